@@ -1,0 +1,1 @@
+//! gmsh meshing (placeholder).

@@ -1,0 +1,6 @@
+//! Finite elements on PETSc DMPlex: mesh load, METIS distribution, ghost exchange, the PRONTO-3D
+//! hexahedron, materials and the explicit central-difference integrator.
+#![warn(missing_docs)]
+
+pub mod hex;
+pub mod material;

@@ -1,0 +1,5 @@
+#include <petscdmplex.h>
+#include <petscksp.h>
+#include <petscsf.h>
+#include <petscsection.h>
+#include <petscpartitioner.h>

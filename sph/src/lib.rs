@@ -1,0 +1,2 @@
+//! Serial SPH physics inside one box (no MPI). Built under the SPH issue.
+#![warn(missing_docs)]
