@@ -4,3 +4,8 @@
 
 pub mod hex;
 pub mod material;
+pub mod mesh;
+pub mod objects;
+pub mod petsc;
+
+pub use petsc_sys as sys;
