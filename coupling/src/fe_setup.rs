@@ -1,0 +1,305 @@
+//! From a scene and a distributed mesh to the FE stage's set-up: materials per element, initial
+//! velocities, and nodal constraints (with the scene errors SCENE.md lists for shared nodes).
+use crate::collective::first_error;
+use crate::scene::{BoundaryKind, Scene};
+use fe_petsc::explicit::Constraint;
+use fe_petsc::material::{build_material, Material};
+use fe_petsc::mesh::{DistributedMesh, LocalMesh};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::collections::BTreeMap;
+
+/// gmsh physical groups: name -> tag, per dimension.
+#[derive(Debug, Clone, Default)]
+pub struct Groups {
+    /// Physical volumes.
+    pub volumes: BTreeMap<String, i32>,
+    /// Physical surfaces.
+    pub surfaces: BTreeMap<String, i32>,
+}
+
+/// What the FE stage needs besides the mesh.
+pub struct FeInputs {
+    /// Material index of each local element.
+    pub elem_material: Vec<usize>,
+    /// Materials, in scene order.
+    pub materials: Vec<Box<dyn Material>>,
+    /// Initial velocity of each local node.
+    pub velocity: Vec<[f64; 3]>,
+    /// Constraints on local nodes.
+    pub constraints: Vec<(u32, Constraint)>,
+}
+
+/// Builds materials, per-element material indices, initial velocities and constraints.
+/// Collective: every rank returns the same error.
+pub fn prepare(
+    comm: &SimpleCommunicator,
+    scene: &Scene,
+    groups: &Groups,
+    dm: &mut DistributedMesh,
+) -> Result<FeInputs, String> {
+    let file = scene.file.display().to_string();
+    let mut materials = Vec::new();
+    for (i, spec) in scene.materials.iter().enumerate() {
+        match build_material(spec) {
+            Ok(m) => materials.push(m),
+            Err(e) => return Err(format!("{file}: material[{i}]: {e}")),
+        }
+    }
+    let mat_index: BTreeMap<&str, usize> = scene
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (m.name.as_str(), i))
+        .collect();
+    // block tag -> (material, velocity)
+    let mut by_tag: BTreeMap<i32, (usize, [f64; 3])> = BTreeMap::new();
+    for b in &scene.blocks {
+        let tag = groups.volumes[&b.group];
+        by_tag.insert(tag, (mat_index[b.material.as_str()], b.velocity));
+    }
+    let m: &LocalMesh = &dm.local;
+    let mut err = None;
+    let mut elem_material = Vec::with_capacity(m.elems.len());
+    for (e, &tag) in m.elem_block.iter().enumerate() {
+        match by_tag.get(&tag) {
+            Some((mi, _)) => elem_material.push(*mi),
+            None => {
+                let name = groups
+                    .volumes
+                    .iter()
+                    .find(|(_, &t)| t == tag)
+                    .map(|(n, _)| format!("physical volume \"{n}\""))
+                    .unwrap_or_else(|| "no physical volume".to_string());
+                err.get_or_insert(format!(
+                    "{file}: element {} is in {name}, which no [[block]] gives a material (add a [[block]] with group = ...)",
+                    m.elem_id[e]
+                ));
+                elem_material.push(0);
+            }
+        }
+    }
+    first_error(comm, err)?;
+
+    // Initial velocity: the mean over the blocks of the elements around the node (weighted by
+    // element count, summed over all ranks so every copy agrees).
+    let nn = m.coords.len();
+    let mut acc = vec![[0.0; 3]; nn];
+    let mut cnt = vec![[0.0; 3]; nn];
+    for (e, conn) in m.elems.iter().enumerate() {
+        let v = by_tag.get(&m.elem_block[e]).map(|x| x.1).unwrap_or([0.0; 3]);
+        for &n in conn {
+            for c in 0..3 {
+                acc[n as usize][c] += v[c];
+                cnt[n as usize][c] += 1.0;
+            }
+        }
+    }
+    dm.exchange
+        .sum_shared(acc.as_flattened_mut())
+        .map_err(|e| e.to_string())?;
+    dm.exchange
+        .sum_shared(cnt.as_flattened_mut())
+        .map_err(|e| e.to_string())?;
+    let velocity: Vec<[f64; 3]> = acc
+        .iter()
+        .zip(cnt.iter())
+        .map(|(a, c)| {
+            if c[0] > 0.0 {
+                [a[0] / c[0], a[1] / c[1], a[2] / c[2]]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+
+    let constraints = constraints(comm, scene, groups, &dm.local)?;
+    Ok(FeInputs {
+        elem_material,
+        materials,
+        velocity,
+        constraints,
+    })
+}
+
+/// Unit normal of a planar node set from the covariance of its points (smallest eigenvector),
+/// reduced over all ranks. Errors when the set is not planar.
+fn plane_normal(
+    comm: &SimpleCommunicator,
+    pts: &[[f64; 3]],
+    name: &str,
+) -> Result<[f64; 3], String> {
+    // s = [count, sx, sy, sz, sxx, syy, szz, sxy, syz, szx]
+    let mut s = [0.0; 10];
+    for p in pts {
+        s[0] += 1.0;
+        for c in 0..3 {
+            s[1 + c] += p[c];
+        }
+        s[4] += p[0] * p[0];
+        s[5] += p[1] * p[1];
+        s[6] += p[2] * p[2];
+        s[7] += p[0] * p[1];
+        s[8] += p[1] * p[2];
+        s[9] += p[2] * p[0];
+    }
+    let mut g = [0.0; 10];
+    comm.all_reduce_into(&s[..], &mut g[..], SystemOperation::sum());
+    let n = g[0];
+    if n < 3.0 {
+        return Err(format!(
+            "symmetry surface \"{name}\" has fewer than 3 nodes"
+        ));
+    }
+    let mu = [g[1] / n, g[2] / n, g[3] / n];
+    let cov = [
+        [g[4] / n - mu[0] * mu[0], g[7] / n - mu[0] * mu[1], g[9] / n - mu[2] * mu[0]],
+        [g[7] / n - mu[0] * mu[1], g[5] / n - mu[1] * mu[1], g[8] / n - mu[1] * mu[2]],
+        [g[9] / n - mu[2] * mu[0], g[8] / n - mu[1] * mu[2], g[6] / n - mu[2] * mu[2]],
+    ];
+    let (vals, vecs) = jacobi_eigen(cov);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| vals[a].partial_cmp(&vals[b]).unwrap());
+    let (lmin, lmid) = (vals[order[0]], vals[order[1]]);
+    if lmid <= 0.0 || lmin.abs() > 1e-10 * lmid {
+        return Err(format!(
+            "symmetry surface \"{name}\" is not planar (out-of-plane spread {:.3e} m against in-plane {:.3e} m): a symmetry plane must be flat",
+            lmin.abs().sqrt(),
+            lmid.sqrt()
+        ));
+    }
+    let k = order[0];
+    Ok([vecs[0][k], vecs[1][k], vecs[2][k]])
+}
+
+/// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix, cyclic Jacobi rotations.
+/// Written by hand: 20 lines, where a linear-algebra crate would add a dependency for one call.
+fn jacobi_eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _sweep in 0..50 {
+        let off = a[0][1].powi(2) + a[1][2].powi(2) + a[0][2].powi(2);
+        if off < 1e-300 {
+            break;
+        }
+        for (p, q) in [(0, 1), (1, 2), (0, 2)] {
+            if a[p][q].abs() < 1e-300 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for k in 0..3 {
+                let (akp, akq) = (a[k][p], a[k][q]);
+                a[k][p] = c * akp - s * akq;
+                a[k][q] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let (apk, aqk) = (a[p][k], a[q][k]);
+                a[p][k] = c * apk - s * aqk;
+                a[q][k] = s * apk + c * aqk;
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    ([a[0][0], a[1][1], a[2][2]], v)
+}
+
+fn constraints(
+    comm: &SimpleCommunicator,
+    scene: &Scene,
+    groups: &Groups,
+    m: &LocalMesh,
+) -> Result<Vec<(u32, Constraint)>, String> {
+    let file = scene.file.display().to_string();
+    let bit_of = |name: &str| -> u32 {
+        let tag = groups.surfaces[name];
+        m.surface_tags
+            .iter()
+            .position(|&t| t == tag)
+            .map(|b| 1u32 << b)
+            .unwrap_or(0)
+    };
+    let nn = m.coords.len();
+    let mut fixed = vec![false; nn];
+    let mut vel: Vec<Option<([f64; 3], usize)>> = vec![None; nn];
+    let mut planes: Vec<Vec<[f64; 3]>> = vec![Vec::new(); nn];
+    let mut err: Option<String> = None;
+    for (i, b) in scene.boundaries.iter().enumerate() {
+        let bit = bit_of(&b.group);
+        let nodes: Vec<usize> = (0..nn).filter(|&n| m.node_surfaces[n] & bit != 0).collect();
+        match &b.kind {
+            BoundaryKind::Fixed => nodes.iter().for_each(|&n| fixed[n] = true),
+            BoundaryKind::Velocity(v) => {
+                for &n in &nodes {
+                    if let Some((w, j)) = vel[n] {
+                        if w != *v && err.is_none() {
+                            err = Some(format!(
+                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities",
+                                m.node_id[n], scene.boundaries[j].group, b.group
+                            ));
+                        }
+                    }
+                    vel[n] = Some((*v, i));
+                }
+            }
+            BoundaryKind::Symmetry => {
+                let pts: Vec<[f64; 3]> = nodes.iter().map(|&n| m.coords[n]).collect();
+                let normal = match plane_normal(comm, &pts, &b.group) {
+                    Ok(n) => n,
+                    Err(e) => return Err(format!("{file}: boundary[{i}]: {e}")),
+                };
+                nodes.iter().for_each(|&n| planes[n].push(normal));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for n in 0..nn {
+        if let Some((v, i)) = vel[n] {
+            if fixed[n] && err.is_none() {
+                err = Some(format!(
+                    "{file}: boundary[{i}]: node {} at ({:.6e}, {:.6e}, {:.6e}) is in a velocity group (\"{}\") and a fixed group",
+                    m.node_id[n], m.coords[n][0], m.coords[n][1], m.coords[n][2], scene.boundaries[i].group
+                ));
+            }
+            for p in &planes[n] {
+                let d = v[0] * p[0] + v[1] * p[1] + v[2] * p[2];
+                let vm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if d.abs() > 1e-12 * vm.max(1e-300) && err.is_none() {
+                    err = Some(format!(
+                        "{file}: boundary[{i}]: node {} has prescribed velocity ({}, {}, {}) with a component along the normal of a symmetry plane through it",
+                        m.node_id[n], v[0], v[1], v[2]
+                    ));
+                }
+            }
+            out.push((n as u32, Constraint::Velocity(v)));
+        } else if fixed[n] {
+            out.push((n as u32, Constraint::Fixed));
+        } else if !planes[n].is_empty() {
+            // Orthonormalise the plane normals (Gram-Schmidt); parallel planes add nothing.
+            let mut basis: Vec<[f64; 3]> = Vec::new();
+            for p in &planes[n] {
+                let mut q = *p;
+                for b in &basis {
+                    let d = q[0] * b[0] + q[1] * b[1] + q[2] * b[2];
+                    for c in 0..3 {
+                        q[c] -= d * b[c];
+                    }
+                }
+                let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                if l > 1e-8 {
+                    basis.push([q[0] / l, q[1] / l, q[2] / l]);
+                }
+            }
+            out.push((n as u32, Constraint::Planes(basis)));
+        }
+    }
+    first_error(comm, err)?;
+    Ok(out)
+}

@@ -1,0 +1,512 @@
+//! Explicit central-difference (velocity-Verlet form) integration of the distributed hex mesh.
+//!
+//! Every rank integrates all its local nodes, owned and ghost, with the same summed nodal force,
+//! so that copies of a node stay identical without a second exchange: one ghost exchange
+//! (local-to-global ADD, global-to-local INSERT) per step. The driver in `coupling` owns the order
+//! of the stages; this type offers them one by one:
+//!
+//! ```text
+//! v(n+1/2) = v(n) + dt/2 a(n)          (kick, then constraints)
+//! x(n+1)   = x(n) + dt v(n+1/2)        (drift)
+//! f(n+1)   = sum over elements          (element loop, ghost exchange)
+//! a(n+1)   = f/m + g                    (constraints)
+//! v(n+1)   = v(n+1/2) + dt/2 a(n+1)     (kick)
+//! ```
+//!
+//! Energy bookkeeping uses the work of the nodal forces over each step's displacement,
+//! W += (f(n) + f(n+1))/2 . (x(n+1) - x(n)), which velocity Verlet balances against the kinetic
+//! energy to O(dt^2) without drift.
+use crate::hex::{self, HexControls, HexState};
+use crate::material::Material;
+use crate::mesh::{LocalMesh, NodeExchange};
+use crate::petsc::PetscError;
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// A nodal constraint from a boundary condition.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Constraint {
+    /// All components zero.
+    Fixed,
+    /// All three components prescribed, m/s.
+    Velocity([f64; 3]),
+    /// The velocity components along these orthonormal directions are zero.
+    Planes(Vec<[f64; 3]>),
+}
+
+/// What the element loop found wrong.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum StepError {
+    /// An element's volume became zero or negative.
+    #[error("element {elem} inverted (volume {volume:e} m^3) at t = {time:e} s, step {step}, near ({:.6e}, {:.6e}, {:.6e}) m", .at[0], .at[1], .at[2])]
+    Inverted {
+        /// Global element id.
+        elem: u64,
+        /// Its volume.
+        volume: f64,
+        /// Its centroid.
+        at: [f64; 3],
+        /// Time.
+        time: f64,
+        /// Step.
+        step: u64,
+    },
+    /// A non-finite value appeared.
+    #[error("non-finite value in {what} at t = {time:e} s, step {step}")]
+    NonFinite {
+        /// Which quantity.
+        what: &'static str,
+        /// Time.
+        time: f64,
+        /// Step.
+        step: u64,
+    },
+    /// PETSc failed.
+    #[error("{0}")]
+    Petsc(#[from] PetscError),
+}
+
+/// Global energies and momentum (sums over ranks), J and kg m/s.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Energies {
+    /// Kinetic energy.
+    pub kinetic: f64,
+    /// Stress work (elastic, plastic, bulk viscosity).
+    pub internal: f64,
+    /// Hourglass-force work.
+    pub hourglass: f64,
+    /// Work of gravity and of the reactions at constrained nodes.
+    pub external_work: f64,
+    /// Total linear momentum.
+    pub momentum: [f64; 3],
+}
+
+/// Set-up of the explicit solver.
+pub struct ExplicitSetup<'a> {
+    /// The local mesh.
+    pub mesh: &'a LocalMesh,
+    /// One material per element (index into `materials`).
+    pub elem_material: Vec<usize>,
+    /// The materials.
+    pub materials: Vec<Box<dyn Material>>,
+    /// Initial velocity of each local node (already consistent across ranks).
+    pub velocity: Vec<[f64; 3]>,
+    /// Constraints: (local node, constraint), at most one entry per node.
+    pub constraints: Vec<(u32, Constraint)>,
+    /// Hourglass and bulk-viscosity coefficients.
+    pub controls: HexControls,
+    /// Gravity, m/s^2.
+    pub gravity: [f64; 3],
+}
+
+/// State and arrays of the explicit FE stage on one rank.
+pub struct ExplicitFe {
+    /// Connectivity (local node indices).
+    pub elems: Vec<[u32; 8]>,
+    /// Global element ids.
+    pub elem_id: Vec<u64>,
+    /// Reference coordinates.
+    pub x0: Vec<[f64; 3]>,
+    /// Current coordinates.
+    pub x: Vec<[f64; 3]>,
+    /// Velocities (at full steps between calls of `step`).
+    pub v: Vec<[f64; 3]>,
+    /// Accelerations.
+    pub a: Vec<[f64; 3]>,
+    /// Lumped nodal masses.
+    pub mass: Vec<f64>,
+    /// Summed element forces on each node (incl. hourglass and bulk viscosity), N.
+    pub force: Vec<[f64; 3]>,
+    force_old: Vec<[f64; 3]>,
+    reaction: Vec<[f64; 3]>,
+    reaction_old: Vec<[f64; 3]>,
+    x_old: Vec<[f64; 3]>,
+    /// Whether this rank owns each node.
+    pub owned: Vec<bool>,
+    /// Element state (stress, hourglass forces).
+    pub state: Vec<HexState>,
+    /// Material history variables, `mat_stride` per element.
+    pub mat_state: Vec<f64>,
+    mat_stride: usize,
+    /// Reference volume of each element.
+    pub vol0: Vec<f64>,
+    /// Current volume of each element.
+    pub vol: Vec<f64>,
+    /// Pressure (without bulk viscosity) of each element, Pa.
+    pub pressure: Vec<f64>,
+    /// Material index of each element.
+    pub elem_material: Vec<usize>,
+    /// The materials.
+    pub materials: Vec<Box<dyn Material>>,
+    constraints: Vec<(u32, Constraint)>,
+    controls: HexControls,
+    gravity: [f64; 3],
+    /// Accumulated energies (global).
+    pub energies: Energies,
+    internal_plus_hg: f64,
+    /// Smallest stable step over local elements from the last force evaluation (no safety).
+    pub dt_stable_local: f64,
+    /// Time.
+    pub time: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// Seconds spent in the element loop, and in the ghost exchange, on this rank.
+    pub timers: FeTimers,
+}
+
+/// Where the FE stage's time goes on this rank.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FeTimers {
+    /// Element kernel (gather, element update, scatter-add).
+    pub elements: f64,
+    /// Ghost exchange through PETSc.
+    pub exchange: f64,
+    /// Nodal updates and energy sums.
+    pub nodal: f64,
+}
+
+#[inline]
+fn gather(xs: &[[f64; 3]], conn: &[u32; 8]) -> [[f64; 3]; 8] {
+    let mut out = [[0.0; 3]; 8];
+    for (o, &n) in out.iter_mut().zip(conn.iter()) {
+        *o = xs[n as usize];
+    }
+    out
+}
+
+fn flat(v: &mut [[f64; 3]]) -> &mut [f64] {
+    v.as_flattened_mut()
+}
+
+impl ExplicitFe {
+    /// Builds the solver: reference volumes, lumped masses (summed over ranks), initial state.
+    pub fn new(
+        setup: ExplicitSetup,
+        exchange: &mut NodeExchange,
+    ) -> Result<ExplicitFe, StepError> {
+        let m = setup.mesh;
+        let nn = m.coords.len();
+        let ne = m.elems.len();
+        let mat_stride = setup
+            .materials
+            .iter()
+            .map(|mm| mm.n_state())
+            .max()
+            .unwrap_or(0);
+        let mut mass3 = vec![[0.0; 3]; nn];
+        let mut vol0 = Vec::with_capacity(ne);
+        let mut mat_state = vec![0.0; ne * mat_stride];
+        for (e, conn) in m.elems.iter().enumerate() {
+            let xe = gather(&m.coords, conn);
+            let vol = hex::volume(&xe);
+            if vol <= 0.0 || !vol.is_finite() {
+                let c = centroid(&xe);
+                return Err(StepError::Inverted {
+                    elem: m.elem_id[e],
+                    volume: vol,
+                    at: c,
+                    time: 0.0,
+                    step: 0,
+                });
+            }
+            vol0.push(vol);
+            let mat = &setup.materials[setup.elem_material[e]];
+            let me = mat.density() * vol / 8.0;
+            for &n in conn {
+                for c in 0..3 {
+                    mass3[n as usize][c] += me;
+                }
+            }
+            if mat_stride > 0 {
+                mat.init_state(&mut mat_state[e * mat_stride..(e + 1) * mat_stride]);
+            }
+        }
+        exchange.sum_shared(flat(&mut mass3))?;
+        let mass: Vec<f64> = mass3.iter().map(|m| m[0]).collect();
+        let mut fe = ExplicitFe {
+            elems: m.elems.clone(),
+            elem_id: m.elem_id.clone(),
+            x0: m.coords.clone(),
+            x: m.coords.clone(),
+            v: setup.velocity,
+            a: vec![[0.0; 3]; nn],
+            mass,
+            force: vec![[0.0; 3]; nn],
+            force_old: vec![[0.0; 3]; nn],
+            reaction: vec![[0.0; 3]; nn],
+            reaction_old: vec![[0.0; 3]; nn],
+            x_old: m.coords.clone(),
+            owned: m.owned.clone(),
+            state: vec![HexState::default(); ne],
+            mat_state,
+            mat_stride,
+            vol: vol0.clone(),
+            vol0,
+            pressure: vec![0.0; ne],
+            elem_material: setup.elem_material,
+            materials: setup.materials,
+            constraints: setup.constraints,
+            controls: setup.controls,
+            gravity: setup.gravity,
+            energies: Energies::default(),
+            internal_plus_hg: 0.0,
+            dt_stable_local: f64::INFINITY,
+            time: 0.0,
+            step: 0,
+            timers: FeTimers::default(),
+        };
+        // Boundary conditions act on the initial velocities; the initial acceleration is
+        // gravity (zero stress), constrained.
+        fe.constrain_velocities();
+        for n in 0..nn {
+            fe.a[n] = fe.gravity;
+        }
+        fe.constrain_accelerations();
+        fe.dt_stable_local = fe.initial_stable_dt();
+        Ok(fe)
+    }
+
+    fn initial_stable_dt(&self) -> f64 {
+        let mut dt = f64::INFINITY;
+        for (e, conn) in self.elems.iter().enumerate() {
+            let xe = gather(&self.x, conn);
+            let mat = &*self.materials[self.elem_material[e]];
+            dt = dt.min(hex::stable_dt(&xe, mat.density(), mat, &self.controls, 0.0));
+        }
+        dt
+    }
+
+    fn constrain_velocities(&mut self) {
+        for (n, c) in &self.constraints {
+            let v = &mut self.v[*n as usize];
+            apply(c, v, true);
+        }
+    }
+
+    fn constrain_accelerations(&mut self) {
+        for (n, c) in &self.constraints {
+            let a = &mut self.a[*n as usize];
+            apply(c, a, false);
+        }
+    }
+
+    /// Number of local nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.x.len()
+    }
+
+    /// First half of the step: kick to the half step, apply constraints, drift the positions.
+    pub fn kick_drift(&mut self, dt: f64) {
+        let t0 = std::time::Instant::now();
+        let h = 0.5 * dt;
+        for n in 0..self.x.len() {
+            for c in 0..3 {
+                self.v[n][c] += h * self.a[n][c];
+            }
+        }
+        self.constrain_velocities();
+        self.x_old.copy_from_slice(&self.x);
+        for n in 0..self.x.len() {
+            for c in 0..3 {
+                self.x[n][c] += dt * self.v[n][c];
+            }
+        }
+        self.timers.nodal += t0.elapsed().as_secs_f64();
+    }
+
+    /// Element loop at the new positions with the half-step velocities, then the ghost
+    /// exchange. Returns the local hourglass work of this step; sets `dt_stable_local`.
+    pub fn element_forces(
+        &mut self,
+        dt: f64,
+        exchange: &mut NodeExchange,
+    ) -> Result<f64, StepError> {
+        let t0 = std::time::Instant::now();
+        std::mem::swap(&mut self.force, &mut self.force_old);
+        for f in self.force.iter_mut() {
+            *f = [0.0; 3];
+        }
+        let mut hg_work = 0.0;
+        let mut dt_min = f64::INFINITY;
+        let stride = self.mat_stride;
+        for (e, conn) in self.elems.iter().enumerate() {
+            let xe = gather(&self.x, conn);
+            let ve = gather(&self.v, conn);
+            let mat = &*self.materials[self.elem_material[e]];
+            let ms = &mut self.mat_state[e * stride..(e + 1) * stride];
+            let out = match hex::update(
+                &xe,
+                &ve,
+                dt,
+                mat.density(),
+                self.vol0[e],
+                mat,
+                &self.controls,
+                &mut self.state[e],
+                ms,
+            ) {
+                Ok(o) => o,
+                Err(hex::ElementError::Inverted { volume }) => {
+                    return Err(StepError::Inverted {
+                        elem: self.elem_id[e],
+                        volume,
+                        at: centroid(&xe),
+                        time: self.time + dt,
+                        step: self.step + 1,
+                    })
+                }
+            };
+            for (k, &n) in conn.iter().enumerate() {
+                let f = &mut self.force[n as usize];
+                f[0] += out.force[k][0];
+                f[1] += out.force[k][1];
+                f[2] += out.force[k][2];
+            }
+            hg_work += out.hg_work;
+            dt_min = dt_min.min(out.dt_stable);
+            self.vol[e] = out.volume;
+            self.pressure[e] = out.pressure;
+        }
+        self.dt_stable_local = dt_min;
+        let t1 = std::time::Instant::now();
+        self.timers.elements += (t1 - t0).as_secs_f64();
+        exchange.sum_shared(flat(&mut self.force))?;
+        self.timers.exchange += t1.elapsed().as_secs_f64();
+        Ok(hg_work)
+    }
+
+    /// Second half of the step: accelerations, constraints and reactions, the closing kick, and
+    /// the local energy increments. Returns the local sums to be reduced:
+    /// `[kinetic, d(internal+hourglass), d(external work), px, py, pz]`.
+    pub fn finish_step(&mut self, dt: f64) -> [f64; 6] {
+        let t0 = std::time::Instant::now();
+        let g = self.gravity;
+        for n in 0..self.x.len() {
+            let im = 1.0 / self.mass[n];
+            for c in 0..3 {
+                self.a[n][c] = self.force[n][c] * im + g[c];
+            }
+        }
+        std::mem::swap(&mut self.reaction, &mut self.reaction_old);
+        for r in self.reaction.iter_mut() {
+            *r = [0.0; 3];
+        }
+        // Reaction = m a(constrained) - m a(free): the force the constraint adds.
+        for i in 0..self.constraints.len() {
+            let n = self.constraints[i].0 as usize;
+            let free = self.a[n];
+            apply(&self.constraints[i].1, &mut self.a[n], false);
+            for c in 0..3 {
+                self.reaction[n][c] = self.mass[n] * (self.a[n][c] - free[c]);
+            }
+        }
+        let h = 0.5 * dt;
+        let mut sums = [0.0; 6];
+        for n in 0..self.x.len() {
+            for c in 0..3 {
+                self.v[n][c] += h * self.a[n][c];
+            }
+            if !self.owned[n] {
+                continue;
+            }
+            let m = self.mass[n];
+            let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
+            for c in 0..3 {
+                let dx = self.x[n][c] - self.x_old[n][c];
+                ke += self.v[n][c] * self.v[n][c];
+                w_elem += 0.5 * (self.force[n][c] + self.force_old[n][c]) * dx;
+                w_ext += (0.5 * (self.reaction[n][c] + self.reaction_old[n][c]) + m * g[c]) * dx;
+                sums[3 + c] += m * self.v[n][c];
+            }
+            sums[0] += 0.5 * m * ke;
+            sums[1] -= w_elem;
+            sums[2] += w_ext;
+        }
+        self.timers.nodal += t0.elapsed().as_secs_f64();
+        sums
+    }
+
+    /// Applies the reduced sums of a step (from `finish_step` and the element loop's hourglass
+    /// work, summed over ranks) to the global energies.
+    pub fn accumulate(&mut self, global: &[f64; 7], dt: f64) {
+        self.energies.kinetic = global[0];
+        self.internal_plus_hg += global[1];
+        self.energies.external_work += global[2];
+        self.energies.momentum = [global[3], global[4], global[5]];
+        self.energies.hourglass += global[6];
+        self.energies.internal = self.internal_plus_hg - self.energies.hourglass;
+        self.time += dt;
+        self.step += 1;
+    }
+
+    /// Global kinetic energy and momentum now (collective); used at step 0.
+    pub fn initial_energies(&mut self, comm: &SimpleCommunicator) {
+        let mut s = [0.0; 4];
+        for n in 0..self.x.len() {
+            if self.owned[n] {
+                let m = self.mass[n];
+                let v = self.v[n];
+                s[0] += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                for c in 0..3 {
+                    s[1 + c] += m * v[c];
+                }
+            }
+        }
+        let mut g = [0.0; 4];
+        comm.all_reduce_into(&s[..], &mut g[..], SystemOperation::sum());
+        self.energies.kinetic = g[0];
+        self.energies.momentum = [g[1], g[2], g[3]];
+    }
+
+    /// Equivalent plastic strain of element `e`.
+    pub fn plastic_strain(&self, e: usize) -> f64 {
+        let s = self.mat_stride;
+        self.materials[self.elem_material[e]].plastic_strain(&self.mat_state[e * s..(e + 1) * s])
+    }
+
+    /// Current density of element `e`, kg/m^3.
+    pub fn density(&self, e: usize) -> f64 {
+        self.materials[self.elem_material[e]].density() * self.vol0[e] / self.vol[e]
+    }
+
+    /// Bytes of the per-node and per-element arrays on this rank.
+    pub fn bytes(&self) -> usize {
+        let nn = self.x.len();
+        let ne = self.elems.len();
+        nn * (9 * 24 + 8 + 1)
+            + ne * (std::mem::size_of::<[u32; 8]>()
+                + 8
+                + std::mem::size_of::<HexState>()
+                + 8 * (3 + self.mat_stride)
+                + 8)
+    }
+}
+
+/// Applies a constraint to a velocity (`is_velocity`) or an acceleration.
+#[inline]
+fn apply(c: &Constraint, v: &mut [f64; 3], is_velocity: bool) {
+    match c {
+        Constraint::Fixed => *v = [0.0; 3],
+        Constraint::Velocity(p) => *v = if is_velocity { *p } else { [0.0; 3] },
+        Constraint::Planes(ns) => {
+            for n in ns {
+                let d = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+                for c in 0..3 {
+                    v[c] -= d * n[c];
+                }
+            }
+        }
+    }
+}
+
+/// Centroid of an element's nodes.
+pub fn centroid(x: &[[f64; 3]; 8]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for p in x {
+        for k in 0..3 {
+            c[k] += p[k] / 8.0;
+        }
+    }
+    c
+}
