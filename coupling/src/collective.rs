@@ -5,7 +5,11 @@ use mpi::traits::*;
 
 /// If any rank has an error, every rank returns the error of the lowest such rank.
 pub fn first_error(comm: &SimpleCommunicator, err: Option<String>) -> Result<(), String> {
-    let me = if err.is_some() { comm.rank() } else { comm.size() };
+    let me = if err.is_some() {
+        comm.rank()
+    } else {
+        comm.size()
+    };
     let mut who = 0i32;
     comm.all_reduce_into(&me, &mut who, SystemOperation::min());
     if who == comm.size() {

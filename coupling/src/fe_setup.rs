@@ -5,9 +5,7 @@ use crate::scene::{BoundaryKind, Scene};
 use fe_petsc::explicit::Constraint;
 use fe_petsc::material::{build_material, Material};
 use fe_petsc::mesh::{DistributedMesh, LocalMesh};
-use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
-use mpi::traits::*;
 use std::collections::BTreeMap;
 
 /// gmsh physical groups: name -> tag, per dimension.
@@ -88,7 +86,10 @@ pub fn prepare(
     let mut acc = vec![[0.0; 3]; nn];
     let mut cnt = vec![[0.0; 3]; nn];
     for (e, conn) in m.elems.iter().enumerate() {
-        let v = by_tag.get(&m.elem_block[e]).map(|x| x.1).unwrap_or([0.0; 3]);
+        let v = by_tag
+            .get(&m.elem_block[e])
+            .map(|x| x.1)
+            .unwrap_or([0.0; 3]);
         for &n in conn {
             for c in 0..3 {
                 acc[n as usize][c] += v[c];
@@ -121,94 +122,6 @@ pub fn prepare(
         velocity,
         constraints,
     })
-}
-
-/// Unit normal of a planar node set from the covariance of its points (smallest eigenvector),
-/// reduced over all ranks. Errors when the set is not planar.
-fn plane_normal(
-    comm: &SimpleCommunicator,
-    pts: &[[f64; 3]],
-    name: &str,
-) -> Result<[f64; 3], String> {
-    // s = [count, sx, sy, sz, sxx, syy, szz, sxy, syz, szx]
-    let mut s = [0.0; 10];
-    for p in pts {
-        s[0] += 1.0;
-        for c in 0..3 {
-            s[1 + c] += p[c];
-        }
-        s[4] += p[0] * p[0];
-        s[5] += p[1] * p[1];
-        s[6] += p[2] * p[2];
-        s[7] += p[0] * p[1];
-        s[8] += p[1] * p[2];
-        s[9] += p[2] * p[0];
-    }
-    let mut g = [0.0; 10];
-    comm.all_reduce_into(&s[..], &mut g[..], SystemOperation::sum());
-    let n = g[0];
-    if n < 3.0 {
-        return Err(format!(
-            "symmetry surface \"{name}\" has fewer than 3 nodes"
-        ));
-    }
-    let mu = [g[1] / n, g[2] / n, g[3] / n];
-    let cov = [
-        [g[4] / n - mu[0] * mu[0], g[7] / n - mu[0] * mu[1], g[9] / n - mu[2] * mu[0]],
-        [g[7] / n - mu[0] * mu[1], g[5] / n - mu[1] * mu[1], g[8] / n - mu[1] * mu[2]],
-        [g[9] / n - mu[2] * mu[0], g[8] / n - mu[1] * mu[2], g[6] / n - mu[2] * mu[2]],
-    ];
-    let (vals, vecs) = jacobi_eigen(cov);
-    let mut order = [0usize, 1, 2];
-    order.sort_by(|&a, &b| vals[a].partial_cmp(&vals[b]).unwrap());
-    let (lmin, lmid) = (vals[order[0]], vals[order[1]]);
-    if lmid <= 0.0 || lmin.abs() > 1e-10 * lmid {
-        return Err(format!(
-            "symmetry surface \"{name}\" is not planar (out-of-plane spread {:.3e} m against in-plane {:.3e} m): a symmetry plane must be flat",
-            lmin.abs().sqrt(),
-            lmid.sqrt()
-        ));
-    }
-    let k = order[0];
-    Ok([vecs[0][k], vecs[1][k], vecs[2][k]])
-}
-
-/// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix, cyclic Jacobi rotations.
-/// Written by hand: 20 lines, where a linear-algebra crate would add a dependency for one call.
-fn jacobi_eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for _sweep in 0..50 {
-        let off = a[0][1].powi(2) + a[1][2].powi(2) + a[0][2].powi(2);
-        if off < 1e-300 {
-            break;
-        }
-        for (p, q) in [(0, 1), (1, 2), (0, 2)] {
-            if a[p][q].abs() < 1e-300 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let t = if theta == 0.0 { 1.0 } else { t };
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            for k in 0..3 {
-                let (akp, akq) = (a[k][p], a[k][q]);
-                a[k][p] = c * akp - s * akq;
-                a[k][q] = s * akp + c * akq;
-            }
-            for k in 0..3 {
-                let (apk, aqk) = (a[p][k], a[q][k]);
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
-            for row in v.iter_mut() {
-                let (vp, vq) = (row[p], row[q]);
-                row[p] = c * vp - s * vq;
-                row[q] = s * vp + c * vq;
-            }
-        }
-    }
-    ([a[0][0], a[1][1], a[2][2]], v)
 }
 
 fn constraints(
@@ -250,10 +163,15 @@ fn constraints(
                 }
             }
             BoundaryKind::Symmetry => {
-                let pts: Vec<[f64; 3]> = nodes.iter().map(|&n| m.coords[n]).collect();
-                let normal = match plane_normal(comm, &pts, &b.group) {
-                    Ok(n) => n,
-                    Err(e) => return Err(format!("{file}: boundary[{i}]: {e}")),
+                let k = m
+                    .surface_tags
+                    .iter()
+                    .position(|&t| t == groups.surfaces[&b.group]);
+                let Some(normal) = k.and_then(|k| m.surface_normals[k]) else {
+                    return Err(format!(
+                        "{file}: boundary[{i}]: symmetry surface \"{}\" is not planar (its faces are not all parallel): a symmetry boundary must be a plane (or parallel planes)",
+                        b.group
+                    ));
                 };
                 nodes.iter().for_each(|&n| planes[n].push(normal));
             }

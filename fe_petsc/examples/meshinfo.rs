@@ -23,8 +23,11 @@ fn main() {
     for e in &l.elems {
         let x = |k: usize| l.coords[e[k] as usize];
         // 5-tet split of a hex in VTK order (positive for a right-handed hex).
-        vol += tet(x(0), x(1), x(3), x(4)) + tet(x(1), x(2), x(3), x(6)) + tet(x(1), x(4), x(5), x(6))
-            + tet(x(3), x(4), x(6), x(7)) + tet(x(1), x(3), x(4), x(6));
+        vol += tet(x(0), x(1), x(3), x(4))
+            + tet(x(1), x(2), x(3), x(6))
+            + tet(x(1), x(4), x(5), x(6))
+            + tet(x(3), x(4), x(6), x(7))
+            + tet(x(1), x(3), x(4), x(6));
     }
     let mut ones = vec![1.0; 3 * l.coords.len()];
     m.exchange.sum_shared(&mut ones).unwrap();

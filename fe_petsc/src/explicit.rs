@@ -181,10 +181,7 @@ fn flat(v: &mut [[f64; 3]]) -> &mut [f64] {
 
 impl ExplicitFe {
     /// Builds the solver: reference volumes, lumped masses (summed over ranks), initial state.
-    pub fn new(
-        setup: ExplicitSetup,
-        exchange: &mut NodeExchange,
-    ) -> Result<ExplicitFe, StepError> {
+    pub fn new(setup: ExplicitSetup, exchange: &mut NodeExchange) -> Result<ExplicitFe, StepError> {
         let m = setup.mesh;
         let nn = m.coords.len();
         let ne = m.elems.len();

@@ -2,6 +2,7 @@
 //! hexahedron, materials and the explicit central-difference integrator.
 #![warn(missing_docs)]
 
+pub mod explicit;
 pub mod hex;
 pub mod material;
 pub mod mesh;

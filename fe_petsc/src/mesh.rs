@@ -49,6 +49,9 @@ pub struct LocalMesh {
     pub node_surfaces: Vec<u32>,
     /// gmsh tags of the physical surfaces, in bit order (the same on every rank).
     pub surface_tags: Vec<i32>,
+    /// Unit normal of each physical surface (bit order) when all its faces are parallel
+    /// (one plane, or parallel planes); `None` for a curved or bent surface.
+    pub surface_normals: Vec<Option<[f64; 3]>>,
     /// Connectivity of the local elements, local node indices, gmsh/VTK hexahedron order.
     pub elems: Vec<[u32; 8]>,
     /// Global id of each local element (the mesh's cell number, 0-based, rank-independent).
@@ -119,9 +122,13 @@ fn agree_on_error(comm: &SimpleCommunicator, err: Option<String>) -> Result<(), 
     if len == 0 {
         return Ok(());
     }
-    let mut buf = err.map(|e| e.into_bytes()).unwrap_or_else(|| vec![0u8; len as usize]);
+    let mut buf = err
+        .map(|e| e.into_bytes())
+        .unwrap_or_else(|| vec![0u8; len as usize]);
     root.broadcast_into(&mut buf[..]);
-    Err(MeshError::Invalid(String::from_utf8_lossy(&buf).into_owned()))
+    Err(MeshError::Invalid(
+        String::from_utf8_lossy(&buf).into_owned(),
+    ))
 }
 
 impl DistributedMesh {
@@ -153,6 +160,7 @@ impl DistributedMesh {
         let (v0, v1) = dm.depth_stratum(0)?;
         let mut err = None;
         let mut surface_tags: Vec<i32> = Vec::new();
+        let mut surface_normals: Vec<Option<[f64; 3]>> = Vec::new();
         let npts = (p1 - p0) as usize;
         let mut orig = vec![-1i32; npts];
         let mut mask = vec![0i32; npts];
@@ -208,15 +216,36 @@ impl DistributedMesh {
             }
             if err.is_none() {
                 let mut cl = Vec::new();
+                let coords = vertex_coords(&dm, v0, v1)?;
                 for (bit, &tag) in surface_tags.iter().enumerate() {
+                    let mut normal: Option<[f64; 3]> = None;
+                    let mut planar = true;
                     for f in dm.label_stratum(&face_sets, tag)? {
                         dm.closure(f, &mut cl)?;
+                        let mut fv = Vec::with_capacity(4);
                         for &q in &cl {
                             if q >= v0 && q < v1 {
                                 mask[(q - p0) as usize] |= 1 << bit;
+                                fv.push(coords[(q - v0) as usize]);
+                            }
+                        }
+                        if let Some(n) = face_normal(&fv) {
+                            if n[0].is_nan() {
+                                planar = false;
+                                continue;
+                            }
+                            match normal {
+                                None => normal = Some(n),
+                                Some(m) => {
+                                    let d = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+                                    if d.abs() < 1.0 - PARALLEL_TOL {
+                                        planar = false;
+                                    }
+                                }
                             }
                         }
                     }
+                    surface_normals.push(if planar { normal } else { None });
                 }
                 for c in c0..c1 {
                     orig[(c - p0) as usize] = c - c0;
@@ -225,7 +254,8 @@ impl DistributedMesh {
                     orig[(v - p0) as usize] = v - v0;
                 }
                 if size > 1 && !Petsc::has_option("-petscpartitioner_type") {
-                    partition = Some(metis_partition(&dm, c0, c1, size).map_err(MeshError::Invalid)?);
+                    partition =
+                        Some(metis_partition(&dm, c0, c1, size).map_err(MeshError::Invalid)?);
                 }
             }
         }
@@ -235,8 +265,24 @@ impl DistributedMesh {
         comm.process_at_rank(0).broadcast_into(&mut ntags);
         surface_tags.resize(ntags as usize, 0);
         if ntags > 0 {
-            comm.process_at_rank(0).broadcast_into(&mut surface_tags[..]);
+            comm.process_at_rank(0)
+                .broadcast_into(&mut surface_tags[..]);
         }
+        // ... and the surface normals: [flag, nx, ny, nz] per surface.
+        let mut nbuf: Vec<f64> = (0..ntags as usize)
+            .map(|k| match surface_normals.get(k).copied().flatten() {
+                Some(n) => [1.0, n[0], n[1], n[2]],
+                None => [0.0; 4],
+            })
+            .flat_map(|a| a.into_iter())
+            .collect();
+        if ntags > 0 {
+            comm.process_at_rank(0).broadcast_into(&mut nbuf[..]);
+        }
+        let surface_normals: Vec<Option<[f64; 3]>> = nbuf
+            .chunks(4)
+            .map(|c| (c[0] > 0.5).then_some([c[1], c[2], c[3]]))
+            .collect();
         let mut totals = [(c1 - c0) as u64, (v1 - v0) as u64];
         comm.process_at_rank(0).broadcast_into(&mut totals[..]);
 
@@ -251,7 +297,12 @@ impl DistributedMesh {
             }
             let mut points: Vec<i32> = Vec::with_capacity(p.len());
             for r in 0..nparts as i32 {
-                points.extend(p.iter().enumerate().filter(|(_, &q)| q == r).map(|(c, _)| c0 + c as i32));
+                points.extend(
+                    p.iter()
+                        .enumerate()
+                        .filter(|(_, &q)| q == r)
+                        .map(|(c, _)| c0 + c as i32),
+                );
             }
             let shell = cstr("shell");
             petsc_call!(PetscPartitionerSetType(part, shell.as_ptr()))?;
@@ -326,6 +377,7 @@ impl DistributedMesh {
         let nv = (v1 - v0) as usize;
         let mut local = LocalMesh {
             surface_tags,
+            surface_normals,
             global_elems: totals[0],
             global_nodes: totals[1],
             ..Default::default()
@@ -353,23 +405,7 @@ impl DistributedMesh {
         local.node_surfaces = (v0..v1).map(|v| mask[(v - p0) as usize] as u32).collect();
 
         // Coordinates of every local vertex.
-        let mut cvec: sys::Vec = std::ptr::null_mut();
-        petsc_call!(DMGetCoordinatesLocal(dm.0, &mut cvec))?;
-        let mut csec: sys::PetscSection = std::ptr::null_mut();
-        petsc_call!(DMGetCoordinateSection(dm.0, &mut csec))?;
-        let mut arr: *const f64 = std::ptr::null();
-        petsc_call!(VecGetArrayRead(cvec, &mut arr))?;
-        let mut len = 0;
-        petsc_call!(VecGetLocalSize(cvec, &mut len))?;
-        let carr = unsafe { std::slice::from_raw_parts(arr, len as usize) };
-        local.coords = Vec::with_capacity(nv);
-        for v in v0..v1 {
-            let mut off = 0;
-            petsc_call!(PetscSectionGetOffset(csec, v, &mut off))?;
-            let o = off as usize;
-            local.coords.push([carr[o], carr[o + 1], carr[o + 2]]);
-        }
-        petsc_call!(VecRestoreArrayRead(cvec, &mut arr))?;
+        local.coords = vertex_coords(&dm, v0, v1)?;
 
         // Section with 3 dofs per vertex: the layout of nodal vectors.
         let mut sec = Section(std::ptr::null_mut());
@@ -414,6 +450,79 @@ impl DistributedMesh {
         };
         Ok(DistributedMesh { local, exchange })
     }
+}
+
+/// Two face normals closer than this (1 - |cos|) count as parallel.
+const PARALLEL_TOL: f64 = 1e-8;
+
+/// Coordinates of the vertices v0..v1.
+fn vertex_coords(dm: &Dm, v0: i32, v1: i32) -> Result<Vec<[f64; 3]>, PetscError> {
+    let mut cvec: sys::Vec = std::ptr::null_mut();
+    petsc_call!(DMGetCoordinatesLocal(dm.0, &mut cvec))?;
+    let mut csec: sys::PetscSection = std::ptr::null_mut();
+    petsc_call!(DMGetCoordinateSection(dm.0, &mut csec))?;
+    let mut arr: *const f64 = std::ptr::null();
+    petsc_call!(VecGetArrayRead(cvec, &mut arr))?;
+    let mut len = 0;
+    petsc_call!(VecGetLocalSize(cvec, &mut len))?;
+    let carr: &[f64] = if len > 0 {
+        // SAFETY: PETSc's local coordinate array of `len` values, valid until restored.
+        unsafe { std::slice::from_raw_parts(arr, len as usize) }
+    } else {
+        &[]
+    };
+    let mut out = Vec::with_capacity((v1 - v0).max(0) as usize);
+    for v in v0..v1 {
+        let mut off = 0;
+        petsc_call!(PetscSectionGetOffset(csec, v, &mut off))?;
+        let o = off as usize;
+        out.push([carr[o], carr[o + 1], carr[o + 2]]);
+    }
+    petsc_call!(VecRestoreArrayRead(cvec, &mut arr))?;
+    Ok(out)
+}
+
+/// Unit normal of a (quadrilateral) face from the cross product of its diagonals' span, or
+/// None for a degenerate face. Any vertex order: the normal's sign is irrelevant here.
+fn face_normal(v: &[[f64; 3]]) -> Option<[f64; 3]> {
+    if v.len() < 3 {
+        return None;
+    }
+    // Newell's method over the polygon (the vertex order of a closure may not be cyclic, so use
+    // the largest cross product among vertex triples instead).
+    let mut best = [0.0; 3];
+    let mut bl = 0.0;
+    for i in 1..v.len() {
+        for j in (i + 1)..v.len() {
+            let a = [v[i][0] - v[0][0], v[i][1] - v[0][1], v[i][2] - v[0][2]];
+            let b = [v[j][0] - v[0][0], v[j][1] - v[0][1], v[j][2] - v[0][2]];
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let l = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+            if l > bl {
+                bl = l;
+                best = c;
+            }
+        }
+    }
+    if bl <= 0.0 {
+        return None;
+    }
+    let l = bl.sqrt();
+    // A warped face: its other vertices must lie in the plane too.
+    let n = [best[0] / l, best[1] / l, best[2] / l];
+    let size = l.sqrt();
+    for p in v {
+        let d = (p[0] - v[0][0]) * n[0] + (p[1] - v[0][1]) * n[1] + (p[2] - v[0][2]) * n[2];
+        if d.abs() > 1e-8 * size {
+            // Warped: no single normal (NaN marks it for the caller).
+            return Some([f64::NAN; 3]);
+        }
+    }
+    Some(n)
 }
 
 /// METIS k-way partition of the cells' dual graph (cells sharing a face), on rank 0.

@@ -67,7 +67,9 @@ pub fn check(code: sys::PetscErrorCode, call: &'static str) -> Result<(), PetscE
         unsafe { sys::PetscErrorMessage(code, &mut text, std::ptr::null_mut()) };
         if !text.is_null() {
             // SAFETY: static NUL-terminated string owned by PETSc.
-            message = unsafe { CStr::from_ptr(text) }.to_string_lossy().into_owned();
+            message = unsafe { CStr::from_ptr(text) }
+                .to_string_lossy()
+                .into_owned();
         }
     }
     Err(PetscError {

@@ -14,7 +14,9 @@ fn main() {
         .expect("ompi-c not found by pkg-config: install libopenmpi-dev");
     let mut builder = bindgen::Builder::default()
         .header("wrapper.h")
-        .allowlist_function("(Petsc|DM|Vec|Mat|KSP|PC|IS|PetscSF|PetscSection|PetscPartitioner)\\w*")
+        .allowlist_function(
+            "(Petsc|DM|Vec|Mat|KSP|PC|IS|PetscSF|PetscSection|PetscPartitioner)\\w*",
+        )
         .allowlist_type("(Petsc|_p_|DM|Vec|Mat|KSP|PC|IS|Insert|Scatter|NormType)\\w*")
         .allowlist_var("(PETSC|DM_|INSERT|ADD|SCATTER|NORM|KSP|PC|MAT)\\w*")
         .blocklist_type("(MPI|ompi|MPIX)_\\w*")

@@ -1,1 +1,143 @@
-fn main(){}
+//! `tdyn`: run a scene, mesh a .geo. PETSc options (`-log_view`, `-petscpartitioner_type simple`,
+//! ...) may follow the other arguments and go to PETSc unchanged.
+use clap::{Parser, Subcommand};
+use coupling::driver::{self, RunOptions};
+use fe_petsc::petsc::Petsc;
+use mpi::traits::*;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "tdyn",
+    version,
+    about = "Parallel transient dynamics: FE, SPH and contact (PRONTO-3D's algorithms)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scene: `mpirun -np 4 tdyn run scenes/bar_impact.toml [--out DIR] [PETSc options]`
+    Run {
+        /// The scene file (TOML, see SCENE.md).
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Mesh a gmsh .geo file (cached): `tdyn mesh meshes/bar.geo -p N=80`
+    Mesh {
+        /// The .geo file.
+        geo: PathBuf,
+        /// Parameters passed to gmsh as -setnumber NAME VALUE.
+        #[arg(long = "param", short = 'p', value_parser = parse_param)]
+        params: Vec<(String, f64)>,
+    },
+}
+
+fn parse_param(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
+    let v: f64 = v.parse().map_err(|_| format!("{v}: not a number"))?;
+    Ok((k.to_string(), v))
+}
+
+/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own.
+fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
+    let is_petsc = |a: &str| {
+        a.len() > 2
+            && a.starts_with('-')
+            && !a.starts_with("--")
+            && a[1..2].chars().all(|c| c.is_ascii_lowercase())
+    };
+    let mut ours = Vec::new();
+    let mut petsc = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        if i > 0 && is_petsc(&args[i]) {
+            petsc.push(args[i].clone());
+            if let Some(next) = args.get(i + 1) {
+                let looks_like_file = [".toml", ".geo", ".msh"].iter().any(|e| next.ends_with(e));
+                if !next.starts_with('-') && !looks_like_file {
+                    petsc.push(next.clone());
+                    i += 1;
+                }
+            }
+        } else {
+            ours.push(args[i].clone());
+        }
+        i += 1;
+    }
+    (ours, petsc)
+}
+
+fn main() -> ExitCode {
+    let (ours, petsc_args) = split_petsc(std::env::args().collect());
+    let cli = Cli::parse_from(ours);
+    match cli.cmd {
+        Cmd::Mesh { geo, params } => {
+            let def = coupling::scene::MeshDef {
+                file: geo.clone(),
+                params: params.into_iter().collect(),
+                translate: [0.0; 3],
+            };
+            let cache = coupling::gmsh::default_cache_dir(
+                geo.parent().unwrap_or(std::path::Path::new(".")),
+            );
+            match coupling::gmsh::mesh_file(&def, &cache) {
+                Ok(p) => {
+                    println!("{}", p.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tdyn: {}: {e}", geo.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Run { scene, out, quiet } => {
+            let Some(universe) = mpi::initialize() else {
+                eprintln!("tdyn: MPI could not be initialised");
+                return ExitCode::FAILURE;
+            };
+            let world = universe.world();
+            let rank = world.rank();
+            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("tdyn: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = RunOptions { scene, out, quiet };
+            let res = driver::run(&world, &opts);
+            drop(petsc);
+            match res {
+                Ok(s) => {
+                    if rank == 0 && !quiet {
+                        println!(
+                            "tdyn: {} steps, energy error max {:.2e}, {:.1} ns per element-cycle",
+                            s.steps, s.energy_error_max, s.ns_per_element_cycle
+                        );
+                        println!(
+                            "tdyn: output in {}/ (open fields.xmf in ParaView; history.csv, probes.csv, report.json)",
+                            s.out.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    if rank == 0 {
+                        eprintln!("tdyn: error: {e}");
+                    }
+                    ExitCode::FAILURE
+                }
+            }
+        }
+    }
+}

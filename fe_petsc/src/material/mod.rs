@@ -24,3 +24,207 @@ pub struct EosSpec {
     /// Its numeric parameters by name.
     pub params: BTreeMap<String, f64>,
 }
+
+mod elastic;
+mod j2_plastic;
+mod johnson_cook;
+pub use elastic::Elastic;
+pub use j2_plastic::J2Plastic;
+pub use johnson_cook::JohnsonCook;
+
+/// A solid material: the stress update and the moduli the element needs.
+pub trait Material: Send + Sync + std::fmt::Debug {
+    /// Reference density rho0, kg/m^3.
+    fn density(&self) -> f64;
+    /// lambda + 2 mu, Pa (stable step, hourglass stiffness).
+    fn dilatational_modulus(&self) -> f64;
+    /// Shear modulus mu, Pa.
+    fn shear_modulus(&self) -> f64;
+    /// History variables per element.
+    fn n_state(&self) -> usize {
+        0
+    }
+    /// Writes the initial history variables.
+    fn init_state(&self, _state: &mut [f64]) {}
+    /// Writes into `stress` (Voigt xx,yy,zz,xy,yz,zx, tension positive, already rotated to the
+    /// new configuration) the stress after the strain increment `deps` = D dt (tensor shear
+    /// components), and updates `state`. `dt` > 0 is the step, for rate-dependent laws.
+    fn update_stress(&self, stress: &mut [f64; 6], state: &mut [f64], deps: &[f64; 6], dt: f64);
+    /// Equivalent plastic strain, for output (0 for elastic models).
+    fn plastic_strain(&self, _state: &[f64]) -> f64 {
+        0.0
+    }
+}
+
+/// A bad `[[material]]` table.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MaterialError {
+    /// The model name is not in the table.
+    #[error("material \"{name}\": unknown model \"{model}\" (expected one of {expected})")]
+    UnknownModel {
+        /// Material name.
+        name: String,
+        /// The model asked for.
+        model: String,
+        /// The models known.
+        expected: String,
+    },
+    /// A required key is missing.
+    #[error("material \"{name}\": missing key \"{key}\" (needed by model {model})")]
+    Missing {
+        /// Material name.
+        name: String,
+        /// The key.
+        key: String,
+        /// The model.
+        model: String,
+    },
+    /// A key the model does not use.
+    #[error("material \"{name}\": unknown key \"{key}\" for model {model} (expected {expected})")]
+    UnknownKey {
+        /// Material name.
+        name: String,
+        /// The key.
+        key: String,
+        /// The model.
+        model: String,
+        /// The keys it takes.
+        expected: String,
+    },
+    /// A value out of range.
+    #[error("material \"{name}\": {key} = {value}: {why}")]
+    BadValue {
+        /// Material name.
+        name: String,
+        /// The key.
+        key: String,
+        /// Its value.
+        value: f64,
+        /// What was expected.
+        why: String,
+    },
+    /// A model that is named in SCENE.md but not built yet.
+    #[error("material \"{name}\": model \"{model}\" is not supported yet")]
+    NotYet {
+        /// Material name.
+        name: String,
+        /// The model.
+        model: String,
+    },
+}
+
+/// Builds a model from a spec.
+pub type Constructor = fn(&MaterialSpec) -> Result<Box<dyn Material>, MaterialError>;
+
+/// The name table: scene `model` -> constructor.
+pub const MODELS: &[(&str, Constructor)] = &[
+    ("elastic", Elastic::build),
+    ("j2_plastic", J2Plastic::build),
+    ("johnson_cook", JohnsonCook::build),
+    ("fluid", not_yet),
+];
+
+fn not_yet(spec: &MaterialSpec) -> Result<Box<dyn Material>, MaterialError> {
+    Err(MaterialError::NotYet {
+        name: spec.name.clone(),
+        model: spec.model.clone(),
+    })
+}
+
+/// Builds the material a spec describes, checking its keys and values.
+pub fn build_material(spec: &MaterialSpec) -> Result<Box<dyn Material>, MaterialError> {
+    match MODELS.iter().find(|(n, _)| *n == spec.model) {
+        Some((_, c)) => c(spec),
+        None => Err(MaterialError::UnknownModel {
+            name: spec.name.clone(),
+            model: spec.model.clone(),
+            expected: MODELS.iter().map(|m| m.0).collect::<Vec<_>>().join(", "),
+        }),
+    }
+}
+
+/// Checks a spec's keys against the model's and returns the values in `keys` order.
+pub(crate) fn take(spec: &MaterialSpec, keys: &[&str]) -> Result<Vec<f64>, MaterialError> {
+    for k in spec.params.keys() {
+        if !keys.contains(&k.as_str()) {
+            return Err(MaterialError::UnknownKey {
+                name: spec.name.clone(),
+                key: k.clone(),
+                model: spec.model.clone(),
+                expected: keys.join(", "),
+            });
+        }
+    }
+    if !(spec.density > 0.0 && spec.density.is_finite()) {
+        return Err(bad(
+            spec,
+            "density",
+            spec.density,
+            "expected a positive density, kg/m^3",
+        ));
+    }
+    keys.iter()
+        .map(|k| {
+            spec.params
+                .get(*k)
+                .copied()
+                .ok_or_else(|| MaterialError::Missing {
+                    name: spec.name.clone(),
+                    key: k.to_string(),
+                    model: spec.model.clone(),
+                })
+        })
+        .collect()
+}
+
+pub(crate) fn bad(spec: &MaterialSpec, key: &str, value: f64, why: &str) -> MaterialError {
+    MaterialError::BadValue {
+        name: spec.name.clone(),
+        key: key.to_string(),
+        value,
+        why: why.to_string(),
+    }
+}
+
+/// Lame constants (lambda, mu) from E and nu, with range checks.
+pub(crate) fn lame(spec: &MaterialSpec, e: f64, nu: f64) -> Result<(f64, f64), MaterialError> {
+    if !(e > 0.0 && e.is_finite()) {
+        return Err(bad(
+            spec,
+            "youngs_modulus",
+            e,
+            "expected a positive modulus, Pa",
+        ));
+    }
+    if !(nu > -1.0 && nu < 0.5) {
+        return Err(bad(
+            spec,
+            "poisson_ratio",
+            nu,
+            "expected -1 < poisson_ratio < 0.5",
+        ));
+    }
+    let mu = e / (2.0 * (1.0 + nu));
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    Ok((lambda, mu))
+}
+
+/// Adds the isotropic elastic increment: stress += lambda tr(deps) I + 2 mu deps.
+#[inline]
+pub(crate) fn add_elastic(stress: &mut [f64; 6], deps: &[f64; 6], lambda: f64, mu: f64) {
+    let tr = deps[0] + deps[1] + deps[2];
+    for k in 0..3 {
+        stress[k] += lambda * tr + 2.0 * mu * deps[k];
+        stress[k + 3] += 2.0 * mu * deps[k + 3];
+    }
+}
+
+/// Deviator of a Voigt stress and the von Mises stress sqrt(3/2 s:s).
+#[inline]
+pub(crate) fn deviator(s: &[f64; 6]) -> ([f64; 6], f64, f64) {
+    let p = (s[0] + s[1] + s[2]) / 3.0;
+    let d = [s[0] - p, s[1] - p, s[2] - p, s[3], s[4], s[5]];
+    let j2 =
+        0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
+    (d, p, (3.0 * j2).sqrt())
+}

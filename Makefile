@@ -1,0 +1,25 @@
+# Two commands (README): `make run` runs the default scene on 2 ranks, `make test` runs the tests.
+# Both install the system packages they need first (scripts/setup.sh).
+NP ?= 2
+SCENE ?= scenes/taylor_impact.toml
+# mpirun as root (CI, containers) and more ranks than cores (tests at np 3 and 4 on 2 cores).
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+
+.PHONY: setup run test bench lint
+setup:
+	./scripts/setup.sh
+
+run: setup
+	mpirun -np $(NP) target/release/tdyn run $(SCENE)
+
+test: setup
+	cargo test --release --workspace
+
+bench: setup
+	./scripts/bench_fe.sh
+
+lint:
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings

@@ -1,0 +1,448 @@
+//! The run: scene -> mesh -> distribution -> time loop (the paper's Fig. 3) -> output.
+//!
+//! Only the stages a scene declares are built. Today that is the FE stage; a scene with
+//! particles, contact or implicit mode is refused with a message naming what is missing.
+use crate::collective::{self, first_error};
+use crate::fe_setup::{self, Groups};
+use crate::gmsh;
+use crate::output::{
+    ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame, Report, StageStats,
+};
+use crate::probes::Probes;
+use crate::scene::{self, Mode};
+use fe_petsc::explicit::{ExplicitFe, ExplicitSetup, StepError};
+use fe_petsc::hex::HexControls;
+use fe_petsc::mesh::DistributedMesh;
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Tolerance on frame and row times, in steps (SCENE.md: t >= k * every - 1e-6 dt).
+const TIME_EPS_STEPS: f64 = 1e-6;
+
+/// Columns of history.csv, in order (SCENE.md).
+pub const HISTORY_COLUMNS: [&str; 13] = [
+    "step",
+    "time",
+    "dt",
+    "kinetic_energy",
+    "internal_energy",
+    "hourglass_energy",
+    "external_work",
+    "contact_energy",
+    "energy_error",
+    "momentum_x",
+    "momentum_y",
+    "momentum_z",
+    "contacts",
+];
+
+/// How the user asked to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output directory (default `out/<scene file stem>`).
+    pub out: Option<PathBuf>,
+    /// No progress bar, no summary on stdout.
+    pub quiet: bool,
+}
+
+/// What a finished run reports to its caller.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Steps taken.
+    pub steps: u64,
+    /// Largest energy error seen.
+    pub energy_error_max: f64,
+    /// Time-loop cost, ns per element-cycle.
+    pub ns_per_element_cycle: f64,
+}
+
+/// Relative energy error (SCENE.md).
+fn energy_error(e: f64, e0: f64, w: f64) -> f64 {
+    (e - e0 - w).abs() / (e0 + w.abs()).max(1e-30)
+}
+
+/// Runs a scene. Collective; every rank returns the same error.
+pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, String> {
+    let wall0 = Instant::now();
+    let rank = world.rank();
+    let size = world.size();
+    // Every rank parses the scene (identical result, no communication).
+    let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
+    let file = scene.file.display().to_string();
+    if scene.run.mode == Mode::Implicit {
+        return Err(format!(
+            "{file}: run.mode: \"implicit\" is not available yet (the implicit KSP mode is still being built); use \"explicit\""
+        ));
+    }
+    if !scene.particles.is_empty() {
+        return Err(format!(
+            "{file}: particles: the SPH stage is not available yet; remove the [[particles]] tables"
+        ));
+    }
+    if scene.contact.is_some() {
+        return Err(format!(
+            "{file}: contact: the contact stage is not available yet; remove the [contact] table"
+        ));
+    }
+    if scene.meshes.len() != 1 {
+        return Err(format!(
+            "{file}: mesh: exactly one [[mesh]] is supported for now (found {}); put the bodies in one .geo as separate physical volumes",
+            scene.meshes.len()
+        ));
+    }
+    let out_dir = opts.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(
+            scene
+                .file
+                .file_stem()
+                .map(|s| s.to_os_string())
+                .unwrap_or_default(),
+        )
+    });
+
+    // Meshing on rank 0 (gmsh, cached), then every rank reads the physical names.
+    let mesh_def = &scene.meshes[0];
+    let mut mesh_path = PathBuf::new();
+    let mut err = None;
+    if rank == 0 {
+        let cache = gmsh::default_cache_dir(mesh_def.file.parent().unwrap_or(Path::new(".")));
+        match gmsh::mesh_file(mesh_def, &cache) {
+            Ok(p) => mesh_path = p,
+            Err(e) => err = Some(format!("{file}: mesh[0]: {e}")),
+        }
+    }
+    first_error(world, err)?;
+    let mut buf = mesh_path.to_string_lossy().into_owned().into_bytes();
+    let mut len = buf.len() as u64;
+    world.process_at_rank(0).broadcast_into(&mut len);
+    buf.resize(len as usize, 0);
+    world.process_at_rank(0).broadcast_into(&mut buf[..]);
+    let mesh_path = PathBuf::from(String::from_utf8_lossy(&buf).into_owned());
+    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh[0]: {e}"))?;
+    let mut groups = Groups::default();
+    for n in &names {
+        match n.dim {
+            3 => {
+                groups.volumes.insert(n.name.clone(), n.tag);
+            }
+            2 => {
+                groups.surfaces.insert(n.name.clone(), n.tag);
+            }
+            _ => {}
+        }
+    }
+    let vols: Vec<String> = groups.volumes.keys().cloned().collect();
+    let surfs: Vec<String> = groups.surfaces.keys().cloned().collect();
+    scene::validate_groups(&scene, &vols, &surfs).map_err(|e| e.to_string())?;
+
+    let t_setup = Instant::now();
+    let mut dm =
+        DistributedMesh::load(world, &mesh_path).map_err(|e| format!("{file}: mesh[0]: {e}"))?;
+    let tr = mesh_def.translate;
+    if tr != [0.0; 3] {
+        for x in dm.local.coords.iter_mut() {
+            for c in 0..3 {
+                x[c] += tr[c];
+            }
+        }
+    }
+    let inputs = fe_setup::prepare(world, &scene, &groups, &mut dm)?;
+    let controls = HexControls {
+        hg_stiffness: scene.run.hourglass.stiffness,
+        hg_viscosity: scene.run.hourglass.viscosity,
+        bv_linear: scene.run.bulk_viscosity.linear,
+        bv_quadratic: scene.run.bulk_viscosity.quadratic,
+    };
+    let setup = ExplicitSetup {
+        mesh: &dm.local,
+        elem_material: inputs.elem_material,
+        materials: inputs.materials,
+        velocity: inputs.velocity,
+        constraints: inputs.constraints,
+        controls,
+        gravity: scene.gravity,
+    };
+    let fe_res = ExplicitFe::new(setup, &mut dm.exchange);
+    first_error(world, fe_res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+    let mut fe = fe_res.map_err(|e| e.to_string())?;
+    fe.initial_energies(world);
+    let probes = Probes::locate(world, &file, &scene.probes, &fe)?;
+
+    // The step: fixed, or dt_safety times the stable step (reduced over ranks).
+    let stable0 = collective::min(world, fe.dt_stable_local);
+    if let Some(dt) = scene.run.dt {
+        if dt > stable0 {
+            return Err(format!(
+                "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s (Flanagan-Belytschko element estimate with bulk viscosity); use run.dt <= {stable0:e} or remove run.dt"
+            ));
+        }
+    }
+    let setup_s = t_setup.elapsed().as_secs_f64();
+
+    // Output.
+    if rank == 0 {
+        std::fs::create_dir_all(&out_dir)
+            .map_err(|e| format!("cannot create output directory {}: {e}", out_dir.display()))?;
+    }
+    world.barrier();
+    let l = &dm.local;
+    let counts = GlobalCounts {
+        nodes: l.global_nodes,
+        elements: l.global_elems,
+        particles: 0,
+    };
+    let mut writer = FieldWriter::create(world, &out_dir, counts, &scene.output.fields)
+        .map_err(|e| format!("{}: {e}", out_dir.display()))?;
+    let mut history = History::create(world, &out_dir.join("history.csv"), &HISTORY_COLUMNS)
+        .map_err(|e| e.to_string())?;
+    let mut probe_cols = vec!["time".to_string()];
+    probe_cols.extend(probes.columns.iter().cloned());
+    let probe_cols_ref: Vec<&str> = probe_cols.iter().map(|s| s.as_str()).collect();
+    let mut probe_csv = History::create(world, &out_dir.join("probes.csv"), &probe_cols_ref)
+        .map_err(|e| e.to_string())?;
+
+    let owned_nodes: Vec<usize> = (0..fe.n_nodes()).filter(|&n| fe.owned[n]).collect();
+    let node_ids: Vec<u64> = owned_nodes.iter().map(|&n| l.node_id[n]).collect();
+    let conn_ids: Vec<[u64; 8]> = fe
+        .elems
+        .iter()
+        .map(|c| std::array::from_fn(|k| l.node_id[c[k] as usize]))
+        .collect();
+    let rank_field = vec![rank; fe.elems.len()];
+    let mut output_s = 0.0;
+    let write_frame = |fe: &ExplicitFe, writer: &mut FieldWriter| -> Result<f64, String> {
+        let t0 = Instant::now();
+        let pos: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x[n]).collect();
+        let disp: Vec<[f64; 3]> = owned_nodes
+            .iter()
+            .map(|&n| std::array::from_fn(|c| fe.x[n][c] - fe.x0[n][c]))
+            .collect();
+        let vel: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.v[n]).collect();
+        let stress: Vec<[f64; 6]> = fe.state.iter().map(|s| s.stress).collect();
+        let eps: Vec<f64> = (0..fe.elems.len()).map(|e| fe.plastic_strain(e)).collect();
+        let nodes = NodeFrame {
+            ids: &node_ids,
+            position: &pos,
+            displacement: Some(&disp),
+            velocity: Some(&vel),
+        };
+        let elems = ElementFrame {
+            ids: &fe.elem_id,
+            connectivity: &conn_ids,
+            stress: Some(&stress),
+            plastic_strain: Some(&eps),
+            pressure: Some(&fe.pressure),
+            rank: Some(&rank_field),
+        };
+        writer
+            .write_frame(fe.time, Some(&nodes), Some(&elems), None)
+            .map_err(|e| format!("writing fields.h5: {e}"))?;
+        Ok(t0.elapsed().as_secs_f64())
+    };
+
+    let e0 = fe.energies.kinetic;
+    let mut err_max = 0.0f64;
+    let end = scene.run.end_time;
+    let output_every = scene.run.output_every.unwrap_or(end);
+    let history_every = scene.run.history_every;
+    let mut next_frame = 1u64; // frame 0 written now
+    let mut next_row = 1u64;
+    output_s += write_frame(&fe, &mut writer)?;
+    let row = |fe: &ExplicitFe, dt: f64, err: f64| -> Vec<f64> {
+        let en = &fe.energies;
+        vec![
+            fe.step as f64,
+            fe.time,
+            dt,
+            en.kinetic,
+            en.internal,
+            en.hourglass,
+            en.external_work,
+            0.0,
+            err,
+            en.momentum[0],
+            en.momentum[1],
+            en.momentum[2],
+            0.0,
+        ]
+    };
+    let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
+    history.row(&row(&fe, dt, 0.0)).map_err(|e| e.to_string())?;
+    let mut pr = vec![0.0];
+    pr.extend(probes.sample(world, &fe));
+    probe_csv.row(&pr).map_err(|e| e.to_string())?;
+
+    let progress = (rank == 0 && !opts.quiet).then(|| {
+        let pb = indicatif::ProgressBar::new(1000);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% t={msg} ETA {eta}",
+            )
+            .unwrap(),
+        );
+        pb
+    });
+
+    let loop_t0 = Instant::now();
+    let mut loop_output_s = 0.0;
+    let mut fe_wall = 0.0;
+    let fixed_dt = scene.run.dt;
+    let mut dt_min = f64::INFINITY;
+    loop {
+        // With a fixed step t = step * dt exactly; otherwise clip the last step onto end_time.
+        let remaining = end - fe.time;
+        if let Some(d) = fixed_dt {
+            if (fe.step as f64) * d >= end - TIME_EPS_STEPS * d {
+                break;
+            }
+            dt = d;
+        } else {
+            if remaining <= TIME_EPS_STEPS * dt {
+                break;
+            }
+            dt = dt.min(remaining);
+        }
+        dt_min = dt_min.min(dt);
+        let tf = Instant::now();
+        fe.kick_drift(dt);
+        let hg = fe.element_forces(dt, &mut dm.exchange);
+        // Agree on failure (inverted element) with the same reduction as the next step size:
+        // a failing rank proposes a negative step.
+        let (local_dt, local_err, hg_work) = match hg {
+            Ok(w) => (fe.dt_stable_local, None, w),
+            Err(e) => (-1.0 - rank as f64, Some(e), 0.0),
+        };
+        let next = collective::min(world, local_dt);
+        if next < 0.0 {
+            let msg = local_err.map(|e: StepError| format!("{file}: {e}"));
+            first_error(world, msg)?;
+        }
+        let sums = fe.finish_step(dt);
+        let mut local = [0.0; 7];
+        local[..6].copy_from_slice(&sums);
+        local[6] = hg_work;
+        let mut global = [0.0; 7];
+        world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
+        fe.accumulate(&global, dt);
+        fe_wall += tf.elapsed().as_secs_f64();
+        if fixed_dt.is_some() {
+            fe.time = fe.step as f64 * dt;
+        }
+        let en = fe.energies;
+        let total = en.kinetic + en.internal + en.hourglass;
+        let err = energy_error(total, e0, en.external_work);
+        if !total.is_finite() || !en.external_work.is_finite() {
+            return Err(format!(
+                "{file}: non-finite energy at t = {:e} s, step {}: the run blew up (is run.dt too large?)",
+                fe.time, fe.step
+            ));
+        }
+        err_max = err_max.max(err);
+        if err > scene.run.max_energy_error {
+            let _ = history.row(&row(&fe, dt, err));
+            return Err(format!(
+                "{file}: energy error {err:.3e} passed run.max_energy_error = {} at t = {:e} s, step {} (E = {total:e} J, E0 = {e0:e} J, external work {:e} J): the run is unstable or under-resolved; reduce run.dt or run.dt_safety",
+                scene.run.max_energy_error, fe.time, fe.step, en.external_work
+            ));
+        }
+        let at_end = fe.time >= end - TIME_EPS_STEPS * dt;
+        let t_row = history_every * next_row as f64;
+        if history_every <= 0.0 || fe.time >= t_row - TIME_EPS_STEPS * dt || at_end {
+            history.row(&row(&fe, dt, err)).map_err(|e| e.to_string())?;
+            let mut pr = vec![fe.time];
+            pr.extend(probes.sample(world, &fe));
+            probe_csv.row(&pr).map_err(|e| e.to_string())?;
+            if history_every > 0.0 {
+                while history_every * next_row as f64 <= fe.time + TIME_EPS_STEPS * dt {
+                    next_row += 1;
+                }
+            }
+        }
+        if fe.time >= output_every * next_frame as f64 - TIME_EPS_STEPS * dt || at_end {
+            let s = write_frame(&fe, &mut writer)?;
+            output_s += s;
+            loop_output_s += s;
+            while output_every * next_frame as f64 <= fe.time + TIME_EPS_STEPS * dt {
+                next_frame += 1;
+            }
+        }
+        if fixed_dt.is_none() {
+            dt = scene.run.dt_safety * next;
+        }
+        if let Some(pb) = &progress {
+            pb.set_position(((fe.time / end) * 1000.0) as u64);
+            pb.set_message(format!("{:.3e}", fe.time));
+        }
+    }
+    let loop_s = loop_t0.elapsed().as_secs_f64() - loop_output_s;
+    if let Some(pb) = progress {
+        pb.finish_and_clear();
+    }
+    let written = writer.bytes_written();
+    writer.finish().map_err(|e| e.to_string())?;
+    history.flush().map_err(|e| e.to_string())?;
+    probe_csv.flush().map_err(|e| e.to_string())?;
+
+    // Report.
+    let elements = l.global_elems;
+    let steps = fe.step;
+    let ns_per_element_cycle = if elements > 0 && steps > 0 {
+        collective::max(world, loop_s) * 1e9 * size as f64 / (elements as f64 * steps as f64)
+    } else {
+        0.0
+    };
+    let fe_stats = StageStats::reduce(
+        world,
+        fe_wall,
+        fe.elems.len() as f64,
+        dm.exchange.bytes_sent as f64,
+    );
+    let out_stats = StageStats::reduce(world, output_s, owned_nodes.len() as f64, written as f64);
+    let mem_bytes = collective::sum(world, fe.bytes() as f64);
+    let wall_s = collective::max(world, wall0.elapsed().as_secs_f64());
+    let mut report = Report::new(size as usize, elements, l.global_nodes, 0, steps, wall_s);
+    report.stages_run = vec!["fe".into()];
+    report.fe = Some(fe_stats);
+    report.output = Some(out_stats);
+    report.ns_per_element_cycle = Some(ns_per_element_cycle);
+    report.energy_error_max = err_max;
+    let ex = &mut report.extra;
+    ex.insert("title".into(), scene.title.clone().into());
+    ex.insert("mode".into(), "explicit".into());
+    ex.insert("dt_stable_initial".into(), stable0.into());
+    ex.insert("dt_min".into(), dt_min.into());
+    ex.insert("setup_s".into(), collective::max(world, setup_s).into());
+    ex.insert("loop_s".into(), collective::max(world, loop_s).into());
+    ex.insert(
+        "bytes_per_element".into(),
+        (mem_bytes / elements.max(1) as f64).into(),
+    );
+    let t = fe.timers;
+    ex.insert(
+        "fe_element_kernel_s".into(),
+        collective::max(world, t.elements).into(),
+    );
+    ex.insert(
+        "fe_ghost_exchange_s".into(),
+        collective::max(world, t.exchange).into(),
+    );
+    ex.insert("fe_nodal_s".into(), collective::max(world, t.nodal).into());
+    if rank == 0 {
+        report
+            .write(&out_dir.join("report.json"))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(RunSummary {
+        out: out_dir,
+        steps,
+        energy_error_max: err_max,
+        ns_per_element_cycle,
+    })
+}

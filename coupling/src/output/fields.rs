@@ -1,0 +1,477 @@
+//! `fields.h5` (HDF5 through MPI-IO, every rank writing its own rows) and its XDMF index.
+//!
+//! Rows are ordered by global id (row r holds id r), so that `elements/connectivity`, which holds
+//! node ids, indexes `nodes/position` directly and ParaView draws the mesh from the `.xmf`.
+//! Before writing, each field is moved to the rank that owns its id range
+//! ([`redistribute_by_id`]), which then writes one contiguous hyperslab.
+use super::OutputError;
+use mpi::datatype::{Partition, PartitionMut};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use ndarray::{s, ArrayView1, ArrayView2};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Global sizes of what a frame holds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GlobalCounts {
+    /// Nodes (ids 0..nodes).
+    pub nodes: u64,
+    /// Elements (ids 0..elements).
+    pub elements: u64,
+    /// Particles (ids 0..particles).
+    pub particles: u64,
+}
+
+/// This rank's owned nodes for a frame.
+pub struct NodeFrame<'a> {
+    /// Global ids.
+    pub ids: &'a [u64],
+    /// Current coordinates.
+    pub position: &'a [[f64; 3]],
+    /// Displacements.
+    pub displacement: Option<&'a [[f64; 3]]>,
+    /// Velocities.
+    pub velocity: Option<&'a [[f64; 3]]>,
+}
+
+/// This rank's elements for a frame.
+pub struct ElementFrame<'a> {
+    /// Global ids.
+    pub ids: &'a [u64],
+    /// Node ids, gmsh/VTK hexahedron order.
+    pub connectivity: &'a [[u64; 8]],
+    /// Stress xx,yy,zz,xy,yz,zx.
+    pub stress: Option<&'a [[f64; 6]]>,
+    /// Equivalent plastic strain.
+    pub plastic_strain: Option<&'a [f64]>,
+    /// Pressure.
+    pub pressure: Option<&'a [f64]>,
+    /// Owning rank.
+    pub rank: Option<&'a [i32]>,
+}
+
+/// This rank's particles for a frame.
+pub struct ParticleFrame<'a> {
+    /// Global ids.
+    pub ids: &'a [u64],
+    /// Positions.
+    pub position: &'a [[f64; 3]],
+    /// Velocities.
+    pub velocity: Option<&'a [[f64; 3]]>,
+    /// Densities.
+    pub density: Option<&'a [f64]>,
+    /// Pressures.
+    pub pressure: Option<&'a [f64]>,
+    /// Smoothing lengths.
+    pub h: Option<&'a [f64]>,
+    /// Owning rank.
+    pub rank: Option<&'a [i32]>,
+}
+
+/// The rows [lo, hi) of `n` ids that rank `r` of `p` writes.
+fn block(n: u64, p: usize, r: usize) -> (u64, u64) {
+    (n * r as u64 / p as u64, n * (r as u64 + 1) / p as u64)
+}
+
+/// Moves rows (`ids[i]`, `values[i*w..(i+1)*w]`) to the rank whose id block holds them and
+/// returns this rank's block sorted by id: (ids, values). Collective. Every id in 0..n must
+/// appear exactly once over all ranks.
+pub fn redistribute_by_id(
+    comm: &SimpleCommunicator,
+    n: u64,
+    ids: &[u64],
+    values: &[f64],
+    w: usize,
+) -> (Vec<u64>, Vec<f64>) {
+    let p = comm.size() as usize;
+    let dest = |id: u64| -> usize {
+        // The block of id: the largest r with lo(r) <= id.
+        let mut r = ((id as u128 * p as u128) / n.max(1) as u128) as usize;
+        r = r.min(p - 1);
+        while r + 1 < p && block(n, p, r + 1).0 <= id {
+            r += 1;
+        }
+        while r > 0 && block(n, p, r).0 > id {
+            r -= 1;
+        }
+        r
+    };
+    let stride = w + 1;
+    let mut counts = vec![0i32; p];
+    for &id in ids {
+        counts[dest(id)] += stride as i32;
+    }
+    let mut displs = vec![0i32; p];
+    for r in 1..p {
+        displs[r] = displs[r - 1] + counts[r - 1];
+    }
+    let mut send = vec![0.0f64; ids.len() * stride];
+    let mut fill = displs.clone();
+    for (i, &id) in ids.iter().enumerate() {
+        let d = dest(id);
+        let o = fill[d] as usize;
+        // ids < 2^53 are exact in f64.
+        send[o] = id as f64;
+        send[o + 1..o + stride].copy_from_slice(&values[i * w..(i + 1) * w]);
+        fill[d] += stride as i32;
+    }
+    let mut rcounts = vec![0i32; p];
+    comm.all_to_all_into(&counts[..], &mut rcounts[..]);
+    let mut rdispls = vec![0i32; p];
+    for r in 1..p {
+        rdispls[r] = rdispls[r - 1] + rcounts[r - 1];
+    }
+    let total = rcounts.iter().sum::<i32>() as usize;
+    let mut recv = vec![0.0f64; total];
+    {
+        let sp = Partition::new(&send[..], &counts[..], &displs[..]);
+        let mut rp = PartitionMut::new(&mut recv[..], &rcounts[..], &rdispls[..]);
+        comm.all_to_all_varcount_into(&sp, &mut rp);
+    }
+    let m = total / stride;
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by_key(|&i| recv[i * stride] as u64);
+    let mut out_ids = Vec::with_capacity(m);
+    let mut out_vals = Vec::with_capacity(m * w);
+    for i in order {
+        out_ids.push(recv[i * stride] as u64);
+        out_vals.extend_from_slice(&recv[i * stride + 1..(i + 1) * stride]);
+    }
+    (out_ids, out_vals)
+}
+
+/// One dataset of a frame as the XDMF index needs to know it.
+struct Item {
+    path: String,
+    name: String,
+    cols: usize,
+    int: bool,
+}
+
+/// Frames written so far (for the XDMF index).
+struct FrameIndex {
+    name: String,
+    time: f64,
+    node_items: Vec<Item>,
+    elem_items: Vec<Item>,
+    particle_items: Vec<Item>,
+}
+
+/// Writes field frames to `fields.h5` and keeps `fields.xmf` up to date.
+pub struct FieldWriter {
+    comm: SimpleCommunicator,
+    file: hdf5::File,
+    dir: PathBuf,
+    counts: GlobalCounts,
+    fields: Vec<String>,
+    frames: Vec<FrameIndex>,
+    bytes: u64,
+}
+
+impl FieldWriter {
+    /// Creates `dir/fields.h5` (collective). `fields` are the `[output] fields` to write besides
+    /// ids, positions and connectivity.
+    pub fn create(
+        comm: &SimpleCommunicator,
+        dir: &Path,
+        counts: GlobalCounts,
+        fields: &[String],
+    ) -> Result<FieldWriter, OutputError> {
+        let raw = comm.as_raw();
+        let file = hdf5::File::with_options()
+            .with_fapl(|p| p.mpio(raw, None))
+            .create(dir.join("fields.h5"))?;
+        file.create_group("frames")?;
+        Ok(FieldWriter {
+            comm: comm.duplicate(),
+            file,
+            dir: dir.to_path_buf(),
+            counts,
+            fields: fields.to_vec(),
+            frames: Vec::new(),
+            bytes: 0,
+        })
+    }
+
+    /// Bytes of field data this rank wrote.
+    pub fn bytes_written(&self) -> u64 {
+        self.bytes
+    }
+
+    fn wants(&self, f: &str) -> bool {
+        self.fields.iter().any(|x| x == f)
+    }
+
+    /// Writes one dataset of `n` rows x `w` columns from this rank's block (collective create).
+    fn put(
+        &mut self,
+        group: &hdf5::Group,
+        name: &str,
+        n: u64,
+        w: usize,
+        lo: u64,
+        vals: &[f64],
+        int: bool,
+    ) -> Result<(), OutputError> {
+        let rows = (vals.len() / w.max(1)) as u64;
+        let hi = lo + rows;
+        let n = n as usize;
+        if int {
+            let ints: Vec<i64> = vals.iter().map(|v| *v as i64).collect();
+            if w == 1 {
+                let ds = group.new_dataset::<i64>().shape([n]).create(name)?;
+                if rows > 0 {
+                    ds.write_slice(ArrayView1::from(&ints[..]), s![lo as usize..hi as usize])?;
+                }
+            } else {
+                let ds = group.new_dataset::<i64>().shape([n, w]).create(name)?;
+                if rows > 0 {
+                    let a = ArrayView2::from_shape((rows as usize, w), &ints[..]).unwrap();
+                    ds.write_slice(a, s![lo as usize..hi as usize, ..])?;
+                }
+            }
+        } else if w == 1 {
+            let ds = group.new_dataset::<f64>().shape([n]).create(name)?;
+            if rows > 0 {
+                ds.write_slice(ArrayView1::from(vals), s![lo as usize..hi as usize])?;
+            }
+        } else {
+            let ds = group.new_dataset::<f64>().shape([n, w]).create(name)?;
+            if rows > 0 {
+                let a = ArrayView2::from_shape((rows as usize, w), vals).unwrap();
+                ds.write_slice(a, s![lo as usize..hi as usize, ..])?;
+            }
+        }
+        self.bytes += 8 * vals.len() as u64;
+        Ok(())
+    }
+
+    /// Packs columns, redistributes by id, writes each column as a dataset. `cols`: (name,
+    /// width, values, is_integer).
+    fn write_set(
+        &mut self,
+        group: &hdf5::Group,
+        n: u64,
+        ids: &[u64],
+        cols: &[(&str, usize, Vec<f64>, bool)],
+    ) -> Result<Vec<Item>, OutputError> {
+        let w: usize = cols.iter().map(|c| c.1).sum();
+        let mut packed = vec![0.0; ids.len() * w];
+        let mut off = 0;
+        for (_, cw, v, _) in cols {
+            for i in 0..ids.len() {
+                packed[i * w + off..i * w + off + cw].copy_from_slice(&v[i * cw..(i + 1) * cw]);
+            }
+            off += cw;
+        }
+        let (bids, bvals) = redistribute_by_id(&self.comm, n, ids, &packed, w);
+        let p = self.comm.size() as usize;
+        let (lo, hi) = block(n, p, self.comm.rank() as usize);
+        debug_assert_eq!(bids.len() as u64, hi - lo, "ids must cover 0..n once");
+        let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
+        let mut items = Vec::new();
+        self.put(group, "id", n, 1, lo, &idf, true)?;
+        let mut off = 0;
+        for (name, cw, _, int) in cols {
+            let mut col = Vec::with_capacity(bids.len() * cw);
+            for i in 0..bids.len() {
+                col.extend_from_slice(&bvals[i * w + off..i * w + off + cw]);
+            }
+            self.put(group, name, n, *cw, lo, &col, *int)?;
+            items.push(Item {
+                path: format!("{}/{}", group.name(), name),
+                name: name.to_string(),
+                cols: *cw,
+                int: *int,
+            });
+            off += cw;
+        }
+        Ok(items)
+    }
+
+    /// Writes a frame at `time` (collective).
+    pub fn write_frame(
+        &mut self,
+        time: f64,
+        nodes: Option<&NodeFrame>,
+        elements: Option<&ElementFrame>,
+        particles: Option<&ParticleFrame>,
+    ) -> Result<(), OutputError> {
+        let name = format!("{:06}", self.frames.len());
+        let g = self.file.group("frames")?.create_group(&name)?;
+        g.new_attr::<f64>().create("time")?.write_scalar(&time)?;
+        let flat3 = |v: &[[f64; 3]]| v.as_flattened().to_vec();
+        let mut node_items = Vec::new();
+        if let Some(nf) = nodes {
+            let mut cols = vec![("position", 3, flat3(nf.position), false)];
+            if let (true, Some(d)) = (self.wants("displacement"), nf.displacement) {
+                cols.push(("displacement", 3, flat3(d), false));
+            }
+            if let (true, Some(v)) = (self.wants("velocity"), nf.velocity) {
+                cols.push(("velocity", 3, flat3(v), false));
+            }
+            let gg = g.create_group("nodes")?;
+            node_items = self.write_set(&gg, self.counts.nodes, nf.ids, &cols)?;
+        }
+        let mut elem_items = Vec::new();
+        if let Some(ef) = elements {
+            let conn: Vec<f64> = ef
+                .connectivity
+                .iter()
+                .flatten()
+                .map(|&c| c as f64)
+                .collect();
+            let mut cols = vec![("connectivity", 8, conn, true)];
+            if let (true, Some(s)) = (self.wants("stress"), ef.stress) {
+                cols.push(("stress", 6, s.as_flattened().to_vec(), false));
+            }
+            if let (true, Some(s)) = (self.wants("plastic_strain"), ef.plastic_strain) {
+                cols.push(("plastic_strain", 1, s.to_vec(), false));
+            }
+            if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
+                cols.push(("pressure", 1, s.to_vec(), false));
+            }
+            if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
+                cols.push(("rank", 1, s.iter().map(|&r| r as f64).collect(), true));
+            }
+            let gg = g.create_group("elements")?;
+            elem_items = self.write_set(&gg, self.counts.elements, ef.ids, &cols)?;
+        }
+        let mut particle_items = Vec::new();
+        if let Some(pf) = particles {
+            let mut cols = vec![("position", 3, flat3(pf.position), false)];
+            if let (true, Some(v)) = (self.wants("velocity"), pf.velocity) {
+                cols.push(("velocity", 3, flat3(v), false));
+            }
+            if let (true, Some(v)) = (self.wants("density"), pf.density) {
+                cols.push(("density", 1, v.to_vec(), false));
+            }
+            if let (true, Some(v)) = (self.wants("pressure"), pf.pressure) {
+                cols.push(("pressure", 1, v.to_vec(), false));
+            }
+            if let Some(v) = pf.h {
+                cols.push(("h", 1, v.to_vec(), false));
+            }
+            if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
+                cols.push(("rank", 1, v.iter().map(|&r| r as f64).collect(), true));
+            }
+            let gg = g.create_group("particles")?;
+            particle_items = self.write_set(&gg, self.counts.particles, pf.ids, &cols)?;
+        }
+        self.file.flush()?;
+        self.frames.push(FrameIndex {
+            name,
+            time,
+            node_items,
+            elem_items,
+            particle_items,
+        });
+        if self.comm.rank() == 0 {
+            self.write_xdmf()?;
+        }
+        Ok(())
+    }
+
+    /// Finishes the file (the XDMF index is already current).
+    pub fn finish(self) -> Result<(), OutputError> {
+        self.file.flush()?;
+        Ok(())
+    }
+
+    fn write_xdmf(&self) -> Result<(), OutputError> {
+        let item = |it: &Item, n: u64| -> String {
+            let dims = if it.cols == 1 {
+                format!("{n}")
+            } else {
+                format!("{n} {}", it.cols)
+            };
+            let ty = if it.int { "Int" } else { "Float" };
+            format!(
+                "<DataItem Dimensions=\"{dims}\" NumberType=\"{ty}\" Precision=\"8\" Format=\"HDF\">fields.h5:{}</DataItem>",
+                it.path
+            )
+        };
+        let attr = |it: &Item, n: u64, center: &str| -> String {
+            let kind = match it.cols {
+                1 => "Scalar",
+                3 => "Vector",
+                _ => "Matrix",
+            };
+            format!(
+                "      <Attribute Name=\"{}\" AttributeType=\"{kind}\" Center=\"{center}\">\n        {}\n      </Attribute>\n",
+                it.name,
+                item(it, n)
+            )
+        };
+        let mut x = String::from(
+            "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n",
+        );
+        let c = self.counts;
+        for (kind, has) in [("mesh", c.elements > 0), ("particles", c.particles > 0)] {
+            if !has {
+                continue;
+            }
+            let _ = writeln!(
+                x,
+                "  <Grid Name=\"{kind}\" GridType=\"Collection\" CollectionType=\"Temporal\">"
+            );
+            for f in &self.frames {
+                let _ = writeln!(
+                    x,
+                    "   <Grid Name=\"{kind} {}\" GridType=\"Uniform\">",
+                    f.name
+                );
+                let _ = writeln!(x, "      <Time Value=\"{:e}\"/>", f.time);
+                if kind == "mesh" {
+                    let conn = f.elem_items.iter().find(|i| i.name == "connectivity");
+                    let pos = f.node_items.iter().find(|i| i.name == "position");
+                    let (Some(conn), Some(pos)) = (conn, pos) else {
+                        continue;
+                    };
+                    let _ = writeln!(
+                        x,
+                        "      <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{}\">\n        {}\n      </Topology>",
+                        c.elements,
+                        item(conn, c.elements)
+                    );
+                    let _ = writeln!(
+                        x,
+                        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
+                        item(pos, c.nodes)
+                    );
+                    for it in f.node_items.iter().filter(|i| i.name != "position") {
+                        x.push_str(&attr(it, c.nodes, "Node"));
+                    }
+                    for it in f.elem_items.iter().filter(|i| i.name != "connectivity") {
+                        x.push_str(&attr(it, c.elements, "Cell"));
+                    }
+                } else {
+                    let Some(pos) = f.particle_items.iter().find(|i| i.name == "position") else {
+                        continue;
+                    };
+                    let _ = writeln!(
+                        x,
+                        "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>",
+                        c.particles
+                    );
+                    let _ = writeln!(
+                        x,
+                        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
+                        item(pos, c.particles)
+                    );
+                    for it in f.particle_items.iter().filter(|i| i.name != "position") {
+                        x.push_str(&attr(it, c.particles, "Node"));
+                    }
+                }
+                x.push_str("   </Grid>\n");
+            }
+            x.push_str("  </Grid>\n");
+        }
+        x.push_str(" </Domain>\n</Xdmf>\n");
+        let tmp = self.dir.join("fields.xmf.tmp");
+        std::fs::write(&tmp, x)?;
+        std::fs::rename(tmp, self.dir.join("fields.xmf"))?;
+        Ok(())
+    }
+}
