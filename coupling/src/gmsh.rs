@@ -152,6 +152,14 @@ pub fn physical_names(msh: &Path) -> Result<Vec<PhysicalName>, MeshError> {
         path: msh.to_path_buf(),
         why: format!("cannot read ({e}); binary .msh files need $PhysicalNames in ASCII: save as ASCII msh 2.2 or 4.1"),
     })?;
+    if !text.starts_with("$MeshFormat") {
+        return Err(MeshError::File {
+            path: msh.to_path_buf(),
+            why:
+                "not a gmsh mesh file (no $MeshFormat header); expected an ASCII .msh (2.2 or 4.1)"
+                    .into(),
+        });
+    }
     let mut out = Vec::new();
     let mut lines = text.lines();
     while let Some(l) = lines.next() {

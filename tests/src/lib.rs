@@ -1,1 +1,123 @@
-//! Helpers for the integration tests.
+//! Helpers for the integration tests: find or build `tdyn`, write scenes, run under mpirun,
+//! read the CSV output.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+/// The release `tdyn` binary, built once if missing.
+pub fn tdyn() -> PathBuf {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let target = std::env::var("CARGO_TARGET_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|_| root().join("target"));
+        let bin = target.join("release").join("tdyn");
+        let st = Command::new(env!("CARGO"))
+            .args(["build", "--release", "-p", "coupling", "--bin", "tdyn"])
+            .current_dir(root())
+            .status()
+            .expect("cargo build");
+        assert!(st.success(), "building tdyn failed");
+        bin
+    })
+    .clone()
+}
+
+/// A fresh directory for one test.
+pub fn workdir(name: &str) -> PathBuf {
+    let d = root().join("target").join("test-runs").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `mpirun -np N tdyn run scene --out out --quiet` (10 min limit) and returns its output.
+pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
+    Command::new("timeout")
+        .arg("600")
+        .arg("mpirun")
+        .args(["-np", &np.to_string()])
+        .arg(tdyn())
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .output()
+        .expect("mpirun")
+}
+
+/// Runs and insists on success.
+pub fn run_ok(np: usize, scene: &Path, out: &Path) {
+    let o = run(np, scene, out);
+    assert!(
+        o.status.success(),
+        "tdyn at np {np} failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// A CSV file as (header, rows).
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|s| s.to_string())
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// A column of a CSV by name.
+pub fn column(h: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
+    let k = h
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name}"));
+    rows.iter().map(|r| r[k]).collect()
+}
+
+/// The bar scene used by the wave, vibration and rank tests: steel, uniaxial strain (symmetry
+/// planes on the lateral faces). `extra` is appended (boundaries, probes, run keys).
+pub fn bar_scene(dir: &Path, n: usize, run: &str, extra: &str) -> PathBuf {
+    let geo = root().join("meshes").join("bar.geo");
+    let text = format!(
+        "title = \"test bar\"\n[run]\n{run}\n\n[[mesh]]\nfile = \"{}\"\nparams = {{ L = 1.0, A = 0.05, N = {n}, M = 1 }}\n\n\
+         [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\nyoungs_modulus = 200.0e9\npoisson_ratio = 0.3\n\n\
+         [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n\n\
+         [[boundary]]\ngroup = \"sides_y\"\nkind = \"symmetry\"\n\n[[boundary]]\ngroup = \"sides_z\"\nkind = \"symmetry\"\n\n{extra}\n",
+        geo.display()
+    );
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Steel: rho, E, nu and the dilatational wave speed sqrt((lambda + 2 mu)/rho).
+pub const RHO: f64 = 7850.0;
+/// Young's modulus, Pa.
+pub const E: f64 = 200.0e9;
+/// Poisson's ratio.
+pub const NU: f64 = 0.3;
+
+/// Dilatational (uniaxial-strain) wave speed of the test steel, m/s.
+pub fn c_dilatational() -> f64 {
+    (E * (1.0 - NU) / ((1.0 + NU) * (1.0 - 2.0 * NU)) / RHO).sqrt()
+}

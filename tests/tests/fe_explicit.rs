@@ -1,0 +1,230 @@
+//! The explicit FE stage under mpirun against analytic answers.
+use tdyn_tests::*;
+
+/// Arrival time (first crossing of half the amplitude) and mean plateau stress at the probe.
+fn wave(n: usize, np: usize) -> (f64, f64, f64) {
+    let dir = workdir(&format!("wave_n{n}_np{np}"));
+    let scene = bar_scene(
+        &dir,
+        n,
+        "end_time = 1.4e-4",
+        "[[boundary]]\ngroup = \"left\"\nkind = \"velocity\"\nvelocity = [1.0, 0.0, 0.0]\n\
+         [[probe]]\nname = \"mid\"\npoint = [0.5, 0.025, 0.025]\nfields = [\"stress_xx\", \"velocity_x\"]\n",
+    );
+    // The velocity step makes the energy error large over the first steps (E0 is the kinetic
+    // energy of one layer of nodes): allow it, this test is about the wave.
+    let text = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("[run]\n", "[run]\nmax_energy_error = 0.5\n");
+    std::fs::write(&scene, text).unwrap();
+    run_ok(np, &scene, &dir.join("out"));
+    let (h, rows) = read_csv(&dir.join("out/probes.csv"));
+    let t = column(&h, &rows, "time");
+    let s = column(&h, &rows, "mid.stress_xx");
+    let amp = RHO * c_dilatational() * 1.0;
+    // Arrival: the nodal velocity at x = 0.5 (a node at every resolution used) crosses half the
+    // step (v = 1 m/s). The element stress is constant over an element, so its front is
+    // offset by up to half an element; the velocity is read at the point itself.
+    let vel = column(&h, &rows, "mid.velocity_x");
+    let k = vel
+        .iter()
+        .position(|v| *v >= 0.5)
+        .expect("the wave reaches the probe");
+    let (t0, t1, v0, v1) = (t[k - 1], t[k], vel[k - 1], vel[k]);
+    let arrival = t0 + (t1 - t0) * (0.5 - v0) / (v1 - v0);
+    // Plateau: from 20 us after arrival to the end (the reflection from the free end at x = 1
+    // comes back at 1.5 L / c = 256 us, after the end).
+    let plateau: Vec<f64> = t
+        .iter()
+        .zip(&s)
+        .filter(|(tt, _)| **tt > arrival + 2e-5)
+        .map(|(_, v)| *v)
+        .collect();
+    let mean = plateau.iter().sum::<f64>() / plateau.len() as f64;
+    // L1 error of the velocity history against the ideal step wave, over the whole run.
+    let t_exact = 0.5 / c_dilatational();
+    let mut l1 = 0.0;
+    for i in 1..t.len() {
+        let exact = if t[i] >= t_exact { 1.0 } else { 0.0 };
+        l1 += (vel[i] - exact).abs() * (t[i] - t[i - 1]);
+    }
+    (arrival, mean, l1)
+}
+
+#[test]
+fn bar_wave_speed_amplitude_and_convergence() {
+    // Uniaxial strain (lateral symmetry planes): the dilatational speed applies,
+    // c = sqrt(E (1 - nu) / ((1 + nu)(1 - 2 nu)) / rho) = 5858.7 m/s; amplitude rho c v.
+    let c = c_dilatational();
+    let t_exact = 0.5 / c;
+    let amp = RHO * c;
+    let (a40, m40, l40) = wave(40, 2);
+    let (a80, m80, l80) = wave(80, 2);
+    for (n, a, m) in [(40, a40, m40), (80, a80, m80)] {
+        assert!(
+            (a - t_exact).abs() < 0.01 * t_exact,
+            "N={n}: arrival {a:e} s vs L/2c = {t_exact:e} s (1 %)"
+        );
+        assert!(
+            (-m - amp).abs() < 0.02 * amp,
+            "N={n}: plateau {m:e} Pa vs rho c v = {amp:e} Pa (2 %)"
+        );
+    }
+    assert!(
+        l80 < l40,
+        "L1 error of the velocity history must fall with refinement: N=40 {l40:e}, N=80 {l80:e}"
+    );
+    println!(
+        "wave: arrival error N=40 {:.3} %, N=80 {:.3} %; L1 {l40:e} -> {l80:e}",
+        100.0 * (a40 / t_exact - 1.0),
+        100.0 * (a80 / t_exact - 1.0)
+    );
+}
+
+#[test]
+fn elastic_free_vibration_conserves_energy() {
+    // A bar fixed at one end, moving at 1 m/s: after the boundary condition acts it vibrates
+    // axially with period 4 L / c. Over 10 periods the total energy (kinetic + internal +
+    // hourglass, no external work: the fixed end does not move) stays within 0.5 % of E0.
+    let dir = workdir("vibration");
+    let period = 4.0 / c_dilatational();
+    let scene = bar_scene(
+        &dir,
+        20,
+        &format!(
+            "end_time = {:e}\nhistory_every = {:e}",
+            10.0 * period,
+            period / 50.0
+        ),
+        "[[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n",
+    );
+    let text = std::fs::read_to_string(&scene).unwrap().replace(
+        "[[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+        "[[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\nvelocity = [1.0, 0.0, 0.0]\n",
+    );
+    std::fs::write(&scene, text).unwrap();
+    run_ok(1, &scene, &dir.join("out"));
+    let (h, rows) = read_csv(&dir.join("out/history.csv"));
+    let ke = column(&h, &rows, "kinetic_energy");
+    let ie = column(&h, &rows, "internal_energy");
+    let hg = column(&h, &rows, "hourglass_energy");
+    let w = column(&h, &rows, "external_work");
+    let e0 = ke[0];
+    let mut worst = 0.0f64;
+    for i in 0..ke.len() {
+        worst = worst.max((ke[i] + ie[i] + hg[i] - e0 - w[i]).abs() / e0);
+    }
+    assert!(
+        worst < 0.005,
+        "energy drift {worst:e} of E0 over 10 periods (limit 0.5 %)"
+    );
+    // It does vibrate: the kinetic energy passes near zero and back.
+    let kmin = ke.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(
+        kmin < 0.2 * e0,
+        "kinetic energy should swing into strain energy (min {kmin:e} of {e0:e})"
+    );
+    assert!(
+        w.iter().all(|x| x.abs() < 1e-9 * e0),
+        "a fixed end does no work"
+    );
+}
+
+#[test]
+fn rank_independence_of_the_history() {
+    // The same scene at np 1, 2, 3, 4: every history column agrees to 1e-10 of its largest value.
+    let mut runs = Vec::new();
+    for np in 1..=4 {
+        let dir = workdir(&format!("ranks_np{np}"));
+        let scene = bar_scene(
+            &dir,
+            24,
+            "end_time = 6.0e-5\nmax_energy_error = 0.5",
+            "[[boundary]]\ngroup = \"left\"\nkind = \"velocity\"\nvelocity = [1.0, 0.0, 0.0]\n",
+        );
+        run_ok(np, &scene, &dir.join("out"));
+        runs.push(read_csv(&dir.join("out/history.csv")));
+    }
+    let (h1, r1) = &runs[0];
+    for (np, (h, r)) in runs.iter().enumerate().skip(1) {
+        assert_eq!(h, h1);
+        assert_eq!(
+            r.len(),
+            r1.len(),
+            "np {} took a different number of steps",
+            np + 1
+        );
+        for (k, name) in h.iter().enumerate() {
+            let scale = r1.iter().map(|row| row[k].abs()).fold(0.0, f64::max);
+            for (a, b) in r.iter().zip(r1.iter()) {
+                assert!(
+                    (a[k] - b[k]).abs() <= 1e-10 * scale,
+                    "np {} vs np 1: column {name} differs: {} vs {} (scale {scale:e}, tolerance 1e-10)",
+                    np + 1, a[k], b[k]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn field_output_covers_every_node_and_element_once() {
+    // fields.h5 at np 3: each frame's node ids are 0..N-1 (rows = ids), positions = reference +
+    // displacement, connectivity indexes existing nodes; the .xmf names every frame.
+    let dir = workdir("fields");
+    let scene = bar_scene(
+        &dir,
+        12,
+        "end_time = 4.0e-5\noutput_every = 1.0e-5\nmax_energy_error = 0.5",
+        "[[boundary]]\ngroup = \"left\"\nkind = \"velocity\"\nvelocity = [1.0, 0.0, 0.0]\n",
+    );
+    run_ok(3, &scene, &dir.join("out"));
+    let f = hdf5::File::open(dir.join("out/fields.h5")).unwrap();
+    let frames = f.group("frames").unwrap().member_names().unwrap();
+    assert_eq!(
+        frames.len(),
+        5,
+        "frames at t = 0, 1, 2, 3, 4 e-5 s (output_every 1e-5)"
+    );
+    let xmf = std::fs::read_to_string(dir.join("out/fields.xmf")).unwrap();
+    for fr in &frames {
+        let g = f.group(&format!("frames/{fr}")).unwrap();
+        let ids: Vec<i64> = g.dataset("nodes/id").unwrap().read_raw().unwrap();
+        let n = ids.len();
+        assert_eq!(n, 13 * 2 * 2, "12 x 1 x 1 hexahedra have 52 nodes");
+        assert!(
+            ids.iter().enumerate().all(|(i, &id)| id == i as i64),
+            "row r holds node id r"
+        );
+        let pos: Vec<f64> = g.dataset("nodes/position").unwrap().read_raw().unwrap();
+        let disp: Vec<f64> = g.dataset("nodes/displacement").unwrap().read_raw().unwrap();
+        for i in 0..n {
+            let x0 = pos[3 * i] - disp[3 * i];
+            assert!(
+                x0 > -1e-12 && x0 < 1.0 + 1e-12,
+                "reference x of node {i} = {x0} lies in the bar"
+            );
+        }
+        let conn: Vec<i64> = g
+            .dataset("elements/connectivity")
+            .unwrap()
+            .read_raw()
+            .unwrap();
+        assert_eq!(conn.len(), 12 * 8);
+        assert!(
+            conn.iter().all(|&c| c >= 0 && (c as usize) < n),
+            "connectivity holds node ids"
+        );
+        let ranks: Vec<i64> = g.dataset("elements/rank").unwrap().read_raw().unwrap();
+        assert!(
+            ranks.iter().all(|&r| (0..3).contains(&r)),
+            "rank field within 0..3"
+        );
+        assert!(
+            xmf.contains(&format!("/frames/{fr}/nodes/position")),
+            "xmf names frame {fr}"
+        );
+        let t: f64 = g.attr("time").unwrap().read_scalar().unwrap();
+        assert!(t >= 0.0 && t <= 4.0e-5 * (1.0 + 1e-9));
+    }
+}
