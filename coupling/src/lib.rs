@@ -1,5 +1,8 @@
 //! Everything parallel that is not PETSc: scene loading, meshing, the timestep driver, output.
 #![warn(missing_docs)]
+// Index loops over nodes and components read like the formulas they implement; `!(x > 0.0)`
+// deliberately also rejects NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod collective;
 pub mod driver;

@@ -505,7 +505,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         let key = if path.is_empty() || path == "." {
             "(scene)".to_string()
         } else {
-            path.replace("mesh[", "mesh[").to_string()
+            path
         };
         err(&key, msg)
     })?;

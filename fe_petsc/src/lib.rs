@@ -1,6 +1,11 @@
 //! Finite elements on PETSc DMPlex: mesh load, METIS distribution, ghost exchange, the PRONTO-3D
 //! hexahedron, materials and the explicit central-difference integrator.
 #![warn(missing_docs)]
+// Index loops over nodes and components read like the formulas they implement; `!(x > 0.0)`
+// deliberately also rejects NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+// `petsc_call!` wraps one FFI call whose arguments are raw PETSc handles: the call is the unsafe part.
+#![allow(clippy::macro_metavars_in_unsafe)]
 
 pub mod explicit;
 pub mod hex;

@@ -79,8 +79,10 @@ pub fn check(code: sys::PetscErrorCode, call: &'static str) -> Result<(), PetscE
     })
 }
 
-/// Calls a PETSc function and converts its error code, naming the call.
+/// Calls a PETSc function and converts its error code, naming the call. Every argument is an
+/// FFI value handed straight to PETSc: the whole call is the unsafe operation.
 #[macro_export]
+#[allow(clippy::macro_metavars_in_unsafe)]
 macro_rules! petsc_call {
     ($f:ident ( $($arg:expr),* $(,)? )) => {
         $crate::petsc::check(unsafe { petsc_sys::$f($($arg),*) }, stringify!($f))

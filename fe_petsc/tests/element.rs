@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)]
 //! The hexahedron and the materials against analytic answers (no MPI, no PETSc).
 use fe_petsc::hex::{self, HexControls, HexState};
 use fe_petsc::material::{build_material, Material, MaterialSpec};

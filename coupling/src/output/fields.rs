@@ -203,17 +203,17 @@ impl FieldWriter {
         self.fields.iter().any(|x| x == f)
     }
 
-    /// Writes one dataset of `n` rows x `w` columns from this rank's block (collective create).
+    /// Writes one dataset of `shape` = (n rows, w columns) from this rank's block starting at
+    /// row `lo` (collective create); returns the bytes written.
     fn put(
-        &mut self,
         group: &hdf5::Group,
         name: &str,
-        n: u64,
-        w: usize,
+        shape: (u64, usize),
         lo: u64,
         vals: &[f64],
         int: bool,
-    ) -> Result<(), OutputError> {
+    ) -> Result<u64, OutputError> {
+        let (n, w) = shape;
         let rows = (vals.len() / w.max(1)) as u64;
         let hi = lo + rows;
         let n = n as usize;
@@ -243,8 +243,7 @@ impl FieldWriter {
                 ds.write_slice(a, s![lo as usize..hi as usize, ..])?;
             }
         }
-        self.bytes += 8 * vals.len() as u64;
-        Ok(())
+        Ok(8 * vals.len() as u64)
     }
 
     /// Packs columns, redistributes by id, writes each column as a dataset. `cols`: (name,
@@ -271,14 +270,14 @@ impl FieldWriter {
         debug_assert_eq!(bids.len() as u64, hi - lo, "ids must cover 0..n once");
         let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
         let mut items = Vec::new();
-        self.put(group, "id", n, 1, lo, &idf, true)?;
+        self.bytes += Self::put(group, "id", (n, 1), lo, &idf, true)?;
         let mut off = 0;
         for (name, cw, _, int) in cols {
             let mut col = Vec::with_capacity(bids.len() * cw);
             for i in 0..bids.len() {
                 col.extend_from_slice(&bvals[i * w + off..i * w + off + cw]);
             }
-            self.put(group, name, n, *cw, lo, &col, *int)?;
+            self.bytes += Self::put(group, name, (n, *cw), lo, &col, *int)?;
             items.push(Item {
                 path: format!("{}/{}", group.name(), name),
                 name: name.to_string(),

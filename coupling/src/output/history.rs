@@ -44,7 +44,7 @@ impl History {
             }
             w.write_all(b"\n")?;
             self.rows += 1;
-            if self.rows % FLUSH_EVERY_ROWS == 0 {
+            if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
                 w.flush()?;
             }
         }
