@@ -5,7 +5,6 @@
 //! with orthogonal hourglass control", IJNME 17 (1981) 679-706 (FB below).
 //! Node order: gmsh/VTK (0-3 the face zeta = -1 counter-clockwise seen from +zeta, 4-7 above).
 use crate::material::Material;
-use std::sync::OnceLock;
 
 /// Nodes of the element.
 pub const NODES: usize = 8;
@@ -104,68 +103,99 @@ pub enum ElementError {
 /// C_IJK = integral of eps_abc dN_I/dxi_a dN_J/dxi_b dN_K/dxi_c (degree <= 2 per variable, so
 /// 2-point Gauss is exact). V is linear in the x-components, so B_xI = dV/dx_I gives
 /// sum_I B_xI x_I = V and sum_I B_xI y_I = 0: the FB uniform-strain gradient, exact for linear
-/// fields. Computed once.
+/// fields.
 struct VolumeTerms {
     pairs: [[(u8, u8, f64); MAX_PAIRS]; 8],
 }
 
-/// Non-zero (J, K) pairs per node in dV/dx_I (12 for the trilinear hexahedron).
-const MAX_PAIRS: usize = 12;
+/// Non-zero (J, K) pairs per node in dV/dx_I (9 for the trilinear hexahedron).
+const MAX_PAIRS: usize = 9;
 
-fn dshape(xi: [f64; 3]) -> [[f64; 3]; 8] {
+const fn dshape(xi: [f64; 3]) -> [[f64; 3]; 8] {
     let mut d = [[0.0; 3]; 8];
-    for (i, n) in NODE_XI.iter().enumerate() {
+    let mut i = 0;
+    while i < 8 {
+        let n = NODE_XI[i];
         let a = 1.0 + n[0] * xi[0];
         let b = 1.0 + n[1] * xi[1];
         let c = 1.0 + n[2] * xi[2];
         d[i] = [n[0] * b * c / 8.0, a * n[1] * c / 8.0, a * b * n[2] / 8.0];
+        i += 1;
     }
     d
 }
 
-fn volume_terms() -> &'static VolumeTerms {
-    static T: OnceLock<VolumeTerms> = OnceLock::new();
-    T.get_or_init(|| {
-        let g = 1.0 / 3f64.sqrt();
-        let mut c = [[[0.0f64; 8]; 8]; 8];
-        for gx in [-g, g] {
-            for gy in [-g, g] {
-                for gz in [-g, g] {
-                    let d = dshape([gx, gy, gz]);
-                    for i in 0..8 {
-                        for j in 0..8 {
-                            for k in 0..8 {
-                                let (a, b, e) = (d[i], d[j], d[k]);
-                                c[i][j][k] += a[0] * (b[1] * e[2] - b[2] * e[1])
-                                    - a[1] * (b[0] * e[2] - b[2] * e[0])
-                                    + a[2] * (b[0] * e[1] - b[1] * e[0]);
-                            }
-                        }
-                    }
+/// 1/sqrt(3): the 2-point Gauss abscissa (sqrt is not available at compile time).
+const GAUSS_2PT: f64 = 0.577_350_269_189_625_8;
+
+/// The table, computed at compile time so that the loops in `volume_gradient` unroll into
+/// straight-line code with constant coefficients and indices.
+const VOLUME_TERMS: VolumeTerms = {
+    let mut c = [[[0.0f64; 8]; 8]; 8];
+    let mut p = 0;
+    while p < 8 {
+        let xi = [
+            if p & 1 == 0 { -GAUSS_2PT } else { GAUSS_2PT },
+            if p & 2 == 0 { -GAUSS_2PT } else { GAUSS_2PT },
+            if p & 4 == 0 { -GAUSS_2PT } else { GAUSS_2PT },
+        ];
+        let d = dshape(xi);
+        let mut i = 0;
+        while i < 8 {
+            let mut j = 0;
+            while j < 8 {
+                let mut k = 0;
+                while k < 8 {
+                    let (a, b, e) = (d[i], d[j], d[k]);
+                    c[i][j][k] += a[0] * (b[1] * e[2] - b[2] * e[1])
+                        - a[1] * (b[0] * e[2] - b[2] * e[0])
+                        + a[2] * (b[0] * e[1] - b[1] * e[0]);
+                    k += 1;
                 }
+                j += 1;
             }
+            i += 1;
         }
-        let mut pairs = [[(0u8, 0u8, 0.0f64); MAX_PAIRS]; 8];
-        for i in 0..8 {
-            let mut n = 0;
-            for j in 0..8 {
-                for k in (j + 1)..8 {
-                    if c[i][j][k].abs() > 1e-12 {
-                        assert!(n < MAX_PAIRS, "hex volume terms: more pairs than expected");
-                        pairs[i][n] = (j as u8, k as u8, c[i][j][k]);
-                        n += 1;
-                    }
+        p += 1;
+    }
+    let mut pairs = [[(0u8, 0u8, 0.0f64); MAX_PAIRS]; 8];
+    let mut i = 0;
+    while i < 8 {
+        let mut n = 0;
+        let mut j = 0;
+        while j < 8 {
+            let mut k = j + 1;
+            while k < 8 {
+                let v = c[i][j][k];
+                if v > 1e-12 || v < -1e-12 {
+                    assert!(n < MAX_PAIRS, "hex volume terms: more pairs than expected");
+                    // Round to the exact multiple of 1/12 (the integrals are rational).
+                    let r = v * 12.0;
+                    let ri = if r > 0.0 {
+                        (r + 0.5) as i64
+                    } else {
+                        (r - 0.5) as i64
+                    };
+                    pairs[i][n] = (j as u8, k as u8, ri as f64 / 12.0);
+                    n += 1;
                 }
+                k += 1;
             }
+            j += 1;
         }
-        VolumeTerms { pairs }
-    })
-}
+        assert!(
+            n == MAX_PAIRS,
+            "hex volume terms: fewer pairs than expected"
+        );
+        i += 1;
+    }
+    VolumeTerms { pairs }
+};
 
 /// FB volume gradient B[I] = dV/dx_I (N.B. not divided by V) and the exact volume.
 #[inline]
 fn volume_gradient(x: &[[f64; 3]; 8]) -> ([[f64; 3]; 8], f64) {
-    let t = volume_terms();
+    let t = &VOLUME_TERMS;
     let mut b = [[0.0; 3]; 8];
     for i in 0..8 {
         let mut s = [0.0; 3];
@@ -443,7 +473,11 @@ pub fn update(
     let mut hg_work = 0.0;
     if ctl.hg_stiffness != 0.0 || ctl.hg_viscosity != 0.0 {
         let ks = ctl.hg_stiffness * mat.dilatational_modulus() * vol * bb / 8.0;
-        let kv = 0.5 * ctl.hg_viscosity * rho * c * vol.powf(2.0 / 3.0);
+        let kv = if ctl.hg_viscosity > 0.0 {
+            0.5 * ctl.hg_viscosity * rho * c * len * len
+        } else {
+            0.0
+        };
         for (al, g) in GAMMA.iter().enumerate() {
             let mut gx = [0.0; 3];
             for k in 0..8 {
