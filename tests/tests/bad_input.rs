@@ -155,3 +155,28 @@ fn an_unreadable_mesh_and_a_blow_up_are_reported() {
         "clear reason:\n{err}"
     );
 }
+
+#[test]
+fn tetrahedral_meshes_are_refused_with_a_reason() {
+    // The element is an 8-node hexahedron: a tetrahedral mesh is refused by name.
+    let dir = workdir("tets");
+    let geo = dir.join("tets.geo");
+    std::fs::write(
+        &geo,
+        "SetFactory(\"OpenCASCADE\");\nBox(1) = {0,0,0,1,1,1};\nMesh.MeshSizeMax = 0.5;\n\
+         Physical Volume(\"bar\") = {1};\nPhysical Surface(\"left\") = {1};\n\
+         Physical Surface(\"sides_y\") = {3, 4};\nPhysical Surface(\"sides_z\") = {5, 6};\n",
+    )
+    .unwrap();
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let bar = root().join("meshes").join("bar.geo").display().to_string();
+    std::fs::write(&scene, text.replace(&bar, &geo.display().to_string())).unwrap();
+    let o = run(2, &scene, &dir.join("out"));
+    assert!(!o.status.success(), "a tetrahedral mesh must be refused");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("tetrahedron") && err.contains("hexahedral"),
+        "names the problem:\n{err}"
+    );
+}
