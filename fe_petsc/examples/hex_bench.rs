@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)]
 //! Times one element update in a tight loop (no mesh, no MPI): `cargo run --release --example hex_bench`.
 use fe_petsc::hex::{self, HexControls, HexState};
 use fe_petsc::material::{build_material, MaterialSpec};
@@ -65,8 +66,8 @@ fn main() {
     let ns = t.elapsed().as_secs_f64() * 1e9 / (reps * n) as f64;
     let t = Instant::now();
     for _ in 0..reps {
-        for e in 0..n {
-            acc += hex::volume(&x[e]);
+        for xe in &x {
+            acc += hex::volume(xe);
         }
     }
     let nsv = t.elapsed().as_secs_f64() * 1e9 / (reps * n) as f64;
