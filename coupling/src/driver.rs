@@ -91,10 +91,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             "{file}: contact: the contact stage is not available yet; remove the [contact] table"
         ));
     }
-    if scene.meshes.len() != 1 {
+    if scene.meshes.is_empty() {
         return Err(format!(
-            "{file}: mesh: exactly one [[mesh]] is supported for now (found {}); put the bodies in one .geo as separate physical volumes",
-            scene.meshes.len()
+            "{file}: mesh: a scene without [[mesh]] needs the SPH stage, which is not available yet"
         ));
     }
     let out_dir = opts.out.clone().unwrap_or_else(|| {
@@ -107,15 +106,31 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         )
     });
 
-    // Meshing on rank 0 (gmsh, cached), then every rank reads the physical names.
-    let mesh_def = &scene.meshes[0];
+    // Meshing on rank 0 (gmsh, cached; several meshes merged, each moved by its translation),
+    // then every rank reads the physical names.
     let mut mesh_path = PathBuf::new();
     let mut err = None;
     if rank == 0 {
-        let cache = gmsh::default_cache_dir(mesh_def.file.parent().unwrap_or(Path::new(".")));
-        match gmsh::mesh_file(mesh_def, &cache) {
-            Ok(p) => mesh_path = p,
-            Err(e) => err = Some(format!("{file}: mesh[0]: {e}")),
+        let mut parts = Vec::new();
+        for (i, m) in scene.meshes.iter().enumerate() {
+            let cache = gmsh::default_cache_dir(m.file.parent().unwrap_or(Path::new(".")));
+            match gmsh::mesh_file(m, &cache) {
+                Ok(p) => parts.push((p, m.translate)),
+                Err(e) => {
+                    err = Some(format!("{file}: mesh[{i}]: {e}"));
+                    break;
+                }
+            }
+        }
+        if err.is_none() {
+            if parts.len() == 1 {
+                mesh_path = parts.remove(0).0;
+            } else {
+                match gmsh::merge(&parts, &gmsh::default_cache_dir(&scene.dir)) {
+                    Ok(p) => mesh_path = p,
+                    Err(e) => err = Some(format!("{file}: mesh: {e}")),
+                }
+            }
         }
     }
     first_error(world, err)?;
@@ -125,7 +140,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     buf.resize(len as usize, 0);
     world.process_at_rank(0).broadcast_into(&mut buf[..]);
     let mesh_path = PathBuf::from(String::from_utf8_lossy(&buf).into_owned());
-    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh[0]: {e}"))?;
+    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
     let mut groups = Groups::default();
     for n in &names {
         match n.dim {
@@ -144,9 +159,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
 
     let t_setup = Instant::now();
     let mut dm =
-        DistributedMesh::load(world, &mesh_path).map_err(|e| format!("{file}: mesh[0]: {e}"))?;
-    let tr = mesh_def.translate;
-    if tr != [0.0; 3] {
+        DistributedMesh::load(world, &mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
+    // One mesh is moved here; several were moved when merged.
+    let tr = scene.meshes[0].translate;
+    if scene.meshes.len() == 1 && tr != [0.0; 3] {
         for x in dm.local.coords.iter_mut() {
             for c in 0..3 {
                 x[c] += tr[c];

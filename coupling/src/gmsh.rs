@@ -189,6 +189,234 @@ pub fn physical_names(msh: &Path) -> Result<Vec<PhysicalName>, MeshError> {
     Ok(out)
 }
 
+/// A msh 2.2 ASCII file in memory: what merging needs.
+struct Msh22 {
+    names: Vec<PhysicalName>,
+    /// (gmsh node id, coordinates)
+    nodes: Vec<(u64, [f64; 3])>,
+    /// (type, physical tag, elementary tag, node ids)
+    elements: Vec<(i32, i32, i32, Vec<u64>)>,
+}
+
+fn bad(path: &Path, why: &str) -> MeshError {
+    MeshError::File {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    }
+}
+
+fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, &e.to_string()))?;
+    let names = physical_names(path)?;
+    let mut nodes = Vec::new();
+    let mut elements = Vec::new();
+    let mut lines = text.lines();
+    while let Some(l) = lines.next() {
+        match l.trim() {
+            "$Nodes" => {
+                let n: usize = lines
+                    .next()
+                    .and_then(|s| s.trim().parse().ok())
+                    .ok_or_else(|| bad(path, "bad $Nodes count"))?;
+                for _ in 0..n {
+                    let row = lines.next().ok_or_else(|| bad(path, "truncated $Nodes"))?;
+                    let v: Vec<f64> = row
+                        .split_whitespace()
+                        .filter_map(|s| s.parse().ok())
+                        .collect();
+                    if v.len() < 4 {
+                        return Err(bad(path, &format!("bad node row: {row}")));
+                    }
+                    nodes.push((v[0] as u64, [v[1], v[2], v[3]]));
+                }
+            }
+            "$Elements" => {
+                let n: usize = lines
+                    .next()
+                    .and_then(|s| s.trim().parse().ok())
+                    .ok_or_else(|| bad(path, "bad $Elements count"))?;
+                for _ in 0..n {
+                    let row = lines
+                        .next()
+                        .ok_or_else(|| bad(path, "truncated $Elements"))?;
+                    let v: Vec<i64> = row
+                        .split_whitespace()
+                        .filter_map(|s| s.parse().ok())
+                        .collect();
+                    if v.len() < 3 || v.len() < 3 + v[2] as usize {
+                        return Err(bad(path, &format!("bad element row: {row}")));
+                    }
+                    let ntags = v[2] as usize;
+                    let phys = if ntags > 0 { v[3] as i32 } else { 0 };
+                    let geom = if ntags > 1 { v[4] as i32 } else { 0 };
+                    let conn = v[3 + ntags..].iter().map(|&x| x as u64).collect();
+                    elements.push((v[1] as i32, phys, geom, conn));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(Msh22 {
+        names,
+        nodes,
+        elements,
+    })
+}
+
+/// A `.msh` in the 2.2 ASCII format: the file itself, or a conversion by gmsh into `cache_dir`.
+fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
+    let head = std::fs::read_to_string(path).map_err(|e| {
+        bad(
+            path,
+            &format!("cannot read as text ({e}); save the mesh as ASCII"),
+        )
+    })?;
+    if head
+        .lines()
+        .nth(1)
+        .map(|l| l.starts_with("2.2 0"))
+        .unwrap_or(false)
+    {
+        return Ok(path.to_path_buf());
+    }
+    std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
+    let mut h = Sha256::new();
+    h.update(head.as_bytes());
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let out = cache_dir.join(format!("converted-{hash}.msh"));
+    if out.exists() {
+        return Ok(out);
+    }
+    let res = Command::new("gmsh")
+        .arg(path)
+        .args(["-save", "-format", "msh22", "-o"])
+        .arg(&out)
+        .output()
+        .map_err(|e| MeshError::Gmsh {
+            path: path.to_path_buf(),
+            why: format!("cannot run gmsh: {e}"),
+        })?;
+    if !res.status.success() || !out.exists() {
+        return Err(MeshError::Gmsh {
+            path: path.to_path_buf(),
+            why: String::from_utf8_lossy(&res.stderr)
+                .lines()
+                .last()
+                .unwrap_or("conversion to msh 2.2 failed")
+                .to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// Merges several meshes, each moved by its translation, into one msh 2.2 file in `cache_dir`
+/// (cached by content). Physical groups with the same dimension and name become one group;
+/// node, element and elementary-entity numbers are offset so they stay unique. The bodies stay
+/// separate (no nodes are shared between meshes).
+pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf, MeshError> {
+    let mut meshes = Vec::new();
+    let mut h = Sha256::new();
+    for (p, t) in parts {
+        let p22 = as_msh22(p, cache_dir)?;
+        h.update(std::fs::read(&p22).map_err(|e| bad(&p22, &e.to_string()))?);
+        h.update(format!("{t:?}").as_bytes());
+        meshes.push((read_msh22(&p22)?, *t));
+    }
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let out = cache_dir.join(format!("merged-{hash}.msh"));
+    if out.exists() {
+        return Ok(out);
+    }
+    // New physical tags per (dim, name), in order of first appearance.
+    let mut groups: Vec<PhysicalName> = Vec::new();
+    let mut text = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
+    let mut maps = Vec::new();
+    for (m, _) in &meshes {
+        let mut map = std::collections::BTreeMap::new();
+        for n in &m.names {
+            let tag = match groups.iter().find(|g| g.dim == n.dim && g.name == n.name) {
+                Some(g) => g.tag,
+                None => {
+                    let tag = groups.len() as i32 + 1;
+                    groups.push(PhysicalName {
+                        dim: n.dim,
+                        tag,
+                        name: n.name.clone(),
+                    });
+                    tag
+                }
+            };
+            map.insert((n.dim, n.tag), tag);
+        }
+        maps.push(map);
+    }
+    text.push_str(&format!("$PhysicalNames\n{}\n", groups.len()));
+    for g in &groups {
+        text.push_str(&format!("{} {} \"{}\"\n", g.dim, g.tag, g.name));
+    }
+    text.push_str("$EndPhysicalNames\n");
+    let total_nodes: usize = meshes.iter().map(|(m, _)| m.nodes.len()).sum();
+    text.push_str(&format!("$Nodes\n{total_nodes}\n"));
+    let mut offsets = Vec::new();
+    let mut base = 0u64;
+    for (m, t) in &meshes {
+        offsets.push(base);
+        let mut top = 0;
+        for (id, x) in &m.nodes {
+            text.push_str(&format!(
+                "{} {:?} {:?} {:?}\n",
+                id + base,
+                x[0] + t[0],
+                x[1] + t[1],
+                x[2] + t[2]
+            ));
+            top = top.max(*id);
+        }
+        base += top;
+    }
+    text.push_str("$EndNodes\n");
+    let total_elems: usize = meshes.iter().map(|(m, _)| m.elements.len()).sum();
+    text.push_str(&format!("$Elements\n{total_elems}\n"));
+    let mut eid = 0u64;
+    let mut geom_base = 0;
+    for (k, (m, _)) in meshes.iter().enumerate() {
+        let mut geom_top = 0;
+        for (ty, phys, geom, conn) in &m.elements {
+            eid += 1;
+            let dim = match ty {
+                15 => 0,
+                1 | 8 => 1,
+                2 | 3 | 9 | 10 => 2,
+                _ => 3,
+            };
+            let p = maps[k].get(&(dim, *phys)).copied().unwrap_or(0);
+            text.push_str(&format!("{eid} {ty} 2 {p} {}", geom + geom_base));
+            for c in conn {
+                text.push_str(&format!(" {}", c + offsets[k]));
+            }
+            text.push('\n');
+            geom_top = geom_top.max(*geom);
+        }
+        geom_base += geom_top;
+    }
+    text.push_str("$EndElements\n");
+    std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
+    let tmp = cache_dir.join(format!("merged-{hash}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, text).map_err(|e| bad(&tmp, &e.to_string()))?;
+    std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
