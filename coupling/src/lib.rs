@@ -5,6 +5,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod collective;
+pub mod comm;
 pub mod driver;
 pub mod fe_setup;
 pub mod gmsh;

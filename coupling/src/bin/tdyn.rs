@@ -31,6 +31,14 @@ enum Cmd {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
+    Selftest {
+        /// Which kernel: `comm`.
+        kernel: String,
+        /// Seed of the random patterns.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Mesh a gmsh .geo file (cached): `tdyn mesh meshes/bar.geo -p N=80`
     Mesh {
         /// The .geo file.
@@ -96,6 +104,32 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("tdyn: {}: {e}", geo.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Selftest { kernel, seed } => {
+            let Some(universe) = mpi::initialize() else {
+                eprintln!("tdyn: MPI could not be initialised");
+                return ExitCode::FAILURE;
+            };
+            let world = universe.world();
+            let res = match kernel.as_str() {
+                "comm" => coupling::comm::selftest(&world, seed),
+                k => Err(format!("unknown kernel {k:?} (expected comm)")),
+            };
+            // Every rank must agree on the outcome.
+            let failed = coupling::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
+            match res {
+                Ok(msg) if !failed => {
+                    if world.rank() == 0 {
+                        println!("{msg}");
+                    }
+                    ExitCode::SUCCESS
+                }
+                Ok(_) => ExitCode::FAILURE,
+                Err(e) => {
+                    eprintln!("tdyn selftest: rank {}: {e}", world.rank());
                     ExitCode::FAILURE
                 }
             }
