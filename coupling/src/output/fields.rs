@@ -5,6 +5,7 @@
 //! Before writing, each field is moved to the rank that owns its id range
 //! ([`redistribute_by_id`]), which then writes one contiguous hyperslab.
 use super::OutputError;
+use mpi::collective::SystemOperation;
 use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -267,7 +268,19 @@ impl FieldWriter {
         let (bids, bvals) = redistribute_by_id(&self.comm, n, ids, &packed, w);
         let p = self.comm.size() as usize;
         let (lo, hi) = block(n, p, self.comm.rank() as usize);
-        debug_assert_eq!(bids.len() as u64, hi - lo, "ids must cover 0..n once");
+        // Row r must hold id r: this rank's block must be exactly lo..hi, once each. Agreed on
+        // by all ranks before any dataset is created, so that a bad id set fails everywhere
+        // instead of leaving some ranks inside a collective call.
+        let covered = bids.len() as u64 == hi - lo && bids.iter().zip(lo..hi).all(|(a, b)| *a == b);
+        let mut all_covered = false;
+        self.comm
+            .all_reduce_into(&covered, &mut all_covered, SystemOperation::logical_and());
+        if !all_covered {
+            return Err(OutputError::Layout(format!(
+                "{}: the ids over all ranks are not 0..{n} each exactly once",
+                group.name()
+            )));
+        }
         let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
         let mut items = Vec::new();
         self.bytes += Self::put(group, "id", (n, 1), lo, &idf, true)?;
@@ -297,6 +310,22 @@ impl FieldWriter {
         elements: Option<&ElementFrame>,
         particles: Option<&ParticleFrame>,
     ) -> Result<(), OutputError> {
+        // What the frame holds must agree over the ranks: every HDF5 create below is collective.
+        let mask = [nodes.is_some(), elements.is_some(), particles.is_some()]
+            .iter()
+            .enumerate()
+            .fold(0i32, |m, (k, &has)| m | (i32::from(has) << k));
+        let (mut lo_mask, mut hi_mask) = (0i32, 0i32);
+        self.comm
+            .all_reduce_into(&mask, &mut lo_mask, SystemOperation::bitwise_and());
+        self.comm
+            .all_reduce_into(&mask, &mut hi_mask, SystemOperation::bitwise_or());
+        if lo_mask != hi_mask {
+            return Err(OutputError::Layout(
+                "write_frame: nodes, elements and particles must be given on every rank or on none"
+                    .into(),
+            ));
+        }
         let name = format!("{:06}", self.frames.len());
         let g = self.file.group("frames")?.create_group(&name)?;
         g.new_attr::<f64>().create("time")?.write_scalar(&time)?;
@@ -366,8 +395,19 @@ impl FieldWriter {
             elem_items,
             particle_items,
         });
-        if self.comm.rank() == 0 {
-            self.write_xdmf()?;
+        // Rank 0 writes the index; every rank returns its verdict, so none goes on alone.
+        let xdmf = if self.comm.rank() == 0 {
+            self.write_xdmf()
+        } else {
+            Ok(())
+        };
+        let mut xdmf_ok = i32::from(xdmf.is_ok());
+        self.comm.process_at_rank(0).broadcast_into(&mut xdmf_ok);
+        xdmf?;
+        if xdmf_ok == 0 {
+            return Err(OutputError::Layout(
+                "rank 0 could not write fields.xmf".into(),
+            ));
         }
         Ok(())
     }
@@ -378,35 +418,14 @@ impl FieldWriter {
         Ok(())
     }
 
+    /// Rewrites `fields.xmf` (rank 0) for the frames so far: one temporal collection for the
+    /// mesh, one for the particles, each frame a grid whose data items name `fields.h5` paths.
+    /// Written to a temporary file and renamed, so a reader never sees half an index.
     fn write_xdmf(&self) -> Result<(), OutputError> {
-        let item = |it: &Item, n: u64| -> String {
-            let dims = if it.cols == 1 {
-                format!("{n}")
-            } else {
-                format!("{n} {}", it.cols)
-            };
-            let ty = if it.int { "Int" } else { "Float" };
-            format!(
-                "<DataItem Dimensions=\"{dims}\" NumberType=\"{ty}\" Precision=\"8\" Format=\"HDF\">fields.h5:{}</DataItem>",
-                it.path
-            )
-        };
-        let attr = |it: &Item, n: u64, center: &str| -> String {
-            let kind = match it.cols {
-                1 => "Scalar",
-                3 => "Vector",
-                _ => "Matrix",
-            };
-            format!(
-                "      <Attribute Name=\"{}\" AttributeType=\"{kind}\" Center=\"{center}\">\n        {}\n      </Attribute>\n",
-                it.name,
-                item(it, n)
-            )
-        };
+        let c = self.counts;
         let mut x = String::from(
             "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n",
         );
-        let c = self.counts;
         for (kind, has) in [("mesh", c.elements > 0), ("particles", c.particles > 0)] {
             if !has {
                 continue;
@@ -416,53 +435,19 @@ impl FieldWriter {
                 "  <Grid Name=\"{kind}\" GridType=\"Collection\" CollectionType=\"Temporal\">"
             );
             for f in &self.frames {
+                // A frame without this part (e.g. particles only) has no grid in its collection.
+                let body = if kind == "mesh" {
+                    mesh_grid(f, c)
+                } else {
+                    particle_grid(f, c)
+                };
+                let Some(body) = body else { continue };
                 let _ = writeln!(
                     x,
-                    "   <Grid Name=\"{kind} {}\" GridType=\"Uniform\">",
-                    f.name
+                    "   <Grid Name=\"{kind} {}\" GridType=\"Uniform\">\n      <Time Value=\"{:e}\"/>",
+                    f.name, f.time
                 );
-                let _ = writeln!(x, "      <Time Value=\"{:e}\"/>", f.time);
-                if kind == "mesh" {
-                    let conn = f.elem_items.iter().find(|i| i.name == "connectivity");
-                    let pos = f.node_items.iter().find(|i| i.name == "position");
-                    let (Some(conn), Some(pos)) = (conn, pos) else {
-                        continue;
-                    };
-                    let _ = writeln!(
-                        x,
-                        "      <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{}\">\n        {}\n      </Topology>",
-                        c.elements,
-                        item(conn, c.elements)
-                    );
-                    let _ = writeln!(
-                        x,
-                        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
-                        item(pos, c.nodes)
-                    );
-                    for it in f.node_items.iter().filter(|i| i.name != "position") {
-                        x.push_str(&attr(it, c.nodes, "Node"));
-                    }
-                    for it in f.elem_items.iter().filter(|i| i.name != "connectivity") {
-                        x.push_str(&attr(it, c.elements, "Cell"));
-                    }
-                } else {
-                    let Some(pos) = f.particle_items.iter().find(|i| i.name == "position") else {
-                        continue;
-                    };
-                    let _ = writeln!(
-                        x,
-                        "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>",
-                        c.particles
-                    );
-                    let _ = writeln!(
-                        x,
-                        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
-                        item(pos, c.particles)
-                    );
-                    for it in f.particle_items.iter().filter(|i| i.name != "position") {
-                        x.push_str(&attr(it, c.particles, "Node"));
-                    }
-                }
+                x.push_str(&body);
                 x.push_str("   </Grid>\n");
             }
             x.push_str("  </Grid>\n");
@@ -473,4 +458,74 @@ impl FieldWriter {
         std::fs::rename(tmp, self.dir.join("fields.xmf"))?;
         Ok(())
     }
+}
+
+/// An XDMF `DataItem` reading `it` (n rows) from `fields.h5`.
+fn data_item(it: &Item, n: u64) -> String {
+    let dims = if it.cols == 1 {
+        format!("{n}")
+    } else {
+        format!("{n} {}", it.cols)
+    };
+    let ty = if it.int { "Int" } else { "Float" };
+    format!(
+        "<DataItem Dimensions=\"{dims}\" NumberType=\"{ty}\" Precision=\"8\" Format=\"HDF\">fields.h5:{}</DataItem>",
+        it.path
+    )
+}
+
+/// An XDMF `Attribute` for `it` (n rows) centred on `center` (`Node` or `Cell`). Stress (6
+/// columns) is a `Matrix`, not XDMF's `Tensor6`, whose component order differs from ours.
+fn attribute(it: &Item, n: u64, center: &str) -> String {
+    let kind = match it.cols {
+        1 => "Scalar",
+        3 => "Vector",
+        _ => "Matrix",
+    };
+    format!(
+        "      <Attribute Name=\"{}\" AttributeType=\"{kind}\" Center=\"{center}\">\n        {}\n      </Attribute>\n",
+        it.name,
+        data_item(it, n)
+    )
+}
+
+/// The body of frame `f`'s mesh grid (hexahedra, node and cell attributes), if it has a mesh.
+fn mesh_grid(f: &FrameIndex, c: GlobalCounts) -> Option<String> {
+    let conn = f.elem_items.iter().find(|i| i.name == "connectivity")?;
+    let pos = f.node_items.iter().find(|i| i.name == "position")?;
+    let mut x = format!(
+        "      <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{}\">\n        {}\n      </Topology>\n",
+        c.elements,
+        data_item(conn, c.elements)
+    );
+    let _ = writeln!(
+        x,
+        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
+        data_item(pos, c.nodes)
+    );
+    for it in f.node_items.iter().filter(|i| i.name != "position") {
+        x.push_str(&attribute(it, c.nodes, "Node"));
+    }
+    for it in f.elem_items.iter().filter(|i| i.name != "connectivity") {
+        x.push_str(&attribute(it, c.elements, "Cell"));
+    }
+    Some(x)
+}
+
+/// The body of frame `f`'s particle grid (one vertex per particle), if it has particles.
+fn particle_grid(f: &FrameIndex, c: GlobalCounts) -> Option<String> {
+    let pos = f.particle_items.iter().find(|i| i.name == "position")?;
+    let mut x = format!(
+        "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>\n",
+        c.particles
+    );
+    let _ = writeln!(
+        x,
+        "      <Geometry GeometryType=\"XYZ\">\n        {}\n      </Geometry>",
+        data_item(pos, c.particles)
+    );
+    for it in f.particle_items.iter().filter(|i| i.name != "position") {
+        x.push_str(&attribute(it, c.particles, "Node"));
+    }
+    Some(x)
 }

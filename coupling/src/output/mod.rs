@@ -3,12 +3,14 @@
 mod fields;
 mod history;
 mod report;
+mod selftest;
 
 pub use fields::{
     redistribute_by_id, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame,
 };
 pub use history::History;
 pub use report::{Report, StageStats};
+pub use selftest::roundtrip_check;
 
 /// Output errors.
 #[derive(Debug, thiserror::Error)]
@@ -19,4 +21,9 @@ pub enum OutputError {
     /// File system.
     #[error("{0}")]
     Io(#[from] std::io::Error),
+    /// The data given do not fit the layout (ids not 0..N once each, a part given on some ranks
+    /// only), or rank 0 could not write the XDMF index. Returned on every rank alike, so that no
+    /// rank is left waiting in a collective call.
+    #[error("{0}")]
+    Layout(String),
 }
