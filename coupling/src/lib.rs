@@ -11,4 +11,5 @@ pub mod fe_setup;
 pub mod gmsh;
 pub mod output;
 pub mod probes;
+pub mod rcb;
 pub mod scene;

@@ -27,3 +27,31 @@ fn comm_plan_delivers_every_item_once_at_1_to_5_ranks() {
         }
     }
 }
+
+#[test]
+fn rcb_balances_queries_and_rebalances_at_1_to_5_ranks() {
+    // Each run checks (see coupling/src/rcb/selftest.rs): every id owned once against the ids
+    // handed in; unit-weight loads within one item; weighted loads within ceil(log2 P) x the
+    // largest weight of the mean; each item inside its rank's box; point and box queries equal
+    // a brute-force test of every rank's box; identical points, a plane, a line, 0 / 1 / P-1
+    // points; a rebalance after a 1 % move migrates under 5 %; a NaN point refused.
+    for np in 1..=5 {
+        for seed in [3u64, 99] {
+            let o = Command::new("timeout")
+                .args(["120", "mpirun", "-np", &np.to_string()])
+                .arg(tdyn())
+                .args(["selftest", "rcb", "--seed", &seed.to_string()])
+                .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+                .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+                .output()
+                .unwrap();
+            let out = String::from_utf8_lossy(&o.stdout);
+            assert!(
+                o.status.success() && out.contains("passed"),
+                "np {np} seed {seed}:\n{out}\n{}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+    }
+}

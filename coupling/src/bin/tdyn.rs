@@ -116,7 +116,8 @@ fn main() -> ExitCode {
             let world = universe.world();
             let res = match kernel.as_str() {
                 "comm" => coupling::comm::selftest(&world, seed),
-                k => Err(format!("unknown kernel {k:?} (expected comm)")),
+                "rcb" => coupling::rcb::selftest(&world, seed),
+                k => Err(format!("unknown kernel {k:?} (expected comm or rcb)")),
             };
             // Every rank must agree on the outcome.
             let failed = coupling::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
