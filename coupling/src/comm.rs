@@ -34,9 +34,9 @@ pub struct CommPlan {
     /// Source ranks with a message, ascending, and the item count from each.
     recv_ranks: Vec<i32>,
     recv_counts: Vec<usize>,
-    /// Bytes this rank sent through the plan so far.
+    /// Bytes this rank sent to other ranks through the plan so far.
     pub bytes_sent: u64,
-    /// Messages this rank sent through the plan so far.
+    /// Messages this rank sent to other ranks through the plan so far.
     pub messages_sent: u64,
 }
 
@@ -188,8 +188,14 @@ impl CommPlan {
                 off += len;
             }
         });
-        self.bytes_sent += std::mem::size_of_val(send) as u64;
-        self.messages_sent += send_ranks.len() as u64;
+        // Bytes and messages to other ranks (a rank's message to itself moves nothing).
+        let me = self.comm.rank();
+        for (k, &r) in send_ranks.iter().enumerate() {
+            if r != me {
+                self.bytes_sent += (send_counts[k] * sz) as u64;
+                self.messages_sent += 1;
+            }
+        }
         out
     }
 }

@@ -219,7 +219,10 @@ mod tests {
         let csv = dir.join("p.csv");
         assert_eq!(write_csv(&d, 1, &csv).unwrap(), 2);
         let text = std::fs::read_to_string(&csv).unwrap();
-        assert!(text.contains("2,0.4,0.5,0.6,1.0,-2.0,3.0,999.0,0.001"), "{text}");
+        assert!(
+            text.contains("2,0.4,0.5,0.6,1.0,-2.0,3.0,999.0,0.001"),
+            "{text}"
+        );
         let dump = dir.join("dump.1");
         std::fs::write(
             &dump,

@@ -68,11 +68,7 @@ fn lattice(region: &Region, s: f64) -> Vec<[f64; 3]> {
                 },
             )
         }
-        Region::Cylinder {
-            base,
-            axis,
-            radius,
-        } => {
+        Region::Cylinder { base, axis, radius } => {
             let (b, a, r) = (*base, *axis, *radius);
             let top = [b[0] + a[0], b[1] + a[1], b[2] + a[2]];
             let min = std::array::from_fn(|d| b[d].min(top[d]) - r);
