@@ -6,7 +6,10 @@
 
 pub mod collective;
 pub mod comm;
+pub mod contact_selftest;
+pub mod contact_stage;
 pub mod driver;
+pub mod fe_contact;
 pub mod fe_setup;
 pub mod gmsh;
 pub mod liggghts;

@@ -288,6 +288,60 @@ impl ExplicitFe {
         }
     }
 
+    /// Positions at the start of the step (before `kick_drift` moved them).
+    pub fn x_start(&self) -> &[[f64; 3]] {
+        &self.x_old
+    }
+
+    /// Whether local node `n` has a constraint that prescribes all its velocity components
+    /// (fixed or velocity): contact treats it as an infinite mass.
+    pub fn fully_constrained(&self) -> Vec<bool> {
+        let mut out = vec![false; self.x.len()];
+        for (n, c) in &self.constraints {
+            if matches!(c, Constraint::Fixed | Constraint::Velocity(_)) {
+                out[*n as usize] = true;
+            }
+        }
+        out
+    }
+
+    /// Applies contact push-back forces after `kick_drift`: `force` holds each node's force on
+    /// this rank's owned nodes (zero on the others); it is summed over ranks to every copy, then
+    /// the half-step velocity gets `F dt / m` and the position `F dt^2 / m`, with the nodal
+    /// constraints applied to the correction. Returns the local work `F . (v + dv/2) dt` over
+    /// owned nodes (the change of their kinetic energy at the half step).
+    pub fn apply_contact(
+        &mut self,
+        force: &mut [[f64; 3]],
+        dt: f64,
+        exchange: &mut NodeExchange,
+    ) -> Result<f64, StepError> {
+        exchange.sum_shared(flat(force))?;
+        let mut cons: Vec<Option<usize>> = vec![None; self.x.len()];
+        for (i, (n, _)) in self.constraints.iter().enumerate() {
+            cons[*n as usize] = Some(i);
+        }
+        let mut work = 0.0;
+        for n in 0..self.x.len() {
+            let f = force[n];
+            if f == [0.0; 3] {
+                continue;
+            }
+            let mut dv = [f[0] * dt / self.mass[n], f[1] * dt / self.mass[n], f[2] * dt / self.mass[n]];
+            if let Some(i) = cons[n] {
+                apply(&self.constraints[i].1, &mut dv, false);
+            }
+            for c in 0..3 {
+                if self.owned[n] {
+                    work += f[c] * (self.v[n][c] + 0.5 * dv[c]) * dt;
+                }
+                self.v[n][c] += dv[c];
+                self.x[n][c] += dv[c] * dt;
+            }
+        }
+        Ok(work)
+    }
+
     /// Number of local nodes.
     pub fn n_nodes(&self) -> usize {
         self.x.len()

@@ -55,3 +55,32 @@ fn rcb_balances_queries_and_rebalances_at_1_to_5_ranks() {
         }
     }
 }
+
+#[test]
+fn parallel_contact_detection_equals_serial_at_1_to_4_ranks() {
+    // coupling/src/contact_selftest.rs: 400 random moving faces, 200 nodes crossing one of them
+    // during the step, 200 flying at random, owners and face holders at random, 3 steps (the
+    // later ones start from the previous cuts). The (node, face) pairs and depths found over all
+    // ranks equal one serial box holding everything (1e-12 m; the contact crate checks that
+    // search against brute force); forces equal the serial push-back (1e-9 relative) and sum
+    // to zero (1e-12 of the total).
+    for np in 1..=4 {
+        for seed in [5u64, 77] {
+            let o = Command::new("timeout")
+                .args(["120", "mpirun", "-np", &np.to_string()])
+                .arg(tdyn())
+                .args(["selftest", "contact", "--seed", &seed.to_string()])
+                .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+                .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+                .output()
+                .unwrap();
+            let out = String::from_utf8_lossy(&o.stdout);
+            assert!(
+                o.status.success() && out.contains("passed"),
+                "np {np} seed {seed}:\n{out}\n{}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+    }
+}

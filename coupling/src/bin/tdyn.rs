@@ -117,7 +117,10 @@ fn main() -> ExitCode {
             let res = match kernel.as_str() {
                 "comm" => coupling::comm::selftest(&world, seed),
                 "rcb" => coupling::rcb::selftest(&world, seed),
-                k => Err(format!("unknown kernel {k:?} (expected comm or rcb)")),
+                "contact" => coupling::contact_selftest::selftest(&world, seed),
+                k => Err(format!(
+                    "unknown kernel {k:?} (expected comm, rcb or contact)"
+                )),
             };
             // Every rank must agree on the outcome.
             let failed = coupling::collective::max(&world, res.is_err() as i32 as f64) > 0.0;

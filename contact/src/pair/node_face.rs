@@ -1,0 +1,21 @@
+//! A mesh node against a face: the node is a point (contact radius 0).
+//!
+//! Rules (SCENE.md, "Contact"): pairs between different bodies are always searched; pairs within
+//! one body only with `self_contact`; a node never contacts a face it is a corner of (compared by
+//! global id, so a box's copies cannot defeat the rule).
+
+use super::{crossing, Hit};
+use crate::data::ContactBox;
+use crate::SearchParams;
+
+/// See [`super::test`].
+pub(super) fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> Option<Hit> {
+    let gid = b.nodes.gid[j];
+    if b.faces.node_gid[f].contains(&gid) {
+        return None;
+    }
+    if !params.self_contact && b.nodes.body[j] == b.faces.body[f] {
+        return None;
+    }
+    crossing(b, j, f, 0.0, params)
+}

@@ -1,0 +1,309 @@
+//! Push-back: kinematic contact (Taylor and Flanagan, PRONTO), frictionless.
+//!
+//! # Why kinematic, not penalty
+//!
+//! A kinematic method removes the penetration found at the end of the predicted step exactly, with
+//! the impulse the masses involved require; it adds no stiffness, so it does not lower the explicit
+//! stable step, needs no penalty parameter to tune per material, and leaves no penetration that
+//! depends on one. A penalty spring stiff enough to keep penetration small would cut the stable step
+//! (its frequency enters `2/omega_max`); a soft one lets bodies sink into each other. PRONTO-3D,
+//! the code the design follows, uses the kinematic method for the same reasons.
+//!
+//! # The impulse of one contact
+//!
+//! Node `s` (mass `m_s`) is `d` behind face `f` at parametric point `xi`, normal `n`; the face's
+//! corners `i` have masses `m_i` and shape functions `N_i(xi)`. Write the contact as the weights
+//! `w_s = 1`, `w_i = -N_i` (they sum to zero because the `N_i` sum to one) on the node positions: the
+//! gap along `n` is `g = n . sum_j w_j x_j`. A normal impulse `P` (N s) gives node `j` the position
+//! correction `dx_j = w_j P dt n / m_j` over the step, so the gap grows by `P dt sum_j w_j^2 / m_j`.
+//! Closing the penetration exactly:
+//!
+//! ```text
+//!   lambda = P dt = d / (1/m_s + sum_i N_i^2 / m_i)        (kg m)
+//!   F_j    = w_j lambda n / dt^2                           (N, force on node j over the step)
+//! ```
+//!
+//! i.e. the node's mass against the face's mass seen at the contact point, `(sum_i N_i^2/m_i)^-1`
+//! (a face whose four corners are one rigid mass `M` with the point at the centre sees `M`). The
+//! forces sum to `lambda n (1 - sum_i N_i) / dt^2 = 0`: momentum is conserved to round-off. With the
+//! corrections applied, the node lies on the corrected face at the same `xi` (the face position there
+//! moves by `sum_i N_i dx_i`, exactly linear), so no penetration is left. A node with infinite mass
+//! (prescribed motion) has `1/m = 0`: it takes the reaction and does not move.
+//!
+//! # Several contacts sharing nodes
+//!
+//! Several nodes on one face, or a node that is both a contact node and a face corner (two surfaces
+//! crossing each other, self-contact), couple the impulses: `A lambda = d`, `lambda >= 0`, with
+//! `A_kl = n_k . n_l sum_j w_kj w_lj / m_j` symmetric positive semidefinite. This is solved by
+//! projected Gauss-Seidel: sweeps over the contacts in (node gid, face gid) order, each contact's
+//! accumulated impulse updated from its current residual penetration and kept non-negative, until the
+//! largest residual (penetration left, or separation where the impulse is positive) is at most
+//! `tol` times the largest depth, or `max_sweeps`. A contact alone converges in one sweep. Every
+//! update conserves momentum, so the result does at any sweep count.
+//!
+//! The system is linearised at the contact points and normals found by the search. With several
+//! contacts on one warped face the corners move along several normals, so each node's contact
+//! point also slides and a second-order penetration remains. So each contact is then re-measured
+//! on the corrected geometry (the corrected node projected on the corrected face) and, if any
+//! penetration above `tol` times the largest depth is left, the system is solved again for it at
+//! the new points and normals (at most `MAX_GEOMETRIC_PASSES` passes; impulses only add). A lone
+//! contact needs one pass: its node lands on the corrected face exactly. Redundant contacts (two
+//! coincident surfaces, each node penetrating the other's face) share the impulse instead of
+//! pushing twice. The answer depends only on the contacts handed in (sorted internally), never on
+//! their order. Contacts that share nodes but lie in different boxes are solved separately in each
+//! box: the shared face nodes then get both boxes' impulses (momentum still conserved, the nodes
+//! left on or outside the faces, possibly a little beyond).
+
+use crate::data::{Config, ContactBox};
+use crate::search::Contact;
+use crate::shape;
+use crate::vec3::{add, axpy, dot, scale, sub, V3};
+
+/// Default [`PushBackParams::max_sweeps`].
+pub const DEFAULT_MAX_SWEEPS: usize = 200;
+/// Default [`PushBackParams::tol`].
+pub const DEFAULT_TOL: f64 = 1e-12;
+/// Most geometric passes (solve linearised, re-measure on the corrected geometry, solve again).
+const MAX_GEOMETRIC_PASSES: usize = 4;
+
+/// How push-back is computed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PushBackParams {
+    /// The time step over which the forces act, s.
+    pub dt: f64,
+    /// Most Gauss-Seidel sweeps.
+    pub max_sweeps: usize,
+    /// Stop when the largest residual is at most `tol` times the largest depth.
+    pub tol: f64,
+}
+
+impl PushBackParams {
+    /// Defaults for step `dt`.
+    pub fn new(dt: f64) -> Self {
+        PushBackParams {
+            dt,
+            max_sweeps: DEFAULT_MAX_SWEEPS,
+            tol: DEFAULT_TOL,
+        }
+    }
+}
+
+/// The push-back of one box.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PushBack {
+    /// Contact force on each box node over the step, N, aligned with the box's nodes (zero where the
+    /// node takes part in no contact). The driver adds `force / mass` to the node's acceleration;
+    /// [`PushBack::contributions`] gives the same keyed by gid for summing to owners.
+    pub force: Vec<V3>,
+    /// Normal force of each contact, N, in the order of the contacts handed in (>= 0).
+    pub normal_force: Vec<f64>,
+    /// Work of the contact forces over the step, J: each force times the corrected displacement of
+    /// its node over the step, `sum_j F_j . (x1_j + dx_j - x0_j)` with `dx_j = F_j dt^2 / m_j`
+    /// (the work to add to `contact_energy`, with the sign flipped, in an energy balance). For a
+    /// frictionless contact it is `-F_n` times the gap the pair closed during the step: zero while
+    /// two surfaces stay together, negative at an impact.
+    pub work: f64,
+    /// Change of the kinetic energy `sum_j m_j |v_j|^2 / 2` of the predicted velocities `v` made
+    /// by the correction, J: `sum_j F_j . (v_j + dv_j / 2) dt`, `dv_j = F_j dt / m_j`. Never
+    /// positive when the nodes started outside. In a central-difference scheme this half-step
+    /// kinetic energy is not the conserved one, so use [`PushBack::work`] for energy balances.
+    pub kinetic_energy_change: f64,
+    /// Gauss-Seidel sweeps done (all passes).
+    pub sweeps: usize,
+    /// Largest penetration left, m, measured on the corrected geometry (re-projected), or 0.
+    pub max_residual: f64,
+}
+
+impl PushBack {
+    /// The nonzero forces keyed by node gid, sorted by gid (for a sum at the owners).
+    pub fn contributions(&self, b: &ContactBox) -> Vec<(u64, V3)> {
+        let mut out: Vec<(u64, V3)> = self
+            .force
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.iter().any(|c| *c != 0.0))
+            .map(|(j, f)| (b.nodes.gid[j], *f))
+            .collect();
+        out.sort_by_key(|e| e.0);
+        out
+    }
+
+    /// The position correction of box node `j` over the step, `F dt^2 / m`, m.
+    pub fn position_correction(&self, b: &ContactBox, j: usize, dt: f64) -> V3 {
+        scale(self.force[j], dt * dt * inverse_mass(b.nodes.mass[j]))
+    }
+}
+
+/// `1/m`, 0 for an infinite (prescribed-motion) mass.
+fn inverse_mass(m: f64) -> f64 {
+    if m.is_finite() {
+        1.0 / m
+    } else {
+        0.0
+    }
+}
+
+/// One contact as weights on node positions (repeated corners merged).
+struct Row {
+    nodes: [usize; 5],
+    w: [f64; 5],
+    len: usize,
+    normal: V3,
+    depth: f64,
+    /// `sum_j w_j^2 / m_j`.
+    inv_mass: f64,
+}
+
+impl Row {
+    /// Contact `c` linearised at parametric point `xi` with `normal`, `depth` to close.
+    fn new(b: &ContactBox, c: &Contact, xi: [f64; 2], normal: V3, depth: f64) -> Row {
+        let mut r = Row {
+            nodes: [0; 5],
+            w: [0.0; 5],
+            len: 0,
+            normal,
+            depth,
+            inv_mass: 0.0,
+        };
+        r.add(c.node as usize, 1.0);
+        let n = shape(xi);
+        for (k, &i) in b.faces.nodes[c.face as usize].iter().enumerate() {
+            r.add(i as usize, -n[k]);
+        }
+        r.inv_mass = (0..r.len)
+            .map(|k| r.w[k] * r.w[k] * inverse_mass(b.nodes.mass[r.nodes[k]]))
+            .sum();
+        r
+    }
+
+    fn add(&mut self, node: usize, w: f64) {
+        if let Some(k) = self.nodes[..self.len].iter().position(|&n| n == node) {
+            self.w[k] += w;
+        } else {
+            self.nodes[self.len] = node;
+            self.w[self.len] = w;
+            self.len += 1;
+        }
+    }
+
+    /// Penetration left given the position corrections `dx`, of which `base` were already there
+    /// when `depth` was measured: `d - n . sum_j w_j (dx_j - base_j)`.
+    fn residual(&self, dx: &[V3], base: &[V3]) -> f64 {
+        let mut opened = 0.0;
+        for k in 0..self.len {
+            let j = self.nodes[k];
+            opened += self.w[k] * dot(self.normal, sub(dx[j], base[j]));
+        }
+        self.depth - opened
+    }
+}
+
+/// Geometric penetration left by corrections `dx` for contact `c`: re-projects the corrected node
+/// on the corrected face. Returns `(xi, normal, penetration)` (penetration < 0: a gap), or `None`
+/// where the projection fails.
+fn regauge(b: &ContactBox, c: &Contact, dx: &[V3]) -> Option<([f64; 2], V3, f64)> {
+    let j = c.node as usize;
+    let p = add(b.nodes.x1[j], dx[j]);
+    let mut q = b.quad(c.face as usize, Config::End);
+    for (k, &i) in b.faces.nodes[c.face as usize].iter().enumerate() {
+        q.x[k] = add(q.x[k], dx[i as usize]);
+    }
+    let proj = q.closest_point(p)?;
+    Some((
+        proj.xi,
+        proj.normal,
+        b.nodes.radius[j] - proj.signed_distance,
+    ))
+}
+
+/// Computes the kinematic push-back of `contacts` (from [`crate::search()`] on the same box) over
+/// step `params.dt`. See the module documentation for the method.
+pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) -> PushBack {
+    let mut order: Vec<usize> = (0..contacts.len()).collect();
+    order.sort_by_key(|&k| (contacts[k].node_gid, contacts[k].face_gid));
+    let inv_m: Vec<f64> = b.nodes.mass.iter().map(|&m| inverse_mass(m)).collect();
+    let max_depth = contacts.iter().fold(0.0, |a: f64, c| a.max(c.depth));
+    let limit = params.tol * max_depth;
+    let mut rows: Vec<Row> = contacts
+        .iter()
+        .map(|c| Row::new(b, c, c.xi, c.normal, c.depth))
+        .collect();
+    let mut dx = vec![[0.0; 3]; b.nodes.len()];
+    let mut total_lambda = vec![0.0; contacts.len()];
+    let mut force = vec![[0.0; 3]; b.nodes.len()];
+    let inv_dt2 = 1.0 / (params.dt * params.dt);
+    let mut sweeps = 0;
+    let mut max_residual = max_depth;
+    for _ in 0..MAX_GEOMETRIC_PASSES {
+        // Linear complementarity by projected Gauss-Seidel, from the gaps measured at the start
+        // of this pass (the corrections of earlier passes are already in `dx`).
+        let mut lambda = vec![0.0; rows.len()];
+        let pass_start = dx.clone();
+        let rel = |r: &Row, dx: &[V3]| r.residual(dx, &pass_start);
+        let residual_of = |lambda: &[f64], dx: &[V3]| {
+            rows.iter().zip(lambda).fold(0.0, |a: f64, (r, &l)| {
+                let res = rel(r, dx);
+                a.max(if l > 0.0 { res.abs() } else { res.max(0.0) })
+            })
+        };
+        let mut linear_residual = residual_of(&lambda, &dx);
+        let mut pass_sweeps = 0;
+        while pass_sweeps < params.max_sweeps && linear_residual > limit {
+            for &k in &order {
+                let r = &rows[k];
+                if r.inv_mass.is_nan() || r.inv_mass <= 0.0 {
+                    continue;
+                }
+                let new = (lambda[k] + rel(r, &dx) / r.inv_mass).max(0.0);
+                let step = new - lambda[k];
+                lambda[k] = new;
+                for q in 0..r.len {
+                    let j = r.nodes[q];
+                    axpy(&mut dx[j], r.w[q] * step * inv_m[j], r.normal);
+                }
+            }
+            pass_sweeps += 1;
+            linear_residual = residual_of(&lambda, &dx);
+        }
+        sweeps += pass_sweeps;
+        // Forces from the impulses (not from dx, so infinite masses get their reactions).
+        for &k in &order {
+            let r = &rows[k];
+            total_lambda[k] += lambda[k];
+            for q in 0..r.len {
+                axpy(
+                    &mut force[r.nodes[q]],
+                    r.w[q] * lambda[k] * inv_dt2,
+                    r.normal,
+                );
+            }
+        }
+        // Measure the penetration left on the corrected geometry; re-linearise there.
+        max_residual = 0.0;
+        for (k, c) in contacts.iter().enumerate() {
+            if let Some((xi, normal, pen)) = regauge(b, c, &dx) {
+                max_residual = max_residual.max(pen);
+                rows[k] = Row::new(b, c, xi, normal, pen);
+            }
+        }
+        if max_residual <= limit {
+            break;
+        }
+    }
+    let mut work = 0.0;
+    let mut kinetic_energy_change = 0.0;
+    for (j, f) in force.iter().enumerate() {
+        let dv = scale(*f, params.dt * inv_m[j]);
+        kinetic_energy_change += dot(*f, add(b.nodes.v[j], scale(dv, 0.5))) * params.dt;
+        let moved = add(sub(b.nodes.x1[j], b.nodes.x0[j]), dx[j]);
+        work += dot(*f, moved);
+    }
+    PushBack {
+        force,
+        normal_force: total_lambda.iter().map(|l| l * inv_dt2).collect(),
+        work,
+        kinetic_energy_change,
+        sweeps,
+        max_residual,
+    }
+}

@@ -1,0 +1,149 @@
+//! Contact search inside one box: for every owned node, the face it crossed during the step.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::data::{Aabb, Config, ContactBox};
+use crate::grid::Grid;
+use crate::pair;
+use crate::vec3::{norm, sub, V3};
+
+/// Default [`SearchParams::gap_tol`].
+pub const DEFAULT_GAP_TOL: f64 = 1e-3;
+/// Default [`SearchParams::param_tol`].
+pub const DEFAULT_PARAM_TOL: f64 = 1e-6;
+
+/// What the search looks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchParams {
+    /// Also search pairs within one body (`[contact] self_contact`).
+    pub self_contact: bool,
+    /// Capture tolerance, as a fraction of the face's diameter: a node that starts the step up to
+    /// this far behind a face still counts as having been outside it (see [`crate::pair`]).
+    pub gap_tol: f64,
+    /// Parametric tolerance of "the projection falls inside the face": `|xi|, |eta| <= 1 + param_tol`
+    /// (closes the seams between neighbouring faces against round-off).
+    pub param_tol: f64,
+}
+
+impl Default for SearchParams {
+    fn default() -> Self {
+        SearchParams {
+            self_contact: false,
+            gap_tol: DEFAULT_GAP_TOL,
+            param_tol: DEFAULT_PARAM_TOL,
+        }
+    }
+}
+
+/// One detected contact: owned node `node` crossed face `face` (box indices; the gids too).
+/// `Pod`, so results can be sent as bytes (72 bytes, no padding).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct Contact {
+    /// Box index of the node.
+    pub node: u32,
+    /// Box index of the face.
+    pub face: u32,
+    /// Global id of the node.
+    pub node_gid: u64,
+    /// Global id of the face.
+    pub face_gid: u64,
+    /// Parametric coordinates of the contact point on the face (see [`crate::shape`]).
+    pub xi: [f64; 2],
+    /// Unit outward normal of the face at the contact point, end-of-step configuration.
+    pub normal: V3,
+    /// Penetration depth, m (> 0): how far the node (or the particle's sphere) is behind the face.
+    pub depth: f64,
+}
+
+/// Growth of a face's box per unit of `param_tol * diameter`: a point of the face at parametric
+/// coordinates up to `1 + param_tol` lies within `param_tol * diameter` of the corners' hull (the
+/// tangents are at most a diameter long); doubled for safety.
+const PARAM_REACH: f64 = 2.0;
+
+/// The box in which face `f` must be visible for the search to be complete: the box of its corners
+/// at both ends of the step, grown by the largest corner motion `max_i |X1_i - X0_i|`, by
+/// `max_radius` (the largest contact radius of any node that may meet it), and by
+/// `(gap_tol + 2 param_tol)` times the face's diameter. A node can only contact the face if its
+/// end position is within its depth of the face's end configuration, and the depth is bounded by
+/// the node's motion plus that growth (rule 4 of [`crate::pair`]); so a node whose
+/// [`node_search_aabb`] misses this box cannot contact the face, and the parallel layer ghosts a
+/// face to every box this overlaps.
+pub fn face_search_aabb(b: &ContactBox, f: usize, params: &SearchParams, max_radius: f64) -> Aabb {
+    let q0 = b.quad(f, Config::Start);
+    let q1 = b.quad(f, Config::End);
+    let mut bb = Aabb::EMPTY;
+    for k in 0..4 {
+        bb.include(q0.x[k]);
+        bb.include(q1.x[k]);
+    }
+    let diameter = q0.diameter().max(q1.diameter());
+    bb.grown(
+        pair::max_corner_motion(&q0, &q1)
+            + max_radius
+            + (params.gap_tol + PARAM_REACH * params.param_tol) * diameter,
+    )
+}
+
+/// The box node `j` searches with: its end position grown by the length of its step (it holds the
+/// swept segment `x0 -> x1`).
+pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
+    let p1 = b.nodes.x1[j];
+    let mut bb = Aabb::EMPTY;
+    bb.include(p1);
+    bb.grown(norm(sub(p1, b.nodes.x0[j])))
+}
+
+/// Finds, for every owned node (`0..n_owned`), the face it penetrated during the step, if any.
+///
+/// Broad phase: a bucket grid over the faces' [`face_search_aabb`]s, queried with each node's
+/// [`node_search_aabb`]. Narrow phase: [`crate::pair::test`]. If a node crossed several faces the contact is
+/// the deepest, then the lowest face gid. The result is sorted by node gid; it depends only on the
+/// geometry and the gids, never on the storage order of nodes or faces.
+pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
+    let max_radius = b.max_radius();
+    let boxes: Vec<Aabb> = (0..b.faces.len())
+        .map(|f| face_search_aabb(b, f, params, max_radius))
+        .collect();
+    let grid = Grid::build(&boxes);
+    // stamp[f] = 1 + the last node that visited face f (removes the grid's repeats).
+    let mut stamp = vec![0usize; b.faces.len()];
+    let mut out = Vec::new();
+    for j in 0..b.nodes.n_owned {
+        let q = node_search_aabb(b, j);
+        let mut best: Option<(pair::Hit, usize)> = None;
+        grid.query(&q, |f| {
+            let f = f as usize;
+            if stamp[f] == j + 1 || !boxes[f].overlaps(&q) {
+                return;
+            }
+            stamp[f] = j + 1;
+            let Some(hit) = pair::test(b, j, f, params) else {
+                return;
+            };
+            let better = match &best {
+                None => true,
+                Some((h, g)) => {
+                    hit.depth > h.depth
+                        || (hit.depth == h.depth && b.faces.gid[f] < b.faces.gid[*g])
+                }
+            };
+            if better {
+                best = Some((hit, f));
+            }
+        });
+        if let Some((h, f)) = best {
+            out.push(Contact {
+                node: j as u32,
+                face: f as u32,
+                node_gid: b.nodes.gid[j],
+                face_gid: b.faces.gid[f],
+                xi: h.xi,
+                normal: h.normal,
+                depth: h.depth,
+            });
+        }
+    }
+    out.sort_by_key(|c| c.node_gid);
+    out
+}

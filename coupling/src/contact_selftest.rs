@@ -1,0 +1,242 @@
+//! Self-test of the parallel contact stage (`tdyn selftest contact`): random moving faces and
+//! nodes, some crossing a face during the step, spread over the ranks at random. The contacts
+//! the stage finds over all ranks must equal those of one serial box holding everything (whose
+//! search the `contact` crate checks against brute force), with the same depths and forces, and
+//! the forces must sum to zero (momentum).
+use crate::collective::first_error;
+use crate::contact_stage::{ContactStage, FullFace};
+use contact::{push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams};
+use mpi::datatype::PartitionMut;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+struct Rng(u64);
+impl Rng {
+    fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// The global configuration (the same on every rank): nodes (face corners first) and faces.
+fn configuration(seed: u64, step: usize, n_faces: usize) -> (Vec<NodeRecord>, Vec<FaceRecord>) {
+    let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let mut nodes = Vec::new();
+    let mut free = Vec::new();
+    let mut faces = Vec::new();
+    let drift = 0.002 * step as f64;
+    for k in 0..n_faces {
+        let c = [rng.unit(), rng.unit(), rng.unit()];
+        let n = unit([rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5]);
+        let t1 = unit(cross(n, [0.3, 0.5, 0.81]));
+        let t2 = cross(n, t1);
+        let s = 0.02;
+        let mv = [
+            0.002 * (rng.unit() - 0.5),
+            0.002 * (rng.unit() - 0.5),
+            0.002 * (rng.unit() - 0.5),
+        ];
+        let mut ids = [0u64; 4];
+        for (q, (a, b)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .iter()
+            .enumerate()
+        {
+            let x0: [f64; 3] =
+                std::array::from_fn(|d| c[d] + s * (a * t1[d] + b * t2[d]) + drift * n[d]);
+            let gid = (4 * k + q) as u64;
+            ids[q] = gid;
+            nodes.push(NodeRecord {
+                gid,
+                body: k as u32,
+                flags: 0,
+                mass: 1.0 + rng.unit(),
+                radius: 0.0,
+                x0,
+                x1: std::array::from_fn(|d| x0[d] + mv[d]),
+                v: mv,
+            });
+        }
+        faces.push(FaceRecord {
+            gid: 1_000_000 + k as u64,
+            nodes: ids,
+            body: k as u32,
+            reserved: 0,
+        });
+        // Every other face gets a node crossing it during the step (a unit time step, so the
+        // velocity is the displacement); the rest of the nodes fly at random.
+        let gid = (4 * n_faces + k) as u64;
+        let (x0, x1) = if k % 2 == 0 {
+            let (a, b) = (rng.unit() * 1.6 - 0.8, rng.unit() * 1.6 - 0.8);
+            let p: [f64; 3] = std::array::from_fn(|d| c[d] + s * (a * t1[d] + b * t2[d]));
+            let (up, down) = (0.004 + drift * 0.1, 0.003 * rng.unit() + 0.0005);
+            (
+                std::array::from_fn(|d| p[d] + (drift + up) * n[d]),
+                std::array::from_fn(|d| p[d] + (drift - down) * n[d] + mv[d]),
+            )
+        } else {
+            let x0 = [rng.unit(), rng.unit(), rng.unit()];
+            (
+                x0,
+                std::array::from_fn(|d| x0[d] + 0.01 * (rng.unit() - 0.5)),
+            )
+        };
+        free.push(NodeRecord {
+            gid,
+            body: (n_faces + k) as u32,
+            flags: 0,
+            mass: 0.5 + rng.unit(),
+            radius: 0.0,
+            x0,
+            x1,
+            v: std::array::from_fn(|d| x1[d] - x0[d]),
+        });
+    }
+    // Corners have gids 0..4F, free nodes 4F..5F: index = gid.
+    nodes.append(&mut free);
+    (nodes, faces)
+}
+
+/// Gathers (node gid, face gid, depth) of every rank on every rank, sorted.
+fn gather_found(comm: &SimpleCommunicator, found: &[(u64, u64, f64)]) -> Vec<(u64, u64, f64)> {
+    let flat: Vec<u64> = found
+        .iter()
+        .flat_map(|c| [c.0, c.1, c.2.to_bits()])
+        .collect();
+    let mut counts = vec![0i32; comm.size() as usize];
+    comm.all_gather_into(&(flat.len() as i32), &mut counts[..]);
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0, |s, &c| {
+            let d = *s;
+            *s += c;
+            Some(d)
+        })
+        .collect();
+    let mut all = vec![0u64; counts.iter().sum::<i32>() as usize];
+    {
+        let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+        comm.all_gather_varcount_into(&flat[..], &mut part);
+    }
+    let mut out: Vec<(u64, u64, f64)> = all
+        .chunks(3)
+        .map(|c| (c[0], c[1], f64::from_bits(c[2])))
+        .collect();
+    out.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    out
+}
+
+/// Runs the self-test; returns a summary or the first failure (the same on every rank).
+pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> {
+    let p = comm.size() as u64;
+    let me = comm.rank() as u64;
+    let n_faces = 400;
+    let mut stage = ContactStage::new(comm, false);
+    let mut total_contacts = 0;
+    let mut lines = Vec::new();
+    for step in 0..3 {
+        let (nodes, faces) = configuration(seed, step, n_faces);
+        // FE/SPH owners at random; faces on another random rank, with their nodes' records.
+        let home = |gid: u64| (gid.wrapping_mul(2654435761) >> 5) % p;
+        let mine: Vec<NodeRecord> = nodes
+            .iter()
+            .filter(|n| home(n.gid) == me)
+            .copied()
+            .collect();
+        let my_faces: Vec<FullFace> = faces
+            .iter()
+            .filter(|f| (f.gid * 7 + 3) % p == me)
+            .map(|f| FullFace {
+                face: *f,
+                nodes: std::array::from_fn(|q| nodes[f.nodes[q] as usize]),
+            })
+            .collect();
+        let out = stage.step(&mine, &my_faces, 1.0)?;
+        let found = gather_found(comm, &out.found);
+        // The reference: one box holding everything, searched serially.
+        let b = ContactBox::from_records(&nodes, nodes.len(), &faces).map_err(|e| e.to_string())?;
+        let reference = search(&b, &stage.params);
+        let pb = push_back(&b, &reference, &PushBackParams::new(1.0));
+        let mut refs: Vec<(u64, u64, f64)> = reference
+            .iter()
+            .map(|c| (c.node_gid, c.face_gid, c.depth))
+            .collect();
+        refs.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        let mut err = None;
+        if found.len() != refs.len()
+            || found
+                .iter()
+                .zip(&refs)
+                .any(|(a, b)| a.0 != b.0 || a.1 != b.1 || (a.2 - b.2).abs() > 1e-12)
+        {
+            err = Some(format!(
+                "step {step}: {} contacts found in parallel, {} by the serial search (or a pair or depth differs by more than 1e-12 m)",
+                found.len(),
+                refs.len()
+            ));
+        }
+        if refs.len() < n_faces / 4 {
+            err = Some(format!(
+                "step {step}: only {} contacts in the test configuration",
+                refs.len()
+            ));
+        }
+        // Forces: the same as the serial push-back at each node (one contact per face, so the
+        // boxes' solutions cannot differ), and summing to zero over all ranks.
+        let mut fmax = 0.0f64;
+        let mut sum = [0.0f64; 3];
+        for (i, n) in mine.iter().enumerate() {
+            let f = out.force[i];
+            let r = pb.force[n.gid as usize];
+            for d in 0..3 {
+                sum[d] += f[d];
+                fmax = fmax.max(r[d].abs());
+                if (f[d] - r[d]).abs() > 1e-9 * (1.0 + r[d].abs()) && err.is_none() {
+                    err = Some(format!(
+                        "step {step}: node {} force {f:?}, serial push-back {r:?}",
+                        n.gid
+                    ));
+                }
+            }
+        }
+        let mut gsum = [0.0f64; 3];
+        comm.all_reduce_into(
+            &sum[..],
+            &mut gsum[..],
+            mpi::collective::SystemOperation::sum(),
+        );
+        let total_ref: f64 = pb.force.iter().flatten().map(|c| c.abs()).sum();
+        if gsum.iter().any(|c| c.abs() > 1e-12 * total_ref) && err.is_none() {
+            err = Some(format!(
+                "step {step}: forces sum to {gsum:?}, expected 0 within 1e-12 x {total_ref:e}"
+            ));
+        }
+        first_error(comm, err)?;
+        total_contacts += found.len();
+        lines.push(format!(
+            "step {step}: {} contacts (= serial), imbalance {:.3}, {} bytes, rcb migrated {}",
+            found.len(),
+            out.imbalance,
+            out.bytes_sent,
+            out.rcb.migrated
+        ));
+    }
+    Ok(format!(
+        "contact selftest passed at np {p}: {total_contacts} contacts over 3 steps\n  {}",
+        lines.join("\n  ")
+    ))
+}
