@@ -136,7 +136,7 @@ fn gather_found(comm: &SimpleCommunicator, found: &[(u64, u64, f64)]) -> Vec<(u6
         .chunks(3)
         .map(|c| (c[0], c[1], f64::from_bits(c[2])))
         .collect();
-    out.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    out.sort_by_key(|a| (a.0, a.1));
     out
 }
 
@@ -175,7 +175,7 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
             .iter()
             .map(|c| (c.node_gid, c.face_gid, c.depth))
             .collect();
-        refs.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        refs.sort_by_key(|a| (a.0, a.1));
         let mut err = None;
         if found.len() != refs.len()
             || found

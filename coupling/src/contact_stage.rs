@@ -8,8 +8,8 @@
 //! 3. each face, with the records of its four nodes ("full data"), goes to the contact owner of its
 //!    first node;
 //! 4. the cuts are shared (every rank holds the tree after the balance);
-//! 5-6. each face goes to every rank whose box its search box (grown by the zone of influence:
-//!    the largest node motion of the step and the largest particle radius) overlaps;
+//! 5. (and 6.) each face goes to every rank whose box its search box (grown by the zone of
+//!    influence: the largest node motion of the step and the largest particle radius) overlaps;
 //! 7. each rank searches its owned nodes against the faces it holds (the `contact` crate) and
 //!    computes the push-back;
 //! 8. forces on face-node copies go to those nodes' contact owners, and every contact owner sends
