@@ -1,7 +1,9 @@
 //! The run: scene -> mesh -> distribution -> time loop (the paper's Fig. 3) -> output.
 //!
-//! Only the stages a scene declares are built. Today that is the FE stage; a scene with
-//! particles, contact or implicit mode is refused with a message naming what is missing.
+//! Only the stages a scene declares are built. Today that is the FE stage, integrated
+//! explicitly (central differences) or implicitly (Newmark average acceleration, Newton and
+//! PETSc KSP: `run.mode = "implicit"`); a scene with particles or contact is refused with a
+//! message naming what is missing.
 use crate::collective::{self, first_error};
 use crate::fe_setup::{self, Groups};
 use crate::gmsh;
@@ -12,7 +14,8 @@ use crate::probes::Probes;
 use crate::scene::{self, Mode};
 use fe_petsc::explicit::{ExplicitFe, ExplicitSetup, StepError};
 use fe_petsc::hex::HexControls;
-use fe_petsc::mesh::DistributedMesh;
+use fe_petsc::implicit::{ImplicitError, ImplicitFe};
+use fe_petsc::mesh::{DistributedMesh, NodeExchange};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -48,6 +51,21 @@ pub struct RunOptions {
     pub out: Option<PathBuf>,
     /// No progress bar, no summary on stdout.
     pub quiet: bool,
+    /// Values that replace the scene's `[run]` keys (used by `tdyn compare`).
+    pub overrides: RunOverrides,
+    /// Stop after set-up (mesh, FE stage, stable step): no time step, no output.
+    pub setup_only: bool,
+}
+
+/// Replacements for `[run]` keys.
+#[derive(Debug, Clone, Default)]
+pub struct RunOverrides {
+    /// `run.mode`.
+    pub mode: Option<Mode>,
+    /// `run.dt`.
+    pub dt: Option<f64>,
+    /// `run.force_dt`.
+    pub force_dt: Option<bool>,
 }
 
 /// What a finished run reports to its caller.
@@ -55,12 +73,149 @@ pub struct RunOptions {
 pub struct RunSummary {
     /// Output directory.
     pub out: PathBuf,
+    /// The integration mode.
+    pub mode: Mode,
     /// Steps taken.
     pub steps: u64,
     /// Largest energy error seen.
     pub energy_error_max: f64,
     /// Time-loop cost, ns per element-cycle.
     pub ns_per_element_cycle: f64,
+    /// The explicit stable step at t = 0 (no safety factor), s.
+    pub dt_stable: f64,
+    /// Smallest step taken, s.
+    pub dt_min: f64,
+    /// Whole run, s (max over ranks).
+    pub wall_s: f64,
+    /// Time-step loop without output, s (max over ranks).
+    pub loop_s: f64,
+}
+
+/// What stopped a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FailureKind {
+    /// A bad scene, mesh or file: nothing was computed.
+    Input,
+    /// An explicit fixed step above the stable limit, refused before the first step.
+    Refused,
+    /// The run blew up: energy check, non-finite values, or any failure of a forced explicit
+    /// run above its stable limit.
+    Unstable,
+    /// Another numerical failure (inverted element, Newton or KSP not converging).
+    Failed,
+}
+
+/// A run's error: its kind and the one line to print.
+#[derive(Debug, Clone)]
+pub struct RunFailure {
+    /// What kind of failure.
+    pub kind: FailureKind,
+    /// The message (file, key or place, what happened, what to do).
+    pub message: String,
+}
+
+impl From<String> for RunFailure {
+    fn from(message: String) -> Self {
+        RunFailure {
+            kind: FailureKind::Input,
+            message,
+        }
+    }
+}
+
+impl std::fmt::Display for RunFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl RunFailure {
+    fn new(kind: FailureKind, message: String) -> Self {
+        RunFailure { kind, message }
+    }
+}
+
+/// The FE stage in the scene's mode. Both keep their state in an [`ExplicitFe`], which probes
+/// and output read.
+enum FeStage {
+    Explicit(Box<ExplicitFe>),
+    Implicit(Box<ImplicitFe>),
+}
+
+impl FeStage {
+    fn fe(&self) -> &ExplicitFe {
+        match self {
+            FeStage::Explicit(fe) => fe,
+            FeStage::Implicit(imp) => &imp.fe,
+        }
+    }
+}
+
+/// One explicit step (Fig. 3's FE part): kick and drift, element forces with the ghost
+/// exchange, the closing kick, energy sums. Returns the next stable step (min over ranks).
+/// Collective; on an inverted element every rank returns the failing rank's message.
+fn explicit_step(
+    world: &SimpleCommunicator,
+    file: &str,
+    fe: &mut ExplicitFe,
+    exchange: &mut NodeExchange,
+    dt: f64,
+) -> Result<f64, String> {
+    fe.kick_drift(dt);
+    let hg = fe.element_forces(dt, exchange);
+    // Agree on failure (inverted element) with the same reduction as the next step size:
+    // a failing rank proposes a negative step.
+    let (local_dt, local_err, hg_work) = match hg {
+        Ok(w) => (fe.dt_stable_local, None, w),
+        Err(e) => (-1.0 - world.rank() as f64, Some(e), 0.0),
+    };
+    let next = collective::min(world, local_dt);
+    if next < 0.0 {
+        let msg = local_err.map(|e: StepError| format!("{file}: {e}"));
+        first_error(world, msg)?;
+    }
+    let sums = fe.finish_step(dt);
+    let mut local = [0.0; 7];
+    local[..6].copy_from_slice(&sums);
+    local[6] = hg_work;
+    let mut global = [0.0; 7];
+    world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
+    fe.accumulate(&global, dt);
+    Ok(next)
+}
+
+/// One implicit step; every rank returns the failing rank's message and its kind.
+fn implicit_step(
+    world: &SimpleCommunicator,
+    file: &str,
+    imp: &mut ImplicitFe,
+    exchange: &mut NodeExchange,
+) -> Result<(), RunFailure> {
+    let res = imp.step(world, exchange);
+    let kind = match &res {
+        Err(ImplicitError::Step(StepError::NonFinite { .. })) => FailureKind::Unstable,
+        _ => FailureKind::Failed,
+    };
+    let kind_code = collective::max(
+        world,
+        if res.is_err() {
+            kind as i32 as f64
+        } else {
+            -1.0
+        },
+    );
+    let msg = match res {
+        Ok(()) | Err(ImplicitError::OtherRank) => None,
+        Err(e) => Some(format!("{file}: {e}")),
+    };
+    first_error(world, msg).map_err(|m| {
+        let kind = if kind_code as i32 == FailureKind::Unstable as i32 {
+            FailureKind::Unstable
+        } else {
+            FailureKind::Failed
+        };
+        RunFailure::new(kind, m)
+    })
 }
 
 /// Relative energy error (SCENE.md).
@@ -69,33 +224,52 @@ fn energy_error(e: f64, e0: f64, w: f64) -> f64 {
 }
 
 /// Runs a scene. Collective; every rank returns the same error.
-pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, String> {
+pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, RunFailure> {
     let wall0 = Instant::now();
     let rank = world.rank();
     let size = world.size();
     // Every rank parses the scene (identical result, no communication).
-    let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
+    let mut scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     let file = scene.file.display().to_string();
-    if scene.run.mode == Mode::Implicit {
-        return Err(format!(
-            "{file}: run.mode: \"implicit\" is not available yet (the implicit KSP mode is still being built); use \"explicit\""
-        ));
+    let ov = &opts.overrides;
+    if let Some(m) = ov.mode {
+        scene.run.mode = m;
     }
+    if let Some(dt) = ov.dt {
+        scene.run.dt = Some(dt);
+    }
+    if let Some(f) = ov.force_dt {
+        scene.run.force_dt = f;
+    }
+    let mode = scene.run.mode;
     if !scene.particles.is_empty() {
         return Err(format!(
             "{file}: particles: the SPH stage is not available yet; remove the [[particles]] tables"
-        ));
+        )
+        .into());
     }
     if scene.contact.is_some() {
         return Err(format!(
             "{file}: contact: the contact stage is not available yet; remove the [contact] table"
-        ));
+        )
+        .into());
     }
     if scene.meshes.is_empty() {
         return Err(format!(
             "{file}: mesh: a scene without [[mesh]] needs the SPH stage, which is not available yet"
-        ));
+        )
+        .into());
     }
+    let implicit_dt = match (mode, scene.run.dt) {
+        (Mode::Implicit, Some(dt)) => Some(dt),
+        (Mode::Implicit, None) => {
+            return Err(format!(
+                "{file}: run.dt: mode = \"implicit\" needs a fixed step run.dt (seconds)"
+            )
+            .into())
+        }
+        (Mode::Explicit, _) => None,
+    };
     let out_dir = opts.out.clone().unwrap_or_else(|| {
         PathBuf::from("out").join(
             scene
@@ -185,22 +359,66 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         controls,
         gravity: scene.gravity,
     };
-    let fe_res = ExplicitFe::new(setup, &mut dm.exchange);
-    first_error(world, fe_res.as_ref().err().map(|e| format!("{file}: {e}")))?;
-    let mut fe = fe_res.map_err(|e| e.to_string())?;
-    fe.initial_energies(world);
-    let probes = Probes::locate(world, &file, &scene.probes, &fe)?;
+    let mut stage = match implicit_dt {
+        None => {
+            let fe_res = ExplicitFe::new(setup, &mut dm.exchange);
+            first_error(world, fe_res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+            FeStage::Explicit(Box::new(fe_res.map_err(|e| e.to_string())?))
+        }
+        Some(dt) => {
+            let res = ImplicitFe::new(world, setup, dt, &mut dm.exchange);
+            first_error(world, res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+            FeStage::Implicit(Box::new(res.map_err(|e| e.to_string())?))
+        }
+    };
+    match &mut stage {
+        FeStage::Explicit(fe) => fe.initial_energies(world),
+        FeStage::Implicit(imp) => imp.fe.initial_energies(world),
+    }
+    let probes = Probes::locate(world, &file, &scene.probes, stage.fe())?;
 
-    // The step: fixed, or dt_safety times the stable step (reduced over ranks).
-    let stable0 = collective::min(world, fe.dt_stable_local);
-    if let Some(dt) = scene.run.dt {
+    // The explicit stable step (reduced over ranks); reported in implicit mode for comparison.
+    let stable0 = collective::min(world, stage.fe().dt_stable_local);
+    let mut forced = false;
+    if let (Mode::Explicit, Some(dt)) = (mode, scene.run.dt) {
         if dt > stable0 {
-            return Err(format!(
-                "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s (Flanagan-Belytschko element estimate with bulk viscosity); use run.dt <= {stable0:e} or remove run.dt"
-            ));
+            if !scene.run.force_dt {
+                return Err(RunFailure::new(
+                    FailureKind::Refused,
+                    format!(
+                        "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s (Flanagan-Belytschko element estimate with bulk viscosity); use run.dt <= {stable0:e}, remove run.dt, set mode = \"implicit\", or set run.force_dt = true to run it anyway"
+                    ),
+                ));
+            }
+            forced = true;
+            if rank == 0 && !opts.quiet {
+                eprintln!(
+                    "tdyn: warning: run.dt = {dt:e} s is {:.3} times the explicit stable limit {stable0:e} s (run.force_dt = true): the energy check will stop the run if it blows up",
+                    dt / stable0
+                );
+            }
         }
     }
     let setup_s = t_setup.elapsed().as_secs_f64();
+    if opts.setup_only {
+        return Ok(RunSummary {
+            out: out_dir,
+            mode,
+            steps: 0,
+            energy_error_max: 0.0,
+            ns_per_element_cycle: 0.0,
+            dt_stable: stable0,
+            dt_min: scene.run.dt.unwrap_or(scene.run.dt_safety * stable0),
+            wall_s: collective::max(world, wall0.elapsed().as_secs_f64()),
+            loop_s: 0.0,
+        });
+    }
+    // A numerical failure of a forced explicit run above its limit is its instability.
+    let numerical = if forced {
+        FailureKind::Unstable
+    } else {
+        FailureKind::Failed
+    };
 
     // Output.
     if rank == 0 {
@@ -224,14 +442,15 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut probe_csv = History::create(world, &out_dir.join("probes.csv"), &probe_cols_ref)
         .map_err(|e| e.to_string())?;
 
-    let owned_nodes: Vec<usize> = (0..fe.n_nodes()).filter(|&n| fe.owned[n]).collect();
+    let fe0 = stage.fe();
+    let owned_nodes: Vec<usize> = (0..fe0.n_nodes()).filter(|&n| fe0.owned[n]).collect();
     let node_ids: Vec<u64> = owned_nodes.iter().map(|&n| l.node_id[n]).collect();
-    let conn_ids: Vec<[u64; 8]> = fe
+    let conn_ids: Vec<[u64; 8]> = fe0
         .elems
         .iter()
         .map(|c| std::array::from_fn(|k| l.node_id[c[k] as usize]))
         .collect();
-    let rank_field = vec![rank; fe.elems.len()];
+    let rank_field = vec![rank; fe0.elems.len()];
     let mut output_s = 0.0;
     let write_frame = |fe: &ExplicitFe, writer: &mut FieldWriter| -> Result<f64, String> {
         let t0 = Instant::now();
@@ -263,14 +482,14 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         Ok(t0.elapsed().as_secs_f64())
     };
 
-    let e0 = fe.energies.kinetic;
+    let e0 = stage.fe().energies.kinetic;
     let mut err_max = 0.0f64;
     let end = scene.run.end_time;
     let output_every = scene.run.output_every.unwrap_or(end);
     let history_every = scene.run.history_every;
     let mut next_frame = 1u64; // frame 0 written now
     let mut next_row = 1u64;
-    output_s += write_frame(&fe, &mut writer)?;
+    output_s += write_frame(stage.fe(), &mut writer)?;
     let row = |fe: &ExplicitFe, dt: f64, err: f64| -> Vec<f64> {
         let en = &fe.energies;
         vec![
@@ -290,9 +509,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         ]
     };
     let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
-    history.row(&row(&fe, dt, 0.0)).map_err(|e| e.to_string())?;
+    history
+        .row(&row(stage.fe(), dt, 0.0))
+        .map_err(|e| e.to_string())?;
     let mut pr = vec![0.0];
-    pr.extend(probes.sample(world, &fe));
+    pr.extend(probes.sample(world, stage.fe()));
     probe_csv.row(&pr).map_err(|e| e.to_string())?;
 
     let progress = (rank == 0 && !opts.quiet).then(|| {
@@ -313,6 +534,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut dt_min = f64::INFINITY;
     loop {
         // With a fixed step t = step * dt exactly; otherwise clip the last step onto end_time.
+        let fe = stage.fe();
         let remaining = end - fe.time;
         if let Some(d) = fixed_dt {
             if (fe.step as f64) * d >= end - TIME_EPS_STEPS * d {
@@ -327,53 +549,61 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         dt_min = dt_min.min(dt);
         let tf = Instant::now();
-        fe.kick_drift(dt);
-        let hg = fe.element_forces(dt, &mut dm.exchange);
-        // Agree on failure (inverted element) with the same reduction as the next step size:
-        // a failing rank proposes a negative step.
-        let (local_dt, local_err, hg_work) = match hg {
-            Ok(w) => (fe.dt_stable_local, None, w),
-            Err(e) => (-1.0 - rank as f64, Some(e), 0.0),
+        let next = match &mut stage {
+            FeStage::Explicit(fe) => explicit_step(world, &file, fe, &mut dm.exchange, dt)
+                .map_err(|m| RunFailure::new(numerical, m))?,
+            FeStage::Implicit(imp) => {
+                implicit_step(world, &file, imp, &mut dm.exchange)?;
+                dt
+            }
         };
-        let next = collective::min(world, local_dt);
-        if next < 0.0 {
-            let msg = local_err.map(|e: StepError| format!("{file}: {e}"));
-            first_error(world, msg)?;
-        }
-        let sums = fe.finish_step(dt);
-        let mut local = [0.0; 7];
-        local[..6].copy_from_slice(&sums);
-        local[6] = hg_work;
-        let mut global = [0.0; 7];
-        world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
-        fe.accumulate(&global, dt);
         fe_wall += tf.elapsed().as_secs_f64();
+        let fe = match &mut stage {
+            FeStage::Explicit(fe) => fe,
+            FeStage::Implicit(imp) => &mut imp.fe,
+        };
         if fixed_dt.is_some() {
             fe.time = fe.step as f64 * dt;
         }
+        let fe = stage.fe();
         let en = fe.energies;
         let total = en.kinetic + en.internal + en.hourglass;
         let err = energy_error(total, e0, en.external_work);
+        let blow_up = if forced {
+            format!(
+                "the explicit run is unstable: run.dt = {dt:e} s is {:.3} times the stable limit {stable0:e} s (forced with run.force_dt = true)",
+                dt / stable0
+            )
+        } else {
+            "the run is unstable or under-resolved; reduce run.dt or run.dt_safety".to_string()
+        };
         if !total.is_finite() || !en.external_work.is_finite() {
-            return Err(format!(
-                "{file}: non-finite energy at t = {:e} s, step {}: the run blew up (is run.dt too large?)",
-                fe.time, fe.step
+            return Err(RunFailure::new(
+                FailureKind::Unstable,
+                format!(
+                    "{file}: non-finite energy at t = {:e} s, step {}: {blow_up}",
+                    fe.time, fe.step
+                ),
             ));
         }
         err_max = err_max.max(err);
         if err > scene.run.max_energy_error {
-            let _ = history.row(&row(&fe, dt, err));
-            return Err(format!(
-                "{file}: energy error {err:.3e} passed run.max_energy_error = {} at t = {:e} s, step {} (E = {total:e} J, E0 = {e0:e} J, external work {:e} J): the run is unstable or under-resolved; reduce run.dt or run.dt_safety",
-                scene.run.max_energy_error, fe.time, fe.step, en.external_work
+            let _ = history.row(&row(fe, dt, err));
+            let _ = history.flush();
+            return Err(RunFailure::new(
+                FailureKind::Unstable,
+                format!(
+                    "{file}: energy error {err:.3e} passed run.max_energy_error = {} at t = {:e} s, step {} (E = {total:e} J, E0 = {e0:e} J, external work {:e} J): {blow_up}",
+                    scene.run.max_energy_error, fe.time, fe.step, en.external_work
+                ),
             ));
         }
         let at_end = fe.time >= end - TIME_EPS_STEPS * dt;
         let t_row = history_every * next_row as f64;
         if history_every <= 0.0 || fe.time >= t_row - TIME_EPS_STEPS * dt || at_end {
-            history.row(&row(&fe, dt, err)).map_err(|e| e.to_string())?;
+            history.row(&row(fe, dt, err)).map_err(|e| e.to_string())?;
             let mut pr = vec![fe.time];
-            pr.extend(probes.sample(world, &fe));
+            pr.extend(probes.sample(world, fe));
             probe_csv.row(&pr).map_err(|e| e.to_string())?;
             if history_every > 0.0 {
                 while history_every * next_row as f64 <= fe.time + TIME_EPS_STEPS * dt {
@@ -382,7 +612,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             }
         }
         if fe.time >= output_every * next_frame as f64 - TIME_EPS_STEPS * dt || at_end {
-            let s = write_frame(&fe, &mut writer)?;
+            let s = write_frame(fe, &mut writer)?;
             output_s += s;
             loop_output_s += s;
             while output_every * next_frame as f64 <= fe.time + TIME_EPS_STEPS * dt {
@@ -407,10 +637,12 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     probe_csv.flush().map_err(|e| e.to_string())?;
 
     // Report.
+    let fe = stage.fe();
     let elements = l.global_elems;
     let steps = fe.step;
+    let loop_s = collective::max(world, loop_s);
     let ns_per_element_cycle = if elements > 0 && steps > 0 {
-        collective::max(world, loop_s) * 1e9 * size as f64 / (elements as f64 * steps as f64)
+        loop_s * 1e9 * size as f64 / (elements as f64 * steps as f64)
     } else {
         0.0
     };
@@ -431,11 +663,18 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     report.energy_error_max = err_max;
     let ex = &mut report.extra;
     ex.insert("title".into(), scene.title.clone().into());
-    ex.insert("mode".into(), "explicit".into());
+    ex.insert(
+        "mode".into(),
+        match mode {
+            Mode::Explicit => "explicit",
+            Mode::Implicit => "implicit",
+        }
+        .into(),
+    );
     ex.insert("dt_stable_initial".into(), stable0.into());
     ex.insert("dt_min".into(), dt_min.into());
     ex.insert("setup_s".into(), collective::max(world, setup_s).into());
-    ex.insert("loop_s".into(), collective::max(world, loop_s).into());
+    ex.insert("loop_s".into(), loop_s.into());
     ex.insert(
         "bytes_per_element".into(),
         (mem_bytes / elements.max(1) as f64).into(),
@@ -450,6 +689,35 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         collective::max(world, t.exchange).into(),
     );
     ex.insert("fe_nodal_s".into(), collective::max(world, t.nodal).into());
+    if let FeStage::Implicit(imp) = &stage {
+        // Counters are the same on every rank (collective solves); timers are maxima.
+        let s = imp.stats;
+        ex.insert("newton_iterations".into(), s.newton_iterations.into());
+        ex.insert(
+            "newton_iterations_per_step".into(),
+            (s.newton_iterations as f64 / steps.max(1) as f64).into(),
+        );
+        ex.insert(
+            "newton_iterations_max_step".into(),
+            s.max_step_iterations.into(),
+        );
+        ex.insert("ksp_iterations".into(), s.ksp_iterations.into());
+        ex.insert(
+            "ksp_iterations_per_solve".into(),
+            (s.ksp_iterations as f64 / s.newton_iterations.max(1) as f64).into(),
+        );
+        ex.insert("tangent_assemblies".into(), s.assemblies.into());
+        ex.insert("residual_evaluations".into(), s.residuals.into());
+        ex.insert(
+            "implicit_assembly_s".into(),
+            collective::max(world, s.assembly_s).into(),
+        );
+        ex.insert(
+            "implicit_ksp_s".into(),
+            collective::max(world, s.solve_s).into(),
+        );
+        ex.insert("newton_rtol".into(), imp.options.rtol.into());
+    }
     if rank == 0 {
         report
             .write(&out_dir.join("report.json"))
@@ -457,8 +725,13 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     }
     Ok(RunSummary {
         out: out_dir,
+        mode,
         steps,
         energy_error_max: err_max,
         ns_per_element_cycle,
+        dt_stable: stable0,
+        dt_min,
+        wall_s,
+        loop_s,
     })
 }

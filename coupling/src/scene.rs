@@ -100,6 +100,10 @@ pub struct Run {
     /// Fixed step, s.
     #[serde(default)]
     pub dt: Option<f64>,
+    /// `force_dt = true` (explicit): run a fixed `dt` above the stable limit instead of refusing
+    /// it (with a warning); the energy check then stops the run when it blows up. Default false.
+    #[serde(default)]
+    pub force_dt: bool,
     /// Seconds between field frames (None: first and last only).
     #[serde(default)]
     pub output_every: Option<f64>,
@@ -115,6 +119,36 @@ pub struct Run {
     /// Hourglass control.
     #[serde(default = "d_hg")]
     pub hourglass: Hourglass,
+}
+
+/// `[compare]` (optional): what `tdyn compare` measures.
+///
+/// ```toml
+/// [compare]
+/// quantity = "tip.displacement_x"   # a probes.csv column; default: the first probe column
+/// measure = "period"                 # "period" | "history" | "final"; default "history"
+/// reference_period = 6.827e-4        # s, an analytic period (measure = "period"); without it
+///                                    # the reference is the run with the smallest step
+/// ```
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompareDef {
+    /// The probes.csv column compared, `probe.field`.
+    #[serde(default)]
+    pub quantity: Option<String>,
+    /// How runs are compared.
+    #[serde(default = "d_measure")]
+    pub measure: String,
+    /// Analytic period, s.
+    #[serde(default)]
+    pub reference_period: Option<f64>,
+}
+
+/// `[compare] measure` values.
+pub const COMPARE_MEASURES: [&str; 3] = ["period", "history", "final"];
+
+fn d_measure() -> String {
+    "history".into()
 }
 
 /// `[[mesh]]`.
@@ -409,6 +443,8 @@ struct RawScene {
     probe: Vec<Probe>,
     #[serde(default)]
     output: OutputDef,
+    #[serde(default)]
+    compare: Option<CompareDef>,
 }
 
 /// A checked scene.
@@ -442,6 +478,8 @@ pub struct Scene {
     pub probes: Vec<Probe>,
     /// `[output]`.
     pub output: OutputDef,
+    /// `[compare]`.
+    pub compare: Option<CompareDef>,
 }
 
 /// Reads and checks a scene file.
@@ -868,6 +906,43 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             ));
         }
     }
+    if let Some(c) = &raw.compare {
+        if !COMPARE_MEASURES.contains(&c.measure.as_str()) {
+            return Err(err(
+                "compare.measure",
+                format!(
+                    "unknown value \"{}\" (expected one of {})",
+                    c.measure,
+                    COMPARE_MEASURES.join(", ")
+                ),
+            ));
+        }
+        if let Some(q) = &c.quantity {
+            let known = raw
+                .probe
+                .iter()
+                .flat_map(|p| {
+                    p.fields
+                        .iter()
+                        .map(move |f| format!("{}.{}", p.name, f.name()))
+                })
+                .any(|col| &col == q);
+            if !known {
+                return Err(err(
+                    "compare.quantity",
+                    format!("\"{q}\" is not a probe column (expected probe.field of a [[probe]])"),
+                ));
+            }
+        }
+        if let Some(t) = c.reference_period {
+            if !pos(t) {
+                return Err(err(
+                    "compare.reference_period",
+                    format!("expected a positive period in seconds, got {t}"),
+                ));
+            }
+        }
+    }
     Ok(Scene {
         file: file.to_path_buf(),
         dir,
@@ -883,6 +958,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         contact: raw.contact,
         probes: raw.probe,
         output: raw.output,
+        compare: raw.compare,
     })
 }
 

@@ -1,5 +1,6 @@
 //! Finite elements on PETSc DMPlex: mesh load, METIS distribution, ghost exchange, the PRONTO-3D
-//! hexahedron, materials and the explicit central-difference integrator.
+//! hexahedron, materials, the explicit central-difference integrator and the implicit Newmark
+//! integrator (tangent in a PETSc matrix, solved by KSP).
 #![warn(missing_docs)]
 // Index loops over nodes and components read like the formulas they implement; `!(x > 0.0)`
 // deliberately also rejects NaN.
@@ -9,9 +10,11 @@
 
 pub mod explicit;
 pub mod hex;
+pub mod implicit;
 pub mod material;
 pub mod mesh;
 pub mod objects;
 pub mod petsc;
+pub mod solver;
 
 pub use petsc_sys as sys;

@@ -1,5 +1,6 @@
-//! `tdyn`: run a scene, mesh a .geo. PETSc options (`-log_view`, `-petscpartitioner_type simple`,
-//! ...) may follow the other arguments and go to PETSc unchanged.
+//! `tdyn`: run a scene, compare explicit and implicit integration on it, mesh a .geo. PETSc
+//! options (`-log_view`, `-ksp_type cg`, `-pc_type gamg`, `-ksp_monitor`,
+//! `-petscpartitioner_type simple`, ...) may follow the other arguments and go to PETSc unchanged.
 use clap::{Parser, Subcommand};
 use coupling::driver::{self, RunOptions};
 use fe_petsc::petsc::Petsc;
@@ -28,6 +29,29 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
         /// No progress bar and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Chart accuracy against cost of explicit and implicit integration on a scene:
+    /// `mpirun -np 2 tdyn compare scenes/bar_vibration.toml [--modes explicit,implicit]
+    /// [--dt-factors 0.5,1,2,10,100] [--out DIR] [PETSc options]`. Each run is made in this
+    /// process, on the same ranks, with dt = factor x the explicit stable limit; writes
+    /// compare.csv, compare.png and compare.svg in DIR. Refused or unstable runs are results:
+    /// the command still exits 0.
+    Compare {
+        /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
+        scene: PathBuf,
+        /// Modes to run, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "explicit,implicit")]
+        modes: Vec<String>,
+        /// Steps as multiples of the explicit stable limit, comma-separated (default: both
+        /// sides of the limit, 0.25 to 100).
+        #[arg(long = "dt-factors", value_delimiter = ',')]
+        dt_factors: Option<Vec<f64>>,
+        /// Output directory (default: out/<scene name>/compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
         #[arg(long, short)]
         quiet: bool,
     },
@@ -138,6 +162,53 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Cmd::Compare {
+            scene,
+            modes,
+            dt_factors,
+            out,
+            quiet,
+        } => {
+            let Some(universe) = mpi::initialize() else {
+                eprintln!("tdyn: MPI could not be initialised");
+                return ExitCode::FAILURE;
+            };
+            let world = universe.world();
+            let rank = world.rank();
+            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("tdyn: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = coupling::compare::CompareOptions {
+                scene,
+                modes,
+                dt_factors,
+                out,
+                quiet,
+            };
+            let res = coupling::compare::compare(&world, &opts);
+            drop(petsc);
+            match res {
+                Ok(dir) => {
+                    if rank == 0 && !quiet {
+                        println!(
+                            "tdyn compare: compare.csv, compare.png and compare.svg in {}/",
+                            dir.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    if rank == 0 {
+                        eprintln!("tdyn compare: error: {e}");
+                    }
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Cmd::Run { scene, out, quiet } => {
             let Some(universe) = mpi::initialize() else {
                 eprintln!("tdyn: MPI could not be initialised");
@@ -152,7 +223,12 @@ fn main() -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             };
-            let opts = RunOptions { scene, out, quiet };
+            let opts = RunOptions {
+                scene,
+                out,
+                quiet,
+                ..Default::default()
+            };
             let res = driver::run(&world, &opts);
             drop(petsc);
             match res {

@@ -1,0 +1,830 @@
+//! Implicit dynamics: Newmark's average-acceleration (trapezoidal) rule, Newton iterations on the
+//! same hexahedron the explicit mode uses, the tangent assembled in a PETSc matrix and solved by
+//! KSP (conjugate gradients with smoothed aggregation by default).
+//!
+//! **Time integration** (Newmark, beta = 1/4, gamma = 1/2; Hughes, *The Finite Element Method*,
+//! 2000, §9.1): with du = u(n+1) - u(n),
+//!
+//! ```text
+//! du       = dt v(n) + dt^2/4 (a(n) + a(n+1))   =>  a(n+1) = 4/dt^2 (du - dt v(n)) - a(n)
+//! v(n+1)   = v(n) + dt/2 (a(n) + a(n+1))
+//! M a(n+1) = f(u(n+1)) + M g + reactions
+//! ```
+//!
+//! unconditionally stable and without numerical damping for a linear system, whose energy it
+//! conserves; its period elongation is (omega dt)^2 / 12 to leading order.
+//!
+//! **Element.** The nodal forces f(u(n+1)) come from [`hex::update`] itself (mean-gradient
+//! hexahedron, Flanagan-Belytschko hourglass stiffness, Hughes-Winget incremental rotation), given
+//! the trial positions x(n) + du and the step's mean velocity du/dt, starting from the element
+//! state at t(n): the two modes differ only in time integration. Bulk viscosity is off (SCENE.md:
+//! explicit only).
+//!
+//! **Tangent** (per element, 24 x 24): K = V S^T C S + (k_s + k_v/dt) sum_a gamma_a gamma_a^T (x)
+//! I3, with S the strain-displacement matrix of the mean gradient at the trial geometry, C the
+//! algorithmic tangent of the material's own stress update, found by forward differences of
+//! `Material::update_stress` about the step's strain increment (exact for linear elasticity to
+//! round-off, the consistent tangent of the radial return for J2 plasticity), and gamma_a the FB
+//! hourglass vectors. Left out (stated approximation): the geometric (initial-stress) stiffness
+//! and the derivative of the rotation, of relative size |stress| / modulus (1e-3 at most for
+//! metals); Newton then converges linearly at about that ratio per iteration.
+//!
+//! **Newton** (modified, with refresh): the tangent is assembled on the first iteration of the
+//! run and again whenever an iteration reduced the residual by less than [`REFRESH_RATIO`]
+//! (`-tdyn_newton_full` rebuilds it every iteration). Convergence test:
+//! ||P r||_2 <= rtol * max(F, 1e-3 F_max), with r = M (a(n+1) - g) - f(u(n+1)) over all nodes,
+//! P the constraint projection, F = ||f||_2 + ||M (a(n+1) - g)||_2 now and F_max the largest F
+//! of the run; rtol = [`NEWTON_RTOL`] (`-tdyn_newton_rtol`), at most [`NEWTON_MAX_IT`] iterations
+//! (`-tdyn_newton_max_it`).
+//!
+//! **Constraints** act as projections: at node I, P_I = 0 for `fixed` and `velocity` (du is
+//! prescribed: 0 or dt v), P_I = I - sum n n^T for symmetry planes. Element blocks enter as
+//! P_I K_IJ P_J, the mass term 4 m / dt^2 I is added whole, so the matrix stays symmetric
+//! positive definite and the Newton update has no component along a constraint.
+//!
+//! **Matrix numbering**: owned nodes are numbered rank after rank (an exclusive sum of the owned
+//! counts), ghost copies learn their owner's number through the DM's local-to-global sum
+//! (`NodeExchange::sum_shared`); the matrix keeps these block indices as its
+//! `ISLocalToGlobalMapping` and elements add their blocks with `MatSetValuesBlockedLocal`.
+//!
+//! **Energies** as in explicit mode: the work of the element forces and of the reactions over
+//! each step's displacement by the trapezoidal rule, W += (f(n) + f(n+1))/2 . du. The scheme's
+//! own identity du = dt (v(n) + v(n+1))/2 makes kinetic energy + that work balance exactly for
+//! any force law, so the energy error measures how well Newton and KSP converged.
+use crate::explicit::{centroid, Constraint, ExplicitFe, ExplicitSetup, StepError};
+use crate::hex::{self, HexControls, HexState, NODE_XI};
+use crate::material::Material;
+use crate::mesh::NodeExchange;
+use crate::objects::Vector;
+use crate::petsc::PetscError;
+use crate::solver::{self, BlockMatrix, SolveError, Solver};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::time::Instant;
+
+/// Default Newton tolerance on the residual relative to the force scale (`-tdyn_newton_rtol`).
+pub const NEWTON_RTOL: f64 = 1e-8;
+/// Default largest number of Newton iterations in one step (`-tdyn_newton_max_it`).
+pub const NEWTON_MAX_IT: u32 = 30;
+/// The tangent is rebuilt when an iteration reduced the residual by less than this factor.
+pub const REFRESH_RATIO: f64 = 0.1;
+/// Below this fraction of the run's largest force scale a residual counts as zero.
+const FORCE_FLOOR: f64 = 1e-3;
+/// Forward-difference step of the material tangent, relative to the strain increment...
+const FD_REL: f64 = 1e-6;
+/// ... and the smallest strain increment it is taken relative to.
+const FD_STRAIN_FLOOR: f64 = 1e-6;
+/// Most history variables a material may have (the tangent's scratch space).
+const MAX_MAT_STATE: usize = 8;
+
+/// Newton settings, from the PETSc options database.
+#[derive(Debug, Clone, Copy)]
+pub struct NewtonOptions {
+    /// Relative residual tolerance.
+    pub rtol: f64,
+    /// Most iterations per step.
+    pub max_iterations: u32,
+    /// Rebuild the tangent every iteration (full Newton).
+    pub full: bool,
+}
+
+impl NewtonOptions {
+    /// Defaults, overridden by `-tdyn_newton_rtol`, `-tdyn_newton_max_it`, `-tdyn_newton_full`.
+    pub fn from_options() -> Result<NewtonOptions, PetscError> {
+        Ok(NewtonOptions {
+            rtol: solver::option_real("-tdyn_newton_rtol")?.unwrap_or(NEWTON_RTOL),
+            max_iterations: solver::option_int("-tdyn_newton_max_it")?
+                .map(|v| v.max(1) as u32)
+                .unwrap_or(NEWTON_MAX_IT),
+            full: crate::petsc::Petsc::has_option("-tdyn_newton_full"),
+        })
+    }
+}
+
+/// Counters and timers of the implicit stage on this rank.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ImplicitStats {
+    /// Newton iterations (linear solves) so far.
+    pub newton_iterations: u64,
+    /// Krylov iterations so far.
+    pub ksp_iterations: u64,
+    /// Tangent assemblies so far.
+    pub assemblies: u64,
+    /// Residual evaluations so far.
+    pub residuals: u64,
+    /// Seconds assembling the tangent.
+    pub assembly_s: f64,
+    /// Seconds in KSP (preconditioner set-up and solve).
+    pub solve_s: f64,
+    /// Largest Newton iteration count of one step.
+    pub max_step_iterations: u32,
+}
+
+/// Why an implicit step failed.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ImplicitError {
+    /// The element loop failed (inverted element, non-finite value) or PETSc failed.
+    #[error("{0}")]
+    Step(#[from] StepError),
+    /// The linear solve failed.
+    #[error("{0}")]
+    Solve(#[from] SolveError),
+    /// Newton did not reach its tolerance.
+    #[error("Newton iterations did not converge at t = {time:e} s, step {step}: residual {residual:e} N after {iterations} iterations, tolerance {tolerance:e} N (reduce run.dt, or raise -tdyn_newton_max_it / -tdyn_newton_rtol)")]
+    NoConvergence {
+        /// Time at the end of the step.
+        time: f64,
+        /// The step.
+        step: u64,
+        /// Final residual norm.
+        residual: f64,
+        /// The tolerance it had to reach.
+        tolerance: f64,
+        /// Iterations taken.
+        iterations: u32,
+    },
+    /// This rank is fine; another one failed (its message is the one to report).
+    #[error("another rank failed")]
+    OtherRank,
+}
+
+impl From<PetscError> for ImplicitError {
+    fn from(e: PetscError) -> Self {
+        ImplicitError::Step(StepError::Petsc(e))
+    }
+}
+
+/// A node's constraint as a projection.
+#[derive(Debug, Clone, Copy)]
+enum NodeDof {
+    Free,
+    /// The increment lies in the range of `p` (symmetry planes: I - sum n n^T).
+    Projected([[f64; 3]; 3]),
+    /// The velocity is prescribed (fixed: zero); no free component.
+    Prescribed([f64; 3]),
+}
+
+impl NodeDof {
+    fn from_constraint(c: &Constraint) -> NodeDof {
+        match c {
+            Constraint::Fixed => NodeDof::Prescribed([0.0; 3]),
+            Constraint::Velocity(v) => NodeDof::Prescribed(*v),
+            Constraint::Planes(ns) => {
+                let mut p = [[0.0; 3]; 3];
+                for i in 0..3 {
+                    p[i][i] = 1.0;
+                }
+                for n in ns {
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            p[i][j] -= n[i] * n[j];
+                        }
+                    }
+                }
+                NodeDof::Projected(p)
+            }
+        }
+    }
+
+    /// The free part P w of a nodal vector.
+    #[inline]
+    fn free(&self, w: [f64; 3]) -> [f64; 3] {
+        match self {
+            NodeDof::Free => w,
+            NodeDof::Projected(p) => mat3_vec(p, &w),
+            NodeDof::Prescribed(_) => [0.0; 3],
+        }
+    }
+
+    /// The projection matrix, or `None` for the identity.
+    #[inline]
+    fn matrix(&self) -> Option<[[f64; 3]; 3]> {
+        match self {
+            NodeDof::Free => None,
+            NodeDof::Projected(p) => Some(*p),
+            NodeDof::Prescribed(_) => Some([[0.0; 3]; 3]),
+        }
+    }
+}
+
+#[inline]
+fn mat3_vec(p: &[[f64; 3]; 3], w: &[f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| p[i][0] * w[0] + p[i][1] * w[1] + p[i][2] * w[2])
+}
+
+#[inline]
+fn gather(xs: &[[f64; 3]], conn: &[u32; 8]) -> [[f64; 3]; 8] {
+    std::array::from_fn(|k| xs[conn[k] as usize])
+}
+
+/// FB hourglass base vectors at the nodes: eta zeta, zeta xi, xi eta, xi eta zeta (as in `hex`).
+const GAMMA: [[f64; 8]; 4] = {
+    let mut g = [[0.0; 8]; 4];
+    let mut i = 0;
+    while i < 8 {
+        let [x, y, z] = NODE_XI[i];
+        g[0][i] = y * z;
+        g[1][i] = z * x;
+        g[2][i] = x * y;
+        g[3][i] = x * y * z;
+        i += 1;
+    }
+    g
+};
+
+/// The implicit FE stage on one rank. Its nodal and element state lives in an [`ExplicitFe`]
+/// (`fe`: the same arrays, element state and energy bookkeeping that probes and output read);
+/// this type replaces the time step.
+pub struct ImplicitFe {
+    /// Nodal and element state, energies, time and step count.
+    pub fe: ExplicitFe,
+    /// The step, s.
+    pub dt: f64,
+    /// Newton settings.
+    pub options: NewtonOptions,
+    /// Counters and timers.
+    pub stats: ImplicitStats,
+    controls: HexControls,
+    gravity: [f64; 3],
+    dofs: Vec<NodeDof>,
+    mat_stride: usize,
+    owned_nodes: Vec<usize>,
+    matrix: BlockMatrix,
+    solver: Solver,
+    rhs: Vector,
+    sol: Vector,
+    du: Vec<[f64; 3]>,
+    x_trial: Vec<[f64; 3]>,
+    v_mean: Vec<[f64; 3]>,
+    force: Vec<[f64; 3]>,
+    force_n: Vec<[f64; 3]>,
+    residual: Vec<[f64; 3]>,
+    reaction: Vec<[f64; 3]>,
+    reaction_n: Vec<[f64; 3]>,
+    state_trial: Vec<HexState>,
+    mat_trial: Vec<f64>,
+    vol_trial: Vec<f64>,
+    pressure_trial: Vec<f64>,
+    hg_work_trial: f64,
+    owned_buf: Vec<f64>,
+    local_buf: Vec<f64>,
+    tangent_stale: bool,
+    force_scale_max: f64,
+}
+
+impl ImplicitFe {
+    /// Builds the stage: the explicit arrays (lumped masses, initial velocities and
+    /// constraints), the global node numbering, the matrix pattern and the solver. `setup`'s
+    /// controls are kept for the explicit stable-step estimate (reported for comparison); the
+    /// element itself runs without bulk viscosity. Collective.
+    pub fn new(
+        comm: &SimpleCommunicator,
+        setup: ExplicitSetup,
+        dt: f64,
+        exchange: &mut NodeExchange,
+    ) -> Result<ImplicitFe, ImplicitError> {
+        let controls = HexControls {
+            bv_linear: 0.0,
+            bv_quadratic: 0.0,
+            ..setup.controls
+        };
+        let gravity = setup.gravity;
+        let nn = setup.mesh.coords.len();
+        let mut dofs = vec![NodeDof::Free; nn];
+        for (n, c) in &setup.constraints {
+            dofs[*n as usize] = NodeDof::from_constraint(c);
+        }
+        let fe = ExplicitFe::new(setup, exchange)?;
+        let mat_stride = fe.materials.iter().map(|m| m.n_state()).max().unwrap_or(0);
+        assert!(
+            mat_stride <= MAX_MAT_STATE,
+            "a material with more than {MAX_MAT_STATE} history variables"
+        );
+
+        // Global block numbers: owned nodes rank after rank, ghosts from their owners.
+        let owned_nodes: Vec<usize> = (0..nn).filter(|&n| fe.owned[n]).collect();
+        let mut counts = vec![0u64; comm.size() as usize];
+        comm.all_gather_into(&(owned_nodes.len() as u64), &mut counts[..]);
+        let offset: u64 = counts[..comm.rank() as usize].iter().sum();
+        let mut ids = vec![0.0; 3 * nn];
+        for (k, &n) in owned_nodes.iter().enumerate() {
+            ids[3 * n] = (offset + k as u64) as f64;
+        }
+        exchange.sum_shared(&mut ids)?;
+        let global_block: Vec<i32> = (0..nn).map(|n| ids[3 * n].round() as i32).collect();
+
+        let mut matrix = BlockMatrix::new(comm, owned_nodes.len(), &global_block, &fe.elems)?;
+        let owned_coords: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x0[n]).collect();
+        matrix.set_rigid_body_modes(&owned_coords)?;
+        let solver = Solver::new(comm, &matrix)?;
+        let rhs = matrix.vector()?;
+        let sol = matrix.vector()?;
+        let ne = fe.elems.len();
+        let mut imp = ImplicitFe {
+            dt,
+            options: NewtonOptions::from_options()?,
+            stats: ImplicitStats::default(),
+            controls,
+            gravity,
+            dofs,
+            mat_stride,
+            matrix,
+            solver,
+            rhs,
+            sol,
+            du: vec![[0.0; 3]; nn],
+            x_trial: fe.x.clone(),
+            v_mean: vec![[0.0; 3]; nn],
+            force: vec![[0.0; 3]; nn],
+            force_n: vec![[0.0; 3]; nn],
+            residual: vec![[0.0; 3]; nn],
+            reaction: vec![[0.0; 3]; nn],
+            reaction_n: vec![[0.0; 3]; nn],
+            state_trial: fe.state.clone(),
+            mat_trial: fe.mat_state.clone(),
+            vol_trial: fe.vol.clone(),
+            pressure_trial: vec![0.0; ne],
+            hg_work_trial: 0.0,
+            owned_buf: vec![0.0; 3 * owned_nodes.len()],
+            local_buf: vec![0.0; 3 * nn],
+            owned_nodes,
+            tangent_stale: true,
+            force_scale_max: 0.0,
+            fe,
+        };
+        // The reactions at t = 0 (zero stress: M a(0) = M g + R(0)).
+        for n in 0..nn {
+            imp.reaction_n[n] = imp.constraint_force(n, imp.fe.a[n], [0.0; 3]);
+        }
+        Ok(imp)
+    }
+
+    /// The force a node's constraint applies: (I - P)(m (a - g) - f).
+    #[inline]
+    fn constraint_force(&self, n: usize, a: [f64; 3], f: [f64; 3]) -> [f64; 3] {
+        if let NodeDof::Free = self.dofs[n] {
+            return [0.0; 3];
+        }
+        let m = self.fe.mass[n];
+        let g = self.gravity;
+        let r: [f64; 3] = std::array::from_fn(|c| m * (a[c] - g[c]) - f[c]);
+        let free = self.dofs[n].free(r);
+        std::array::from_fn(|c| r[c] - free[c])
+    }
+
+    /// Number of local nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.fe.x.len()
+    }
+
+    /// One Newmark step of `self.dt`: predictor, Newton iterations, update of positions,
+    /// velocities, accelerations, element state and energies (collective; every rank returns an
+    /// error together, the failing ones their own and the others [`ImplicitError::OtherRank`]).
+    pub fn step(
+        &mut self,
+        comm: &SimpleCommunicator,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), ImplicitError> {
+        let dt = self.dt;
+        let t0 = Instant::now();
+        // Predictor: a(n+1) = a(n).
+        for n in 0..self.n_nodes() {
+            let (v, a) = (self.fe.v[n], self.fe.a[n]);
+            let d: [f64; 3] = std::array::from_fn(|c| dt * v[c] + 0.5 * dt * dt * a[c]);
+            self.du[n] = self.constrained_increment(n, d);
+        }
+        self.fe.timers.nodal += t0.elapsed().as_secs_f64();
+        let mut prev: Option<f64> = None;
+        let mut iterations = 0u32;
+        loop {
+            let (rnorm, scale) = self.evaluate(comm, exchange)?;
+            self.force_scale_max = self.force_scale_max.max(scale);
+            let tol = self.options.rtol * scale.max(FORCE_FLOOR * self.force_scale_max);
+            if rnorm <= tol {
+                break;
+            }
+            if iterations >= self.options.max_iterations {
+                return Err(ImplicitError::NoConvergence {
+                    time: self.fe.time + dt,
+                    step: self.fe.step + 1,
+                    residual: rnorm,
+                    tolerance: tol,
+                    iterations,
+                });
+            }
+            if prev.is_some_and(|p| rnorm > REFRESH_RATIO * p) {
+                self.tangent_stale = true;
+            }
+            if self.tangent_stale || self.options.full {
+                self.assemble_tangent()?;
+                self.tangent_stale = false;
+            }
+            self.newton_update(exchange)?;
+            prev = Some(rnorm);
+            iterations += 1;
+        }
+        self.stats.newton_iterations += iterations as u64;
+        self.stats.max_step_iterations = self.stats.max_step_iterations.max(iterations);
+        let sums = self.accept();
+        let mut global = [0.0; 7];
+        comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
+        self.fe.accumulate(&global, dt);
+        Ok(())
+    }
+
+    /// A node's increment with its constraint applied: prescribed dt v, or the free part.
+    #[inline]
+    fn constrained_increment(&self, n: usize, d: [f64; 3]) -> [f64; 3] {
+        match self.dofs[n] {
+            NodeDof::Prescribed(v) => std::array::from_fn(|c| self.dt * v[c]),
+            ref dof => dof.free(d),
+        }
+    }
+
+    /// Element forces at x(n) + du from the state at t(n), the projected residual, and the
+    /// global norms (||P r||_2, F). Collective.
+    fn evaluate(
+        &mut self,
+        comm: &SimpleCommunicator,
+        exchange: &mut NodeExchange,
+    ) -> Result<(f64, f64), ImplicitError> {
+        let dt = self.dt;
+        let t0 = Instant::now();
+        let inv_dt = 1.0 / dt;
+        for n in 0..self.n_nodes() {
+            for c in 0..3 {
+                self.x_trial[n][c] = self.fe.x[n][c] + self.du[n][c];
+                self.v_mean[n][c] = self.du[n][c] * inv_dt;
+            }
+        }
+        for f in self.force.iter_mut() {
+            *f = [0.0; 3];
+        }
+        let stride = self.mat_stride;
+        let mut hg_work = 0.0;
+        let mut failure: Option<StepError> = None;
+        for (e, conn) in self.fe.elems.iter().enumerate() {
+            let xe = gather(&self.x_trial, conn);
+            let ve = gather(&self.v_mean, conn);
+            let mat = &*self.fe.materials[self.fe.elem_material[e]];
+            let mut st = self.fe.state[e];
+            let ms = &mut self.mat_trial[e * stride..(e + 1) * stride];
+            ms.copy_from_slice(&self.fe.mat_state[e * stride..(e + 1) * stride]);
+            match hex::update(
+                &xe,
+                &ve,
+                dt,
+                mat.density(),
+                self.fe.vol0[e],
+                mat,
+                &self.controls,
+                &mut st,
+                ms,
+            ) {
+                Ok(out) => {
+                    for (k, &n) in conn.iter().enumerate() {
+                        let f = &mut self.force[n as usize];
+                        for c in 0..3 {
+                            f[c] += out.force[k][c];
+                        }
+                    }
+                    hg_work += out.hg_work;
+                    self.state_trial[e] = st;
+                    self.vol_trial[e] = out.volume;
+                    self.pressure_trial[e] = out.pressure;
+                }
+                Err(hex::ElementError::Inverted { volume }) => {
+                    failure = Some(StepError::Inverted {
+                        elem: self.fe.elem_id[e],
+                        volume,
+                        at: centroid(&xe),
+                        time: self.fe.time + dt,
+                        step: self.fe.step + 1,
+                    });
+                    break;
+                }
+            }
+        }
+        self.hg_work_trial = hg_work;
+        self.stats.residuals += 1;
+        let t1 = Instant::now();
+        self.fe.timers.elements += (t1 - t0).as_secs_f64();
+        // Every rank learns whether one failed before the collective exchange.
+        let failed = {
+            let mine = failure.is_some() as i32;
+            let mut any = 0;
+            comm.all_reduce_into(&mine, &mut any, SystemOperation::max());
+            any > 0
+        };
+        if failed {
+            return Err(failure
+                .map(ImplicitError::Step)
+                .unwrap_or(ImplicitError::OtherRank));
+        }
+        exchange.sum_shared(self.force.as_flattened_mut())?;
+        let t2 = Instant::now();
+        self.fe.timers.exchange += (t2 - t1).as_secs_f64();
+        let c_mass = 4.0 / (dt * dt);
+        let g = self.gravity;
+        let mut sums = [0.0f64; 3];
+        for n in 0..self.n_nodes() {
+            let m = self.fe.mass[n];
+            let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
+            let inertia: [f64; 3] =
+                std::array::from_fn(|c| m * (c_mass * (du[c] - dt * v[c]) - a[c] - g[c]));
+            let r: [f64; 3] = std::array::from_fn(|c| inertia[c] - f[c]);
+            let pr = self.dofs[n].free(r);
+            self.residual[n] = pr;
+            if self.fe.owned[n] {
+                for c in 0..3 {
+                    sums[0] += pr[c] * pr[c];
+                    sums[1] += f[c] * f[c];
+                    sums[2] += inertia[c] * inertia[c];
+                }
+            }
+        }
+        let mut global = [0.0f64; 3];
+        comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
+        self.fe.timers.nodal += t2.elapsed().as_secs_f64();
+        let rnorm = global[0].sqrt();
+        if !rnorm.is_finite() {
+            return Err(ImplicitError::Step(StepError::NonFinite {
+                what: "the implicit residual",
+                time: self.fe.time + dt,
+                step: self.fe.step + 1,
+            }));
+        }
+        Ok((rnorm, global[1].sqrt() + global[2].sqrt()))
+    }
+
+    /// Assembles 4 M / dt^2 + K at the current trial state (see the module comment).
+    fn assemble_tangent(&mut self) -> Result<(), PetscError> {
+        let t0 = Instant::now();
+        let dt = self.dt;
+        self.matrix.zero()?;
+        let stride = self.mat_stride;
+        let mut ke = [0.0; 576];
+        for (e, conn) in self.fe.elems.iter().enumerate() {
+            let xe = gather(&self.x_trial, conn);
+            let due = gather(&self.du, conn);
+            let mat = &*self.fe.materials[self.fe.elem_material[e]];
+            let (b, vol) = hex::gradient(&xe);
+            // The strain increment of the step, for the material tangent.
+            let mut deps = [0.0; 6];
+            for k in 0..8 {
+                let (d, bk) = (due[k], b[k]);
+                deps[0] += d[0] * bk[0];
+                deps[1] += d[1] * bk[1];
+                deps[2] += d[2] * bk[2];
+                deps[3] += 0.5 * (d[0] * bk[1] + d[1] * bk[0]);
+                deps[4] += 0.5 * (d[1] * bk[2] + d[2] * bk[1]);
+                deps[5] += 0.5 * (d[2] * bk[0] + d[0] * bk[2]);
+            }
+            let c = material_tangent(
+                mat,
+                &self.fe.state[e].stress,
+                &self.fe.mat_state[e * stride..(e + 1) * stride],
+                &deps,
+                dt,
+            );
+            // S_I (6 x 3): engineering strain from node I's displacement.
+            let s: [[[f64; 3]; 6]; 8] = std::array::from_fn(|k| {
+                let [x, y, z] = b[k];
+                [
+                    [x, 0.0, 0.0],
+                    [0.0, y, 0.0],
+                    [0.0, 0.0, z],
+                    [y, x, 0.0],
+                    [0.0, z, y],
+                    [z, 0.0, x],
+                ]
+            });
+            // C S_J, then V S_I^T (C S_J).
+            let cs: [[[f64; 3]; 6]; 8] = std::array::from_fn(|j| {
+                std::array::from_fn(|p| {
+                    std::array::from_fn(|bb| (0..6).map(|q| c[p][q] * s[j][q][bb]).sum())
+                })
+            });
+            let hg = self.hourglass_stiffness(mat, &xe, &b, vol, self.fe.vol0[e]);
+            let proj: [Option<[[f64; 3]; 3]>; 8] =
+                std::array::from_fn(|k| self.dofs[conn[k] as usize].matrix());
+            for i in 0..8 {
+                for j in 0..8 {
+                    let mut kij = [[0.0; 3]; 3];
+                    for a in 0..3 {
+                        for bb in 0..3 {
+                            let mut v = 0.0;
+                            for p in 0..6 {
+                                v += s[i][p][a] * cs[j][p][bb];
+                            }
+                            kij[a][bb] = vol * v;
+                        }
+                        kij[a][a] += hg.0 * hg.1[i][j];
+                    }
+                    if let Some(p) = proj[i] {
+                        kij = mat3_mul(&p, &kij);
+                    }
+                    if let Some(p) = proj[j] {
+                        kij = mat3_mul(&kij, &p);
+                    }
+                    for a in 0..3 {
+                        for bb in 0..3 {
+                            ke[(3 * i + a) * 24 + 3 * j + bb] = kij[a][bb];
+                        }
+                    }
+                }
+            }
+            let rows: [i32; 8] = std::array::from_fn(|k| conn[k] as i32);
+            self.matrix.add_local(&rows, &ke)?;
+        }
+        let c_mass = 4.0 / (dt * dt);
+        for &n in &self.owned_nodes {
+            let d = c_mass * self.fe.mass[n];
+            let blk = [d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d];
+            self.matrix.add_local(&[n as i32], &blk)?;
+        }
+        self.matrix.assemble()?;
+        self.stats.assemblies += 1;
+        self.stats.assembly_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The FB hourglass stiffness of an element as (k, G) with K_hg[Ia, Jb] = k G[I][J]
+    /// delta_ab: k = k_s + k_v / dt (k_s = kappa_s (lambda + 2 mu) V (b . b) / 8,
+    /// k_v = kappa_v rho c V^(2/3) / 2, as in `hex::update`), G = sum_a gamma_a gamma_a^T.
+    fn hourglass_stiffness(
+        &self,
+        mat: &dyn Material,
+        x: &[[f64; 3]; 8],
+        b: &[[f64; 3]; 8],
+        vol: f64,
+        vol0: f64,
+    ) -> (f64, [[f64; 8]; 8]) {
+        let ctl = &self.controls;
+        let mut g = [[0.0; 8]; 8];
+        if ctl.hg_stiffness == 0.0 && ctl.hg_viscosity == 0.0 {
+            return (0.0, g);
+        }
+        let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
+        let ks = ctl.hg_stiffness * mat.dilatational_modulus() * vol * bb / 8.0;
+        let kv = if ctl.hg_viscosity > 0.0 {
+            let rho = mat.density() * vol0 / vol;
+            let c = (mat.dilatational_modulus() / rho).sqrt();
+            let len = vol.cbrt();
+            0.5 * ctl.hg_viscosity * rho * c * len * len
+        } else {
+            0.0
+        };
+        for gam in GAMMA.iter() {
+            let mut gx = [0.0; 3];
+            for k in 0..8 {
+                for a in 0..3 {
+                    gx[a] += gam[k] * x[k][a];
+                }
+            }
+            let v: [f64; 8] = std::array::from_fn(|k| {
+                gam[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2])
+            });
+            for i in 0..8 {
+                for j in 0..8 {
+                    g[i][j] += v[i] * v[j];
+                }
+            }
+        }
+        (ks + kv / self.dt, g)
+    }
+
+    /// Solves (4 M / dt^2 + K) delta = -P r and adds P delta to du on every local node.
+    fn newton_update(&mut self, exchange: &mut NodeExchange) -> Result<(), ImplicitError> {
+        let t0 = Instant::now();
+        for (k, &n) in self.owned_nodes.iter().enumerate() {
+            for c in 0..3 {
+                self.owned_buf[3 * k + c] = -self.residual[n][c];
+            }
+        }
+        solver::write_vector(&self.rhs, &self.owned_buf)?;
+        let its = self.solver.solve(&self.rhs, &mut self.sol)?;
+        self.stats.ksp_iterations += its as u64;
+        solver::read_vector(&self.sol, &mut self.owned_buf)?;
+        self.stats.solve_s += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        self.local_buf.fill(0.0);
+        for (k, &n) in self.owned_nodes.iter().enumerate() {
+            self.local_buf[3 * n..3 * n + 3].copy_from_slice(&self.owned_buf[3 * k..3 * k + 3]);
+        }
+        // Ghost copies contribute zero: the sum gives every copy its owner's value.
+        exchange.sum_shared(&mut self.local_buf)?;
+        self.fe.timers.exchange += t1.elapsed().as_secs_f64();
+        for n in 0..self.n_nodes() {
+            let d = [
+                self.local_buf[3 * n],
+                self.local_buf[3 * n + 1],
+                self.local_buf[3 * n + 2],
+            ];
+            let d = self.dofs[n].free(d);
+            for c in 0..3 {
+                self.du[n][c] += d[c];
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes the converged increment: new accelerations, velocities, positions, reactions and
+    /// element state. Returns the local sums `[kinetic, d(internal+hourglass), d(external
+    /// work), px, py, pz, hourglass work]` to be reduced.
+    fn accept(&mut self) -> [f64; 7] {
+        let t0 = Instant::now();
+        let dt = self.dt;
+        let c_mass = 4.0 / (dt * dt);
+        let g = self.gravity;
+        let mut sums = [0.0; 7];
+        for n in 0..self.n_nodes() {
+            let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
+            let a_raw: [f64; 3] = std::array::from_fn(|c| c_mass * (du[c] - dt * v[c]) - a[c]);
+            let a_new = self.dofs[n].free(a_raw);
+            let v_raw: [f64; 3] = std::array::from_fn(|c| v[c] + 0.5 * dt * (a[c] + a_new[c]));
+            let v_new = match self.dofs[n] {
+                NodeDof::Prescribed(p) => p,
+                ref dof => dof.free(v_raw),
+            };
+            self.reaction[n] = self.constraint_force(n, a_new, f);
+            for c in 0..3 {
+                self.fe.x[n][c] += du[c];
+            }
+            self.fe.a[n] = a_new;
+            self.fe.v[n] = v_new;
+            if !self.fe.owned[n] {
+                continue;
+            }
+            let m = self.fe.mass[n];
+            let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
+            for c in 0..3 {
+                ke += v_new[c] * v_new[c];
+                w_elem += 0.5 * (f[c] + self.force_n[n][c]) * du[c];
+                w_ext += (0.5 * (self.reaction[n][c] + self.reaction_n[n][c]) + m * g[c]) * du[c];
+                sums[3 + c] += m * v_new[c];
+            }
+            sums[0] += 0.5 * m * ke;
+            sums[1] -= w_elem;
+            sums[2] += w_ext;
+        }
+        sums[6] = self.hg_work_trial;
+        std::mem::swap(&mut self.force_n, &mut self.force);
+        std::mem::swap(&mut self.reaction_n, &mut self.reaction);
+        self.fe.force.copy_from_slice(&self.force_n);
+        std::mem::swap(&mut self.fe.state, &mut self.state_trial);
+        std::mem::swap(&mut self.fe.mat_state, &mut self.mat_trial);
+        self.fe.vol.copy_from_slice(&self.vol_trial);
+        self.fe.pressure.copy_from_slice(&self.pressure_trial);
+        self.fe.timers.nodal += t0.elapsed().as_secs_f64();
+        sums
+    }
+}
+
+#[inline]
+fn mat3_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// The algorithmic tangent d(stress)/d(strain) of `mat`'s stress update at (stress, state,
+/// deps), Voigt xx,yy,zz,xy,yz,zx against engineering shear strains, symmetrised: forward
+/// differences of `update_stress` (6 extra calls).
+pub fn material_tangent(
+    mat: &dyn Material,
+    stress: &[f64; 6],
+    state: &[f64],
+    deps: &[f64; 6],
+    dt: f64,
+) -> [[f64; 6]; 6] {
+    let n = state.len();
+    let mut buf = [0.0; MAX_MAT_STATE];
+    let mut eval = |d: &[f64; 6]| -> [f64; 6] {
+        let mut s = *stress;
+        buf[..n].copy_from_slice(state);
+        mat.update_stress(&mut s, &mut buf[..n], d, dt);
+        s
+    };
+    let s0 = eval(deps);
+    let scale = deps.iter().fold(FD_STRAIN_FLOOR, |m, d| m.max(d.abs()));
+    let h = FD_REL * scale;
+    let mut c = [[0.0; 6]; 6];
+    for l in 0..6 {
+        let mut d = *deps;
+        d[l] += h;
+        let s1 = eval(&d);
+        // Tensor shear strain h is engineering strain 2h.
+        let to_eng = if l >= 3 { 0.5 } else { 1.0 };
+        for k in 0..6 {
+            c[k][l] = (s1[k] - s0[k]) / h * to_eng;
+        }
+    }
+    for k in 0..6 {
+        for l in (k + 1)..6 {
+            let m = 0.5 * (c[k][l] + c[l][k]);
+            c[k][l] = m;
+            c[l][k] = m;
+        }
+    }
+    c
+}
