@@ -17,6 +17,13 @@ pub const DEFAULT_PARAM_TOL: f64 = 1e-6;
 pub struct SearchParams {
     /// Also search pairs within one body (`[contact] self_contact`).
     pub self_contact: bool,
+    /// Between two different bodies, search only nodes of the higher-numbered body against
+    /// faces of the lower (one pass), instead of both ways. The parallel stage uses it: with
+    /// two passes, a pair of surfaces whose two passes' contacts land in different boxes is
+    /// pushed apart twice (each box removes the whole penetration); one pass pushes it once.
+    /// The price: a node of the lower body can cross a face of the higher one unseen (fine for
+    /// surfaces of similar resolution).
+    pub one_pass: bool,
     /// Capture tolerance, as a fraction of the face's diameter: a node that starts the step up to
     /// this far behind a face still counts as having been outside it (see [`crate::pair`]).
     pub gap_tol: f64,
@@ -29,6 +36,7 @@ impl Default for SearchParams {
     fn default() -> Self {
         SearchParams {
             self_contact: false,
+            one_pass: false,
             gap_tol: DEFAULT_GAP_TOL,
             param_tol: DEFAULT_PARAM_TOL,
         }

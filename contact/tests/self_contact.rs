@@ -154,6 +154,7 @@ fn corner_never_contacts_its_face() {
     let b = ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
     let params = SearchParams {
         self_contact: true,
+        one_pass: false,
         gap_tol: 0.5,
         param_tol: 0.5,
     };

@@ -107,6 +107,7 @@ impl ContactStage {
             tree: None,
             params: SearchParams {
                 self_contact,
+                one_pass: true,
                 ..SearchParams::default()
             },
         }

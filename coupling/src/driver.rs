@@ -5,6 +5,8 @@
 //! PETSc KSP: `run.mode = "implicit"`); a scene with particles or contact is refused with a
 //! message naming what is missing.
 use crate::collective::{self, first_error};
+use crate::contact_stage::ContactStage;
+use crate::fe_contact::FeContact;
 use crate::fe_setup::{self, Groups};
 use crate::gmsh;
 use crate::output::{
@@ -151,6 +153,50 @@ impl FeStage {
     }
 }
 
+/// The contact stage of a run with `[contact]`: the FE side's surfaces, the stage on its own
+/// decomposition, and what it found and cost.
+struct ContactCtx {
+    fe_side: FeContact,
+    stage: ContactStage,
+    node_gid: Vec<u64>,
+    /// Energy taken by the push-back (minus the work of the contact forces), J.
+    energy: f64,
+    /// Contacts found in the last step.
+    contacts: u64,
+    wall_s: f64,
+    bytes: f64,
+    /// Sum over steps of the search imbalance (for the mean).
+    imbalance_sum: f64,
+    steps: u64,
+}
+
+impl ContactCtx {
+    /// Steps 4-5 of Fig. 3 after the drift: detection on the contact decomposition, push-back
+    /// forces back on the FE nodes (all copies), positions and half-step velocities corrected.
+    fn step(
+        &mut self,
+        world: &SimpleCommunicator,
+        fe: &mut ExplicitFe,
+        exchange: &mut NodeExchange,
+        dt: f64,
+    ) -> Result<(), String> {
+        let t0 = Instant::now();
+        let (nodes, faces) = self.fe_side.records(fe, &self.node_gid);
+        let out = self.stage.step(&nodes, &faces, dt)?;
+        let mut f = self.fe_side.forces_on_nodes(fe.n_nodes(), &out.force);
+        let w = fe
+            .apply_contact(&mut f, dt, exchange)
+            .map_err(|e| e.to_string())?;
+        self.energy -= collective::sum(world, w);
+        self.contacts = out.contacts;
+        self.bytes += out.bytes_sent as f64;
+        self.imbalance_sum += out.imbalance;
+        self.steps += 1;
+        self.wall_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
 /// One explicit step (Fig. 3's FE part): kick and drift, element forces with the ghost
 /// exchange, the closing kick, energy sums. Returns the next stable step (min over ranks).
 /// Collective; on an inverted element every rank returns the failing rank's message.
@@ -160,8 +206,12 @@ fn explicit_step(
     fe: &mut ExplicitFe,
     exchange: &mut NodeExchange,
     dt: f64,
+    contact: Option<&mut ContactCtx>,
 ) -> Result<f64, String> {
     fe.kick_drift(dt);
+    if let Some(c) = contact {
+        c.step(world, fe, exchange, dt)?;
+    }
     let hg = fe.element_forces(dt, exchange);
     // Agree on failure (inverted element) with the same reduction as the next step size:
     // a failing rank proposes a negative step.
@@ -248,9 +298,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         )
         .into());
     }
-    if scene.contact.is_some() {
+    if scene.contact.is_some() && mode == Mode::Implicit {
         return Err(format!(
-            "{file}: contact: the contact stage is not available yet; remove the [contact] table"
+            "{file}: contact: the contact stage runs in explicit mode only; use mode = \"explicit\" or remove the [contact] table"
         )
         .into());
     }
@@ -376,6 +426,43 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         FeStage::Implicit(imp) => imp.fe.initial_energies(world),
     }
     let probes = Probes::locate(world, &file, &scene.probes, stage.fe())?;
+    let mut contact = match &scene.contact {
+        Some(c) => {
+            // The named physical surfaces as node bits ("exterior": every boundary face).
+            let bits = if c.surfaces.iter().any(|s| s == "exterior") {
+                None
+            } else {
+                let mut b = 0u32;
+                for name in &c.surfaces {
+                    let tag = groups.surfaces.get(name).copied();
+                    if let Some(k) = dm.local.surface_tags.iter().position(|&t| Some(t) == tag) {
+                        b |= 1 << k;
+                    }
+                }
+                Some(b)
+            };
+            let fe_side = FeContact::build(world, &dm.local, bits);
+            if fe_side.global_faces == 0 {
+                return Err(format!(
+                    "{file}: contact.surfaces: no boundary face lies on {:?}",
+                    c.surfaces
+                )
+                .into());
+            }
+            Some(ContactCtx {
+                fe_side,
+                stage: ContactStage::new(world, c.self_contact),
+                node_gid: dm.local.node_id.clone(),
+                energy: 0.0,
+                contacts: 0,
+                wall_s: 0.0,
+                bytes: 0.0,
+                imbalance_sum: 0.0,
+                steps: 0,
+            })
+        }
+        None => None,
+    };
 
     // The explicit stable step (reduced over ranks); reported in implicit mode for comparison.
     let stable0 = collective::min(world, stage.fe().dt_stable_local);
@@ -490,7 +577,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut next_frame = 1u64; // frame 0 written now
     let mut next_row = 1u64;
     output_s += write_frame(stage.fe(), &mut writer)?;
-    let row = |fe: &ExplicitFe, dt: f64, err: f64| -> Vec<f64> {
+    let row = |fe: &ExplicitFe, dt: f64, err: f64, c: Option<&ContactCtx>| -> Vec<f64> {
         let en = &fe.energies;
         vec![
             fe.step as f64,
@@ -500,17 +587,17 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             en.internal,
             en.hourglass,
             en.external_work,
-            0.0,
+            c.map(|c| c.energy).unwrap_or(0.0),
             err,
             en.momentum[0],
             en.momentum[1],
             en.momentum[2],
-            0.0,
+            c.map(|c| c.contacts as f64).unwrap_or(0.0),
         ]
     };
     let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
     history
-        .row(&row(stage.fe(), dt, 0.0))
+        .row(&row(stage.fe(), dt, 0.0, contact.as_ref()))
         .map_err(|e| e.to_string())?;
     let mut pr = vec![0.0];
     pr.extend(probes.sample(world, stage.fe()));
@@ -550,8 +637,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         dt_min = dt_min.min(dt);
         let tf = Instant::now();
         let next = match &mut stage {
-            FeStage::Explicit(fe) => explicit_step(world, &file, fe, &mut dm.exchange, dt)
-                .map_err(|m| RunFailure::new(numerical, m))?,
+            FeStage::Explicit(fe) => {
+                explicit_step(world, &file, fe, &mut dm.exchange, dt, contact.as_mut())
+                    .map_err(|m| RunFailure::new(numerical, m))?
+            }
             FeStage::Implicit(imp) => {
                 implicit_step(world, &file, imp, &mut dm.exchange)?;
                 dt
@@ -567,7 +656,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         let fe = stage.fe();
         let en = fe.energies;
-        let total = en.kinetic + en.internal + en.hourglass;
+        let total = en.kinetic
+            + en.internal
+            + en.hourglass
+            + contact.as_ref().map(|c| c.energy).unwrap_or(0.0);
         let err = energy_error(total, e0, en.external_work);
         let blow_up = if forced {
             format!(
@@ -588,7 +680,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         err_max = err_max.max(err);
         if err > scene.run.max_energy_error {
-            let _ = history.row(&row(fe, dt, err));
+            let _ = history.row(&row(fe, dt, err, contact.as_ref()));
             let _ = history.flush();
             return Err(RunFailure::new(
                 FailureKind::Unstable,
@@ -601,7 +693,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let at_end = fe.time >= end - TIME_EPS_STEPS * dt;
         let t_row = history_every * next_row as f64;
         if history_every <= 0.0 || fe.time >= t_row - TIME_EPS_STEPS * dt || at_end {
-            history.row(&row(fe, dt, err)).map_err(|e| e.to_string())?;
+            history
+                .row(&row(fe, dt, err, contact.as_ref()))
+                .map_err(|e| e.to_string())?;
             let mut pr = vec![fe.time];
             pr.extend(probes.sample(world, fe));
             probe_csv.row(&pr).map_err(|e| e.to_string())?;
@@ -658,6 +752,24 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut report = Report::new(size as usize, elements, l.global_nodes, 0, steps, wall_s);
     report.stages_run = vec!["fe".into()];
     report.fe = Some(fe_stats);
+    if let Some(c) = &contact {
+        report.stages_run.push("contact".into());
+        report.contact = Some(StageStats {
+            wall_s: collective::max(world, c.wall_s),
+            imbalance: c.imbalance_sum / c.steps.max(1) as f64,
+            bytes_sent: c.bytes,
+        });
+        report.extra.insert(
+            "contact_share_of_step".into(),
+            (collective::max(world, c.wall_s) / loop_s.max(1e-30)).into(),
+        );
+        report
+            .extra
+            .insert("contact_faces".into(), c.fe_side.global_faces.into());
+        report
+            .extra
+            .insert("contact_bodies".into(), c.fe_side.n_bodies.into());
+    }
     report.output = Some(out_stats);
     report.ns_per_element_cycle = Some(ns_per_element_cycle);
     report.energy_error_max = err_max;

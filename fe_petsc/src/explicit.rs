@@ -308,8 +308,9 @@ impl ExplicitFe {
     /// Applies contact push-back forces after `kick_drift`: `force` holds each node's force on
     /// this rank's owned nodes (zero on the others); it is summed over ranks to every copy, then
     /// the half-step velocity gets `F dt / m` and the position `F dt^2 / m`, with the nodal
-    /// constraints applied to the correction. Returns the local work `F . (v + dv/2) dt` over
-    /// owned nodes (the change of their kinetic energy at the half step).
+    /// constraints applied to the correction. Returns the local work of the push-back over
+    /// owned nodes, `m dv . (v + dv/2 - a_n dt/2)` with `dv` the velocity correction: what
+    /// closes the energy balance of the step with the element and external work.
     pub fn apply_contact(
         &mut self,
         force: &mut [[f64; 3]],
@@ -327,13 +328,23 @@ impl ExplicitFe {
             if f == [0.0; 3] {
                 continue;
             }
-            let mut dv = [f[0] * dt / self.mass[n], f[1] * dt / self.mass[n], f[2] * dt / self.mass[n]];
+            let mut dv = [
+                f[0] * dt / self.mass[n],
+                f[1] * dt / self.mass[n],
+                f[2] * dt / self.mass[n],
+            ];
             if let Some(i) = cons[n] {
                 apply(&self.constraints[i].1, &mut dv, false);
             }
             for c in 0..3 {
                 if self.owned[n] {
-                    work += f[c] * (self.v[n][c] + 0.5 * dv[c]) * dt;
+                    // The change of the half-step kinetic energy, less the part of the start
+                    // kick that the element and external work (trapezoids over the corrected
+                    // displacement) already count: velocity Verlet with an impulse dv between
+                    // the kicks gives dKE = W_trapezoid + m dv.(v + dv/2) - (dt/2) m a_n.dv.
+                    work += self.mass[n]
+                        * dv[c]
+                        * (self.v[n][c] + 0.5 * dv[c] - 0.5 * dt * self.a[n][c]);
                 }
                 self.v[n][c] += dv[c];
                 self.x[n][c] += dv[c] * dt;

@@ -17,5 +17,8 @@ pub(super) fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) ->
     if !params.self_contact && b.nodes.body[j] == b.faces.body[f] {
         return None;
     }
+    if params.one_pass && b.nodes.body[j] < b.faces.body[f] {
+        return None;
+    }
     crossing(b, j, f, 0.0, params)
 }
