@@ -88,14 +88,20 @@ fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> 
 impl FeContact {
     /// Finds the contact faces and nodes (collective). `surface_bits`: the bits (in
     /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`.
-    pub fn build(comm: &SimpleCommunicator, mesh: &LocalMesh, surface_bits: Option<u32>) -> FeContact {
+    pub fn build(
+        comm: &SimpleCommunicator,
+        mesh: &LocalMesh,
+        surface_bits: Option<u32>,
+    ) -> FeContact {
         let me = comm.rank();
         // Elements: (elem gid, 8 node gids); owned nodes: (gid, surface bits).
         let elems: Vec<u64> = mesh
             .elems
             .iter()
             .zip(&mesh.elem_id)
-            .flat_map(|(c, &id)| std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize])))
+            .flat_map(|(c, &id)| {
+                std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize]))
+            })
             .collect();
         let nodes: Vec<u64> = (0..mesh.node_id.len())
             .filter(|&n| mesh.owned[n])
@@ -182,7 +188,10 @@ impl FeContact {
             .enumerate()
             .map(|(i, &g)| (g, i as u32))
             .collect();
-        let split = mine.iter().position(|&v| v == u64::MAX).unwrap_or(mine.len());
+        let split = mine
+            .iter()
+            .position(|&v| v == u64::MAX)
+            .unwrap_or(mine.len());
         let mut out = FeContact {
             global_faces: gf[0],
             n_bodies: gf[1] as u32,

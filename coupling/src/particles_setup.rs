@@ -1,9 +1,10 @@
 //! SPH particles from the scene's `[[particles]]` tables: lattice-filled regions (box, cylinder,
 //! sphere) and particle files (CSV), with global ids independent of the rank count.
 //!
-//! Ids: particles read from files keep the file's ids; generated particles are numbered after
-//! the largest file id (from 0 when there is no file), entry by entry in scene order, lattice
-//! points in x-fastest order. Each rank builds a contiguous share of the global sequence; the
+//! Ids are dense, 0..N (the rows of `fields.h5`): particles read from files first, in ascending
+//! order of the file's ids (so a file numbered 0..N-1 keeps its ids, and one numbered 1..N, as
+//! LIGGGHTS writes them, is shifted down by one), then generated particles, entry by entry in
+//! scene order, lattice points in x-fastest order. Each rank builds a contiguous share of the global sequence; the
 //! first RCB balance then places them.
 use crate::scene::{ParticlesDef, Region, Scene};
 use std::path::Path;
@@ -227,7 +228,13 @@ pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<Partic
             w[0]
         ));
     }
-    let mut next = ids.last().map(|&m| m + 1).unwrap_or(0);
+    // Dense ids 0..N (fields.h5 rows are ids): file particles in ascending file id, then the
+    // generated ones.
+    from_files.sort_by_key(|s| s.id);
+    for (k, s) in from_files.iter_mut().enumerate() {
+        s.id = k as u64;
+    }
+    let mut next = from_files.len() as u64;
     let mut all = from_files;
     for (i, pts) in generated {
         let def = &scene.particles[i];

@@ -394,6 +394,12 @@ pub struct SphDef {
     pub periodic: Option<Periodic>,
     #[serde(default = "d_profile")]
     pub profile: String,
+    /// Beyond SCENE.md: h = adaptive_h (m/rho)^(1/3) after every step (standard profile).
+    #[serde(default)]
+    pub adaptive_h: Option<f64>,
+    /// Beyond SCENE.md: artificial thermal conductivity alpha_u (Price 2008), energy equation on.
+    #[serde(default)]
+    pub conductivity: Option<f64>,
 }
 fn d_kernel() -> String {
     "cubic_spline".into()
@@ -866,6 +872,16 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         }
     }
     if let Some(s) = &raw.sph {
+        for (k, v) in [
+            ("sph.adaptive_h", s.adaptive_h),
+            ("sph.conductivity", s.conductivity),
+        ] {
+            if let Some(v) = v {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(err(k, format!("expected a positive number, got {v}")));
+                }
+            }
+        }
         for (k, v, ok) in [
             ("sph.kernel", &s.kernel, &["cubic_spline", "wendland"][..]),
             ("sph.density", &s.density, &["continuity", "summation"][..]),

@@ -142,8 +142,9 @@ fn main() -> ExitCode {
                 "comm" => coupling::comm::selftest(&world, seed),
                 "rcb" => coupling::rcb::selftest(&world, seed),
                 "contact" => coupling::contact_selftest::selftest(&world, seed),
+                "sph" => coupling::sph_selftest::selftest(&world, seed),
                 k => Err(format!(
-                    "unknown kernel {k:?} (expected comm, rcb or contact)"
+                    "unknown kernel {k:?} (expected comm, rcb, contact or sph)"
                 )),
             };
             // Every rank must agree on the outcome.
@@ -229,6 +230,24 @@ fn main() -> ExitCode {
                 quiet,
                 ..Default::default()
             };
+            // A scene of particles only runs the SPH stage alone.
+            if let Some(r) = coupling::sph_run::run_if_particles_only(
+                &world,
+                &opts.scene,
+                opts.out.clone(),
+                quiet,
+            ) {
+                drop(petsc);
+                return match r {
+                    Ok(_) => ExitCode::SUCCESS,
+                    Err(e) => {
+                        if rank == 0 {
+                            eprintln!("tdyn: error: {e}");
+                        }
+                        ExitCode::FAILURE
+                    }
+                };
+            }
             let res = driver::run(&world, &opts);
             drop(petsc);
             match res {

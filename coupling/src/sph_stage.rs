@@ -1,0 +1,283 @@
+//! The SPH stage on its own dynamic RCB decomposition (the paper's §4, Fig. 8).
+//!
+//! Each step: the owned particles take the first half of the step (the `sph` crate), then
+//! 1. RCB rebalance of the particles, started from the previous cuts (every rank then holds the
+//!    cut tree: the shared cuts);
+//! 2. ghosts: each particle is copied to every other rank whose box its sphere (radius h)
+//!    overlaps, and with a periodic box each periodic image of it likewise (the rank's own
+//!    included). The centre of interaction of a pair lies within h_a of a and within h_b of b,
+//!    so the rank whose half-open box holds the COI holds both;
+//! 3. density pass over the pairs whose COI lies in my box, ghost sums sent back to the owners
+//!    (the plan's reverse) and added, EOS on the owners, new (rho, p, c) out to the ghosts;
+//! 4. force pass likewise, sums back to the owners, gravity;
+//!
+//! then the owners take the second half of the step. Every pair is computed exactly once over
+//! all ranks (the COI rule), so momentum is conserved to round-off whatever the rank count.
+use crate::comm::CommPlan;
+use crate::rcb::{Rcb, RcbItem, RcbStats};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use sph::{
+    add_gravity, density_pass, first_half, force_pass, pairs, periodic_images, reset_density_sums,
+    reset_force_sums, second_half, setup_state, update_eos, DensityMode, EosState, PairSums,
+    PairWork, Params, ParticleRecord, Particles,
+};
+use std::time::Instant;
+
+/// Margin on a sphere's radius when finding the ranks it reaches (round-off in the COI).
+const REACH_MARGIN: f64 = 1e-9;
+
+/// A particle as RCB sees it: its record (real position, id).
+#[repr(transparent)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Item(ParticleRecord);
+
+impl RcbItem for Item {
+    fn position(&self) -> [f64; 3] {
+        self.0.x
+    }
+    fn id(&self) -> u64 {
+        self.0.id
+    }
+}
+
+/// What the SPH stage did in the last step (global figures, the same on every rank).
+#[derive(Clone, Debug, Default)]
+pub struct SphStats {
+    /// The RCB call.
+    pub rcb: RcbStats,
+    /// Ghost copies made, over all ranks.
+    pub ghosts: u64,
+    /// Pairs computed, over all ranks.
+    pub pairs: u64,
+    /// Max over ranks of the pairs computed, over the mean.
+    pub pair_imbalance: f64,
+    /// Bytes sent point to point in the step (RCB, ghosts, sums, EOS states).
+    pub bytes_sent: u64,
+    /// Wall time of the stage's step, max over ranks, s.
+    pub wall_s: f64,
+}
+
+/// The SPH stage of one run.
+pub struct SphStage {
+    comm: SimpleCommunicator,
+    rcb: Rcb,
+    /// The particles this rank holds (owned first, then this step's ghosts).
+    pub parts: Particles,
+    /// The model.
+    pub params: Params,
+    /// Owned index of each ghost record sent (in the plan's order).
+    ghost_src: Vec<usize>,
+    plan: Option<CommPlan>,
+    bytes: u64,
+    /// This rank's box (half-open) from the last rebalance.
+    box_lo: [f64; 3],
+    box_hi: [f64; 3],
+    /// Statistics of the last step.
+    pub stats: SphStats,
+    /// Pair work rate of the last evaluation (local), W.
+    pub work: PairWork,
+}
+
+impl SphStage {
+    /// A stage over `comm` (collective) with this rank's initial particles (owned).
+    pub fn new(comm: &SimpleCommunicator, parts: Particles, params: Params) -> SphStage {
+        SphStage {
+            comm: comm.duplicate(),
+            rcb: Rcb::new(comm),
+            parts,
+            params,
+            ghost_src: Vec::new(),
+            plan: None,
+            bytes: 0,
+            box_lo: [f64::NEG_INFINITY; 3],
+            box_hi: [f64::INFINITY; 3],
+            stats: SphStats::default(),
+            work: PairWork::default(),
+        }
+    }
+
+    /// The decomposition's cut tree (after the first rebalance).
+    pub fn tree(&self) -> &crate::rcb::CutTree {
+        self.rcb.tree()
+    }
+
+    /// The set-up evaluation before the first step (collective): state at t = 0 and the first
+    /// rates, on a fresh decomposition.
+    pub fn setup(&mut self) -> Result<(), String> {
+        let t0 = Instant::now();
+        self.bytes = 0;
+        setup_state(&mut self.parts, &self.params);
+        self.rebalance()?;
+        self.make_ghosts();
+        let full = self.params.profile.setup_evaluates_density_and_eos();
+        self.evaluate(full);
+        self.finish_stats(t0);
+        Ok(())
+    }
+
+    /// One step of `dt` (collective).
+    pub fn step(&mut self, dt: f64) -> Result<(), String> {
+        let t0 = Instant::now();
+        self.bytes = 0;
+        self.parts.truncate_ghosts();
+        first_half(&mut self.parts, dt, &self.params);
+        self.rebalance()?;
+        self.make_ghosts();
+        self.evaluate(true);
+        second_half(&mut self.parts, dt, &self.params);
+        self.finish_stats(t0);
+        Ok(())
+    }
+
+    /// 1. RCB over the owned particles, from the previous cuts.
+    fn rebalance(&mut self) -> Result<(), String> {
+        self.parts.truncate_ghosts();
+        let items: Vec<Item> = (0..self.parts.n_owned)
+            .map(|i| Item(self.parts.record(i)))
+            .collect();
+        let (mine, stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
+        let mut parts = Particles::new();
+        for it in &mine {
+            parts.push_owned(&it.0);
+        }
+        self.parts = parts;
+        self.bytes += stats.bytes_sent;
+        self.stats.rcb = stats;
+        let (lo, hi) = self.rcb.tree().rank_box(self.comm.rank());
+        self.box_lo = lo;
+        self.box_hi = hi;
+        Ok(())
+    }
+
+    /// 2. Ghost copies (and periodic images) to every rank their sphere reaches.
+    fn make_ghosts(&mut self) {
+        let me = self.comm.rank();
+        let tree = self.rcb.tree();
+        let per = self.params.periodic;
+        let mut dest = Vec::new();
+        let mut recs = Vec::new();
+        let mut src = Vec::new();
+        let mut ranks = Vec::new();
+        for i in 0..self.parts.n_owned {
+            let x = self.parts.x_real[i];
+            let r = self.parts.h[i] * (1.0 + REACH_MARGIN);
+            let mut shifts = vec![[0.0; 3]];
+            if let Some(p) = &per {
+                shifts.extend(periodic_images(x, r, p));
+            }
+            for s in shifts {
+                let c: [f64; 3] = std::array::from_fn(|k| x[k] + s[k]);
+                let lo = [c[0] - r, c[1] - r, c[2] - r];
+                let hi = [c[0] + r, c[1] + r, c[2] + r];
+                ranks.clear();
+                tree.ranks_overlapping(&lo, &hi, &mut ranks);
+                for &q in &ranks {
+                    if q == me && s == [0.0; 3] {
+                        continue;
+                    }
+                    let mut rec = self.parts.record(i);
+                    rec.shift = s;
+                    dest.push(q);
+                    recs.push(rec);
+                    src.push(i);
+                }
+            }
+        }
+        let mut plan = CommPlan::new(&self.comm, &dest);
+        let got = plan.exchange(&recs);
+        for g in &got {
+            self.parts.push_ghost(g);
+        }
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        self.ghost_src = src;
+        self.plan = Some(plan);
+    }
+
+    /// Sends the ghosts' sums back to their owners and adds them there.
+    fn fold_back(&mut self, with_rho: bool, with_drho: bool) {
+        let n0 = self.parts.n_owned;
+        let sums: Vec<PairSums> = (0..self.parts.n_ghosts())
+            .map(|g| {
+                let mut s = self.parts.pair_sums(n0 + g);
+                if !with_drho {
+                    s.drho = 0.0;
+                }
+                s
+            })
+            .collect();
+        let plan = self.plan.as_mut().expect("ghosts made");
+        let back = plan.reverse(&sums);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        for (k, s) in back.iter().enumerate() {
+            self.parts.add_pair_sums(self.ghost_src[k], s, with_rho);
+        }
+    }
+
+    /// 3-4. The passes with their communication.
+    fn evaluate(&mut self, density_and_eos: bool) {
+        let (lo, hi) = (self.box_lo, self.box_hi);
+        let owns = |c: [f64; 3]| (0..3).all(|k| lo[k] <= c[k] && c[k] < hi[k]);
+        let list = pairs(&self.parts, &self.params.search_options(), owns);
+        if density_and_eos {
+            reset_density_sums(&mut self.parts, &self.params);
+            density_pass(&list, &mut self.parts, &self.params);
+            let with_rho = self.params.density == DensityMode::Summation;
+            self.fold_back(with_rho, true);
+            update_eos(&mut self.parts, &self.params);
+            // New (rho, p, c) of the owners out to their ghosts.
+            let states: Vec<EosState> = self
+                .ghost_src
+                .iter()
+                .map(|&i| self.parts.eos_state(i))
+                .collect();
+            let plan = self.plan.as_mut().expect("ghosts made");
+            let got = plan.exchange(&states);
+            self.bytes += plan.bytes_sent;
+            plan.bytes_sent = 0;
+            let n0 = self.parts.n_owned;
+            for (g, s) in got.iter().enumerate() {
+                self.parts.set_eos_state(n0 + g, s);
+            }
+        }
+        reset_force_sums(&mut self.parts);
+        self.work = force_pass(&list, &mut self.parts, &self.params);
+        self.fold_back(false, false);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
+    fn finish_stats(&mut self, t0: Instant) {
+        let comm = &self.comm;
+        let mut sums = [0.0f64; 3];
+        comm.all_reduce_into(
+            &[
+                self.stats.pairs as f64,
+                self.parts.n_ghosts() as f64,
+                self.bytes as f64,
+            ][..],
+            &mut sums[..],
+            SystemOperation::sum(),
+        );
+        let mut maxes = [0.0f64; 2];
+        comm.all_reduce_into(
+            &[self.stats.pairs as f64, t0.elapsed().as_secs_f64()][..],
+            &mut maxes[..],
+            SystemOperation::max(),
+        );
+        let mean = sums[0] / comm.size() as f64;
+        self.stats.pair_imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
+        self.stats.pairs = sums[0] as u64;
+        self.stats.ghosts = sums[1] as u64;
+        self.stats.bytes_sent = sums[2] as u64;
+        self.stats.wall_s = maxes[1];
+    }
+
+    /// The stable step over all ranks (collective), 0.3 min h/(c + |v|).
+    pub fn stable_dt(&self) -> f64 {
+        crate::collective::min(&self.comm, sph::stable_dt(&self.parts))
+    }
+}
