@@ -6,7 +6,6 @@
 use crate::collective::first_error;
 use crate::contact_stage::{ContactStage, FullFace};
 use contact::{push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams};
-use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
@@ -117,21 +116,7 @@ fn gather_found(comm: &SimpleCommunicator, found: &[(u64, u64, f64)]) -> Vec<(u6
         .iter()
         .flat_map(|c| [c.0, c.1, c.2.to_bits()])
         .collect();
-    let mut counts = vec![0i32; comm.size() as usize];
-    comm.all_gather_into(&(flat.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let mut all = vec![0u64; counts.iter().sum::<i32>() as usize];
-    {
-        let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
-        comm.all_gather_varcount_into(&flat[..], &mut part);
-    }
+    let all = crate::collective::all_gather_varcount(comm, &flat);
     let mut out: Vec<(u64, u64, f64)> = all
         .chunks(3)
         .map(|c| (c[0], c[1], f64::from_bits(c[2])))

@@ -7,7 +7,6 @@
 //! round-off. Run for the LIGGGHTS and standard profiles, open and periodic.
 use crate::sph_stage::SphStage;
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::{
@@ -87,21 +86,7 @@ fn gather(comm: &SimpleCommunicator, p: &Particles) -> Vec<[f64; 9]> {
             ]
         })
         .collect();
-    let mut counts = vec![0i32; comm.size() as usize];
-    comm.all_gather_into(&(mine.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let mut all = vec![0.0; counts.iter().sum::<i32>() as usize];
-    {
-        let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
-        comm.all_gather_varcount_into(&mine[..], &mut part);
-    }
+    let all = crate::collective::all_gather_varcount(comm, &mine);
     let mut rows: Vec<[f64; 9]> = all
         .chunks(9)
         .map(|c| std::array::from_fn(|k| c[k]))

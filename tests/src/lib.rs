@@ -121,3 +121,23 @@ pub const NU: f64 = 0.3;
 pub fn c_dilatational() -> f64 {
     (E * (1.0 - NU) / ((1.0 + NU) * (1.0 - 2.0 * NU)) / RHO).sqrt()
 }
+
+/// Runs `mpirun -np NP tdyn selftest KERNEL --seed SEED` and asserts it passed (the self-test
+/// itself compares with its references and says "passed").
+pub fn selftest(np: usize, kernel: &str, seed: u64, timeout_s: u32) {
+    let o = std::process::Command::new("timeout")
+        .args([&timeout_s.to_string(), "mpirun", "-np", &np.to_string()])
+        .arg(tdyn())
+        .args(["selftest", kernel, "--seed", &seed.to_string()])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .output()
+        .expect("mpirun could not be started");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && out.contains("passed"),
+        "selftest {kernel} at np {np}, seed {seed}:\n{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

@@ -1,5 +1,4 @@
 //! The parallel kernels (issue 3) under mpirun at 1 to 5 ranks.
-use std::process::Command;
 use tdyn_tests::*;
 
 #[test]
@@ -9,21 +8,7 @@ fn comm_plan_delivers_every_item_once_at_1_to_5_ranks() {
     // `reverse` must return each item's own value, and gather + scatter-add must sum exactly.
     for np in 1..=5 {
         for seed in [1u64, 7, 12345] {
-            let o = Command::new("timeout")
-                .args(["120", "mpirun", "-np", &np.to_string()])
-                .arg(tdyn())
-                .args(["selftest", "comm", "--seed", &seed.to_string()])
-                .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-                .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-                .output()
-                .unwrap();
-            let out = String::from_utf8_lossy(&o.stdout);
-            assert!(
-                o.status.success() && out.contains("passed"),
-                "np {np} seed {seed}:\n{out}\n{}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            selftest(np, "comm", seed, 120);
         }
     }
 }
@@ -37,21 +22,7 @@ fn rcb_balances_queries_and_rebalances_at_1_to_5_ranks() {
     // points; a rebalance after a 1 % move migrates under 5 %; a NaN point refused.
     for np in 1..=5 {
         for seed in [3u64, 99] {
-            let o = Command::new("timeout")
-                .args(["120", "mpirun", "-np", &np.to_string()])
-                .arg(tdyn())
-                .args(["selftest", "rcb", "--seed", &seed.to_string()])
-                .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-                .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-                .output()
-                .unwrap();
-            let out = String::from_utf8_lossy(&o.stdout);
-            assert!(
-                o.status.success() && out.contains("passed"),
-                "np {np} seed {seed}:\n{out}\n{}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            selftest(np, "rcb", seed, 120);
         }
     }
 }
@@ -66,21 +37,7 @@ fn parallel_contact_detection_equals_serial_at_1_to_4_ranks() {
     // to zero (1e-12 of the total).
     for np in 1..=4 {
         for seed in [5u64, 77] {
-            let o = Command::new("timeout")
-                .args(["120", "mpirun", "-np", &np.to_string()])
-                .arg(tdyn())
-                .args(["selftest", "contact", "--seed", &seed.to_string()])
-                .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-                .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-                .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-                .output()
-                .unwrap();
-            let out = String::from_utf8_lossy(&o.stdout);
-            assert!(
-                o.status.success() && out.contains("passed"),
-                "np {np} seed {seed}:\n{out}\n{}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            selftest(np, "contact", seed, 120);
         }
     }
 }
@@ -95,20 +52,6 @@ fn parallel_sph_equals_serial_and_computes_each_pair_once_at_1_to_4_ranks() {
     // computes each pair exactly once), x, v, rho, p within 1e-9 of their scales (round-off),
     // momentum within 1e-12 of sum m|v|.
     for np in 1..=4 {
-        let o = Command::new("timeout")
-            .args(["180", "mpirun", "-np", &np.to_string()])
-            .arg(tdyn())
-            .args(["selftest", "sph", "--seed", "5"])
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-            .output()
-            .unwrap();
-        let out = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success() && out.contains("passed"),
-            "np {np}:\n{out}\n{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        selftest(np, "sph", 5, 180);
     }
 }

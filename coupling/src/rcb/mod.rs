@@ -33,7 +33,6 @@ pub use tree::{Cut, CutTree};
 use crate::comm::CommPlan;
 use bytemuck::Pod;
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
 use mpi::topology::{Color, SimpleCommunicator};
 use mpi::traits::*;
 use std::time::Instant;
@@ -521,23 +520,7 @@ fn finish_gathered(
         .iter()
         .flat_map(|k| [k.c.to_bits(), k.id, k.w.to_bits()])
         .collect();
-    let n = mine.len() as i32;
-    let mut counts = vec![0i32; g.size() as usize];
-    g.all_gather_into(&n, &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let total: i32 = counts.iter().sum();
-    let mut buf = vec![0u64; total as usize];
-    {
-        let mut part = PartitionMut::new(&mut buf[..], &counts[..], &displs[..]);
-        g.all_gather_varcount_into(&mine[..], &mut part);
-    }
+    let buf = crate::collective::all_gather_varcount(g, &mine);
     let mut all: Vec<(f64, u64, f64)> = buf
         .chunks(3)
         .map(|c| (f64::from_bits(c[0]), c[1], f64::from_bits(c[2])))

@@ -5,7 +5,6 @@ use super::{Rcb, RcbItem, RcbStats};
 use crate::collective::first_error;
 use bytemuck::{Pod, Zeroable};
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
@@ -75,19 +74,7 @@ fn check(
     let ids: Vec<u64> = items.iter().map(|t| t.id).collect();
     let mut counts = vec![0i32; p as usize];
     comm.all_gather_into(&(ids.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let mut all = vec![0u64; counts.iter().sum::<i32>() as usize];
-    {
-        let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
-        comm.all_gather_varcount_into(&ids[..], &mut part);
-    }
+    let mut all = crate::collective::all_gather_varcount(comm, &ids);
     all.sort_unstable();
     if all.len() as u64 != n_total || all.iter().enumerate().any(|(k, &id)| id != k as u64) {
         fail(format!(
