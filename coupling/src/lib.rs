@@ -9,6 +9,7 @@ pub mod comm;
 pub mod compare;
 pub mod contact_selftest;
 pub mod contact_stage;
+pub mod crosscheck;
 pub mod driver;
 pub mod fe_contact;
 pub mod fe_setup;

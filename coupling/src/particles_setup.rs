@@ -1,5 +1,5 @@
 //! SPH particles from the scene's `[[particles]]` tables: lattice-filled regions (box, cylinder,
-//! sphere) and particle files (CSV), with global ids independent of the rank count.
+//! sphere) and particle files (CSV, or LIGGGHTS data files with `liggghts_type`), with global ids independent of the rank count.
 //!
 //! Ids are dense, 0..N (the rows of `fields.h5`): particles read from files first, in ascending
 //! order of the file's ids (so a file numbered 0..N-1 keeps its ids, and one numbered 1..N, as
@@ -188,6 +188,42 @@ fn read_file(
     Ok(out)
 }
 
+/// The atoms of type `kind` of a LIGGGHTS `atom_style sph` data file: position, velocity and
+/// density as in the file, the mass of the type from its Masses section, h = h_factor x spacing.
+fn read_liggghts_data(
+    path: &Path,
+    def: &ParticlesDef,
+    kind: u32,
+    entry: usize,
+    material: usize,
+) -> Result<Vec<ParticleSeed>, String> {
+    let data = crate::liggghts::read_data(path)?;
+    let mass = *data
+        .masses
+        .get(&kind)
+        .ok_or_else(|| format!("{}: no mass for atom type {kind}", path.display()))?;
+    let out: Vec<ParticleSeed> = data
+        .atoms
+        .iter()
+        .filter(|a| a.kind == kind)
+        .map(|a| ParticleSeed {
+            id: a.id,
+            x: a.x,
+            v: a.v,
+            rho: a.rho,
+            h: def.h_factor * def.spacing,
+            mass,
+            material,
+            fixed: def.fixed,
+            entry,
+        })
+        .collect();
+    if out.is_empty() {
+        return Err(format!("{}: no atom of type {kind}", path.display()));
+    }
+    Ok(out)
+}
+
 /// All particles of the scene, every rank building the same global list, then keeping its
 /// contiguous share `[N me / P, N (me + 1) / P)`. Errors name the entry and key.
 pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<ParticleSeed>, String> {
@@ -204,8 +240,11 @@ pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<Partic
         match &def.region {
             Region::File(p) => {
                 let path = scene.dir.join(p);
-                let mut seeds = read_file(&path, def, density, i, material)
-                    .map_err(|e| format!("{file}: particles[{i}].region.file: {e}"))?;
+                let mut seeds = match def.liggghts_type {
+                    Some(kind) => read_liggghts_data(&path, def, kind, i, material),
+                    None => read_file(&path, def, density, i, material),
+                }
+                .map_err(|e| format!("{file}: particles[{i}].region.file: {e}"))?;
                 from_files.append(&mut seeds);
             }
             r => {

@@ -291,6 +291,10 @@ pub struct OutputDef {
     /// Fields to write (default: all).
     #[serde(default = "d_fields")]
     pub fields: Vec<String>,
+    /// Beyond SCENE.md: every this many steps (and at step 0), the particles as a LIGGGHTS
+    /// `dump custom` text file `dumps/dump.tdyn.<step>`; 0 (default) = none.
+    #[serde(default)]
+    pub dump_every: u64,
 }
 
 fn d_fields() -> Vec<String> {
@@ -299,7 +303,10 @@ fn d_fields() -> Vec<String> {
 
 impl Default for OutputDef {
     fn default() -> Self {
-        OutputDef { fields: d_fields() }
+        OutputDef {
+            fields: d_fields(),
+            dump_every: 0,
+        }
     }
 }
 
@@ -345,6 +352,11 @@ pub struct ParticlesDef {
     /// Boundary particles.
     #[serde(default)]
     pub fixed: bool,
+    /// Beyond SCENE.md: `region.file` is a LIGGGHTS `atom_style sph` data file (Atoms lines
+    /// `id type rho 0 x y z 0 0`, Masses, optional Velocities) and this entry takes its atoms of
+    /// this type (for the cross-check against LIGGGHTS on the very same particles).
+    #[serde(default)]
+    pub liggghts_type: Option<u32>,
 }
 
 /// Monaghan viscosity.
@@ -868,6 +880,12 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             return Err(err(
                 &format!("particles[{i}].h_factor"),
                 format!("expected a positive factor, got {}", p.h_factor),
+            ));
+        }
+        if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
+            return Err(err(
+                &format!("particles[{i}].liggghts_type"),
+                "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
             ));
         }
     }

@@ -315,6 +315,17 @@ pub fn run(
     let fixed_dt = scene.run.dt;
     let mut dt = fixed_dt.unwrap_or(scene.run.dt_safety * stable0);
     output_s += write_frame(&st, 0.0, &mut writer)?;
+    let dump_every = scene.output.dump_every;
+    let dump_dir = out_dir.join("dumps");
+    let dump = |st: &SphStage, step: u64| -> Result<f64, String> {
+        let t0 = Instant::now();
+        crate::output::write_particle_dump(world, &dump_dir, step, &st.parts)
+            .map_err(|e| format!("{}: {e}", dump_dir.display()))?;
+        Ok(t0.elapsed().as_secs_f64())
+    };
+    if dump_every > 0 {
+        output_s += dump(&st, 0)?;
+    }
     history
         .row(&row(0, 0.0, dt, &g0, 0.0, 0.0))
         .map_err(|e| e.to_string())?;
@@ -396,6 +407,11 @@ pub fn run(
                 next_frame += 1;
             }
             let s = write_frame(&st, t, &mut writer)?;
+            output_s += s;
+            output_in_loop += s;
+        }
+        if dump_every > 0 && (steps % dump_every == 0 || last) {
+            let s = dump(&st, steps)?;
             output_s += s;
             output_in_loop += s;
         }

@@ -55,6 +55,38 @@ enum Cmd {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Cross-check our SPH against LIGGGHTS on the same particles: runs the deck (`liggghts -in`,
+    /// or under `mpirun -np M` with `--liggghts-np M`) and the scene (`mpirun -np N tdyn run`),
+    /// then compares the two codes' dumps step by step (x, v, f, rho, p; kinetic energy and
+    /// front of the moving particles) and their cost. Writes crosscheck.csv in the work
+    /// directory. Run it without mpirun:
+    /// `tdyn crosscheck scenes/liggghts_random.toml --deck scenes/liggghts/in.random1step --np 2 --tol 1e-12`
+    Crosscheck {
+        /// Our scene (its particles from the deck's data file, `[output] dump_every` set).
+        scene: PathBuf,
+        /// The LIGGGHTS deck (its directory's files are copied beside it).
+        #[arg(long)]
+        deck: PathBuf,
+        /// Ranks for our run.
+        #[arg(long, default_value_t = 1)]
+        np: usize,
+        /// Ranks for LIGGGHTS.
+        #[arg(long = "liggghts-np", default_value_t = 1)]
+        liggghts_np: usize,
+        /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
+        #[arg(long = "var", value_parser = parse_var)]
+        vars: Vec<(String, String)>,
+        /// Work directory (default out/<scene name>/crosscheck).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Exit non-zero when a per-field difference exceeds this fraction of the field's
+        /// largest LIGGGHTS value.
+        #[arg(long)]
+        tol: Option<f64>,
+        /// Compare against the LIGGGHTS dumps already in the work directory.
+        #[arg(long)]
+        reuse_liggghts: bool,
+    },
     /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
     Selftest {
         /// Which kernel: `comm`.
@@ -71,6 +103,11 @@ enum Cmd {
         #[arg(long = "param", short = 'p', value_parser = parse_param)]
         params: Vec<(String, f64)>,
     },
+}
+
+fn parse_var(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
+    Ok((k.to_string(), v.to_string()))
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -128,6 +165,38 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("tdyn: {}: {e}", geo.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Crosscheck {
+            scene,
+            deck,
+            np,
+            liggghts_np,
+            vars,
+            out,
+            tol,
+            reuse_liggghts,
+        } => {
+            let opts = coupling::crosscheck::CrosscheckOptions {
+                scene,
+                deck,
+                np,
+                liggghts_np,
+                vars,
+                out,
+                tol,
+                reuse_liggghts,
+            };
+            match coupling::crosscheck::crosscheck(&opts) {
+                Ok(s) => {
+                    print!("{}", coupling::crosscheck::table(&s));
+                    println!("tdyn crosscheck: {}/crosscheck.csv", s.dir.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tdyn crosscheck: error: {e}");
                     ExitCode::FAILURE
                 }
             }

@@ -1,10 +1,12 @@
 //! The run's output (SCENE.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
 //! parallel, `history.csv` and `probes.csv` by rank 0, `report.json`.
+mod dump;
 mod fields;
 mod history;
 mod report;
 mod selftest;
 
+pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{
     redistribute_by_id, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame,
 };
