@@ -19,9 +19,9 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::{
-    add_gravity, density_pass, first_half, force_pass, pairs, periodic_images, reset_density_sums,
-    reset_force_sums, second_half, setup_state, update_eos, DensityMode, EosState, PairSums,
-    PairWork, Params, ParticleRecord, Particles,
+    add_gravity, continuity_and_force_pass, density_pass, first_half, force_pass, pairs_in_box,
+    periodic_images, reset_density_sums, reset_force_sums, second_half, setup_state, update_eos,
+    DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles,
 };
 use std::time::Instant;
 
@@ -124,8 +124,18 @@ impl SphStage {
         self.parts.truncate_ghosts();
         first_half(&mut self.parts, dt, &self.params);
         self.rebalance()?;
-        self.make_ghosts();
-        self.evaluate(true);
+        if self.params.density == DensityMode::Continuity {
+            // The forces need (rho, p, c) at the new positions, which continuity density has
+            // already (rho was advanced in the first half): the EOS runs on the owners before
+            // the ghosts are made (they carry it), and one fused pass computes density rates
+            // and forces.
+            update_eos(&mut self.parts, &self.params);
+            self.make_ghosts();
+            self.evaluate_fused();
+        } else {
+            self.make_ghosts();
+            self.evaluate(true);
+        }
         second_half(&mut self.parts, dt, &self.params);
         self.finish_stats(t0);
         Ok(())
@@ -138,11 +148,20 @@ impl SphStage {
             .map(|i| Item(self.parts.record(i)))
             .collect();
         let (mine, stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
-        let mut parts = Particles::new();
-        for it in &mine {
-            parts.push_owned(&it.0);
+        // Nothing came or went (the common case once balanced: RCB keeps its items in order):
+        // the particles stay as they are, no rebuild.
+        let same = mine.len() == self.parts.n_owned
+            && mine
+                .iter()
+                .zip(&self.parts.id)
+                .all(|(it, &id)| it.0.id == id);
+        if !same {
+            let mut parts = Particles::new();
+            for it in &mine {
+                parts.push_owned(&it.0);
+            }
+            self.parts = parts;
         }
-        self.parts = parts;
         self.bytes += stats.bytes_sent;
         self.stats.rcb = stats;
         let (lo, hi) = self.rcb.tree().rank_box(self.comm.rank());
@@ -217,11 +236,31 @@ impl SphStage {
         }
     }
 
+    /// 3-4 with continuity density: one fused pass (density rates and forces), its sums back
+    /// to the owners, gravity. The EOS was applied before the ghosts were made.
+    fn evaluate_fused(&mut self) {
+        let list = pairs_in_box(
+            &self.parts,
+            &self.params.search_options(),
+            self.box_lo,
+            self.box_hi,
+        );
+        reset_density_sums(&mut self.parts, &self.params);
+        reset_force_sums(&mut self.parts);
+        self.work = continuity_and_force_pass(&list, &mut self.parts, &self.params);
+        self.fold_back(false, true);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
     /// 3-4. The passes with their communication.
     fn evaluate(&mut self, density_and_eos: bool) {
-        let (lo, hi) = (self.box_lo, self.box_hi);
-        let owns = |c: [f64; 3]| (0..3).all(|k| lo[k] <= c[k] && c[k] < hi[k]);
-        let list = pairs(&self.parts, &self.params.search_options(), owns);
+        let list = pairs_in_box(
+            &self.parts,
+            &self.params.search_options(),
+            self.box_lo,
+            self.box_hi,
+        );
         if density_and_eos {
             reset_density_sums(&mut self.parts, &self.params);
             density_pass(&list, &mut self.parts, &self.params);

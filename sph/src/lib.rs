@@ -46,12 +46,12 @@ pub use diagnostics::{energies, gravity_power, interpolate, Energies};
 pub use eos::Eos;
 pub use integrate::{first_half, second_half, setup_state, stable_dt, CFL_FACTOR};
 pub use kernel::{Kernel, SmoothingKernel};
-pub use neighbour::{canonical, coi, pairs, CellList, Coi, PairEnd, SearchOptions};
+pub use neighbour::{canonical, coi, pairs, pairs_in_box, CellList, Coi, PairEnd, SearchOptions};
 pub use params::{ArtificialViscosity, DensityMode, Params, Profile, TensileCorrection};
 pub use particles::{EosState, NewParticle, PairSums, ParticleRecord, Particles};
 pub use passes::{
-    add_gravity, density_pass, force_pass, reset_density_sums, reset_force_sums, update_eos,
-    PairWork,
+    add_gravity, continuity_and_force_pass, density_pass, force_pass, reset_density_sums,
+    reset_force_sums, update_eos, PairWork,
 };
 pub use periodic::{periodic_images, Periodic};
 pub use serial::SerialSim;

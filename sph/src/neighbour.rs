@@ -272,11 +272,22 @@ impl CellList {
 
     /// Restricts the search to pairs with at least one primary entry (`primary[i]` per entry).
     pub fn with_primary(mut self, primary: &[bool]) -> Self {
-        self.primary = self.order.iter().map(|&i| primary[i as usize]).collect();
+        // Within each cell, primary slots first (each group in its previous order), so that a
+        // non-primary slot's candidates are the primary prefix of the other cell: pairs of two
+        // non-primary slots (a wall against a wall) are never even looked at.
+        let mut perm: Vec<usize> = Vec::with_capacity(self.order.len()); // new slot -> old
         for c in 0..self.cell_primaries.len() {
             let slots = self.start[c]..self.start[c + 1];
-            self.cell_primaries[c] = slots.filter(|&s| self.primary[s]).count() as u32;
+            let before = perm.len();
+            let is_p = |sl: &usize| primary[self.order[*sl] as usize];
+            perm.extend(slots.clone().filter(is_p));
+            self.cell_primaries[c] = (perm.len() - before) as u32;
+            perm.extend(slots.filter(|sl| !is_p(sl)));
         }
+        self.order = perm.iter().map(|&k| self.order[k]).collect();
+        self.xs = perm.iter().map(|&k| self.xs[k]).collect();
+        self.hs = perm.iter().map(|&k| self.hs[k]).collect();
+        self.primary = self.order.iter().map(|&i| primary[i as usize]).collect();
         self
     }
 
@@ -304,9 +315,10 @@ impl CellList {
                         continue;
                     }
                     let pc = self.cell_primaries[c];
-                    for si in s0..s1 {
+                    // primary slots are s0..s0 + pc: a pair needs one of them
+                    for si in s0..s0 + pc as usize {
                         for sj in si + 1..s1 {
-                            if (self.primary[si] || self.primary[sj]) && self.close(si, sj) {
+                            if self.close(si, sj) {
                                 visit(self.order[si], self.order[sj]);
                             }
                         }
@@ -336,13 +348,17 @@ impl CellList {
                             continue;
                         }
                         for si in s0..s1 {
-                            if dist >= (self.hs[si] + ho) * (1.0 + PREFILTER_SLACK)
-                                || (po == 0 && !self.primary[si])
-                            {
+                            if dist >= (self.hs[si] + ho) * (1.0 + PREFILTER_SLACK) {
                                 continue;
                             }
-                            for sj in t0..t1 {
-                                if (self.primary[si] || self.primary[sj]) && self.close(si, sj) {
+                            // a non-primary slot meets the other cell's primary prefix only
+                            let t_end = if self.primary[si] {
+                                t1
+                            } else {
+                                t0 + po as usize
+                            };
+                            for sj in t0..t_end {
+                                if self.close(si, sj) {
                                     visit(self.order[si], self.order[sj]);
                                 }
                             }
@@ -387,6 +403,50 @@ pub fn pairs(
     opts: &SearchOptions,
     owns: impl Fn([f64; 3]) -> bool,
 ) -> Vec<(u32, u32)> {
+    pairs_with_interior(parts, opts, owns, &[])
+}
+
+/// Pairs listed per entry reserved up front (half of ~31 neighbours in 3D with 2h = 2.4 dx).
+const PAIRS_PER_ENTRY_HINT: usize = 16;
+
+/// Relative margin on h when deciding that a sphere lies strictly inside a box (so that the
+/// rounding of a COI computed from it cannot fall outside).
+const INTERIOR_MARGIN: f64 = 1e-9;
+
+/// `pairs` for the box [lo, hi) (half-open): a pair is this box's when its COI lies in it. Owned
+/// entries whose sphere lies strictly inside the box (without a periodic box) skip the COI:
+/// the COI is the midpoint of a point of each sphere, so when both spheres lie inside the
+/// (convex) box, so does the COI. The list is the same as `pairs` with `owns` = "inside
+/// [lo, hi)"; the COI is only computed for pairs near the box's faces.
+pub fn pairs_in_box(
+    parts: &Particles,
+    opts: &SearchOptions,
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Vec<(u32, u32)> {
+    let owns = |c: [f64; 3]| (0..3).all(|k| lo[k] <= c[k] && c[k] < hi[k]);
+    let interior: Vec<bool> = if opts.periodic.is_some() {
+        Vec::new()
+    } else {
+        (0..parts.n_owned)
+            .map(|i| {
+                let (x, r) = (parts.x_real[i], parts.h[i] * (1.0 + INTERIOR_MARGIN));
+                (0..3).all(|k| lo[k] < x[k] - r && x[k] + r < hi[k])
+            })
+            .collect()
+    };
+    pairs_with_interior(parts, opts, owns, &interior)
+}
+
+/// `pairs`, with `interior[i]` (for the first `interior.len()` entries) saying that entry i's
+/// sphere lies inside the region `owns` accepts, so a pair of two such entries is listed when
+/// the spheres overlap, without its COI.
+fn pairs_with_interior(
+    parts: &Particles,
+    opts: &SearchOptions,
+    owns: impl Fn([f64; 3]) -> bool,
+    interior: &[bool],
+) -> Vec<(u32, u32)> {
     let per = opts.periodic.as_ref();
     // Primary entries: a pair needs at least one. With skip_fixed_pairs, fixed particles are
     // not primary (wall-only cells are then skipped whole). With a periodic box, every listed
@@ -417,7 +477,9 @@ pub fn pairs(
         image: images[i],
         h: parts.h[i],
     };
-    let mut out = Vec::new();
+    // room for the typical ~16 listed pairs per entry (3D, support 2h = 2.4 spacings) up
+    // front, instead of growing (and copying) the list step by step
+    let mut out = Vec::with_capacity(PAIRS_PER_ENTRY_HINT * parts.len());
     cells.for_each_close_pair(|i, j| {
         let (i, j) = if i < j { (i, j) } else { (j, i) };
         let (iu, ju) = (i as usize, j as usize);
@@ -425,6 +487,16 @@ pub fn pairs(
             return; // two copies of one particle at the same place
         }
         if opts.skip_fixed_pairs && parts.fixed[iu] && parts.fixed[ju] {
+            return;
+        }
+        if ju < interior.len() && interior[iu] && interior[ju] {
+            // the same overlap test as `coi`'s (r^2 and h_a + h_b do not depend on the order)
+            let (a, b) = (parts.x_real[iu], parts.x_real[ju]);
+            let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let reach = parts.h[iu] + parts.h[ju];
+            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
+                out.push((i, j));
+            }
             return;
         }
         if let Some(per) = per {

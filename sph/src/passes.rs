@@ -14,6 +14,7 @@
 //!
 //! Notation: r_ab = x_a - x_b, r = |r_ab|, h = (h_a + h_b)/2, v^_ab = v^_a - v^_b,
 //! grad_a W_ab = dW/dr r_ab/r. Passes skip coincident pairs (r = 0: no direction).
+use crate::kernel::ScaledKernel;
 use crate::params::{DensityMode, Params, Profile};
 use crate::particles::Particles;
 
@@ -144,88 +145,215 @@ pub fn reset_force_sums(p: &mut Particles) {
 /// artificial conductivity to de (see there). Returns the pair work rate. Flops per pair ~80,
 /// bytes ~250.
 pub fn force_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) -> PairWork {
-    let k = params.smoothing_kernel();
-    let liggghts = params.profile == Profile::Liggghts;
-    let conductivity = if params.energy {
-        params.conductivity
-    } else {
-        None
-    };
+    let ctx = ForceCtx::new(p, params);
     let mut work = PairWork::default();
     for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
-        let d = sub(p.x[i], p.x[j]);
-        let r2 = dot(d, d);
-        let r = r2.sqrt();
-        if r == 0.0 {
-            continue;
+        if let Some(g) = PairGeom::new(p, &ctx, params, i, j) {
+            force_pair(p, params, &ctx, &g, &mut work);
         }
-        let h = 0.5 * (p.h[i] + p.h[j]);
-        let dw = k.dw_dr(r, h);
-        let pa = p.p[i] / (p.rho[i] * p.rho[i]);
-        let pb = p.p[j] / (p.rho[j] * p.rho[j]);
-        let vr = dot(sub(p.vhat[i], p.vhat[j]), d);
-        let visc = match params.viscosity {
-            Some(av) if vr < 0.0 => {
-                let mu = h * vr / (r2 + av.eta_factor * h * h);
-                let c_mean = 0.5 * (p.c[i] + p.c[j]);
-                let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
-                (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
-            }
-            _ => 0.0,
-        };
-        let tensile = match params.tensile {
+    }
+    work
+}
+
+/// The continuity density pass and the force pass in one walk over the pairs: what
+/// `density_pass` (continuity) then `force_pass` add, with the pair geometry and dW/dr computed
+/// once. Valid when the forces do not need this pass's density rates, i.e. with continuity
+/// density, whose rates only enter the next update of rho: call `update_eos` on the owners
+/// first and give the ghosts those (rho, p, c). Saves one walk over the pairs (~30 of ~110
+/// flops per pair) and, in parallel, one reverse communication and one ghost refresh.
+pub fn continuity_and_force_pass(
+    pairs: &[(u32, u32)],
+    p: &mut Particles,
+    params: &Params,
+) -> PairWork {
+    assert_eq!(
+        params.density,
+        DensityMode::Continuity,
+        "the fused pass needs continuity density"
+    );
+    let ctx = ForceCtx::new(p, params);
+    let mut work = PairWork::default();
+    for &(i, j) in pairs {
+        if let Some(g) = PairGeom::new(p, &ctx, params, i, j) {
+            // Monaghan 1992, eq. 2.16, as in density_pass
+            let t = g.dw * dot(g.d, sub(p.vhat[g.i], p.vhat[g.j])) * g.inv_r;
+            p.drho[g.i] += p.m[g.j] * t;
+            p.drho[g.j] += p.m[g.i] * t;
+            force_pair(p, params, &ctx, &g, &mut work);
+        }
+    }
+    work
+}
+
+/// What every pair of a force pass shares.
+struct ForceCtx {
+    k: crate::kernel::SmoothingKernel,
+    liggghts: bool,
+    conductivity: Option<f64>,
+    /// p / rho^2 of every entry (computed once per entry rather than twice per pair).
+    p_rho2: Vec<f64>,
+    /// The kernel at the last pair's h, with 1/W(delta_p, h) of the tensile correction (h is
+    /// mostly the same for every pair, and these depend on h only).
+    at_h: std::cell::Cell<(ScaledKernel, f64)>,
+}
+
+impl ForceCtx {
+    /// The kernel at h and 1/W(delta_p, h) (0 without tensile correction or when delta_p is
+    /// beyond the support).
+    #[inline(always)]
+    fn kernel_at(&self, h: f64, params: &Params) -> (ScaledKernel, f64) {
+        let cached = self.at_h.get();
+        if cached.0.h == h {
+            return cached;
+        }
+        let sk = self.k.at(h);
+        let inv_w_dp = match params.tensile {
             Some(tc) => {
-                let w_dp = k.w(tc.delta_p, h);
+                let w_dp = sk.w(tc.delta_p);
                 if w_dp > 0.0 {
-                    let fab = k.w(r, h) / w_dp;
-                    let r_ab = if liggghts {
-                        if p.p[i] > 0.0 && p.p[j] > 0.0 {
-                            POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb)
-                        } else {
-                            let neg = |x: f64| if x < 0.0 { tc.epsilon * x.abs() } else { 0.0 };
-                            neg(pa) + neg(pb)
-                        }
-                    } else {
-                        let one = |x: f64| {
-                            if x < 0.0 {
-                                tc.epsilon * x.abs()
-                            } else {
-                                POSITIVE_PRESSURE_TENSILE_FACTOR * x
-                            }
-                        };
-                        one(pa) + one(pb)
-                    };
-                    r_ab * fab.powi(TENSILE_EXPONENT)
+                    1.0 / w_dp
                 } else {
                     0.0
                 }
             }
             None => 0.0,
         };
-        let press = pa + pb + tensile;
-        let g = dw / r; // grad_a W_ab = g r_ab
-        let mm = p.m[i] * p.m[j];
-        let fs = mm * (press + visc) * g;
-        for (c, dc) in d.into_iter().enumerate() {
-            p.f[i][c] -= fs * dc;
-            p.f[j][c] += fs * dc;
-        }
-        let de = (press + visc) * g * vr;
-        p.de[i] += 0.5 * p.m[j] * de;
-        p.de[j] += 0.5 * p.m[i] * de;
-        work.pressure += mm * press * g * vr;
-        work.viscosity += mm * visc * g * vr;
-        if let Some(alpha_u) = conductivity {
-            // de_a += m_b alpha_u v_sig (e_a - e_b)/rho_mean dW/dr, v_sig = sqrt(|p_a - p_b|/rho_mean)
-            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
-            let v_sig = ((p.p[i] - p.p[j]).abs() / rho_mean).sqrt();
-            let q = alpha_u * v_sig * (p.e[i] - p.e[j]) / rho_mean * dw;
-            p.de[i] += p.m[j] * q;
-            p.de[j] -= p.m[i] * q;
+        self.at_h.set((sk, inv_w_dp));
+        (sk, inv_w_dp)
+    }
+}
+
+impl ForceCtx {
+    fn new(p: &Particles, params: &Params) -> Self {
+        ForceCtx {
+            p_rho2: (0..p.len())
+                .map(|i| p.p[i] / (p.rho[i] * p.rho[i]))
+                .collect(),
+            at_h: std::cell::Cell::new((params.smoothing_kernel().at(f64::NAN), 0.0)),
+            k: params.smoothing_kernel(),
+            liggghts: params.profile == Profile::Liggghts,
+            conductivity: if params.energy {
+                params.conductivity
+            } else {
+                None
+            },
         }
     }
-    work
+}
+
+/// One pair's geometry: entries, r_ab, r^2, r, mean h, dW/dr.
+struct PairGeom {
+    i: usize,
+    j: usize,
+    d: [f64; 3],
+    r2: f64,
+    r: f64,
+    /// 1/r.
+    inv_r: f64,
+    h: f64,
+    dw: f64,
+    /// The kernel at h and 1/W(delta_p, h).
+    kernel: (ScaledKernel, f64),
+}
+
+impl PairGeom {
+    /// None for coincident entries (r = 0: no direction).
+    #[inline(always)]
+    fn new(p: &Particles, ctx: &ForceCtx, params: &Params, i: u32, j: u32) -> Option<Self> {
+        let (i, j) = (i as usize, j as usize);
+        let d = sub(p.x[i], p.x[j]);
+        let r2 = dot(d, d);
+        let r = r2.sqrt();
+        if r == 0.0 {
+            return None;
+        }
+        let h = 0.5 * (p.h[i] + p.h[j]);
+        let kernel = ctx.kernel_at(h, params);
+        Some(PairGeom {
+            i,
+            j,
+            d,
+            r2,
+            r,
+            inv_r: 1.0 / r,
+            h,
+            dw: kernel.0.dw_dr(r),
+            kernel,
+        })
+    }
+}
+
+/// Adds one pair's force, energy rate and work (see `force_pass`). Flops ~80, bytes ~250.
+#[inline(always)]
+fn force_pair(
+    p: &mut Particles,
+    params: &Params,
+    ctx: &ForceCtx,
+    g: &PairGeom,
+    work: &mut PairWork,
+) {
+    let (i, j, d, r2, r, h, dw) = (g.i, g.j, g.d, g.r2, g.r, g.h, g.dw);
+    let (pa, pb) = (ctx.p_rho2[i], ctx.p_rho2[j]);
+    let vr = dot(sub(p.vhat[i], p.vhat[j]), d);
+    let visc = match params.viscosity {
+        Some(av) if vr < 0.0 => {
+            let mu = h * vr / (r2 + av.eta_factor * h * h);
+            let c_mean = 0.5 * (p.c[i] + p.c[j]);
+            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
+            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+        }
+        _ => 0.0,
+    };
+    let tensile = match params.tensile {
+        Some(tc) => {
+            let (sk, inv_w_dp) = g.kernel;
+            if inv_w_dp > 0.0 {
+                let fab = sk.w(r) * inv_w_dp;
+                let r_ab = if ctx.liggghts {
+                    if p.p[i] > 0.0 && p.p[j] > 0.0 {
+                        POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb)
+                    } else {
+                        let neg = |x: f64| if x < 0.0 { tc.epsilon * x.abs() } else { 0.0 };
+                        neg(pa) + neg(pb)
+                    }
+                } else {
+                    let one = |x: f64| {
+                        if x < 0.0 {
+                            tc.epsilon * x.abs()
+                        } else {
+                            POSITIVE_PRESSURE_TENSILE_FACTOR * x
+                        }
+                    };
+                    one(pa) + one(pb)
+                };
+                r_ab * fab.powi(TENSILE_EXPONENT)
+            } else {
+                0.0
+            }
+        }
+        None => 0.0,
+    };
+    let press = pa + pb + tensile;
+    let gr = dw * g.inv_r; // grad_a W_ab = gr r_ab
+    let mm = p.m[i] * p.m[j];
+    let fs = mm * (press + visc) * gr;
+    for (c, dc) in d.into_iter().enumerate() {
+        p.f[i][c] -= fs * dc;
+        p.f[j][c] += fs * dc;
+    }
+    let de = (press + visc) * gr * vr;
+    p.de[i] += 0.5 * p.m[j] * de;
+    p.de[j] += 0.5 * p.m[i] * de;
+    work.pressure += mm * press * gr * vr;
+    work.viscosity += mm * visc * gr * vr;
+    if let Some(alpha_u) = ctx.conductivity {
+        // de_a += m_b alpha_u v_sig (e_a - e_b)/rho_mean dW/dr, v_sig = sqrt(|p_a - p_b|/rho_mean)
+        let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
+        let v_sig = ((p.p[i] - p.p[j]).abs() / rho_mean).sqrt();
+        let q = alpha_u * v_sig * (p.e[i] - p.e[j]) / rho_mean * dw;
+        p.de[i] += p.m[j] * q;
+        p.de[j] -= p.m[i] * q;
+    }
 }
 
 /// Adds m g to the force of every owned entry that moves.

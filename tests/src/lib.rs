@@ -72,7 +72,8 @@ pub fn run_ok(np: usize, scene: &Path, out: &Path) {
 /// A CSV file as (header, rows).
 pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text.lines();
+    // lines starting with '#' are comments (the reference data files say where they come from)
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<String> = lines
         .next()
         .unwrap()
