@@ -19,6 +19,7 @@ test: setup
 
 bench: setup
 	./scripts/bench_fe.sh
+	./scripts/bench_sph.sh
 
 lint:
 	cargo fmt --all -- --check

@@ -1,9 +1,12 @@
 //! The run: scene -> mesh -> distribution -> time loop (the paper's Fig. 3) -> output.
 //!
-//! Only the stages a scene declares are built. Today that is the FE stage, integrated
-//! explicitly (central differences) or implicitly (Newmark average acceleration, Newton and
-//! PETSc KSP: `run.mode = "implicit"`); a scene with particles or contact is refused with a
-//! message naming what is missing.
+//! Only the stages a scene declares are built: the FE stage, integrated explicitly (central
+//! differences) or implicitly (Newmark average acceleration, Newton and PETSc KSP:
+//! `run.mode = "implicit"`); with `[[particles]]` the SPH stage on its own decomposition; with
+//! `[contact]` the contact stage on a third one (explicit mode only). One explicit step is the
+//! paper's Fig. 3: FE kick and drift, SPH kick and drift, contact detection and push-back on
+//! both (nodes and, with `contact.particles`, particles), FE element forces, SPH passes, the
+//! closing kicks. A scene of particles only runs in `sph_run`.
 use crate::collective::{self, first_error};
 use crate::contact_stage::ContactStage;
 use crate::fe_contact::FeContact;
@@ -14,6 +17,7 @@ use crate::output::{
 };
 use crate::probes::Probes;
 use crate::scene::{self, Mode};
+use crate::sph_coupled::SphCtx;
 use fe_petsc::explicit::{ExplicitFe, ExplicitSetup, StepError};
 use fe_petsc::hex::HexControls;
 use fe_petsc::implicit::{ImplicitError, ImplicitFe};
@@ -159,6 +163,10 @@ struct ContactCtx {
     fe_side: FeContact,
     stage: ContactStage,
     node_gid: Vec<u64>,
+    /// SPH particles are contact nodes too (`contact.particles`), with ids from this offset
+    /// (the mesh's node count, so no particle id meets a node id).
+    particles: bool,
+    particle_gid_offset: u64,
     /// Energy taken by the push-back (minus the work of the contact forces), J.
     energy: f64,
     /// Contacts found in the last step.
@@ -179,14 +187,25 @@ impl ContactCtx {
         fe: &mut ExplicitFe,
         exchange: &mut NodeExchange,
         dt: f64,
+        sph: Option<&mut SphCtx>,
     ) -> Result<(), String> {
         let t0 = Instant::now();
-        let (nodes, faces) = self.fe_side.records(fe, &self.node_gid);
+        let (mut nodes, faces) = self.fe_side.records(fe, &self.node_gid);
+        let n_fe = nodes.len();
+        let sph = sph.filter(|_| self.particles);
+        if let Some(s) = &sph {
+            nodes.extend(s.stage.contact_records(self.particle_gid_offset));
+        }
         let out = self.stage.step(&nodes, &faces, dt)?;
-        let mut f = self.fe_side.forces_on_nodes(fe.n_nodes(), &out.force);
-        let w = fe
+        let mut f = self
+            .fe_side
+            .forces_on_nodes(fe.n_nodes(), &out.force[..n_fe]);
+        let mut w = fe
             .apply_contact(&mut f, dt, exchange)
             .map_err(|e| e.to_string())?;
+        if let Some(s) = sph {
+            w += s.stage.apply_contact(&out.force[n_fe..], dt);
+        }
         self.energy -= collective::sum(world, w);
         self.contacts = out.contacts;
         self.bytes += out.bytes_sent as f64;
@@ -207,10 +226,17 @@ fn explicit_step(
     exchange: &mut NodeExchange,
     dt: f64,
     contact: Option<&mut ContactCtx>,
+    mut sph: Option<&mut SphCtx>,
 ) -> Result<f64, String> {
+    // Fig. 3: 3. move nodes and particles (each on its own decomposition); 4-5. contact
+    // detection and push-back on both; 1. FE forces at the new positions; 2. SPH forces;
+    // 6. the closing kicks.
     fe.kick_drift(dt);
+    if let Some(s) = sph.as_deref_mut() {
+        s.stage.drift(dt);
+    }
     if let Some(c) = contact {
-        c.step(world, fe, exchange, dt)?;
+        c.step(world, fe, exchange, dt, sph.as_deref_mut())?;
     }
     let hg = fe.element_forces(dt, exchange);
     // Agree on failure (inverted element) with the same reduction as the next step size:
@@ -231,7 +257,13 @@ fn explicit_step(
     let mut global = [0.0; 7];
     world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
     fe.accumulate(&global, dt);
-    Ok(next)
+    match sph {
+        Some(s) => {
+            s.finish(world, dt)?;
+            Ok(next.min(s.stage.stable_dt()))
+        }
+        None => Ok(next),
+    }
 }
 
 /// One implicit step; every rank returns the failing rank's message and its kind.
@@ -292,9 +324,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         scene.run.force_dt = f;
     }
     let mode = scene.run.mode;
-    if !scene.particles.is_empty() {
+    if !scene.particles.is_empty() && mode == Mode::Implicit {
         return Err(format!(
-            "{file}: particles: the SPH stage is not available yet; remove the [[particles]] tables"
+            "{file}: run.mode: the SPH stage is explicit only; use mode = \"explicit\" or remove the [[particles]] tables"
         )
         .into());
     }
@@ -306,7 +338,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     }
     if scene.meshes.is_empty() {
         return Err(format!(
-            "{file}: mesh: a scene without [[mesh]] needs the SPH stage, which is not available yet"
+            "{file}: mesh: the contact stage needs mesh faces: a scene of particles only cannot have a [contact] table"
         )
         .into());
     }
@@ -425,6 +457,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         FeStage::Explicit(fe) => fe.initial_energies(world),
         FeStage::Implicit(imp) => imp.fe.initial_energies(world),
     }
+    let mut sph = if scene.particles.is_empty() {
+        None
+    } else {
+        Some(SphCtx::new(world, &scene)?)
+    };
     let probes = Probes::locate(world, &file, &scene.probes, stage.fe())?;
     let mut contact = match &scene.contact {
         Some(c) => {
@@ -453,6 +490,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 fe_side,
                 stage: ContactStage::new(world, c.self_contact),
                 node_gid: dm.local.node_id.clone(),
+                particles: c.particles && sph.is_some(),
+                particle_gid_offset: dm.local.global_nodes,
                 energy: 0.0,
                 contacts: 0,
                 wall_s: 0.0,
@@ -465,7 +504,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     };
 
     // The explicit stable step (reduced over ranks); reported in implicit mode for comparison.
-    let stable0 = collective::min(world, stage.fe().dt_stable_local);
+    let stable0 = collective::min(world, stage.fe().dt_stable_local).min(
+        sph.as_ref()
+            .map(|s| s.stage.stable_dt())
+            .unwrap_or(f64::INFINITY),
+    );
     let mut forced = false;
     if let (Mode::Explicit, Some(dt)) = (mode, scene.run.dt) {
         if dt > stable0 {
@@ -473,7 +516,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 return Err(RunFailure::new(
                     FailureKind::Refused,
                     format!(
-                        "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s (Flanagan-Belytschko element estimate with bulk viscosity); use run.dt <= {stable0:e}, remove run.dt, set mode = \"implicit\", or set run.force_dt = true to run it anyway"
+                        "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s (Flanagan-Belytschko element estimate with bulk viscosity{}); use run.dt <= {stable0:e}, remove run.dt, set mode = \"implicit\", or set run.force_dt = true to run it anyway",
+                        if sph.is_some() { ", and 0.3 h/(c + |v|) over the particles" } else { "" }
                     ),
                 ));
             }
@@ -517,7 +561,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let counts = GlobalCounts {
         nodes: l.global_nodes,
         elements: l.global_elems,
-        particles: 0,
+        particles: sph.as_ref().map(|s| s.n_total).unwrap_or(0),
     };
     let mut writer = FieldWriter::create(world, &out_dir, counts, &scene.output.fields)
         .map_err(|e| format!("{}: {e}", out_dir.display()))?;
@@ -539,65 +583,76 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         .collect();
     let rank_field = vec![rank; fe0.elems.len()];
     let mut output_s = 0.0;
-    let write_frame = |fe: &ExplicitFe, writer: &mut FieldWriter| -> Result<f64, String> {
-        let t0 = Instant::now();
-        let pos: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x[n]).collect();
-        let disp: Vec<[f64; 3]> = owned_nodes
-            .iter()
-            .map(|&n| std::array::from_fn(|c| fe.x[n][c] - fe.x0[n][c]))
-            .collect();
-        let vel: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.v[n]).collect();
-        let stress: Vec<[f64; 6]> = fe.state.iter().map(|s| s.stress).collect();
-        let eps: Vec<f64> = (0..fe.elems.len()).map(|e| fe.plastic_strain(e)).collect();
-        let nodes = NodeFrame {
-            ids: &node_ids,
-            position: &pos,
-            displacement: Some(&disp),
-            velocity: Some(&vel),
+    let mut particle_ranks = Vec::new();
+    let mut write_frame =
+        |fe: &ExplicitFe, sph: Option<&SphCtx>, writer: &mut FieldWriter| -> Result<f64, String> {
+            let t0 = Instant::now();
+            let pos: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x[n]).collect();
+            let disp: Vec<[f64; 3]> = owned_nodes
+                .iter()
+                .map(|&n| std::array::from_fn(|c| fe.x[n][c] - fe.x0[n][c]))
+                .collect();
+            let vel: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.v[n]).collect();
+            let stress: Vec<[f64; 6]> = fe.state.iter().map(|s| s.stress).collect();
+            let eps: Vec<f64> = (0..fe.elems.len()).map(|e| fe.plastic_strain(e)).collect();
+            let nodes = NodeFrame {
+                ids: &node_ids,
+                position: &pos,
+                displacement: Some(&disp),
+                velocity: Some(&vel),
+            };
+            let elems = ElementFrame {
+                ids: &fe.elem_id,
+                connectivity: &conn_ids,
+                stress: Some(&stress),
+                plastic_strain: Some(&eps),
+                pressure: Some(&fe.pressure),
+                rank: Some(&rank_field),
+            };
+            let parts = sph.map(|s| s.frame(&mut particle_ranks, rank));
+            writer
+                .write_frame(fe.time, Some(&nodes), Some(&elems), parts.as_ref())
+                .map_err(|e| format!("writing fields.h5: {e}"))?;
+            Ok(t0.elapsed().as_secs_f64())
         };
-        let elems = ElementFrame {
-            ids: &fe.elem_id,
-            connectivity: &conn_ids,
-            stress: Some(&stress),
-            plastic_strain: Some(&eps),
-            pressure: Some(&fe.pressure),
-            rank: Some(&rank_field),
-        };
-        writer
-            .write_frame(fe.time, Some(&nodes), Some(&elems), None)
-            .map_err(|e| format!("writing fields.h5: {e}"))?;
-        Ok(t0.elapsed().as_secs_f64())
-    };
 
-    let e0 = stage.fe().energies.kinetic;
+    let e0 = stage.fe().energies.kinetic + sph.as_ref().map(|s| s.energy()).unwrap_or(0.0);
     let mut err_max = 0.0f64;
     let end = scene.run.end_time;
     let output_every = scene.run.output_every.unwrap_or(end);
     let history_every = scene.run.history_every;
     let mut next_frame = 1u64; // frame 0 written now
     let mut next_row = 1u64;
-    output_s += write_frame(stage.fe(), &mut writer)?;
-    let row = |fe: &ExplicitFe, dt: f64, err: f64, c: Option<&ContactCtx>| -> Vec<f64> {
+    output_s += write_frame(stage.fe(), sph.as_ref(), &mut writer)?;
+    // history.csv: FE and particles together (kinetic, internal and external work summed).
+    let row = |fe: &ExplicitFe,
+               dt: f64,
+               err: f64,
+               c: Option<&ContactCtx>,
+               s: Option<&SphCtx>|
+     -> Vec<f64> {
         let en = &fe.energies;
+        let g = s.map(|s| s.globals).unwrap_or([0.0; 6]);
+        let w_sph = s.map(|s| s.external_work).unwrap_or(0.0);
         vec![
             fe.step as f64,
             fe.time,
             dt,
-            en.kinetic,
-            en.internal,
+            en.kinetic + g[0],
+            en.internal + g[1],
             en.hourglass,
-            en.external_work,
+            en.external_work + w_sph,
             c.map(|c| c.energy).unwrap_or(0.0),
             err,
-            en.momentum[0],
-            en.momentum[1],
-            en.momentum[2],
+            en.momentum[0] + g[2],
+            en.momentum[1] + g[3],
+            en.momentum[2] + g[4],
             c.map(|c| c.contacts as f64).unwrap_or(0.0),
         ]
     };
     let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
     history
-        .row(&row(stage.fe(), dt, 0.0, contact.as_ref()))
+        .row(&row(stage.fe(), dt, 0.0, contact.as_ref(), sph.as_ref()))
         .map_err(|e| e.to_string())?;
     let mut pr = vec![0.0];
     pr.extend(probes.sample(world, stage.fe()));
@@ -637,10 +692,16 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         dt_min = dt_min.min(dt);
         let tf = Instant::now();
         let next = match &mut stage {
-            FeStage::Explicit(fe) => {
-                explicit_step(world, &file, fe, &mut dm.exchange, dt, contact.as_mut())
-                    .map_err(|m| RunFailure::new(numerical, m))?
-            }
+            FeStage::Explicit(fe) => explicit_step(
+                world,
+                &file,
+                fe,
+                &mut dm.exchange,
+                dt,
+                contact.as_mut(),
+                sph.as_mut(),
+            )
+            .map_err(|m| RunFailure::new(numerical, m))?,
             FeStage::Implicit(imp) => {
                 implicit_step(world, &file, imp, &mut dm.exchange)?;
                 dt
@@ -659,8 +720,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let total = en.kinetic
             + en.internal
             + en.hourglass
-            + contact.as_ref().map(|c| c.energy).unwrap_or(0.0);
-        let err = energy_error(total, e0, en.external_work);
+            + contact.as_ref().map(|c| c.energy).unwrap_or(0.0)
+            + sph.as_ref().map(|s| s.energy()).unwrap_or(0.0);
+        let external = en.external_work + sph.as_ref().map(|s| s.external_work).unwrap_or(0.0);
+        let err = energy_error(total, e0, external);
         let blow_up = if forced {
             format!(
                 "the explicit run is unstable: run.dt = {dt:e} s is {:.3} times the stable limit {stable0:e} s (forced with run.force_dt = true)",
@@ -669,7 +732,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         } else {
             "the run is unstable or under-resolved; reduce run.dt or run.dt_safety".to_string()
         };
-        if !total.is_finite() || !en.external_work.is_finite() {
+        if !total.is_finite() || !external.is_finite() {
             return Err(RunFailure::new(
                 FailureKind::Unstable,
                 format!(
@@ -680,13 +743,13 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         err_max = err_max.max(err);
         if err > scene.run.max_energy_error {
-            let _ = history.row(&row(fe, dt, err, contact.as_ref()));
+            let _ = history.row(&row(fe, dt, err, contact.as_ref(), sph.as_ref()));
             let _ = history.flush();
             return Err(RunFailure::new(
                 FailureKind::Unstable,
                 format!(
-                    "{file}: energy error {err:.3e} passed run.max_energy_error = {} at t = {:e} s, step {} (E = {total:e} J, E0 = {e0:e} J, external work {:e} J): {blow_up}",
-                    scene.run.max_energy_error, fe.time, fe.step, en.external_work
+                    "{file}: energy error {err:.3e} passed run.max_energy_error = {} at t = {:e} s, step {} (E = {total:e} J, E0 = {e0:e} J, external work {external:e} J): {blow_up}",
+                    scene.run.max_energy_error, fe.time, fe.step
                 ),
             ));
         }
@@ -694,7 +757,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let t_row = history_every * next_row as f64;
         if history_every <= 0.0 || fe.time >= t_row - TIME_EPS_STEPS * dt || at_end {
             history
-                .row(&row(fe, dt, err, contact.as_ref()))
+                .row(&row(fe, dt, err, contact.as_ref(), sph.as_ref()))
                 .map_err(|e| e.to_string())?;
             let mut pr = vec![fe.time];
             pr.extend(probes.sample(world, fe));
@@ -706,7 +769,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             }
         }
         if fe.time >= output_every * next_frame as f64 - TIME_EPS_STEPS * dt || at_end {
-            let s = write_frame(fe, &mut writer)?;
+            let s = write_frame(fe, sph.as_ref(), &mut writer)?;
             output_s += s;
             loop_output_s += s;
             while output_every * next_frame as f64 <= fe.time + TIME_EPS_STEPS * dt {
@@ -740,18 +803,63 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     } else {
         0.0
     };
+    // The FE stage's own time: the step less the SPH and contact stages inside it.
+    let fe_own = fe_wall
+        - sph.as_ref().map(|s| s.wall_s).unwrap_or(0.0)
+        - contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0);
     let fe_stats = StageStats::reduce(
         world,
-        fe_wall,
+        fe_own.max(0.0),
         fe.elems.len() as f64,
         dm.exchange.bytes_sent as f64,
     );
     let out_stats = StageStats::reduce(world, output_s, owned_nodes.len() as f64, written as f64);
     let mem_bytes = collective::sum(world, fe.bytes() as f64);
     let wall_s = collective::max(world, wall0.elapsed().as_secs_f64());
-    let mut report = Report::new(size as usize, elements, l.global_nodes, 0, steps, wall_s);
+    let n_particles = sph.as_ref().map(|s| s.n_total).unwrap_or(0);
+    let mut report = Report::new(
+        size as usize,
+        elements,
+        l.global_nodes,
+        n_particles,
+        steps,
+        wall_s,
+    );
     report.stages_run = vec!["fe".into()];
     report.fe = Some(fe_stats);
+    let mut skipped = serde_json::Map::new();
+    match &sph {
+        Some(s) => {
+            report.stages_run.push("sph".into());
+            let st = StageStats::reduce(world, s.wall_s, s.pairs_local, s.bytes / size as f64);
+            report.sph = Some(StageStats {
+                wall_s: s.wall_s,
+                bytes_sent: s.bytes,
+                ..st
+            });
+            report.rcb = Some(StageStats {
+                wall_s: s.stage.stats.rcb.wall_s,
+                imbalance: s.stage.stats.rcb.imbalance,
+                bytes_sent: 0.0,
+            });
+            report.us_per_particle_step = Some(
+                loop_s * size as f64 / (n_particles.max(1) as f64 * steps.max(1) as f64) * 1e6,
+            );
+            report.extra.insert(
+                "sph_share_of_step".into(),
+                (s.wall_s / loop_s.max(1e-30)).into(),
+            );
+        }
+        None => {
+            skipped.insert("sph".into(), "no [[particles]]".into());
+        }
+    }
+    if contact.is_none() {
+        skipped.insert("contact".into(), "no [contact]".into());
+    }
+    report
+        .extra
+        .insert("stages_skipped".into(), serde_json::Value::Object(skipped));
     if let Some(c) = &contact {
         report.stages_run.push("contact".into());
         report.contact = Some(StageStats {

@@ -38,19 +38,22 @@ pub fn prepare(
     dm: &mut DistributedMesh,
 ) -> Result<FeInputs, String> {
     let file = scene.file.display().to_string();
+    // The materials the blocks use, in scene order (a material only SPH particles use, such
+    // as a fluid with an EOS, is not an element material).
     let mut materials = Vec::new();
+    let mut mat_index: BTreeMap<&str, usize> = BTreeMap::new();
     for (i, spec) in scene.materials.iter().enumerate() {
+        if !scene.blocks.iter().any(|b| b.material == spec.name) {
+            continue;
+        }
         match build_material(spec) {
-            Ok(m) => materials.push(m),
+            Ok(m) => {
+                mat_index.insert(spec.name.as_str(), materials.len());
+                materials.push(m);
+            }
             Err(e) => return Err(format!("{file}: material[{i}]: {e}")),
         }
     }
-    let mat_index: BTreeMap<&str, usize> = scene
-        .materials
-        .iter()
-        .enumerate()
-        .map(|(i, m)| (m.name.as_str(), i))
-        .collect();
     // block tag -> (material, velocity)
     let mut by_tag: BTreeMap<i32, (usize, [f64; 3])> = BTreeMap::new();
     for b in &scene.blocks {

@@ -20,6 +20,7 @@ pub mod particles_setup;
 pub mod probes;
 pub mod rcb;
 pub mod scene;
+pub mod sph_coupled;
 pub mod sph_run;
 pub mod sph_selftest;
 pub mod sph_stage;

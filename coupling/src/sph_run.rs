@@ -138,7 +138,7 @@ pub fn particles_from_seeds(
 /// Shepard-interpolated probe values: partial sums over owned particles, summed over ranks
 /// (exact, whatever the decomposition). NaN where no particle reaches the point or the field
 /// has no particle meaning (displacement, plastic strain).
-fn sample(comm: &SimpleCommunicator, st: &SphStage, scene: &Scene) -> Vec<f64> {
+pub(crate) fn sample(comm: &SimpleCommunicator, st: &SphStage, scene: &Scene) -> Vec<f64> {
     let p = &st.parts;
     let k = st.params.smoothing_kernel();
     let mut sums = Vec::new();
@@ -188,7 +188,7 @@ fn sample(comm: &SimpleCommunicator, st: &SphStage, scene: &Scene) -> Vec<f64> {
 }
 
 /// Global energies and momentum: [kinetic, internal, px, py, pz, gravity power].
-fn globals(comm: &SimpleCommunicator, st: &SphStage) -> [f64; 6] {
+pub(crate) fn globals(comm: &SimpleCommunicator, st: &SphStage) -> [f64; 6] {
     let e = sph::energies(&st.parts);
     let gp = sph::gravity_power(&st.parts, st.params.gravity);
     let loc = [
@@ -365,7 +365,7 @@ pub fn run(
         sph_s += st.stats.wall_s;
         rcb_s += st.stats.rcb.wall_s;
         bytes += st.stats.bytes_sent as f64;
-        pairs_work += st.stats.pairs as f64;
+        pairs_work += st.stats.pairs_local as f64;
         let g = globals(world, &st);
         w_ext += 0.5 * (gp_old + g[5]) * dt;
         gp_old = g[5];
@@ -432,7 +432,7 @@ pub fn run(
 
     let wall_s = crate::collective::max(world, wall0.elapsed().as_secs_f64());
     let loop_s = crate::collective::max(world, loop_s);
-    let sph_stats = StageStats::reduce(world, sph_s, pairs_work / size as f64, bytes / size as f64);
+    let sph_stats = StageStats::reduce(world, sph_s, pairs_work, bytes / size as f64);
     let rcb_stats = StageStats {
         wall_s: rcb_s,
         imbalance: st.stats.rcb.imbalance,

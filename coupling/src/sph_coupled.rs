@@ -1,0 +1,88 @@
+//! The SPH stage inside a run that also has a mesh (Fig. 3 with both FE and SPH): the stage on
+//! its own RCB decomposition, its global energies and momentum, the work of gravity on the
+//! particles, and what it cost. The driver calls `drift` and `finish` around the contact stage.
+use crate::output::ParticleFrame;
+use crate::particles_setup;
+use crate::scene::Scene;
+use crate::sph_run::{globals, params_from_scene, particles_from_seeds};
+use crate::sph_stage::SphStage;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// The SPH side of a coupled run.
+pub struct SphCtx {
+    /// The stage.
+    pub stage: SphStage,
+    /// Particles over all ranks.
+    pub n_total: u64,
+    /// Global energies and momentum after the last step: [kinetic, internal, px, py, pz,
+    /// gravity power].
+    pub globals: [f64; 6],
+    /// Work of gravity on the particles so far (trapezoid of its power), J.
+    pub external_work: f64,
+    /// Wall time of the stage (max over ranks per step, summed), s.
+    pub wall_s: f64,
+    /// Bytes sent by the stage, all ranks, summed over steps.
+    pub bytes: f64,
+    /// Pairs computed on this rank, summed over steps (the stage's work).
+    pub pairs_local: f64,
+}
+
+impl SphCtx {
+    /// Particles of the scene on their decomposition, set up at t = 0 (collective).
+    pub fn new(world: &SimpleCommunicator, scene: &Scene) -> Result<SphCtx, String> {
+        let (params, map) = params_from_scene(scene)?;
+        let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
+        crate::collective::first_error(world, seeds.as_ref().err().cloned())?;
+        let seeds = seeds.expect("checked");
+        let n_total = crate::collective::sum(world, seeds.len() as f64) as u64;
+        let parts = particles_from_seeds(&seeds, &map)?;
+        let mut stage = SphStage::new(world, parts, params);
+        stage.setup()?;
+        let g = globals(world, &stage);
+        Ok(SphCtx {
+            stage,
+            n_total,
+            globals: g,
+            external_work: 0.0,
+            wall_s: 0.0,
+            bytes: 0.0,
+            pairs_local: 0.0,
+        })
+    }
+
+    /// Kinetic + internal energy of the particles, J.
+    pub fn energy(&self) -> f64 {
+        self.globals[0] + self.globals[1]
+    }
+
+    /// The rest of the step after the drift and the contact correction (collective): the
+    /// stage's passes, then the global sums and the gravity work over the step.
+    pub fn finish(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<(), String> {
+        self.stage.finish(dt)?;
+        self.wall_s += self.stage.stats.wall_s;
+        self.bytes += self.stage.stats.bytes_sent as f64;
+        self.pairs_local += self.stage.stats.pairs_local as f64;
+        let g = globals(world, &self.stage);
+        self.external_work += 0.5 * (self.globals[5] + g[5]) * dt;
+        self.globals = g;
+        Ok(())
+    }
+
+    /// The owned particles as a field frame (ids 0..N-1, SCENE.md).
+    pub fn frame<'a>(&'a self, ranks: &'a mut Vec<i32>, rank: i32) -> ParticleFrame<'a> {
+        let p = &self.stage.parts;
+        let n = p.n_owned;
+        ranks.clear();
+        ranks.resize(n, rank);
+        ParticleFrame {
+            ids: &p.id[..n],
+            position: &p.x_real[..n],
+            velocity: Some(&p.v[..n]),
+            density: Some(&p.rho[..n]),
+            pressure: Some(&p.p[..n]),
+            h: Some(&p.h[..n]),
+            rank: Some(ranks),
+        }
+    }
+}

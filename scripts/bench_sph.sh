@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# SPH benchmark against LIGGGHTS (issue 4): the peer's dam break (4,000 fluid + 14,568 fixed
+# wall particles, 2,000 steps) run by LIGGGHTS 3.8.0 and by us on the same data file, one after
+# the other inside one `tdyn crosscheck` call, at np 1 and 2, REPEATS times; prints the medians
+# of us per particle-step (loop time x ranks / (particles x steps); LIGGGHTS's from its "Loop
+# time" line) and of the per-repeat ratio ours / LIGGGHTS. Then our run alone at np 2 and 4:
+# pair-work imbalance (max/mean over ranks), bytes moved per step by the SPH stage (RCB
+# migration, ghosts, sums back), ghosts and RCB migrations in the last step.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+REPEATS=${REPEATS:-3}
+NSTEPS=${NSTEPS:-2000}
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+T=target/release/tdyn
+scene=out/bench_sph/dambreak.toml
+mkdir -p out/bench_sph
+# the scene with NSTEPS steps (end_time = NSTEPS x 5e-5 s), dumps only at the first and last
+sed -e "s/^end_time = .*/end_time = $(python3 -c "print($NSTEPS * 5e-5)")/" \
+    -e "s/^dump_every = .*/dump_every = $NSTEPS/" \
+    -e "s#liggghts/data#$(pwd)/scenes/liggghts/data#" scenes/liggghts_dambreak.toml > "$scene"
+for np in 1 2; do
+  for r in $(seq "$REPEATS"); do
+    $T crosscheck "$scene" --deck scenes/liggghts/in.dambreak3d --np "$np" --liggghts-np "$np" \
+      --var nsteps="$NSTEPS" --var dumpevery="$NSTEPS" --out "out/bench_sph/np${np}_r${r}" \
+      | grep '^cost' | sed "s/^/np $np repeat $r: /"
+  done
+done
+for np in 2 4; do
+  mpirun -np "$np" $T run "$scene" --quiet --out "out/bench_sph/alone_np${np}"
+done
+python3 - "$REPEATS" <<'PY'
+import json, re, statistics, sys
+rep = int(sys.argv[1])
+for np_ in (1, 2):
+    ours, lig = [], []
+    for r in range(1, rep + 1):
+        d = f"out/bench_sph/np{np_}_r{r}"
+        ours.append(json.load(open(f"{d}/tdyn/report.json"))["us_per_particle_step"])
+        m = re.search(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms",
+                      open(f"{d}/liggghts/liggghts.out").read())
+        t, p, n, a = float(m[1]), int(m[2]), int(m[3]), int(m[4])
+        lig.append(t * p / (n * a) * 1e6)
+    ratio = statistics.median(o / l for o, l in zip(ours, lig))
+    print(f"np {np_}: ours {statistics.median(ours):.3f} us/particle-step, LIGGGHTS "
+          f"{statistics.median(lig):.3f}, ratio ours/LIGGGHTS {ratio:.2f} (median of {rep}; "
+          f"ours {', '.join(f'{x:.3f}' for x in ours)}; LIGGGHTS {', '.join(f'{x:.3f}' for x in lig)})")
+for np_ in (2, 4):
+    r = json.load(open(f"out/bench_sph/alone_np{np_}/report.json"))
+    s, ex = r["sph"], r
+    print(f"np {np_} alone: {r['us_per_particle_step']:.3f} us/particle-step, pair-work imbalance "
+          f"{s['imbalance']:.3f}, {s['bytes_sent'] / r['steps'] / 1e3:.1f} kB moved per step "
+          f"({s['bytes_sent'] / r['steps'] / r['particles']:.1f} B per particle), ghosts "
+          f"{ex['sph_ghosts_last_step']}, RCB migrations {ex['rcb_migrated_last_step']} in the last step")
+PY
