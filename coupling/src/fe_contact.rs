@@ -119,11 +119,16 @@ impl FeContact {
             for (r, &c) in counts_e.iter().enumerate() {
                 elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
             }
-            let hexes: Vec<[u64; 8]> = all_e
-                .chunks(9)
-                .map(|c| std::array::from_fn(|k| c[1 + k]))
+            // In element gid order, so that bodies (numbered by their first element) and with
+            // them the one-pass search direction do not depend on the rank count.
+            let mut order: Vec<usize> = (0..elem_rank.len()).collect();
+            order.sort_unstable_by_key(|&k| all_e[9 * k]);
+            let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
+            let hexes: Vec<[u64; 8]> = order
+                .iter()
+                .map(|&k| std::array::from_fn(|j| all_e[9 * k + 1 + j]))
                 .collect();
-            let elem_gid: Vec<u64> = all_e.chunks(9).map(|c| c[0]).collect();
+            let elem_gid: Vec<u64> = order.iter().map(|&k| all_e[9 * k]).collect();
             let mut bits: HashMap<u64, u32> = HashMap::new();
             let mut node_rank: HashMap<u64, usize> = HashMap::new();
             let mut off = 0;
