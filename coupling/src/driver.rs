@@ -44,6 +44,11 @@ pub const HISTORY_COLUMNS: [&str; 13] = [
     "contacts",
 ];
 
+/// Columns history.csv adds after [`HISTORY_COLUMNS`] in a run with contact: the search's
+/// balance (max/mean over ranks of owned nodes + faces held) and the bytes the stage sent point
+/// to point (all ranks, RCB included), both of the step.
+pub const CONTACT_HISTORY_COLUMNS: [&str; 2] = ["contact_imbalance", "contact_bytes"];
+
 /// How the user asked to run.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
@@ -167,6 +172,20 @@ struct ContactCtx {
     bytes: f64,
     /// Sum over steps of the search imbalance (for the mean).
     imbalance_sum: f64,
+    /// Largest search imbalance of a step.
+    imbalance_max: f64,
+    /// The last step's search imbalance and bytes sent (history.csv).
+    last_imbalance: f64,
+    last_bytes: f64,
+    /// Contacts summed over steps, and the most in one step.
+    contacts_total: u64,
+    contacts_max: u64,
+    /// The contact decomposition's RCB: nodes moved between contact owners, bytes sent, wall
+    /// time (each call's max over ranks) and imbalance, summed over steps.
+    rcb_migrated: u64,
+    rcb_bytes: f64,
+    rcb_wall_s: f64,
+    rcb_imbalance_sum: f64,
     steps: u64,
 }
 
@@ -191,6 +210,15 @@ impl ContactCtx {
         self.contacts = out.contacts;
         self.bytes += out.bytes_sent as f64;
         self.imbalance_sum += out.imbalance;
+        self.imbalance_max = self.imbalance_max.max(out.imbalance);
+        self.last_imbalance = out.imbalance;
+        self.last_bytes = out.bytes_sent as f64;
+        self.contacts_total += out.contacts;
+        self.contacts_max = self.contacts_max.max(out.contacts);
+        self.rcb_migrated += out.rcb.migrated;
+        self.rcb_bytes += out.rcb.bytes_sent as f64;
+        self.rcb_wall_s += out.rcb.wall_s;
+        self.rcb_imbalance_sum += out.rcb.imbalance;
         self.steps += 1;
         self.wall_s += t0.elapsed().as_secs_f64();
         Ok(())
@@ -458,6 +486,15 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 wall_s: 0.0,
                 bytes: 0.0,
                 imbalance_sum: 0.0,
+                imbalance_max: 0.0,
+                last_imbalance: 1.0,
+                last_bytes: 0.0,
+                contacts_total: 0,
+                contacts_max: 0,
+                rcb_migrated: 0,
+                rcb_bytes: 0.0,
+                rcb_wall_s: 0.0,
+                rcb_imbalance_sum: 0.0,
                 steps: 0,
             })
         }
@@ -521,7 +558,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     };
     let mut writer = FieldWriter::create(world, &out_dir, counts, &scene.output.fields)
         .map_err(|e| format!("{}: {e}", out_dir.display()))?;
-    let mut history = History::create(world, &out_dir.join("history.csv"), &HISTORY_COLUMNS)
+    let mut history_cols: Vec<&str> = HISTORY_COLUMNS.to_vec();
+    if contact.is_some() {
+        history_cols.extend(CONTACT_HISTORY_COLUMNS);
+    }
+    let mut history = History::create(world, &out_dir.join("history.csv"), &history_cols)
         .map_err(|e| e.to_string())?;
     let mut probe_cols = vec!["time".to_string()];
     probe_cols.extend(probes.columns.iter().cloned());
@@ -579,7 +620,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     output_s += write_frame(stage.fe(), &mut writer)?;
     let row = |fe: &ExplicitFe, dt: f64, err: f64, c: Option<&ContactCtx>| -> Vec<f64> {
         let en = &fe.energies;
-        vec![
+        let mut r = vec![
             fe.step as f64,
             fe.time,
             dt,
@@ -593,7 +634,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             en.momentum[1],
             en.momentum[2],
             c.map(|c| c.contacts as f64).unwrap_or(0.0),
-        ]
+        ];
+        if let Some(c) = c {
+            r.extend([c.last_imbalance, c.last_bytes]);
+        }
+        r
     };
     let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
     history
@@ -636,6 +681,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         dt_min = dt_min.min(dt);
         let tf = Instant::now();
+        let contact_s0 = contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0);
         let next = match &mut stage {
             FeStage::Explicit(fe) => {
                 explicit_step(world, &file, fe, &mut dm.exchange, dt, contact.as_mut())
@@ -646,7 +692,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 dt
             }
         };
-        fe_wall += tf.elapsed().as_secs_f64();
+        // The FE stage's time without the contact step inside it.
+        fe_wall += tf.elapsed().as_secs_f64()
+            - (contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0) - contact_s0);
         let fe = match &mut stage {
             FeStage::Explicit(fe) => fe,
             FeStage::Implicit(imp) => &mut imp.fe,
@@ -759,10 +807,30 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             imbalance: c.imbalance_sum / c.steps.max(1) as f64,
             bytes_sent: c.bytes,
         });
+        let n_steps = c.steps.max(1) as f64;
+        report.rcb = Some(StageStats {
+            wall_s: c.rcb_wall_s,
+            imbalance: c.rcb_imbalance_sum / n_steps,
+            bytes_sent: c.rcb_bytes,
+        });
         report.extra.insert(
             "contact_share_of_step".into(),
             (collective::max(world, c.wall_s) / loop_s.max(1e-30)).into(),
         );
+        let ex = &mut report.extra;
+        ex.insert(
+            "contact_nodes".into(),
+            (collective::sum(world, c.fe_side.nodes.len() as f64) as u64).into(),
+        );
+        ex.insert("contacts_found_total".into(), c.contacts_total.into());
+        ex.insert("contacts_found_max_step".into(), c.contacts_max.into());
+        ex.insert("contact_imbalance_max".into(), c.imbalance_max.into());
+        ex.insert("contact_bytes_per_step".into(), (c.bytes / n_steps).into());
+        ex.insert(
+            "contact_s_per_step".into(),
+            (collective::max(world, c.wall_s) / n_steps).into(),
+        );
+        ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
         report
             .extra
             .insert("contact_faces".into(), c.fe_side.global_faces.into());
