@@ -91,6 +91,10 @@ pub struct ContactOutcome {
     pub work: f64,
     /// Max over ranks of (owned nodes + faces held) over the mean: the balance of the search.
     pub imbalance: f64,
+    /// Owned nodes + faces held: the largest over ranks, and the sum over ranks.
+    pub work_items_max: f64,
+    /// See `work_items_max`.
+    pub work_items_total: f64,
     /// Bytes sent point to point by all ranks in this step (RCB included).
     pub bytes_sent: u64,
     /// The RCB call's statistics.
@@ -323,6 +327,8 @@ impl ContactStage {
                 .collect(),
             work: sums[1],
             imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
+            work_items_max: maxes[0],
+            work_items_total: sums[3],
             bytes_sent: sums[2] as u64,
             rcb: rcb_stats,
             wall_s: maxes[1],

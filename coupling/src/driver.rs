@@ -5,6 +5,7 @@
 //! PETSc KSP: `run.mode = "implicit"`); a scene with particles or contact is refused with a
 //! message naming what is missing.
 use crate::collective::{self, first_error};
+use crate::contact_baseline::{self, BaselineStage};
 use crate::contact_stage::ContactStage;
 use crate::fe_contact::FeContact;
 use crate::fe_setup::{self, Groups};
@@ -158,11 +159,18 @@ impl FeStage {
     }
 }
 
+/// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
+/// ([`contact_baseline::BASELINE_ENV`]), the static FE decomposition.
+enum ContactImpl {
+    Dynamic(ContactStage),
+    Baseline(BaselineStage),
+}
+
 /// The contact stage of a run with `[contact]`: the FE side's surfaces, the stage on its own
 /// decomposition, and what it found and cost.
 struct ContactCtx {
     fe_side: FeContact,
-    stage: ContactStage,
+    stage: ContactImpl,
     node_gid: Vec<u64>,
     /// Energy taken by the push-back (minus the work of the contact forces), J.
     energy: f64,
@@ -174,6 +182,9 @@ struct ContactCtx {
     imbalance_sum: f64,
     /// Largest search imbalance of a step.
     imbalance_max: f64,
+    /// Nodes + faces searched summed over steps: on the busiest rank, and over all ranks.
+    work_max_sum: f64,
+    work_total_sum: f64,
     /// The last step's search imbalance and bytes sent (history.csv).
     last_imbalance: f64,
     last_bytes: f64,
@@ -201,8 +212,19 @@ impl ContactCtx {
     ) -> Result<(), String> {
         let t0 = Instant::now();
         let (nodes, faces) = self.fe_side.records(fe, &self.node_gid);
-        let out = self.stage.step(&nodes, &faces, dt)?;
-        let mut f = self.fe_side.forces_on_nodes(fe.n_nodes(), &out.force);
+        let (out, mut f) = match &mut self.stage {
+            ContactImpl::Dynamic(stage) => {
+                let out = stage.step(&nodes, &faces, dt)?;
+                let f = self.fe_side.forces_on_nodes(fe.n_nodes(), &out.force);
+                (out, f)
+            }
+            ContactImpl::Baseline(stage) => {
+                let b = stage.step(&nodes, &faces, dt)?;
+                let mut f = self.fe_side.forces_on_nodes(fe.n_nodes(), &b.outcome.force);
+                self.fe_side.add_corner_forces(&mut f, &b.corner_force);
+                (b.outcome, f)
+            }
+        };
         let w = fe
             .apply_contact(&mut f, dt, exchange)
             .map_err(|e| e.to_string())?;
@@ -211,6 +233,8 @@ impl ContactCtx {
         self.bytes += out.bytes_sent as f64;
         self.imbalance_sum += out.imbalance;
         self.imbalance_max = self.imbalance_max.max(out.imbalance);
+        self.work_max_sum += out.work_items_max;
+        self.work_total_sum += out.work_items_total;
         self.last_imbalance = out.imbalance;
         self.last_bytes = out.bytes_sent as f64;
         self.contacts_total += out.contacts;
@@ -479,7 +503,14 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             }
             Some(ContactCtx {
                 fe_side,
-                stage: ContactStage::new(world, c.self_contact),
+                stage: {
+                    let dynamic = ContactStage::new(world, c.self_contact);
+                    if contact_baseline::requested() {
+                        ContactImpl::Baseline(BaselineStage::new(world, dynamic.params))
+                    } else {
+                        ContactImpl::Dynamic(dynamic)
+                    }
+                },
                 node_gid: dm.local.node_id.clone(),
                 energy: 0.0,
                 contacts: 0,
@@ -487,6 +518,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 bytes: 0.0,
                 imbalance_sum: 0.0,
                 imbalance_max: 0.0,
+                work_max_sum: 0.0,
+                work_total_sum: 0.0,
                 last_imbalance: 1.0,
                 last_bytes: 0.0,
                 contacts_total: 0,
@@ -808,7 +841,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             bytes_sent: c.bytes,
         });
         let n_steps = c.steps.max(1) as f64;
-        report.rcb = Some(StageStats {
+        report.rcb = matches!(c.stage, ContactImpl::Dynamic(_)).then_some(StageStats {
             wall_s: c.rcb_wall_s,
             imbalance: c.rcb_imbalance_sum / n_steps,
             bytes_sent: c.rcb_bytes,
@@ -831,6 +864,22 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             (collective::max(world, c.wall_s) / n_steps).into(),
         );
         ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
+        ex.insert(
+            "contact_work_max_per_step".into(),
+            (c.work_max_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_work_total_per_step".into(),
+            (c.work_total_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_decomposition".into(),
+            match c.stage {
+                ContactImpl::Dynamic(_) => "dynamic_rcb",
+                ContactImpl::Baseline(_) => "static_fe_baseline",
+            }
+            .into(),
+        );
         report
             .extra
             .insert("contact_faces".into(), c.fe_side.global_faces.into());

@@ -629,3 +629,61 @@ fn crushed_tube_folds_without_its_walls_passing_through_each_other() {
         );
     }
 }
+
+#[test]
+fn static_decomposition_baseline_finds_the_same_contacts() {
+    // The benchmark's baseline (contact searched on the FE decomposition, TDYN_CONTACT_BASELINE=1)
+    // must do the same physics as the dynamic stage for its figures to compare like with like.
+    // Reference: the dynamic stage's run of scenes/block_drop.toml at the same rank count. The
+    // contact count of every step is equal, momentum equal to 1e-12 of its scale, the energies
+    // within the rank-independence tolerances of the block test (the push-backs are solved
+    // per box in both, and the boxes differ); the report names the decomposition. At np 3.
+    let np = 3;
+    let dir = workdir("block_drop_baseline");
+    let scene = root().join("scenes/block_drop.toml");
+    let mut rows = Vec::new();
+    for (mode, name) in [("0", "dynamic_rcb"), ("1", "static_fe_baseline")] {
+        let out = dir.join(format!("out{mode}"));
+        let o = std::process::Command::new("timeout")
+            .args(["600", "mpirun", "-np", &np.to_string()])
+            .args(["-x", &format!("TDYN_CONTACT_BASELINE={mode}")])
+            .arg(tdyn())
+            .arg("run")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .arg("--quiet")
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+            .output()
+            .expect("mpirun");
+        assert!(
+            o.status.success(),
+            "TDYN_CONTACT_BASELINE={mode} failed:\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["contact_decomposition"], name);
+        rows.push(read_csv(&out.join("history.csv")));
+    }
+    let (h, dynamic) = &rows[0];
+    let (_, baseline) = &rows[1];
+    let d = column_differences(dynamic, baseline);
+    for (c, name) in h.iter().enumerate() {
+        let tol = match name.as_str() {
+            "contact_imbalance" | "contact_bytes" => continue,
+            "contacts" | "step" => 0.0,
+            n if n.starts_with("momentum") => 1e-12,
+            "contact_energy" => 5e-3,
+            _ => 1e-3,
+        };
+        assert!(
+            d[c] <= tol,
+            "baseline: history column {name} differs from the dynamic stage by {:e} of its largest value (limit {tol:e})",
+            d[c]
+        );
+    }
+}
