@@ -8,6 +8,7 @@
 //! both (nodes and, with `contact.particles`, particles), FE element forces, SPH passes, the
 //! closing kicks. A scene of particles only runs in `sph_run`.
 use crate::collective::{self, first_error};
+use crate::contact_baseline::{self, BaselineStage};
 use crate::contact_stage::ContactStage;
 use crate::fe_contact::FeContact;
 use crate::fe_setup::{self, Groups};
@@ -47,6 +48,11 @@ pub const HISTORY_COLUMNS: [&str; 13] = [
     "momentum_z",
     "contacts",
 ];
+
+/// Columns history.csv adds after [`HISTORY_COLUMNS`] in a run with contact: the search's
+/// balance (max/mean over ranks of owned nodes + faces held) and the bytes the stage sent point
+/// to point (all ranks, RCB included), both of the step.
+pub const CONTACT_HISTORY_COLUMNS: [&str; 2] = ["contact_imbalance", "contact_bytes"];
 
 /// How the user asked to run.
 #[derive(Debug, Clone, Default)]
@@ -157,11 +163,18 @@ impl FeStage {
     }
 }
 
+/// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
+/// ([`contact_baseline::BASELINE_ENV`]), the static FE decomposition.
+enum ContactImpl {
+    Dynamic(ContactStage),
+    Baseline(BaselineStage),
+}
+
 /// The contact stage of a run with `[contact]`: the FE side's surfaces, the stage on its own
 /// decomposition, and what it found and cost.
 struct ContactCtx {
     fe_side: FeContact,
-    stage: ContactStage,
+    stage: ContactImpl,
     node_gid: Vec<u64>,
     /// SPH particles are contact nodes too (`contact.particles`), with ids from this offset
     /// (the mesh's node count, so no particle id meets a node id).
@@ -175,6 +188,23 @@ struct ContactCtx {
     bytes: f64,
     /// Sum over steps of the search imbalance (for the mean).
     imbalance_sum: f64,
+    /// Largest search imbalance of a step.
+    imbalance_max: f64,
+    /// Nodes + faces searched summed over steps: on the busiest rank, and over all ranks.
+    work_max_sum: f64,
+    work_total_sum: f64,
+    /// The last step's search imbalance and bytes sent (history.csv).
+    last_imbalance: f64,
+    last_bytes: f64,
+    /// Contacts summed over steps, and the most in one step.
+    contacts_total: u64,
+    contacts_max: u64,
+    /// The contact decomposition's RCB: nodes moved between contact owners, bytes sent, wall
+    /// time (each call's max over ranks) and imbalance, summed over steps.
+    rcb_migrated: u64,
+    rcb_bytes: f64,
+    rcb_wall_s: f64,
+    rcb_imbalance_sum: f64,
     steps: u64,
 }
 
@@ -196,10 +226,22 @@ impl ContactCtx {
         if let Some(s) = &sph {
             nodes.extend(s.stage.contact_records(self.particle_gid_offset));
         }
-        let out = self.stage.step(&nodes, &faces, dt)?;
-        let mut f = self
-            .fe_side
-            .forces_on_nodes(fe.n_nodes(), &out.force[..n_fe]);
+        let (out, mut f) = match &mut self.stage {
+            ContactImpl::Dynamic(stage) => {
+                let out = stage.step(&nodes, &faces, dt)?;
+                let f = self
+                    .fe_side
+                    .forces_on_nodes(fe.n_nodes(), &out.force[..n_fe]);
+                (out, f)
+            }
+            ContactImpl::Baseline(stage) => {
+                // the benchmark baseline searches mesh nodes only (`particles` is off)
+                let b = stage.step(&nodes[..n_fe], &faces, dt)?;
+                let mut f = self.fe_side.forces_on_nodes(fe.n_nodes(), &b.outcome.force);
+                self.fe_side.add_corner_forces(&mut f, &b.corner_force);
+                (b.outcome, f)
+            }
+        };
         let mut w = fe
             .apply_contact(&mut f, dt, exchange)
             .map_err(|e| e.to_string())?;
@@ -210,6 +252,17 @@ impl ContactCtx {
         self.contacts = out.contacts;
         self.bytes += out.bytes_sent as f64;
         self.imbalance_sum += out.imbalance;
+        self.imbalance_max = self.imbalance_max.max(out.imbalance);
+        self.work_max_sum += out.work_items_max;
+        self.work_total_sum += out.work_items_total;
+        self.last_imbalance = out.imbalance;
+        self.last_bytes = out.bytes_sent as f64;
+        self.contacts_total += out.contacts;
+        self.contacts_max = self.contacts_max.max(out.contacts);
+        self.rcb_migrated += out.rcb.migrated;
+        self.rcb_bytes += out.rcb.bytes_sent as f64;
+        self.rcb_wall_s += out.rcb.wall_s;
+        self.rcb_imbalance_sum += out.rcb.imbalance;
         self.steps += 1;
         self.wall_s += t0.elapsed().as_secs_f64();
         Ok(())
@@ -488,15 +541,33 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             }
             Some(ContactCtx {
                 fe_side,
-                stage: ContactStage::new(world, c.self_contact),
+                stage: {
+                    let dynamic = ContactStage::new(world, c.self_contact);
+                    if contact_baseline::requested() {
+                        ContactImpl::Baseline(BaselineStage::new(world, dynamic.params))
+                    } else {
+                        ContactImpl::Dynamic(dynamic)
+                    }
+                },
                 node_gid: dm.local.node_id.clone(),
-                particles: c.particles && sph.is_some(),
+                particles: c.particles && sph.is_some() && !contact_baseline::requested(),
                 particle_gid_offset: dm.local.global_nodes,
                 energy: 0.0,
                 contacts: 0,
                 wall_s: 0.0,
                 bytes: 0.0,
                 imbalance_sum: 0.0,
+                imbalance_max: 0.0,
+                work_max_sum: 0.0,
+                work_total_sum: 0.0,
+                last_imbalance: 1.0,
+                last_bytes: 0.0,
+                contacts_total: 0,
+                contacts_max: 0,
+                rcb_migrated: 0,
+                rcb_bytes: 0.0,
+                rcb_wall_s: 0.0,
+                rcb_imbalance_sum: 0.0,
                 steps: 0,
             })
         }
@@ -565,7 +636,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     };
     let mut writer = FieldWriter::create(world, &out_dir, counts, &scene.output.fields)
         .map_err(|e| format!("{}: {e}", out_dir.display()))?;
-    let mut history = History::create(world, &out_dir.join("history.csv"), &HISTORY_COLUMNS)
+    let mut history_cols: Vec<&str> = HISTORY_COLUMNS.to_vec();
+    if contact.is_some() {
+        history_cols.extend(CONTACT_HISTORY_COLUMNS);
+    }
+    let mut history = History::create(world, &out_dir.join("history.csv"), &history_cols)
         .map_err(|e| e.to_string())?;
     let mut probe_cols = vec!["time".to_string()];
     probe_cols.extend(probes.columns.iter().cloned());
@@ -634,7 +709,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let en = &fe.energies;
         let g = s.map(|s| s.globals).unwrap_or([0.0; 6]);
         let w_sph = s.map(|s| s.external_work).unwrap_or(0.0);
-        vec![
+        let mut r = vec![
             fe.step as f64,
             fe.time,
             dt,
@@ -648,7 +723,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             en.momentum[1] + g[3],
             en.momentum[2] + g[4],
             c.map(|c| c.contacts as f64).unwrap_or(0.0),
-        ]
+        ];
+        if let Some(c) = c {
+            r.extend([c.last_imbalance, c.last_bytes]);
+        }
+        r
     };
     let mut dt = scene.run.dt.unwrap_or(scene.run.dt_safety * stable0);
     history
@@ -691,6 +770,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         }
         dt_min = dt_min.min(dt);
         let tf = Instant::now();
+        let contact_s0 = contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0);
         let next = match &mut stage {
             FeStage::Explicit(fe) => explicit_step(
                 world,
@@ -707,7 +787,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 dt
             }
         };
-        fe_wall += tf.elapsed().as_secs_f64();
+        // The FE stage's time without the contact step inside it.
+        fe_wall += tf.elapsed().as_secs_f64()
+            - (contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0) - contact_s0);
         let fe = match &mut stage {
             FeStage::Explicit(fe) => fe,
             FeStage::Implicit(imp) => &mut imp.fe,
@@ -803,10 +885,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     } else {
         0.0
     };
-    // The FE stage's own time: the step less the SPH and contact stages inside it.
-    let fe_own = fe_wall
-        - sph.as_ref().map(|s| s.wall_s).unwrap_or(0.0)
-        - contact.as_ref().map(|c| c.wall_s).unwrap_or(0.0);
+    // The FE stage's own time: the step less the SPH stage inside it (the contact step is
+    // already taken out in the loop).
+    let fe_own = fe_wall - sph.as_ref().map(|s| s.wall_s).unwrap_or(0.0);
     let fe_stats = StageStats::reduce(
         world,
         fe_own.max(0.0),
@@ -867,9 +948,45 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             imbalance: c.imbalance_sum / c.steps.max(1) as f64,
             bytes_sent: c.bytes,
         });
+        let n_steps = c.steps.max(1) as f64;
+        report.rcb = matches!(c.stage, ContactImpl::Dynamic(_)).then_some(StageStats {
+            wall_s: c.rcb_wall_s,
+            imbalance: c.rcb_imbalance_sum / n_steps,
+            bytes_sent: c.rcb_bytes,
+        });
         report.extra.insert(
             "contact_share_of_step".into(),
             (collective::max(world, c.wall_s) / loop_s.max(1e-30)).into(),
+        );
+        let ex = &mut report.extra;
+        ex.insert(
+            "contact_nodes".into(),
+            (collective::sum(world, c.fe_side.nodes.len() as f64) as u64).into(),
+        );
+        ex.insert("contacts_found_total".into(), c.contacts_total.into());
+        ex.insert("contacts_found_max_step".into(), c.contacts_max.into());
+        ex.insert("contact_imbalance_max".into(), c.imbalance_max.into());
+        ex.insert("contact_bytes_per_step".into(), (c.bytes / n_steps).into());
+        ex.insert(
+            "contact_s_per_step".into(),
+            (collective::max(world, c.wall_s) / n_steps).into(),
+        );
+        ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
+        ex.insert(
+            "contact_work_max_per_step".into(),
+            (c.work_max_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_work_total_per_step".into(),
+            (c.work_total_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_decomposition".into(),
+            match c.stage {
+                ContactImpl::Dynamic(_) => "dynamic_rcb",
+                ContactImpl::Baseline(_) => "static_fe_baseline",
+            }
+            .into(),
         );
         report
             .extra

@@ -119,11 +119,16 @@ impl FeContact {
             for (r, &c) in counts_e.iter().enumerate() {
                 elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
             }
-            let hexes: Vec<[u64; 8]> = all_e
-                .chunks(9)
-                .map(|c| std::array::from_fn(|k| c[1 + k]))
+            // In element gid order, so that bodies (numbered by their first element) and with
+            // them the one-pass search direction do not depend on the rank count.
+            let mut order: Vec<usize> = (0..elem_rank.len()).collect();
+            order.sort_unstable_by_key(|&k| all_e[9 * k]);
+            let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
+            let hexes: Vec<[u64; 8]> = order
+                .iter()
+                .map(|&k| std::array::from_fn(|j| all_e[9 * k + 1 + j]))
                 .collect();
-            let elem_gid: Vec<u64> = all_e.chunks(9).map(|c| c[0]).collect();
+            let elem_gid: Vec<u64> = order.iter().map(|&k| all_e[9 * k]).collect();
             let mut bits: HashMap<u64, u32> = HashMap::new();
             let mut node_rank: HashMap<u64, usize> = HashMap::new();
             let mut off = 0;
@@ -264,6 +269,18 @@ impl FeContact {
             })
             .collect();
         (nodes, faces)
+    }
+
+    /// Adds forces on the corners of this rank's faces (aligned with `records`' faces) to the
+    /// per-local-node array (a corner may be a ghost: the FE ghost sum takes it to the owner).
+    pub fn add_corner_forces(&self, out: &mut [[f64; 3]], corner: &[[[f64; 3]; 4]]) {
+        for ((_, loc), fc) in self.faces.iter().zip(corner) {
+            for k in 0..4 {
+                for c in 0..3 {
+                    out[loc[k] as usize][c] += fc[k][c];
+                }
+            }
+        }
     }
 
     /// Spreads the forces the contact stage returned (aligned with `records`' nodes) onto a

@@ -7,6 +7,7 @@
 pub mod collective;
 pub mod comm;
 pub mod compare;
+pub mod contact_baseline;
 pub mod contact_selftest;
 pub mod contact_stage;
 pub mod crosscheck;
