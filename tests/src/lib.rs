@@ -1,5 +1,7 @@
 //! Helpers for the integration tests: find or build `tdyn`, write scenes, run under mpirun,
 //! read the CSV output.
+pub mod frames;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;

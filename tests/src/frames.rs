@@ -1,0 +1,242 @@
+//! Geometry of a run's frames for the contact tests: read the node positions and connectivity
+//! of fields.h5, the skin (boundary faces) of a set of elements, and how deep a node lies inside
+//! a body (an independent check of the contact stage: its own projection onto bilinear faces).
+/// The frames of a run's fields.h5: (time, node positions by node id), and the connectivity
+/// (node ids of each element, by element id) of the first frame.
+pub struct Frames {
+    pub times: Vec<f64>,
+    pub positions: Vec<Vec<[f64; 3]>>,
+    pub connectivity: Vec<[usize; 8]>,
+}
+
+pub fn read_frames(out: &std::path::Path) -> Frames {
+    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
+    let mut names = f.group("frames").unwrap().member_names().unwrap();
+    names.sort();
+    let mut fr = Frames {
+        times: Vec::new(),
+        positions: Vec::new(),
+        connectivity: Vec::new(),
+    };
+    for (k, name) in names.iter().enumerate() {
+        let g = f.group(&format!("frames/{name}")).unwrap();
+        let t: f64 = g.attr("time").unwrap().read_scalar().unwrap();
+        let pos: Vec<f64> = g.dataset("nodes/position").unwrap().read_raw().unwrap();
+        fr.times.push(t);
+        fr.positions
+            .push(pos.chunks(3).map(|c| [c[0], c[1], c[2]]).collect());
+        if k == 0 {
+            let conn: Vec<u64> = g
+                .dataset("elements/connectivity")
+                .unwrap()
+                .read_raw()
+                .unwrap();
+            fr.connectivity = conn
+                .chunks(8)
+                .map(|c| std::array::from_fn(|i| c[i] as usize))
+                .collect();
+        }
+    }
+    fr
+}
+
+/// The six faces of a hexahedron in VTK (= gmsh) node order, each counter-clockwise seen from
+/// outside, so `(x2 - x0) x (x3 - x1)` points outward.
+pub const FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// The point of the bilinear face with corners `q` (counter-clockwise seen from outside)
+/// closest to `p`, with parametric coordinates kept within `bound`, and the unit outward normal
+/// there. The surface is `X = sum N_i(xi) q_i`, `N_i = (1 +- xi)(1 +- eta)/4`; Newton's method on
+/// `|p - X|^2` from the centre (the faces here are nearly flat, so it converges in a few
+/// iterations); `X_xi x X_eta` points outward for that corner order.
+pub fn project(p: [f64; 3], q: &[[f64; 3]; 4], bound: f64) -> ([f64; 3], [f64; 3]) {
+    // X = a + b xi + c eta + d xi eta.
+    let a: [f64; 3] = std::array::from_fn(|k| 0.25 * (q[0][k] + q[1][k] + q[2][k] + q[3][k]));
+    let b: [f64; 3] = std::array::from_fn(|k| 0.25 * (-q[0][k] + q[1][k] + q[2][k] - q[3][k]));
+    let c: [f64; 3] = std::array::from_fn(|k| 0.25 * (-q[0][k] - q[1][k] + q[2][k] + q[3][k]));
+    let d: [f64; 3] = std::array::from_fn(|k| 0.25 * (q[0][k] - q[1][k] + q[2][k] - q[3][k]));
+    let point = |xi: f64, eta: f64| -> [f64; 3] {
+        std::array::from_fn(|k| a[k] + b[k] * xi + c[k] * eta + d[k] * xi * eta)
+    };
+    let (mut xi, mut eta) = (0.0f64, 0.0f64);
+    for _ in 0..NEWTON_ITERATIONS {
+        let r = sub(p, point(xi, eta));
+        let tx: [f64; 3] = std::array::from_fn(|k| b[k] + d[k] * eta);
+        let te: [f64; 3] = std::array::from_fn(|k| c[k] + d[k] * xi);
+        let g = [dot(r, tx), dot(r, te)];
+        let h01 = dot(tx, te) - dot(r, d);
+        let (h00, h11) = (dot(tx, tx), dot(te, te));
+        let det = h00 * h11 - h01 * h01;
+        xi = (xi + (h11 * g[0] - h01 * g[1]) / det).clamp(-bound, bound);
+        eta = (eta + (h00 * g[1] - h01 * g[0]) / det).clamp(-bound, bound);
+    }
+    let tx: [f64; 3] = std::array::from_fn(|k| b[k] + d[k] * eta);
+    let te: [f64; 3] = std::array::from_fn(|k| c[k] + d[k] * xi);
+    let n = cross(tx, te);
+    let len = dot(n, n).sqrt();
+    (point(xi, eta), [n[0] / len, n[1] / len, n[2] / len])
+}
+
+/// Newton iterations of [`project`] (quadratic convergence from the centre of a nearly flat
+/// face: 8 are far more than round-off needs).
+pub const NEWTON_ITERATIONS: usize = 8;
+/// Parametric bound of the projections that decide "inside an element": beyond the face, so a
+/// point near an edge is judged against the face's own surface continued a little.
+pub const INSIDE_BOUND: f64 = 2.0;
+
+/// How deep point `p` lies inside the (deformed) hexahedron with corners `x`: the smallest
+/// distance behind its six bilinear faces. Negative: `p` is outside at least one face.
+pub fn depth_inside(p: [f64; 3], x: &[[f64; 3]; 8]) -> f64 {
+    let mut depth = f64::INFINITY;
+    for f in &FACES {
+        let q = [x[f[0]], x[f[1]], x[f[2]], x[f[3]]];
+        let (c, n) = project(p, &q, INSIDE_BOUND);
+        depth = depth.min(dot(sub(c, p), n));
+        if depth < 0.0 {
+            return depth;
+        }
+    }
+    depth
+}
+
+/// The boundary faces of a set of hexahedra (faces used by exactly one of them), as node ids
+/// counter-clockwise seen from outside.
+pub fn boundary_faces(conn: &[[usize; 8]], elems: &[usize]) -> Vec<[usize; 4]> {
+    let mut uses: std::collections::HashMap<[usize; 4], ([usize; 4], u32)> =
+        std::collections::HashMap::new();
+    for &e in elems {
+        for f in &FACES {
+            let nodes = f.map(|i| conn[e][i]);
+            let mut key = nodes;
+            key.sort_unstable();
+            uses.entry(key).or_insert((nodes, 0)).1 += 1;
+        }
+    }
+    let mut out: Vec<[usize; 4]> = uses
+        .into_values()
+        .filter(|(_, c)| *c == 1)
+        .map(|(f, _)| f)
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// A body the check looks into: its elements and its boundary faces.
+pub struct Body {
+    pub elems: Vec<usize>,
+    pub skin: Vec<[usize; 4]>,
+}
+
+impl Body {
+    pub fn new(conn: &[[usize; 8]], elems: Vec<usize>) -> Body {
+        let skin = boundary_faces(conn, &elems);
+        Body { elems, skin }
+    }
+}
+
+/// The deepest penetration of any of `nodes` into `body` in configuration `pos`: a node is in
+/// the body when it lies inside one of its elements that it is not a corner of, and it is then
+/// as deep as its distance to the nearest face of the body's skin that it is not a corner of.
+/// Returns (depth, node), depth 0 when no node is inside. Elements are screened by bounding
+/// boxes.
+pub fn deepest_penetration(
+    pos: &[[f64; 3]],
+    conn: &[[usize; 8]],
+    nodes: &[usize],
+    body: &Body,
+) -> (f64, usize) {
+    let boxes: Vec<([f64; 3], [f64; 3])> = body
+        .elems
+        .iter()
+        .map(|&e| {
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            for &n in &conn[e] {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(pos[n][k]);
+                    hi[k] = hi[k].max(pos[n][k]);
+                }
+            }
+            (lo, hi)
+        })
+        .collect();
+    let mut worst = (0.0, usize::MAX);
+    for &n in nodes {
+        let p = pos[n];
+        let inside = boxes.iter().zip(&body.elems).any(|(b, &e)| {
+            (0..3).all(|k| p[k] >= b.0[k] && p[k] <= b.1[k])
+                && !conn[e].contains(&n)
+                && depth_inside(p, &std::array::from_fn(|i| pos[conn[e][i]])) > 0.0
+        });
+        if !inside {
+            continue;
+        }
+        let depth = body
+            .skin
+            .iter()
+            .filter(|f| !f.contains(&n))
+            .map(|f| {
+                let (c, _) = project(p, &f.map(|i| pos[i]), 1.0);
+                dot(sub(p, c), sub(p, c)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        if depth > worst.0 {
+            worst = (depth, n);
+        }
+    }
+    worst
+}
+
+/// Largest distance any node moved between two consecutive frames: a node cannot have crossed
+/// a layer thicker than this without a frame showing it inside.
+pub fn max_frame_motion(fr: &Frames) -> f64 {
+    let mut m = 0.0f64;
+    for w in fr.positions.windows(2) {
+        for (a, b) in w[0].iter().zip(&w[1]) {
+            m = m.max(dot(sub(*b, *a), sub(*b, *a)).sqrt());
+        }
+    }
+    m
+}
+
+/// Largest |a - b| over two histories, over the largest |value| of the first, per column.
+pub fn column_differences(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<f64> {
+    let ncol = a[0].len();
+    (0..ncol)
+        .map(|c| {
+            let scale = a.iter().fold(0.0f64, |m, r| m.max(r[c].abs()));
+            let d = a
+                .iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x[c] - y[c]).abs()));
+            if scale > 0.0 {
+                d / scale
+            } else {
+                d
+            }
+        })
+        .collect()
+}
