@@ -41,7 +41,9 @@ pub use data::{
 };
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{push_back, PushBack, PushBackParams};
-pub use search::{face_search_aabb, node_search_aabb, search, Contact, SearchParams};
+pub use search::{
+    face_records_search_aabb, face_search_aabb, node_search_aabb, search, Contact, SearchParams,
+};
 pub use surfaces::{bodies, face_key, surfaces, BoundaryFace, Surfaces, HEX_FACES};
 pub use vec3::V3;
 

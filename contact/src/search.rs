@@ -3,6 +3,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::data::{Aabb, Config, ContactBox};
+use crate::geometry::Quad;
 use crate::grid::Grid;
 use crate::pair;
 use crate::vec3::{norm, sub, V3};
@@ -78,8 +79,33 @@ const PARAM_REACH: f64 = 2.0;
 /// [`node_search_aabb`] misses this box cannot contact the face, and the parallel layer ghosts a
 /// face to every box this overlaps.
 pub fn face_search_aabb(b: &ContactBox, f: usize, params: &SearchParams, max_radius: f64) -> Aabb {
-    let q0 = b.quad(f, Config::Start);
-    let q1 = b.quad(f, Config::End);
+    quads_search_aabb(
+        &b.quad(f, Config::Start),
+        &b.quad(f, Config::End),
+        params,
+        max_radius,
+    )
+}
+
+/// [`face_search_aabb`] of a face given by its four corner records (in the face's order), with
+/// no box to build: what the parallel layer needs to ghost each face.
+pub fn face_records_search_aabb(
+    corners: &[crate::NodeRecord; 4],
+    params: &SearchParams,
+    max_radius: f64,
+) -> Aabb {
+    let q0 = Quad {
+        x: std::array::from_fn(|k| corners[k].x0),
+    };
+    let q1 = Quad {
+        x: std::array::from_fn(|k| corners[k].x1),
+    };
+    quads_search_aabb(&q0, &q1, params, max_radius)
+}
+
+/// The search box of a face with start and end configurations `q0`, `q1`.
+fn quads_search_aabb(q0: &Quad, q1: &Quad, params: &SearchParams, max_radius: f64) -> Aabb {
+    let (q0, q1) = (*q0, *q1);
     let mut bb = Aabb::EMPTY;
     for k in 0..4 {
         bb.include(q0.x[k]);

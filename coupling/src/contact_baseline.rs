@@ -22,7 +22,8 @@
 use crate::comm::CommPlan;
 use crate::contact_stage::{ContactOutcome, FullFace};
 use contact::{
-    face_search_aabb, push_back, search, Aabb, ContactBox, NodeRecord, PushBackParams, SearchParams,
+    face_records_search_aabb, push_back, search, Aabb, ContactBox, NodeRecord, PushBackParams,
+    SearchParams,
 };
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -130,16 +131,8 @@ impl BaselineStage {
         // 2. Faces to every other rank whose box their search box overlaps.
         let mut dest = Vec::new();
         let mut ghost_of = Vec::new();
-        let mut err = None;
         for (i, f) in faces.iter().enumerate() {
-            let b = match ContactBox::from_records(&f.nodes, 0, std::slice::from_ref(&f.face)) {
-                Ok(b) => b,
-                Err(e) => {
-                    err = Some(e.to_string());
-                    continue;
-                }
-            };
-            let bb = face_search_aabb(&b, 0, &self.params, radius).grown(motion);
+            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(motion);
             for (r, rb) in boxes.iter().enumerate() {
                 if r != me && rb.overlaps(&bb) {
                     dest.push(r as i32);
@@ -147,7 +140,6 @@ impl BaselineStage {
                 }
             }
         }
-        crate::collective::first_error(comm, err)?;
         let mut plan = CommPlan::new(comm, &dest);
         let ghosts: Vec<FullFace> = ghost_of.iter().map(|&i| faces[i]).collect();
         let received = plan.exchange(&ghosts);

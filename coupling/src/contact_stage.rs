@@ -23,8 +23,8 @@ use crate::comm::CommPlan;
 use crate::rcb::{CutTree, Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
 use contact::{
-    face_search_aabb, push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams,
-    SearchParams,
+    face_records_search_aabb, push_back, search, ContactBox, FaceRecord, NodeRecord,
+    PushBackParams, SearchParams,
 };
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -199,16 +199,8 @@ impl ContactStage {
         let mut dest = Vec::new();
         let mut ghosts = Vec::new();
         let mut ranks = Vec::new();
-        let mut err = None;
         for f in &my_faces {
-            let b = match ContactBox::from_records(&f.nodes, 0, std::slice::from_ref(&f.face)) {
-                Ok(b) => b,
-                Err(e) => {
-                    err = Some(e.to_string());
-                    continue;
-                }
-            };
-            let bb = face_search_aabb(&b, 0, &self.params, radius).grown(motion);
+            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(motion);
             ranks.clear();
             tree.ranks_overlapping(&bb.min, &bb.max, &mut ranks);
             for &r in &ranks {
@@ -216,7 +208,6 @@ impl ContactStage {
                 ghosts.push(*f);
             }
         }
-        crate::collective::first_error(comm, err)?;
         let mut plan = CommPlan::new(comm, &dest);
         let held = plan.exchange(&ghosts);
         bytes += plan.bytes_sent;
