@@ -227,6 +227,9 @@ impl BaselineStage {
                 bytes_sent: sums[2] as u64,
                 rcb: Default::default(),
                 wall_s: maxes[1],
+                // the baseline searches where the nodes live: no transfer between
+                // decompositions
+                transfer: Default::default(),
             },
             corner_force,
         })

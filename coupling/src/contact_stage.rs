@@ -101,6 +101,21 @@ pub struct ContactOutcome {
     pub rcb: RcbStats,
     /// Wall time of the step, max over ranks, s.
     pub wall_s: f64,
+    /// The transfers between decompositions inside the step (included in the above).
+    pub transfer: TransferStats,
+}
+
+/// The transfers between decompositions in one contact step: the contact nodes' records from
+/// their FE and SPH owners to the contact owners, the faces to theirs, and the push-back forces
+/// back to the FE and SPH owners.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TransferStats {
+    /// Bytes sent by all ranks.
+    pub bytes_sent: u64,
+    /// Max over ranks of the bytes sent, over the mean.
+    pub imbalance: f64,
+    /// Wall time, max over ranks, s.
+    pub wall_s: f64,
 }
 
 /// The contact stage of one run.
@@ -156,7 +171,11 @@ impl ContactStage {
                 home_idx: i as u64,
             })
             .collect();
+        // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
+        // owners to contact owners and back): their bytes and time.
+        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
         // 1. To last step's contact owners.
+        let tt = Instant::now();
         let items = match &self.tree {
             Some(t) => {
                 let dest: Vec<i32> = items
@@ -166,15 +185,18 @@ impl ContactStage {
                 let mut plan = CommPlan::new(comm, &dest);
                 let got = plan.exchange(&items);
                 bytes += plan.bytes_sent;
+                t_bytes += plan.bytes_sent;
                 got
             }
             None => items,
         };
+        t_s += tt.elapsed().as_secs_f64();
         // 2. RCB over nodes and particles, from the previous cuts.
         let (mine, rcb_stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
         bytes += rcb_stats.bytes_sent;
         let tree = self.rcb.tree().clone();
         // 3. Faces with their nodes to the contact owner of their first node.
+        let tt = Instant::now();
         let dest: Vec<i32> = faces
             .iter()
             .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
@@ -182,6 +204,8 @@ impl ContactStage {
         let mut plan = CommPlan::new(comm, &dest);
         let my_faces = plan.exchange(faces);
         bytes += plan.bytes_sent;
+        t_bytes += plan.bytes_sent;
+        t_s += tt.elapsed().as_secs_f64();
         // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
         // influence: the largest node motion of the step and the largest particle radius.
         let (mut motion, mut radius) = (0.0f64, 0.0f64);
@@ -272,6 +296,7 @@ impl ContactStage {
             }
         }
         crate::collective::first_error(comm, err)?;
+        let tt = Instant::now();
         let mut dest = Vec::new();
         let mut back = Vec::new();
         for (i, n) in mine.iter().enumerate() {
@@ -286,6 +311,7 @@ impl ContactStage {
         let mut plan = CommPlan::new(comm, &dest);
         let got = plan.exchange(&back);
         bytes += plan.bytes_sent;
+        t_bytes += plan.bytes_sent;
         let mut force = vec![[0.0; 3]; nodes.len()];
         for bk in &got {
             let f = &mut force[bk.key as usize];
@@ -293,20 +319,28 @@ impl ContactStage {
                 f[k] += bk.f[k];
             }
         }
+        t_s += tt.elapsed().as_secs_f64();
 
         // Statistics.
-        let mut sums = [0.0f64; 4];
+        let mut sums = [0.0f64; 5];
         comm.all_reduce_into(
-            &[contacts.len() as f64, pb.work, bytes as f64, work_items][..],
+            &[
+                contacts.len() as f64,
+                pb.work,
+                bytes as f64,
+                work_items,
+                t_bytes as f64,
+            ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
-        let mut maxes = [0.0f64; 2];
+        let mut maxes = [0.0f64; 4];
         comm.all_reduce_into(
-            &[work_items, t0.elapsed().as_secs_f64()][..],
+            &[work_items, t0.elapsed().as_secs_f64(), t_bytes as f64, t_s][..],
             &mut maxes[..],
             SystemOperation::max(),
         );
+        let t_mean = sums[4] / comm.size() as f64;
         let mean = sums[3] / comm.size() as f64;
         self.tree = Some(tree);
         Ok(ContactOutcome {
@@ -323,6 +357,11 @@ impl ContactStage {
             bytes_sent: sums[2] as u64,
             rcb: rcb_stats,
             wall_s: maxes[1],
+            transfer: TransferStats {
+                bytes_sent: sums[4] as u64,
+                imbalance: if t_mean > 0.0 { maxes[2] / t_mean } else { 1.0 },
+                wall_s: maxes[3],
+            },
         })
     }
 }

@@ -205,6 +205,11 @@ struct ContactCtx {
     rcb_bytes: f64,
     rcb_wall_s: f64,
     rcb_imbalance_sum: f64,
+    /// Transfers between decompositions (FE/SPH owners <-> contact owners): bytes, time (each
+    /// step's max over ranks) and byte imbalance, summed over steps.
+    transfer_bytes: f64,
+    transfer_s: f64,
+    transfer_imbalance_sum: f64,
     steps: u64,
 }
 
@@ -263,6 +268,9 @@ impl ContactCtx {
         self.rcb_bytes += out.rcb.bytes_sent as f64;
         self.rcb_wall_s += out.rcb.wall_s;
         self.rcb_imbalance_sum += out.rcb.imbalance;
+        self.transfer_bytes += out.transfer.bytes_sent as f64;
+        self.transfer_s += out.transfer.wall_s;
+        self.transfer_imbalance_sum += out.transfer.imbalance;
         self.steps += 1;
         self.wall_s += t0.elapsed().as_secs_f64();
         Ok(())
@@ -568,6 +576,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 rcb_bytes: 0.0,
                 rcb_wall_s: 0.0,
                 rcb_imbalance_sum: 0.0,
+                transfer_bytes: 0.0,
+                transfer_s: 0.0,
+                transfer_imbalance_sum: 0.0,
                 steps: 0,
             })
         }
@@ -919,9 +930,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 ..st
             });
             report.rcb = Some(StageStats {
-                wall_s: s.stage.stats.rcb.wall_s,
-                imbalance: s.stage.stats.rcb.imbalance,
-                bytes_sent: 0.0,
+                wall_s: s.rcb_s,
+                imbalance: s.rcb_imbalance_sum / steps.max(1) as f64,
+                bytes_sent: s.rcb_bytes,
             });
             report.us_per_particle_step = Some(
                 loop_s * size as f64 / (n_particles.max(1) as f64 * steps.max(1) as f64) * 1e6,
@@ -949,11 +960,28 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             bytes_sent: c.bytes,
         });
         let n_steps = c.steps.max(1) as f64;
-        report.rcb = matches!(c.stage, ContactImpl::Dynamic(_)).then_some(StageStats {
-            wall_s: c.rcb_wall_s,
-            imbalance: c.rcb_imbalance_sum / n_steps,
-            bytes_sent: c.rcb_bytes,
-        });
+        // `rcb`: both dynamic decompositions' rebalances (SPH and contact) together.
+        if matches!(c.stage, ContactImpl::Dynamic(_)) {
+            let mine = StageStats {
+                wall_s: c.rcb_wall_s,
+                imbalance: c.rcb_imbalance_sum / n_steps,
+                bytes_sent: c.rcb_bytes,
+            };
+            report.rcb = Some(match report.rcb.take() {
+                Some(r) => StageStats {
+                    wall_s: r.wall_s + mine.wall_s,
+                    imbalance: r.imbalance.max(mine.imbalance),
+                    bytes_sent: r.bytes_sent + mine.bytes_sent,
+                },
+                None => mine,
+            });
+            report.transfer = Some(StageStats {
+                wall_s: c.transfer_s,
+                imbalance: c.transfer_imbalance_sum / n_steps,
+                bytes_sent: c.transfer_bytes,
+            });
+            report.stages_run.push("transfer".into());
+        }
         report.extra.insert(
             "contact_share_of_step".into(),
             (collective::max(world, c.wall_s) / loop_s.max(1e-30)).into(),

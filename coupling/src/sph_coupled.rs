@@ -26,6 +26,13 @@ pub struct SphCtx {
     pub bytes: f64,
     /// Pairs computed on this rank, summed over steps (the stage's work).
     pub pairs_local: f64,
+    /// The SPH decomposition's RCB: wall time (max over ranks per call), bytes (all ranks) and
+    /// imbalance, summed over steps.
+    pub rcb_s: f64,
+    /// See `rcb_s`.
+    pub rcb_bytes: f64,
+    /// See `rcb_s`.
+    pub rcb_imbalance_sum: f64,
 }
 
 impl SphCtx {
@@ -48,6 +55,9 @@ impl SphCtx {
             wall_s: 0.0,
             bytes: 0.0,
             pairs_local: 0.0,
+            rcb_s: 0.0,
+            rcb_bytes: 0.0,
+            rcb_imbalance_sum: 0.0,
         })
     }
 
@@ -63,6 +73,10 @@ impl SphCtx {
         self.wall_s += self.stage.stats.wall_s;
         self.bytes += self.stage.stats.bytes_sent as f64;
         self.pairs_local += self.stage.stats.pairs_local as f64;
+        let r = &self.stage.stats.rcb;
+        self.rcb_s += r.wall_s;
+        self.rcb_bytes += r.bytes_sent as f64;
+        self.rcb_imbalance_sum += r.imbalance;
         let g = globals(world, &self.stage);
         self.external_work += 0.5 * (self.globals[5] + g[5]) * dt;
         self.globals = g;
