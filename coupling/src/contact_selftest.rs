@@ -1,11 +1,17 @@
 //! Self-test of the parallel contact stage (`tdyn selftest contact`): random moving faces and
-//! nodes, some crossing a face during the step, spread over the ranks at random. The contacts
+//! nodes (a third of the free ones SPH particles with a radius), some crossing a face during the step, spread over the ranks at random. The contacts
 //! the stage finds over all ranks must equal those of one serial box holding everything (whose
 //! search the `contact` crate checks against brute force), with the same depths and forces, and
 //! the forces must sum to zero (momentum).
 use crate::collective::first_error;
 use crate::contact_stage::{ContactStage, FullFace};
-use contact::{push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams};
+use contact::{
+    push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams, FLAG_PARTICLE,
+};
+
+/// Contact radius of the test's particles, m (a tenth of a face's half-width, about the
+/// crossing depths of the test).
+const PARTICLE_RADIUS: f64 = 0.002;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
@@ -94,12 +100,14 @@ fn configuration(seed: u64, step: usize, n_faces: usize) -> (Vec<NodeRecord>, Ve
                 std::array::from_fn(|d| x0[d] + 0.01 * (rng.unit() - 0.5)),
             )
         };
+        // every third free node is an SPH particle (a sphere of radius PARTICLE_RADIUS)
+        let particle = k % 3 == 1;
         free.push(NodeRecord {
             gid,
             body: (n_faces + k) as u32,
-            flags: 0,
+            flags: if particle { FLAG_PARTICLE } else { 0 },
             mass: 0.5 + rng.unit(),
-            radius: 0.0,
+            radius: if particle { PARTICLE_RADIUS } else { 0.0 },
             x0,
             x1,
             v: std::array::from_fn(|d| x1[d] - x0[d]),
