@@ -523,7 +523,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     } else {
         Some(SphCtx::new(world, &scene)?)
     };
-    let probes = Probes::locate(world, &file, &scene.probes, stage.fe())?;
+    let probes = Probes::locate(world, &file, &scene.probes, stage.fe(), sph.is_some())?;
     let mut contact = match &scene.contact {
         Some(c) => {
             // The named physical surfaces as node bits ("exterior": every boundary face).
@@ -745,7 +745,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         .row(&row(stage.fe(), dt, 0.0, contact.as_ref(), sph.as_ref()))
         .map_err(|e| e.to_string())?;
     let mut pr = vec![0.0];
-    pr.extend(probes.sample(world, stage.fe()));
+    pr.extend(probes.sample(world, stage.fe(), sph.as_ref().map(|s| &s.stage)));
     probe_csv.row(&pr).map_err(|e| e.to_string())?;
 
     let progress = (rank == 0 && !opts.quiet).then(|| {
@@ -853,7 +853,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 .row(&row(fe, dt, err, contact.as_ref(), sph.as_ref()))
                 .map_err(|e| e.to_string())?;
             let mut pr = vec![fe.time];
-            pr.extend(probes.sample(world, fe));
+            pr.extend(probes.sample(world, fe, sph.as_ref().map(|s| &s.stage)));
             probe_csv.row(&pr).map_err(|e| e.to_string())?;
             if history_every > 0.0 {
                 while history_every * next_row as f64 <= fe.time + TIME_EPS_STEPS * dt {

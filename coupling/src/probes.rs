@@ -2,9 +2,12 @@
 //!
 //! A probe is located once, in the reference configuration, in the element with the lowest
 //! global id that contains it (to within 1e-9 m). The owning rank evaluates it; one sum over the
-//! ranks gathers every probe's values (non-owners contribute zero).
+//! ranks gathers every probe's values (non-owners contribute zero). In a run with SPH particles,
+//! a probe outside the mesh is a particle probe: Shepard-interpolated from the particles
+//! (SCENE.md "Probes").
 use crate::collective::first_error;
 use crate::scene::{Probe, ProbeField};
+use crate::sph_stage::SphStage;
 use fe_petsc::explicit::ExplicitFe;
 use fe_petsc::hex;
 use mpi::collective::SystemOperation;
@@ -20,6 +23,8 @@ struct Located {
     /// Local element index and natural coordinates, when this rank evaluates it.
     here: Option<(usize, [f64; 3])>,
     fields: Vec<ProbeField>,
+    /// Outside the mesh, sampled from the particles.
+    particle: Option<Probe>,
 }
 
 /// All probes of a scene.
@@ -30,12 +35,14 @@ pub struct Probes {
 }
 
 impl Probes {
-    /// Locates every probe; a probe outside the mesh is a scene error (collective).
+    /// Locates every probe; a probe outside the mesh is a scene error, or, with `particles`,
+    /// a particle probe (collective).
     pub fn locate(
         comm: &SimpleCommunicator,
         file: &str,
         probes: &[Probe],
         fe: &ExplicitFe,
+        particles: bool,
     ) -> Result<Probes, String> {
         let mut located = Vec::new();
         let mut columns = Vec::new();
@@ -64,7 +71,8 @@ impl Probes {
             let mine = best.map(|b| b.0).unwrap_or(u64::MAX);
             let mut lowest = 0u64;
             comm.all_reduce_into(&mine, &mut lowest, SystemOperation::min());
-            if lowest == u64::MAX && err.is_none() {
+            let outside = lowest == u64::MAX;
+            if outside && !particles && err.is_none() {
                 err = Some(format!(
                     "{file}: probe[{i}] \"{}\": point ({}, {}, {}) lies outside the mesh",
                     p.name, p.point[0], p.point[1], p.point[2]
@@ -77,6 +85,7 @@ impl Probes {
             located.push(Located {
                 here,
                 fields: p.fields.clone(),
+                particle: (outside && particles).then(|| p.clone()),
             });
         }
         first_error(comm, err)?;
@@ -84,7 +93,12 @@ impl Probes {
     }
 
     /// The values of every probe column, on every rank (collective).
-    pub fn sample(&self, comm: &SimpleCommunicator, fe: &ExplicitFe) -> Vec<f64> {
+    pub fn sample(
+        &self,
+        comm: &SimpleCommunicator,
+        fe: &ExplicitFe,
+        sph: Option<&SphStage>,
+    ) -> Vec<f64> {
         let mut vals = Vec::with_capacity(self.columns.len());
         for l in &self.located {
             for f in &l.fields {
@@ -97,6 +111,25 @@ impl Probes {
         let mut out = vec![0.0; vals.len()];
         if !vals.is_empty() {
             comm.all_reduce_into(&vals[..], &mut out[..], SystemOperation::sum());
+        }
+        // Particle probes: their columns from the particles (collective: every rank has the
+        // same list).
+        let parts: Vec<&Probe> = self
+            .located
+            .iter()
+            .filter_map(|l| l.particle.as_ref())
+            .collect();
+        if let (Some(st), false) = (sph, parts.is_empty()) {
+            let mut v = crate::sph_run::shepard(comm, st, &parts).into_iter();
+            let mut col = 0;
+            for l in &self.located {
+                for _ in &l.fields {
+                    if l.particle.is_some() {
+                        out[col] = v.next().unwrap_or(f64::NAN);
+                    }
+                    col += 1;
+                }
+            }
         }
         out
     }

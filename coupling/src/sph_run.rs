@@ -2,7 +2,7 @@
 //! stage, history, probes, fields and report per SCENE.md.
 use crate::output::{FieldWriter, GlobalCounts, History, ParticleFrame, Report, StageStats};
 use crate::particles_setup::{self, ParticleSeed};
-use crate::scene::{ProbeField, Scene};
+use crate::scene::{Probe, ProbeField, Scene};
 use crate::sph_stage::SphStage;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -139,10 +139,16 @@ pub fn particles_from_seeds(
 /// (exact, whatever the decomposition). NaN where no particle reaches the point or the field
 /// has no particle meaning (displacement, plastic strain).
 pub(crate) fn sample(comm: &SimpleCommunicator, st: &SphStage, scene: &Scene) -> Vec<f64> {
+    let all: Vec<&Probe> = scene.probes.iter().collect();
+    shepard(comm, st, &all)
+}
+
+/// `sample` for the given probes (collective): their columns in order.
+pub(crate) fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> Vec<f64> {
     let p = &st.parts;
     let k = st.params.smoothing_kernel();
     let mut sums = Vec::new();
-    for pr in &scene.probes {
+    for pr in probes {
         let (mut den, mut num) = (0.0, vec![0.0; pr.fields.len()]);
         for i in 0..p.n_owned {
             let x = p.x_real[i];
@@ -173,7 +179,7 @@ pub(crate) fn sample(comm: &SimpleCommunicator, st: &SphStage, scene: &Scene) ->
     comm.all_reduce_into(&sums[..], &mut g[..], SystemOperation::sum());
     let mut out = Vec::new();
     let mut k = 0;
-    for pr in &scene.probes {
+    for pr in probes {
         let den = g[k];
         for f in 0..pr.fields.len() {
             out.push(if den > 0.0 {

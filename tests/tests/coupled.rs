@@ -65,6 +65,16 @@ fn particle_cloud_falling_on_a_meshed_plate_never_passes_through_it() {
             contacts.iter().any(|&c| c > 0.0),
             "np {np}: the cloud reaches the plate"
         );
+        // The particle probe (outside the mesh: Shepard-interpolated from the particles) at
+        // t = 0 gives the cloud's uniform state: density 1000, velocity -10 (Shepard
+        // reproduces a constant exactly: 1e-12).
+        let (ph, prow) = read_csv(&out.join("probes.csv"));
+        let rho0 = column(&ph, &prow, "cloud.density")[0];
+        let vz0 = column(&ph, &prow, "cloud.velocity_z")[0];
+        assert!(
+            (rho0 - 1000.0).abs() < 1e-12 * 1000.0 && (vz0 + 10.0).abs() < 1e-12 * 10.0,
+            "np {np}: particle probe at t = 0: density {rho0}, velocity_z {vz0} (1000, -10)"
+        );
         let ke = *column(&h, &rows, "kinetic_energy").last().unwrap();
         let ce = *column(&h, &rows, "contact_energy").last().unwrap();
         finals.push((ke, ce));
