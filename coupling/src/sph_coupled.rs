@@ -85,18 +85,26 @@ impl SphCtx {
 
     /// The owned particles as a field frame (ids 0..N-1, SCENE.md).
     pub fn frame<'a>(&'a self, ranks: &'a mut Vec<i32>, rank: i32) -> ParticleFrame<'a> {
-        let p = &self.stage.parts;
-        let n = p.n_owned;
-        ranks.clear();
-        ranks.resize(n, rank);
-        ParticleFrame {
-            ids: &p.id[..n],
-            position: &p.x_real[..n],
-            velocity: Some(&p.v[..n]),
-            density: Some(&p.rho[..n]),
-            pressure: Some(&p.p[..n]),
-            h: Some(&p.h[..n]),
-            rank: Some(ranks),
-        }
+        particle_frame(&self.stage.parts, ranks, rank)
+    }
+}
+
+/// The owned entries of `p` as a field frame; `ranks` is filled with `rank` (its storage).
+pub fn particle_frame<'a>(
+    p: &'a sph::Particles,
+    ranks: &'a mut Vec<i32>,
+    rank: i32,
+) -> ParticleFrame<'a> {
+    let n = p.n_owned;
+    ranks.clear();
+    ranks.resize(n, rank);
+    ParticleFrame {
+        ids: &p.id[..n],
+        position: &p.x_real[..n],
+        velocity: Some(&p.v[..n]),
+        density: Some(&p.rho[..n]),
+        pressure: Some(&p.p[..n]),
+        h: Some(&p.h[..n]),
+        rank: Some(ranks),
     }
 }

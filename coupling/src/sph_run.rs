@@ -1,6 +1,6 @@
 //! A run of a scene with SPH particles and no mesh: particles from the scene, the parallel SPH
 //! stage, history, probes, fields and report per SCENE.md.
-use crate::output::{FieldWriter, GlobalCounts, History, ParticleFrame, Report, StageStats};
+use crate::output::{FieldWriter, GlobalCounts, History, Report, StageStats};
 use crate::particles_setup::{self, ParticleSeed};
 use crate::scene::{Probe, ProbeField, Scene};
 use crate::sph_stage::SphStage;
@@ -275,20 +275,10 @@ pub fn run(
         .map_err(|e| e.to_string())?;
 
     let mut output_s = 0.0;
-    let write_frame = |st: &SphStage, t: f64, w: &mut FieldWriter| -> Result<f64, String> {
+    let mut ranks = Vec::new();
+    let mut write_frame = |st: &SphStage, t: f64, w: &mut FieldWriter| -> Result<f64, String> {
         let t0 = Instant::now();
-        let p = &st.parts;
-        let n = p.n_owned;
-        let ranks = vec![rank; n];
-        let frame = ParticleFrame {
-            ids: &p.id[..n],
-            position: &p.x_real[..n],
-            velocity: Some(&p.v[..n]),
-            density: Some(&p.rho[..n]),
-            pressure: Some(&p.p[..n]),
-            h: Some(&p.h[..n]),
-            rank: Some(&ranks),
-        };
+        let frame = crate::sph_coupled::particle_frame(&st.parts, &mut ranks, rank);
         w.write_frame(t, None, None, Some(&frame))
             .map_err(|e| format!("writing fields.h5: {e}"))?;
         Ok(t0.elapsed().as_secs_f64())

@@ -325,6 +325,17 @@ impl SphStage {
     /// 3-4 with continuity density: one fused pass (density rates and forces), its sums back
     /// to the owners, gravity. The EOS was applied before the ghosts were made.
     fn evaluate_fused(&mut self) {
+        let list = self.pair_list();
+        reset_density_sums(&mut self.parts, &self.params);
+        reset_force_sums(&mut self.parts);
+        self.work = continuity_and_force_pass(&list, &mut self.parts, &self.params);
+        self.fold_back(false, true);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
+    /// The pairs this box computes (COI in its box), counted per owned particle.
+    fn pair_list(&mut self) -> Vec<(u32, u32)> {
         let list = pairs_in_box(
             &self.parts,
             &self.params.search_options(),
@@ -332,12 +343,7 @@ impl SphStage {
             self.box_hi,
         );
         self.count_pairs(&list);
-        reset_density_sums(&mut self.parts, &self.params);
-        reset_force_sums(&mut self.parts);
-        self.work = continuity_and_force_pass(&list, &mut self.parts, &self.params);
-        self.fold_back(false, true);
-        add_gravity(&mut self.parts, &self.params);
-        self.stats.pairs = list.len() as u64;
+        list
     }
 
     /// Pairs per owned particle in this evaluation (the next rebalance's weights).
@@ -356,13 +362,7 @@ impl SphStage {
 
     /// 3-4. The passes with their communication.
     fn evaluate(&mut self, density_and_eos: bool) {
-        let list = pairs_in_box(
-            &self.parts,
-            &self.params.search_options(),
-            self.box_lo,
-            self.box_hi,
-        );
-        self.count_pairs(&list);
+        let list = self.pair_list();
         if density_and_eos {
             reset_density_sums(&mut self.parts, &self.params);
             density_pass(&list, &mut self.parts, &self.params);

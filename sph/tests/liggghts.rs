@@ -1,6 +1,6 @@
 //! Operator-level cross-check against the peer code LIGGGHTS-PUBLIC 3.8.0 (Debian's `liggghts`).
 //!
-//! Reference: LIGGGHTS itself, run on the deck `tests/liggghts/in.random1step` (1,000 jittered
+//! Reference: LIGGGHTS itself, run on the deck `scenes/liggghts/in.random1step` (1,000 jittered
 //! particles, random velocities, densities 995..1005 so that pressures of both signs occur, no
 //! walls, no gravity, non-periodic, one rank, so no ghosts): Tait EOS, cubic spline, continuity,
 //! artificial viscosity alpha 0.1, beta 0.2, eta = 0.01 h^2, tensile correction epsilon 0.2 with
@@ -10,7 +10,7 @@
 //! differences of the summation order give ~1e-15).
 //!
 //! The same deck edited to LIGGGHTS's `wendland` kernel checks our Wendland constant.
-//! A third test runs the dam-break deck `tests/liggghts/in.dambreak3d` for 40 steps (fixed
+//! A third test runs the dam-break deck `scenes/liggghts/in.dambreak3d` for 40 steps (fixed
 //! wall particles, gravity) with the same tolerance.
 //!
 //! Needs `liggghts` and `python3` on PATH (scripts/setup.sh installs liggghts).
@@ -164,7 +164,8 @@ fn field_error_over(
 /// Runs `gen_data.py <kind>` and `liggghts -in <deck> <vars>` in `dir`, the deck's text passed
 /// through `edit` first.
 fn run_liggghts(dir: &Path, kind: &str, deck: &str, vars: &[&str], edit: impl Fn(&str) -> String) {
-    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/liggghts");
+    // the decks and generator shared with the scenes and `tdyn crosscheck`
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/liggghts");
     std::fs::copy(src.join("gen_data.py"), dir.join("gen_data.py")).unwrap();
     let text = std::fs::read_to_string(src.join(deck)).unwrap();
     std::fs::write(dir.join(deck), edit(&text)).unwrap();
