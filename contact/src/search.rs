@@ -6,7 +6,7 @@ use crate::data::{Aabb, Config, ContactBox};
 use crate::geometry::Quad;
 use crate::grid::Grid;
 use crate::pair;
-use crate::vec3::{norm, sub, V3};
+use crate::vec3::{dot, norm, sub, V3};
 
 /// Default [`SearchParams::gap_tol`].
 pub const DEFAULT_GAP_TOL: f64 = 1e-3;
@@ -132,8 +132,13 @@ pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
 ///
 /// Broad phase: a bucket grid over the faces' [`face_search_aabb`]s, queried with each node's
 /// [`node_search_aabb`]. Narrow phase: [`crate::pair::test`]. If a node crossed several faces the contact is
-/// the deepest, then the lowest face gid. The result is sorted by node gid; it depends only on the
-/// geometry and the gids, never on the storage order of nodes or faces.
+/// the deepest, then the lowest face gid. A particle (a sphere) can touch two or three faces at
+/// once at an edge or a corner of a cavity, and one contact would leave it inside the others'
+/// offset surfaces, where the next step's crossing test no longer sees it: a particle keeps, in
+/// that order, every further hit whose normal is not within `PARTICLE_SAME_NORMAL_COS` of a kept
+/// one (coplanar neighbours across a seam still give one contact). The result is sorted by node
+/// gid, then depth and face gid; it depends only on the geometry and the gids, never on the
+/// storage order of nodes or faces.
 pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
     let max_radius = b.max_radius();
     let boxes: Vec<Aabb> = (0..b.faces.len())
@@ -145,28 +150,33 @@ pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
     let mut out = Vec::new();
     for j in 0..b.nodes.n_owned {
         let q = node_search_aabb(b, j);
-        let mut best: Option<(pair::Hit, usize)> = None;
+        let mut hits: Vec<(pair::Hit, usize)> = Vec::new();
         grid.query(&q, |f| {
             let f = f as usize;
             if stamp[f] == j + 1 || !boxes[f].overlaps(&q) {
                 return;
             }
             stamp[f] = j + 1;
-            let Some(hit) = pair::test(b, j, f, params) else {
-                return;
-            };
-            let better = match &best {
-                None => true,
-                Some((h, g)) => {
-                    hit.depth > h.depth
-                        || (hit.depth == h.depth && b.faces.gid[f] < b.faces.gid[*g])
-                }
-            };
-            if better {
-                best = Some((hit, f));
+            if let Some(hit) = pair::test(b, j, f, params) {
+                hits.push((hit, f));
             }
         });
-        if let Some((h, f)) = best {
+        // Deepest first, then the lowest face gid.
+        hits.sort_by(|(h, f), (k, g)| {
+            k.depth
+                .total_cmp(&h.depth)
+                .then(b.faces.gid[*f].cmp(&b.faces.gid[*g]))
+        });
+        let mut kept: Vec<(pair::Hit, usize)> = Vec::new();
+        for (h, f) in hits {
+            let distinct = kept
+                .iter()
+                .all(|(k, _)| dot(k.normal, h.normal).abs() < PARTICLE_SAME_NORMAL_COS);
+            if kept.is_empty() || (b.nodes.particle[j] && distinct) {
+                kept.push((h, f));
+            }
+        }
+        for (h, f) in kept {
             out.push(Contact {
                 node: j as u32,
                 face: f as u32,
@@ -178,6 +188,11 @@ pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
             });
         }
     }
+    // Stable: a node's contacts stay deepest first.
     out.sort_by_key(|c| c.node_gid);
     out
 }
+
+/// Two hits of one particle whose normals' |cos| is at least this (within about 25 degrees)
+/// are the same contact (coplanar or nearly coplanar faces): only the deeper is kept.
+pub const PARTICLE_SAME_NORMAL_COS: f64 = 0.9;

@@ -391,6 +391,20 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         )
         .into());
     }
+    if mode == Mode::Implicit {
+        if let Some(b) = scene.blocks.iter().find(|b| {
+            scene
+                .materials
+                .iter()
+                .any(|m| m.name == b.material && m.model == "fluid")
+        }) {
+            return Err(format!(
+                "{file}: run.mode: block \"{}\" is meshed with the fluid material \"{}\", which is explicit only (its stress is a function of the density, with no strain tangent); use mode = \"explicit\"",
+                b.group, b.material
+            )
+            .into());
+        }
+    }
     if scene.contact.is_some() && mode == Mode::Implicit {
         return Err(format!(
             "{file}: contact: the contact stage runs in explicit mode only; use mode = \"explicit\" or remove the [contact] table"

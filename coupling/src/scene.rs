@@ -814,6 +814,15 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             ));
         }
     }
+    // A fluid is built (EOS keys and values checked) when a block meshes it; particles take
+    // their EOS from the SPH side.
+    for (i, m) in materials.iter().enumerate() {
+        if m.model == "fluid" && raw.block.iter().any(|b| b.material == m.name) {
+            if let Err(e) = fe_petsc::material::build_material(m) {
+                return Err(err(&format!("material[{i}]"), e.to_string()));
+            }
+        }
+    }
     let mut boundaries = Vec::new();
     for (i, b) in raw.boundary.iter().enumerate() {
         let kind = match (b.kind.as_str(), b.velocity) {

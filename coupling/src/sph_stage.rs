@@ -161,7 +161,11 @@ impl SphStage {
     /// Contact-node records of the owned particles after `drift` (start and predicted end
     /// position, half-step velocity), ids `gid_offset + id`. Fixed particles have infinite
     /// mass (they take reactions but do not move). The contact radius is half the particle's
-    /// own size, (m/rho)^(1/3)/2: a particle touches a face when its volume does.
+    /// own size, (m/rho)^(1/3)/2: a particle touches a face when its volume does. An expanding
+    /// particle keeps the radius of its material's reference density (when the EOS has one):
+    /// the search counts a contact only for a sphere that was outside the face at the start of
+    /// the step, so a radius growing faster than the push-back follows (detonation products
+    /// expanding to several times their volume) would let the particle through the face.
     pub fn contact_records(&self, gid_offset: u64) -> Vec<contact::NodeRecord> {
         let p = &self.parts;
         (0..p.n_owned)
@@ -170,7 +174,12 @@ impl SphStage {
                 body: u32::MAX,
                 flags: contact::FLAG_PARTICLE,
                 mass: if p.fixed[i] { f64::INFINITY } else { p.m[i] },
-                radius: 0.5 * (p.m[i] / p.rho[i]).cbrt(),
+                radius: {
+                    let rho_ref = self.params.eos[p.mat[i] as usize]
+                        .reference_density()
+                        .unwrap_or(p.rho[i]);
+                    0.5 * (p.m[i] / p.rho[i].max(rho_ref)).cbrt()
+                },
                 x0: self.x_start[i],
                 x1: p.x_real[i],
                 v: p.v[i],
@@ -190,11 +199,21 @@ impl SphStage {
             if *f == [0.0; 3] || p.fixed[i] {
                 continue;
             }
+            // The predicted velocity vhat = v(n+1/2) + dt/2 a(n) (the rates' velocity) still
+            // carries the half kick into the face that the push-back stopped: a particle held
+            // on a face would expand (continuity density, p dV work) as if it moved into it.
+            // Its part along the push-back's direction n, when it points into the face, is
+            // removed, so the rates see the particle resting on the face.
+            let fn_ = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            let n = [f[0] / fn_, f[1] / fn_, f[2] / fn_];
+            let kick_n = (0..3)
+                .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
+                .sum::<f64>();
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
                 work += p.m[i] * dv * (p.v[i][c] + 0.5 * dv - 0.5 * dt * p.f[i][c] / p.m[i]);
                 p.v[i][c] += dv;
-                p.vhat[i][c] += dv;
+                p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];

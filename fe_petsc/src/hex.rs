@@ -433,13 +433,16 @@ pub fn update(
         rot(2, 0),
     ];
     let deps: [f64; 6] = std::array::from_fn(|k| d[k] * dt);
-    mat.update_stress(&mut stress, mat_state, &deps, dt);
+    // rho = m / V with the exact volume (a fluid's EOS reads it).
+    let rho = rho0 * vol0 * iv;
+    mat.update_stress(&mut stress, mat_state, &deps, dt, rho);
     st.stress = stress;
 
     // Bulk viscosity (PRONTO/LS-DYNA convention, quadratic coefficient squared):
-    // q = rho l eps_v (b1 c + b2^2 l max(0, -eps_v)), added to the normal stresses.
-    let rho = rho0 * vol0 * iv;
-    let c = (mat.dilatational_modulus() / rho).sqrt();
+    // q = rho l eps_v (b1 c + b2^2 l max(0, -eps_v)), added to the normal stresses; c from the
+    // material's current rho c^2 (constant for a solid, the EOS's for a fluid).
+    let modulus = mat.wave_modulus(rho, mat_state);
+    let c = (modulus / rho).sqrt();
     let ev = d[0] + d[1] + d[2];
     let len = vol.cbrt();
     let comp = (-ev).max(0.0);
@@ -468,11 +471,11 @@ pub fn update(
     // FB hourglass control. gamma_alpha = Gamma_alpha - (Gamma_alpha . x_i) b_i is orthogonal
     // to every linear velocity field; qdot_i,alpha = sum_I v_iI gamma_alpha,I.
     // Stiffness: dQ_s/dt = kappa_s * (lambda + 2 mu) * V * (b . b) / 8 * qdot, so the mode's
-    // stiffness is kappa_s times the element's (lambda + 2 mu) h scale. Viscous (FB eq. 35):
-    // Q_v = 1/2 kappa_v rho c V^(2/3) qdot.
+    // stiffness is kappa_s times the element's (lambda + 2 mu) h scale (rho c^2 for a fluid).
+    // Viscous (FB eq. 35): Q_v = 1/2 kappa_v rho c V^(2/3) qdot.
     let mut hg_work = 0.0;
     if ctl.hg_stiffness != 0.0 || ctl.hg_viscosity != 0.0 {
-        let ks = ctl.hg_stiffness * mat.dilatational_modulus() * vol * bb / 8.0;
+        let ks = ctl.hg_stiffness * modulus * vol * bb / 8.0;
         let kv = if ctl.hg_viscosity > 0.0 {
             0.5 * ctl.hg_viscosity * rho * c * len * len
         } else {

@@ -789,7 +789,8 @@ fn mat3_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
 
 /// The algorithmic tangent d(stress)/d(strain) of `mat`'s stress update at (stress, state,
 /// deps), Voigt xx,yy,zz,xy,yz,zx against engineering shear strains, symmetrised: forward
-/// differences of `update_stress` (6 extra calls).
+/// differences of `update_stress` (6 extra calls), at the reference density (a fluid, whose
+/// stress is a function of the density alone, has no such tangent: fluids are explicit only).
 pub fn material_tangent(
     mat: &dyn Material,
     stress: &[f64; 6],
@@ -802,7 +803,7 @@ pub fn material_tangent(
     let mut eval = |d: &[f64; 6]| -> [f64; 6] {
         let mut s = *stress;
         buf[..n].copy_from_slice(state);
-        mat.update_stress(&mut s, &mut buf[..n], d, dt);
+        mat.update_stress(&mut s, &mut buf[..n], d, dt, mat.density());
         s
     };
     let s0 = eval(deps);

@@ -360,7 +360,13 @@ fn j2_uniaxial_stress_matches_linear_hardening() {
         for _ in 0..50 {
             let mut s = stress;
             let mut st = state.clone();
-            m.update_stress(&mut s, &mut st, &[de, lat, lat, 0.0, 0.0, 0.0], 1e-6);
+            m.update_stress(
+                &mut s,
+                &mut st,
+                &[de, lat, lat, 0.0, 0.0, 0.0],
+                1e-6,
+                7850.0,
+            );
             let mut s2 = stress;
             let mut st2 = state.clone();
             let dl = 1e-12;
@@ -369,6 +375,7 @@ fn j2_uniaxial_stress_matches_linear_hardening() {
                 &mut st2,
                 &[de, lat + dl, lat + dl, 0.0, 0.0, 0.0],
                 1e-6,
+                7850.0,
             );
             let slope = (s2[1] - s[1]) / dl;
             let step = s[1] / slope;
@@ -382,6 +389,7 @@ fn j2_uniaxial_stress_matches_linear_hardening() {
             &mut state,
             &[de, lat, lat, 0.0, 0.0, 0.0],
             1e-6,
+            7850.0,
         );
         eps += de;
     }
@@ -432,7 +440,13 @@ fn johnson_cook_flow_stress_at_constant_rate() {
     let mut prev = 0.0;
     let mut rate = 0.0;
     for _ in 0..2000 {
-        m.update_stress(&mut s, &mut st, &[0.0, 0.0, 0.0, gdot * dt, 0.0, 0.0], dt);
+        m.update_stress(
+            &mut s,
+            &mut st,
+            &[0.0, 0.0, 0.0, gdot * dt, 0.0, 0.0],
+            dt,
+            7850.0,
+        );
         rate = (st[0] - prev) / dt;
         prev = st[0];
     }

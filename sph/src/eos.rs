@@ -70,6 +70,16 @@ impl Eos {
         self.pressure_and_derivatives(rho, e).0
     }
 
+    /// The reference density rho0 of the kinds that have one (Tait, JWL, Mie-Grüneisen), kg/m^3.
+    pub fn reference_density(&self) -> Option<f64> {
+        match *self {
+            Eos::Tait { rho0, .. } | Eos::Jwl { rho0, .. } | Eos::MieGruneisen { rho0, .. } => {
+                Some(rho0)
+            }
+            Eos::IdealGas { .. } => None,
+        }
+    }
+
     /// The sound speed LIGGGHTS's artificial viscosity uses: the per-type constant
     /// `speedOfSound`, which for a Tait fluid is c0; `None` for the other materials (their EOS
     /// sound speed is used).

@@ -32,7 +32,14 @@ impl Material for Elastic {
     fn shear_modulus(&self) -> f64 {
         self.mu
     }
-    fn update_stress(&self, stress: &mut [f64; 6], _state: &mut [f64], deps: &[f64; 6], _dt: f64) {
+    fn update_stress(
+        &self,
+        stress: &mut [f64; 6],
+        _state: &mut [f64],
+        deps: &[f64; 6],
+        _dt: f64,
+        _density: f64,
+    ) {
         add_elastic(stress, deps, self.lambda, self.mu);
     }
 }

@@ -68,7 +68,14 @@ impl Material for J2Plastic {
     fn n_state(&self) -> usize {
         1
     }
-    fn update_stress(&self, stress: &mut [f64; 6], state: &mut [f64], deps: &[f64; 6], _dt: f64) {
+    fn update_stress(
+        &self,
+        stress: &mut [f64; 6],
+        state: &mut [f64],
+        deps: &[f64; 6],
+        _dt: f64,
+        _density: f64,
+    ) {
         add_elastic(stress, deps, self.lambda, self.mu);
         let (s, p, q) = deviator(stress);
         let f = q - (self.yield_stress + self.hardening * state[0]);

@@ -26,9 +26,12 @@ pub struct EosSpec {
 }
 
 mod elastic;
+pub mod eos;
+mod fluid;
 mod j2_plastic;
 mod johnson_cook;
 pub use elastic::Elastic;
+pub use fluid::Fluid;
 pub use j2_plastic::J2Plastic;
 pub use johnson_cook::JohnsonCook;
 
@@ -48,8 +51,23 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn init_state(&self, _state: &mut [f64]) {}
     /// Writes into `stress` (Voigt xx,yy,zz,xy,yz,zx, tension positive, already rotated to the
     /// new configuration) the stress after the strain increment `deps` = D dt (tensor shear
-    /// components), and updates `state`. `dt` > 0 is the step, for rate-dependent laws.
-    fn update_stress(&self, stress: &mut [f64; 6], state: &mut [f64], deps: &[f64; 6], dt: f64);
+    /// components), and updates `state`. `dt` > 0 is the step, for rate-dependent laws;
+    /// `density` = rho0 V0 / V is the element's density at the end of the step, kg/m^3 (a
+    /// fluid's EOS reads it; the solids ignore it).
+    fn update_stress(
+        &self,
+        stress: &mut [f64; 6],
+        state: &mut [f64],
+        deps: &[f64; 6],
+        dt: f64,
+        density: f64,
+    );
+    /// rho c^2 at the element's current `density` and `state` after `update_stress`, Pa: the
+    /// modulus the stable step, the bulk viscosity's sound speed and the hourglass stiffness
+    /// use. Default: the constant `dilatational_modulus` (lambda + 2 mu of a solid).
+    fn wave_modulus(&self, _density: f64, _state: &[f64]) -> f64 {
+        self.dilatational_modulus()
+    }
     /// Equivalent plastic strain, for output (0 for elastic models).
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
@@ -103,14 +121,6 @@ pub enum MaterialError {
         /// What was expected.
         why: String,
     },
-    /// A model that is named in SCENE.md but not built yet.
-    #[error("material \"{name}\": model \"{model}\" is not supported yet")]
-    NotYet {
-        /// Material name.
-        name: String,
-        /// The model.
-        model: String,
-    },
 }
 
 /// Builds a model from a spec.
@@ -121,15 +131,8 @@ pub const MODELS: &[(&str, Constructor)] = &[
     ("elastic", Elastic::build),
     ("j2_plastic", J2Plastic::build),
     ("johnson_cook", JohnsonCook::build),
-    ("fluid", not_yet),
+    ("fluid", Fluid::build),
 ];
-
-fn not_yet(spec: &MaterialSpec) -> Result<Box<dyn Material>, MaterialError> {
-    Err(MaterialError::NotYet {
-        name: spec.name.clone(),
-        model: spec.model.clone(),
-    })
-}
 
 /// Builds the material a spec describes, checking its keys and values.
 pub fn build_material(spec: &MaterialSpec) -> Result<Box<dyn Material>, MaterialError> {
