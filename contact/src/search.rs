@@ -31,6 +31,11 @@ pub struct SearchParams {
     /// Parametric tolerance of "the projection falls inside the face": `|xi|, |eta| <= 1 + param_tol`
     /// (closes the seams between neighbouring faces against round-off).
     pub param_tol: f64,
+    /// The same for a node against a face of its own body (self-contact), where a fold's crease
+    /// can sit on the seam of two faces at an angle: the parallel layer widens it there only, as
+    /// a wider tolerance between bodies couples more contacts across boxes (see the parallel
+    /// stage's `MESH_PARAM_TOL`).
+    pub self_param_tol: f64,
 }
 
 impl Default for SearchParams {
@@ -40,6 +45,7 @@ impl Default for SearchParams {
             one_pass: false,
             gap_tol: DEFAULT_GAP_TOL,
             param_tol: DEFAULT_PARAM_TOL,
+            self_param_tol: DEFAULT_PARAM_TOL,
         }
     }
 }
@@ -115,7 +121,8 @@ fn quads_search_aabb(q0: &Quad, q1: &Quad, params: &SearchParams, max_radius: f6
     bb.grown(
         pair::max_corner_motion(&q0, &q1)
             + max_radius
-            + (params.gap_tol + PARAM_REACH * params.param_tol) * diameter,
+            + (params.gap_tol + PARAM_REACH * params.param_tol.max(params.self_param_tol))
+                * diameter,
     )
 }
 

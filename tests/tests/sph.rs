@@ -116,6 +116,21 @@ fn liggghts_operator_test_through_the_parallel_stage_at_1_to_4_ranks() {
             vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0],
             "np {np}: every step compared"
         );
+        // Newton's third law on an isolated blob (no walls, no gravity): total momentum stays
+        // its initial value to round-off, 1e-12 of M v_max (M = 1 kg: 1,000 particles of
+        // rho0 dx^3; gen_data.py draws velocity components in [-0.1, 0.1] m/s).
+        let dir = root().join(format!("target/test-runs/crosscheck_random_np{np}"));
+        let (hh, hist) = read_csv(&dir.join("tdyn/history.csv"));
+        for c in ["momentum_x", "momentum_y", "momentum_z"] {
+            let m = column(&hh, &hist, c);
+            for v in &m {
+                assert!(
+                    (v - m[0]).abs() <= 1e-12 * 1.0 * 0.1,
+                    "np {np}: {c} {v} drifted from {} (1e-12 of M v_max)",
+                    m[0]
+                );
+            }
+        }
         for f in ["x", "v", "f", "rho", "p"] {
             for (k, e) in column(&h, &rows, &format!("rel_{f}")).iter().enumerate() {
                 assert!(

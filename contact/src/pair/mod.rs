@@ -60,11 +60,12 @@ pub(crate) fn crossing(
     j: usize,
     f: usize,
     r: f64,
+    param_tol: f64,
     params: &SearchParams,
 ) -> Option<Hit> {
     let q1 = b.quad(f, Config::End);
     let proj = q1.closest_point(b.nodes.x1[j])?;
-    let lim = 1.0 + params.param_tol;
+    let lim = 1.0 + param_tol;
     if proj.xi[0].abs() > lim || proj.xi[1].abs() > lim {
         return None;
     }

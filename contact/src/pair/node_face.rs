@@ -20,5 +20,10 @@ pub(super) fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) ->
     if params.one_pass && b.nodes.body[j] < b.faces.body[f] {
         return None;
     }
-    crossing(b, j, f, 0.0, params)
+    let tol = if b.nodes.body[j] == b.faces.body[f] {
+        params.self_param_tol
+    } else {
+        params.param_tol
+    };
+    crossing(b, j, f, 0.0, tol, params)
 }

@@ -13,5 +13,5 @@ use crate::SearchParams;
 
 /// See [`super::test`].
 pub(super) fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> Option<Hit> {
-    crossing(b, j, f, b.nodes.radius[j], params)
+    crossing(b, j, f, b.nodes.radius[j], params.param_tol, params)
 }
