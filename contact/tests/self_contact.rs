@@ -157,6 +157,7 @@ fn corner_never_contacts_its_face() {
         one_pass: false,
         gap_tol: 0.5,
         param_tol: 0.5,
+        self_param_tol: 0.5,
     };
     for f in 0..b.faces.len() {
         for &j in &b.faces.nodes[f] {
