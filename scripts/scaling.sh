@@ -13,6 +13,8 @@
 #   WEAK_SCENE   scene of the weak series (default scenes/bench_block.toml); WEAK=0 skips it
 #   WEAK_PARAMS  its parameters as awk expressions of np (default "A=1 M=25 N=3*np L=0.12*np":
 #                a 3np x 25 x 25 block of 4 cm cubes, 1,875 x np elements at a constant step)
+#   END_TIME     run.end_time of every run, s (default: the scenes'); the figures are per step,
+#                so a shorter run gives them at less cost
 #   OUT          output directory (default out/scaling/<scene name>)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,7 +35,9 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 mkdir -p "$OUT"
 rm -rf "$OUT"/strong_np* "$OUT"/weak_np*
 
-strong=()
+common=()
+if [ -n "${END_TIME:-}" ]; then common+=(--end-time "$END_TIME"); fi
+strong=("${common[@]}")
 for p in "$@"; do strong+=(--param "$p"); done
 for np in $NPS; do
   echo "strong np $np: $SCENE $*"
@@ -42,7 +46,7 @@ done
 
 if [ "$WEAK" != 0 ]; then
   for np in $NPS; do
-    weak=()
+    weak=("${common[@]}")
     shown=""
     for p in $WEAK_PARAMS; do
       v=$(awk -v np="$np" "BEGIN { printf \"%.10g\", ${p#*=} }")

@@ -73,6 +73,8 @@ pub struct RunOverrides {
     pub dt: Option<f64>,
     /// `run.force_dt`.
     pub force_dt: Option<bool>,
+    /// `run.end_time` (a shorter run for per-step figures: `scripts/scaling.sh`).
+    pub end_time: Option<f64>,
     /// `mesh[k].params.NAME = value`, as (k, NAME, value); NAME must be in the scene's table.
     pub mesh_params: Vec<(usize, String, f64)>,
     /// `particles[i].spacing = value`, as (Some(i), value), or of every `[[particles]]` (None).
@@ -92,6 +94,14 @@ impl RunOverrides {
         }
         if let Some(f) = self.force_dt {
             scene.run.force_dt = f;
+        }
+        if let Some(t) = self.end_time {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(format!(
+                    "{file}: run.end_time: expected a positive time in s, got {t}"
+                ));
+            }
+            scene.run.end_time = t;
         }
         for (k, name, v) in &self.mesh_params {
             let n = scene.meshes.len();

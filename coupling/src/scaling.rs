@@ -223,6 +223,9 @@ fn stage_colour(k: usize) -> plotters::style::RGBColor {
 /// Chart size, pixels.
 const SCALING_CHART_SIZE: (u32, u32) = (1400, 1000);
 
+/// The bar panels' height over the tallest bar (room for the legend above the bars).
+const BAR_HEADROOM: f64 = 1.7;
+
 /// Bar width, in units of log2(ranks).
 const BAR_WIDTH: f64 = 0.6;
 
@@ -281,19 +284,28 @@ impl Figure for ScalingChart<'_> {
                 .fold(0.0f64, f64::max)
                 .max(1e-12)
                 * 1e3
-                * 1.25;
+                * BAR_HEADROOM;
             let mut b = ChartBuilder::on(area);
             b.margin(15).caption(
                 match name {
                     "strong" => {
                         "strong scaling: time per step by stage (max over ranks)".to_string()
                     }
-                    _ => format!(
-                        "weak scaling ({} elements per rank): time per step by stage",
-                        rows.first()
-                            .map(|r| r.elements / r.np.max(1) as u64)
-                            .unwrap_or(0)
-                    ),
+                    _ => {
+                        let per = |f: fn(&ScalingRow) -> u64| {
+                            rows.first().map(|r| f(r) / r.np.max(1) as u64).unwrap_or(0)
+                        };
+                        let parts = per(|r| r.particles);
+                        format!(
+                            "weak scaling ({} elements{} per rank): time per step by stage",
+                            per(|r| r.elements),
+                            if parts > 0 {
+                                format!(", {parts} particles")
+                            } else {
+                                String::new()
+                            }
+                        )
+                    }
                 },
                 ("sans-serif", 17),
             );

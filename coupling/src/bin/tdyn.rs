@@ -37,6 +37,9 @@ enum Cmd {
         /// (or `particles[i].spacing`) a particle spacing; repeatable.
         #[arg(long = "param", short = 'p')]
         params: Vec<String>,
+        /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
+        #[arg(long = "end-time")]
+        end_time: Option<f64>,
     },
     /// Chart accuracy against cost over a ladder of resolutions:
     /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
@@ -393,8 +396,12 @@ fn main() -> ExitCode {
             out,
             quiet,
             params,
+            end_time,
         } => {
-            let mut overrides = driver::RunOverrides::default();
+            let mut overrides = driver::RunOverrides {
+                end_time,
+                ..Default::default()
+            };
             for p in &params {
                 match coupling::sweep::parse_param(p, 0) {
                     Ok((t, v)) if v.len() == 1 => t.set(&mut overrides, v[0]),
