@@ -212,6 +212,7 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
                         mode: Some(mode),
                         dt: Some(dt),
                         force_dt: Some(force),
+                        ..Default::default()
                     },
                     setup_only: false,
                 };
@@ -303,8 +304,7 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
                 limit,
                 rows: &rows,
             };
-            chart.draw_png(&out_dir.join("compare.png"))?;
-            chart.draw_svg(&out_dir.join("compare.svg"))
+            crate::chart::save(&chart, &out_dir.join("compare"))
         });
         if let Err(e) = &result {
             result = Err(format!("{file}: {e}"));
@@ -324,24 +324,25 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
 /// A probes.csv column: (times, values).
 fn read_series(dir: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
     let path = dir.join("probes.csv");
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((read_column(&path, "time")?, read_column(&path, column)?))
+}
+
+/// One column of a CSV file with a header row (probes.csv, history.csv), by name.
+pub(crate) fn read_column(path: &Path, column: &str) -> Result<Vec<f64>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
     let k = header
         .iter()
         .position(|h| *h == column)
         .ok_or_else(|| format!("{}: no column {column}", path.display()))?;
-    let (mut t, mut q) = (Vec::new(), Vec::new());
-    for l in lines {
-        let v: Vec<&str> = l.split(',').collect();
-        let num = |s: &str| {
+    lines
+        .map(|l| {
+            let s = l.split(',').nth(k).unwrap_or("");
             s.parse::<f64>()
-                .map_err(|_| format!("{}: bad number {s:?}", path.display()))
-        };
-        t.push(num(v[0])?);
-        q.push(num(v[k])?);
-    }
-    Ok((t, q))
+                .map_err(|_| format!("{}: bad number {s:?} in column {column}", path.display()))
+        })
+        .collect()
 }
 
 /// Period of the dominant oscillation of a sampled signal: a first estimate from the crossings
@@ -612,43 +613,9 @@ fn factor_label(f: f64) -> String {
 
 /// Chart size, pixels.
 const CHART_SIZE: (u32, u32) = (1400, 600);
-/// TrueType fonts tried for the chart's text (the first found is used).
-const FONT_PATHS: [&str; 4] = [
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-];
-
-/// Registers a system font as "sans-serif" once; false when none is found.
-fn font_ready() -> bool {
-    static READY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *READY.get_or_init(|| {
-        FONT_PATHS.iter().any(|p| {
-            std::fs::read(p).ok().is_some_and(|bytes| {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                plotters::style::register_font(
-                    "sans-serif",
-                    plotters::style::FontStyle::Normal,
-                    bytes,
-                )
-                .is_ok()
-            })
-        })
-    })
-}
-
-impl Chart<'_> {
-    fn draw_png(&self, path: &Path) -> Result<(), String> {
-        let root = plotters::prelude::BitMapBackend::new(path, CHART_SIZE);
-        self.draw(plotters::prelude::IntoDrawingArea::into_drawing_area(root))
-            .map_err(|e| format!("{}: {e}", path.display()))
-    }
-
-    fn draw_svg(&self, path: &Path) -> Result<(), String> {
-        let root = plotters::prelude::SVGBackend::new(path, CHART_SIZE);
-        self.draw(plotters::prelude::IntoDrawingArea::into_drawing_area(root))
-            .map_err(|e| format!("{}: {e}", path.display()))
+impl crate::chart::Figure for Chart<'_> {
+    fn size(&self) -> (u32, u32) {
+        CHART_SIZE
     }
 
     fn draw<DB: plotters::prelude::DrawingBackend>(
@@ -656,7 +623,7 @@ impl Chart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let text = font_ready();
+        let text = crate::chart::font_ready();
         let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         root.fill(&WHITE).map_err(e)?;
         let root = if text {
@@ -679,16 +646,7 @@ impl Chart<'_> {
         // Room above the data for the stopped runs' marks.
         let (y0, y1) = (y0 / 3.0, y1 * 10.0);
         let y_stop = y1 / 2.0;
-        let span = |v: &mut dyn Iterator<Item = f64>| {
-            let (a, b) = v
-                .filter(|x| *x > 0.0 && x.is_finite())
-                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
-            if b > 0.0 {
-                (a / 2.0, b * 2.0)
-            } else {
-                (1e-3, 1.0)
-            }
-        };
+        let span = |v: &mut dyn Iterator<Item = f64>| crate::chart::log_span(v, 2.0, (1e-3, 1.0));
         let (c0, c1) = span(&mut self.rows.iter().map(|r| r.loop_s));
         let (d0, d1) = span(&mut self.rows.iter().map(|r| r.dt).chain([self.limit]));
         let colour = |m: Mode| match m {
@@ -713,8 +671,8 @@ impl Chart<'_> {
             if text {
                 mesh.x_desc(x_desc)
                     .y_desc(self.y_desc.as_str())
-                    .x_label_formatter(&|v| format!("{v:.0e}"))
-                    .y_label_formatter(&|v| format!("{v:.0e}"));
+                    .x_label_formatter(&crate::chart::sci)
+                    .y_label_formatter(&crate::chart::sci);
             } else {
                 mesh.x_labels(0).y_labels(0);
             }

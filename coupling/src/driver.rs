@@ -63,13 +63,14 @@ pub struct RunOptions {
     pub out: Option<PathBuf>,
     /// No progress bar, no summary on stdout.
     pub quiet: bool,
-    /// Values that replace the scene's `[run]` keys (used by `tdyn compare`).
+    /// Values that replace the scene's keys (`tdyn compare`, `tdyn sweep`, `tdyn run --param`).
     pub overrides: RunOverrides,
     /// Stop after set-up (mesh, FE stage, stable step): no time step, no output.
     pub setup_only: bool,
 }
 
-/// Replacements for `[run]` keys.
+/// Replacements for scene keys: `[run]` keys (`tdyn compare`), mesh parameters and particle
+/// spacings (`tdyn run --param`, `tdyn sweep`).
 #[derive(Debug, Clone, Default)]
 pub struct RunOverrides {
     /// `run.mode`.
@@ -78,6 +79,82 @@ pub struct RunOverrides {
     pub dt: Option<f64>,
     /// `run.force_dt`.
     pub force_dt: Option<bool>,
+    /// `run.end_time` (a shorter run for per-step figures: `scripts/scaling.sh`).
+    pub end_time: Option<f64>,
+    /// `mesh[k].params.NAME = value`, as (k, NAME, value); NAME must be in the scene's table.
+    pub mesh_params: Vec<(usize, String, f64)>,
+    /// `particles[i].spacing = value`, as (Some(i), value), or of every `[[particles]]` (None).
+    pub particle_spacing: Vec<(Option<usize>, f64)>,
+}
+
+impl RunOverrides {
+    /// Writes the replacements into `scene`; an index or a mesh parameter the scene does not
+    /// have is an error naming the key.
+    pub fn apply(&self, scene: &mut scene::Scene) -> Result<(), String> {
+        let file = scene.file.display().to_string();
+        if let Some(m) = self.mode {
+            scene.run.mode = m;
+        }
+        if let Some(dt) = self.dt {
+            scene.run.dt = Some(dt);
+        }
+        if let Some(f) = self.force_dt {
+            scene.run.force_dt = f;
+        }
+        if let Some(t) = self.end_time {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(format!(
+                    "{file}: run.end_time: expected a positive time in s, got {t}"
+                ));
+            }
+            scene.run.end_time = t;
+        }
+        for (k, name, v) in &self.mesh_params {
+            let n = scene.meshes.len();
+            let m = scene
+                .meshes
+                .get_mut(*k)
+                .ok_or_else(|| format!("{file}: mesh[{k}]: the scene has {n} [[mesh]] entries"))?;
+            let known: Vec<String> = m.params.keys().cloned().collect();
+            match m.params.get_mut(name) {
+                Some(p) => *p = *v,
+                None => {
+                    return Err(format!(
+                        "{file}: mesh[{k}].params.{name}: not a parameter of this mesh (it has {}); add it to the scene's params table to vary it",
+                        known.join(", ")
+                    ))
+                }
+            }
+        }
+        for (i, v) in &self.particle_spacing {
+            if !(*v > 0.0 && v.is_finite()) {
+                return Err(format!(
+                    "{file}: particles.spacing: expected a positive spacing in m, got {v}"
+                ));
+            }
+            let n = scene.particles.len();
+            match i {
+                Some(i) => {
+                    scene
+                        .particles
+                        .get_mut(*i)
+                        .ok_or_else(|| {
+                            format!(
+                                "{file}: particles[{i}]: the scene has {n} [[particles]] entries"
+                            )
+                        })?
+                        .spacing = *v
+                }
+                None if n == 0 => {
+                    return Err(format!(
+                        "{file}: particles.spacing: the scene has no [[particles]]"
+                    ))
+                }
+                None => scene.particles.iter_mut().for_each(|p| p.spacing = *v),
+            }
+        }
+        Ok(())
+    }
 }
 
 /// What a finished run reports to its caller.
@@ -374,16 +451,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     // Every rank parses the scene (identical result, no communication).
     let mut scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     let file = scene.file.display().to_string();
-    let ov = &opts.overrides;
-    if let Some(m) = ov.mode {
-        scene.run.mode = m;
-    }
-    if let Some(dt) = ov.dt {
-        scene.run.dt = Some(dt);
-    }
-    if let Some(f) = ov.force_dt {
-        scene.run.force_dt = f;
-    }
+    opts.overrides.apply(&mut scene)?;
     let mode = scene.run.mode;
     if !scene.particles.is_empty() && mode == Mode::Implicit {
         return Err(format!(

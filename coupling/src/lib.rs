@@ -4,6 +4,7 @@
 // deliberately also rejects NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod chart;
 pub mod collective;
 pub mod comm;
 pub mod compare;
@@ -20,8 +21,10 @@ pub mod output;
 pub mod particles_setup;
 pub mod probes;
 pub mod rcb;
+pub mod scaling;
 pub mod scene;
 pub mod sph_coupled;
 pub mod sph_run;
 pub mod sph_selftest;
 pub mod sph_stage;
+pub mod sweep;

@@ -151,6 +151,25 @@ fn d_measure() -> String {
     "history".into()
 }
 
+/// `[sweep]` (optional, beyond SCENE.md): the ladder `tdyn sweep` runs when the command line
+/// gives none, in the command line's syntax (parsed and checked by `tdyn sweep`).
+///
+/// ```toml
+/// [sweep]
+/// param = ["N=10,20,40,80"]                   # as --param: [K:]NAME=v1,v2,... or particles.spacing=...
+/// measure = ["mid.stress_xx:final=-4.599e7"]  # as --measure: COLUMN[:peak|final][=REFERENCE]
+/// ```
+#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepDef {
+    /// Swept parameters (several: swept together, the same number of values each).
+    #[serde(default)]
+    pub param: Vec<String>,
+    /// Accuracy measures.
+    #[serde(default)]
+    pub measure: Vec<String>,
+}
+
 /// `[[mesh]]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshDef {
@@ -463,6 +482,8 @@ struct RawScene {
     output: OutputDef,
     #[serde(default)]
     compare: Option<CompareDef>,
+    #[serde(default)]
+    sweep: Option<SweepDef>,
 }
 
 /// A checked scene.
@@ -498,6 +519,8 @@ pub struct Scene {
     pub output: OutputDef,
     /// `[compare]`.
     pub compare: Option<CompareDef>,
+    /// `[sweep]` (beyond SCENE.md).
+    pub sweep: Option<SweepDef>,
 }
 
 /// Reads and checks a scene file.
@@ -1002,6 +1025,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         probes: raw.probe,
         output: raw.output,
         compare: raw.compare,
+        sweep: raw.sweep,
     })
 }
 

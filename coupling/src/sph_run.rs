@@ -450,6 +450,7 @@ pub fn run(
     ex.insert("title".into(), scene.title.clone().into());
     ex.insert("mode".into(), "explicit".into());
     ex.insert("stable_dt_initial".into(), stable0.into());
+    ex.insert("loop_s".into(), loop_s.into());
     ex.insert("sph_pairs_last_step".into(), st.stats.pairs.into());
     ex.insert("sph_ghosts_last_step".into(), st.stats.ghosts.into());
     ex.insert(
@@ -478,17 +479,19 @@ pub fn run(
     Ok((steps, err_max))
 }
 
-/// Runs the scene here when it has particles and no mesh and no contact (collective); `None`
-/// when it is not such a scene (or does not load: the main driver reports that).
+/// Runs the scene here when it has particles and no mesh and no contact (collective), with the
+/// options' overrides (particle spacings); `None` when it is not such a scene (or does not
+/// load: the main driver reports that).
 pub fn run_if_particles_only(
     world: &SimpleCommunicator,
-    scene_file: &Path,
-    out: Option<std::path::PathBuf>,
-    quiet: bool,
+    opts: &crate::driver::RunOptions,
 ) -> Option<Result<(u64, f64), String>> {
-    let scene = crate::scene::load(scene_file).ok()?;
+    let mut scene = crate::scene::load(&opts.scene).ok()?;
     if !(scene.meshes.is_empty() && !scene.particles.is_empty() && scene.contact.is_none()) {
         return None;
+    }
+    if let Err(e) = opts.overrides.apply(&mut scene) {
+        return Some(Err(e));
     }
     if scene.run.mode == crate::scene::Mode::Implicit {
         return Some(Err(format!(
@@ -496,7 +499,7 @@ pub fn run_if_particles_only(
             scene.file.display()
         )));
     }
-    let out_dir = out.unwrap_or_else(|| {
+    let out_dir = opts.out.clone().unwrap_or_else(|| {
         std::path::PathBuf::from("out").join(
             scene
                 .file
@@ -505,5 +508,5 @@ pub fn run_if_particles_only(
                 .unwrap_or_default(),
         )
     });
-    Some(run(world, &scene, &out_dir, quiet))
+    Some(run(world, &scene, &out_dir, opts.quiet))
 }

@@ -1,4 +1,5 @@
-//! `tdyn`: run a scene, compare explicit and implicit integration on it, mesh a .geo. PETSc
+//! `tdyn`: run a scene, compare explicit and implicit integration on it, sweep its resolution,
+//! chart a scaling study, mesh a .geo. PETSc
 //! options (`-log_view`, `-ksp_type cg`, `-pc_type gamg`, `-ksp_monitor`,
 //! `-petscpartitioner_type simple`, ...) may follow the other arguments and go to PETSc unchanged.
 use clap::{Parser, Subcommand};
@@ -31,6 +32,54 @@ enum Cmd {
         /// No progress bar and no summary.
         #[arg(long, short)]
         quiet: bool,
+        /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
+        /// defaults to 0; the scene's params table must have it), `particles.spacing=VALUE`
+        /// (or `particles[i].spacing`) a particle spacing; repeatable.
+        #[arg(long = "param", short = 'p')]
+        params: Vec<String>,
+        /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
+        #[arg(long = "end-time")]
+        end_time: Option<f64>,
+    },
+    /// Chart accuracy against cost over a ladder of resolutions:
+    /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
+    /// [--measure mid.stress_xx:final=-4.599e7] [--out DIR] [PETSc options]`. Each run is made
+    /// in this process, on the same ranks; writes accuracy_cost.csv, accuracy_cost.png and
+    /// accuracy_cost.svg in DIR (error against loop wall time, model memory and peak RSS). Runs
+    /// that stop or fail are reported: the command still exits 0.
+    Sweep {
+        /// The scene file (TOML; an optional [sweep] table gives the default ladder and measures).
+        scene: PathBuf,
+        /// The swept parameter: `[K:]NAME=v1,v2,...` (a gmsh parameter of [[mesh]] K) or
+        /// `particles.spacing=v1,v2,...`; repeat it to sweep several together (value k of each
+        /// in run k).
+        #[arg(long = "param", short = 'p')]
+        params: Vec<String>,
+        /// The [[mesh]] a parameter without `K:` belongs to.
+        #[arg(long, default_value_t = 0)]
+        mesh: usize,
+        /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
+        /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
+        /// the finest run. Repeatable (default: [sweep] measure, else the first probe column's
+        /// peak).
+        #[arg(long = "measure")]
+        measures: Vec<String>,
+        /// Output directory (default: out/<scene name>/sweep).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Chart a scaling study (scripts/scaling.sh): reads DIR/<series>_np<P>/report.json
+    /// (series `strong`, `weak`), writes DIR/scaling.csv, scaling.png and scaling.svg: time per
+    /// step by stage, imbalance per stage, bytes per rank per step. No MPI.
+    ChartScaling {
+        /// The study's directory.
+        dir: PathBuf,
+        /// Chart title.
+        #[arg(long, default_value = "scaling")]
+        title: String,
     },
     /// Chart accuracy against cost of explicit and implicit integration on a scene:
     /// `mpirun -np 2 tdyn compare scenes/bar_vibration.toml [--modes explicit,implicit]
@@ -279,7 +328,93 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Cmd::Run { scene, out, quiet } => {
+        Cmd::ChartScaling { dir, title } => match coupling::scaling::chart_scaling(&dir, &title) {
+            Ok(rows) => {
+                print!("{}", coupling::scaling::table(&rows));
+                println!(
+                    "tdyn chart-scaling: scaling.csv, scaling.png and scaling.svg in {}/",
+                    dir.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("tdyn chart-scaling: error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Cmd::Sweep {
+            scene,
+            params,
+            mesh,
+            measures,
+            out,
+            quiet,
+        } => {
+            let Some(universe) = mpi::initialize() else {
+                eprintln!("tdyn: MPI could not be initialised");
+                return ExitCode::FAILURE;
+            };
+            let world = universe.world();
+            let rank = world.rank();
+            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("tdyn: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = coupling::sweep::SweepOptions {
+                scene,
+                params,
+                mesh,
+                measures,
+                out,
+                quiet,
+            };
+            let res = coupling::sweep::sweep(&world, &opts);
+            drop(petsc);
+            match res {
+                Ok(dir) => {
+                    if rank == 0 && !quiet {
+                        println!(
+                            "tdyn sweep: accuracy_cost.csv, accuracy_cost.png and accuracy_cost.svg in {}/",
+                            dir.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    if rank == 0 {
+                        eprintln!("tdyn sweep: error: {e}");
+                    }
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Run {
+            scene,
+            out,
+            quiet,
+            params,
+            end_time,
+        } => {
+            let mut overrides = driver::RunOverrides {
+                end_time,
+                ..Default::default()
+            };
+            for p in &params {
+                match coupling::sweep::parse_param(p, 0) {
+                    Ok((t, v)) if v.len() == 1 => t.set(&mut overrides, v[0]),
+                    Ok(_) => {
+                        eprintln!("tdyn: error: --param {p}: expected one value (tdyn sweep runs several)");
+                        return ExitCode::FAILURE;
+                    }
+                    Err(e) => {
+                        eprintln!("tdyn: error: --param {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
             let Some(universe) = mpi::initialize() else {
                 eprintln!("tdyn: MPI could not be initialised");
                 return ExitCode::FAILURE;
@@ -297,15 +432,11 @@ fn main() -> ExitCode {
                 scene,
                 out,
                 quiet,
+                overrides,
                 ..Default::default()
             };
             // A scene of particles only runs the SPH stage alone.
-            if let Some(r) = coupling::sph_run::run_if_particles_only(
-                &world,
-                &opts.scene,
-                opts.out.clone(),
-                quiet,
-            ) {
+            if let Some(r) = coupling::sph_run::run_if_particles_only(&world, &opts) {
                 drop(petsc);
                 return match r {
                     Ok(_) => ExitCode::SUCCESS,

@@ -1,0 +1,90 @@
+//! What the charts of `tdyn compare`, `tdyn sweep` and `tdyn chart-scaling` share: the font,
+//! one drawing written both as PNG and as SVG, log-axis ranges, and the labels of powers of ten.
+use plotters::coord::Shift;
+use plotters::prelude::{BitMapBackend, DrawingArea, DrawingBackend, IntoDrawingArea, SVGBackend};
+use std::path::Path;
+
+/// TrueType fonts tried for the charts' text (the first found is used).
+const FONT_PATHS: [&str; 4] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+];
+
+/// Registers a system font as "sans-serif" once; false when none is found (the charts are then
+/// drawn without text rather than not at all).
+pub fn font_ready() -> bool {
+    static READY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *READY.get_or_init(|| {
+        FONT_PATHS.iter().any(|p| {
+            std::fs::read(p).ok().is_some_and(|bytes| {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                plotters::style::register_font(
+                    "sans-serif",
+                    plotters::style::FontStyle::Normal,
+                    bytes,
+                )
+                .is_ok()
+            })
+        })
+    })
+}
+
+/// A chart that can draw itself on any plotters backend.
+pub trait Figure {
+    /// Width and height, pixels.
+    fn size(&self) -> (u32, u32);
+    /// Draws the whole chart on `root` (filled, titled, presented).
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Writes `fig` to `stem`.png and `stem`.svg.
+pub fn save(fig: &impl Figure, stem: &Path) -> Result<(), String> {
+    let png = stem.with_extension("png");
+    let svg = stem.with_extension("svg");
+    fig.draw(BitMapBackend::new(&png, fig.size()).into_drawing_area())
+        .map_err(|e| format!("{}: {e}", png.display()))?;
+    fig.draw(SVGBackend::new(&svg, fig.size()).into_drawing_area())
+        .map_err(|e| format!("{}: {e}", svg.display()))
+}
+
+/// A log axis range around the positive finite values: a factor `pad` beyond the smallest and
+/// the largest; `empty` when there is none.
+pub fn log_span(values: impl Iterator<Item = f64>, pad: f64, empty: (f64, f64)) -> (f64, f64) {
+    let (a, b) = values
+        .filter(|x| *x > 0.0 && x.is_finite())
+        .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+    if b > 0.0 {
+        (a / pad, b * pad)
+    } else {
+        empty
+    }
+}
+
+/// `span` widened about its geometric middle to at least `ratio` (hi / lo), so that a log axis
+/// over nearly equal values still has labelled ticks.
+pub fn at_least(span: (f64, f64), ratio: f64) -> (f64, f64) {
+    let (lo, hi) = span;
+    if hi / lo >= ratio {
+        return span;
+    }
+    let mid = (lo * hi).sqrt();
+    (mid / ratio.sqrt(), mid * ratio.sqrt())
+}
+
+/// A tick label on a log axis: "1e-3".
+pub fn sci(v: &f64) -> String {
+    format!("{v:.0e}")
+}
+
+/// A tick label for sizes and times: plain from 0.01 to 10^5 ("0.05", "2", "300"), else "1e-3".
+pub fn plain(v: &f64) -> String {
+    let a = v.abs();
+    if (1e-2..1e5).contains(&a) {
+        let s = format!("{v:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        sci(v)
+    }
+}
