@@ -318,6 +318,17 @@ fn critical_dt(bb: f64, c: f64, xi: f64) -> f64 {
     (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi)
 }
 
+/// The element's characteristic length for the bulk viscosity: the one its FB frequency bound
+/// implies, l = sqrt(3) / sqrt(2 sum b^2) (= h for a cube of side h, as V^(1/3) is; for a flat
+/// brick close to its thinnest side rather than V^(1/3)). The damping ratio the stable step
+/// assumes, xi = b1 + b2^2 l |eps_v| / c, is the highest mode's only with this length: with
+/// V^(1/3) a brick 8:1 thin was damped 2.4 times more than its step allowed and blew up
+/// (bar_wave with N = 160, M = 1; a thin wall's elements likewise).
+#[inline]
+fn bulk_viscosity_length(bb: f64) -> f64 {
+    3f64.sqrt() / (2.0 * bb).sqrt()
+}
+
 /// Stable step of an element at density `rho` with volumetric strain rate `div_v`.
 pub fn stable_dt(
     x: &[[f64; 3]; 8],
@@ -326,10 +337,10 @@ pub fn stable_dt(
     ctl: &HexControls,
     div_v: f64,
 ) -> f64 {
-    let (b, v) = gradient(x);
+    let (b, _) = gradient(x);
     let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
     let c = (mat.dilatational_modulus() / rho).sqrt();
-    let l = v.cbrt();
+    let l = bulk_viscosity_length(bb);
     let xi = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * l * (-div_v).max(0.0) / c;
     critical_dt(bb, c, xi)
 }
@@ -444,7 +455,7 @@ pub fn update(
     let modulus = mat.wave_modulus(rho, mat_state);
     let c = (modulus / rho).sqrt();
     let ev = d[0] + d[1] + d[2];
-    let len = vol.cbrt();
+    let len = bulk_viscosity_length(bb);
     let comp = (-ev).max(0.0);
     let q = rho * len * ev * (ctl.bv_linear * c + ctl.bv_quadratic * ctl.bv_quadratic * len * comp);
     let xi = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
