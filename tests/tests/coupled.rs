@@ -35,7 +35,7 @@ fn particle_cloud_falling_on_a_meshed_plate_never_passes_through_it() {
     // radius, i.e. no particle passes through; kinematic push-back leaves it at one radius,
     // measured 0.95 r); the energy balance (kinetic + internal + contact = initial + work of
     // gravity) within 2 %; np 1 and 3 agree on the final kinetic energy and contact energy
-    // within 1 % (the push-back is solved box by box, so not to round-off).
+    // within 1 %.
     let radius = 0.0025;
     let mut finals = Vec::new();
     for np in [1, 3] {
