@@ -391,6 +391,7 @@ impl ExplicitFe {
         }
         let mut hg_work = 0.0;
         let mut dt_min = f64::INFINITY;
+        let mut inverted = None;
         let stride = self.mat_stride;
         for (e, conn) in self.elems.iter().enumerate() {
             let xe = gather(&self.x, conn);
@@ -410,13 +411,16 @@ impl ExplicitFe {
             ) {
                 Ok(o) => o,
                 Err(hex::ElementError::Inverted { volume }) => {
-                    return Err(StepError::Inverted {
+                    // Keep the first, finish the loop: the ghost exchange below is collective,
+                    // and a rank that left before it would hang the others in it.
+                    inverted.get_or_insert(StepError::Inverted {
                         elem: self.elem_id[e],
                         volume,
                         at: centroid(&xe),
                         time: self.time + dt,
                         step: self.step + 1,
-                    })
+                    });
+                    continue;
                 }
             };
             for (k, &n) in conn.iter().enumerate() {
@@ -435,7 +439,10 @@ impl ExplicitFe {
         self.timers.elements += (t1 - t0).as_secs_f64();
         exchange.sum_shared(flat(&mut self.force))?;
         self.timers.exchange += t1.elapsed().as_secs_f64();
-        Ok(hg_work)
+        match inverted {
+            Some(e) => Err(e),
+            None => Ok(hg_work),
+        }
     }
 
     /// Second half of the step: accelerations, constraints and reactions, the closing kick, and

@@ -154,6 +154,46 @@ enum Cmd {
     },
 }
 
+/// Runs `work` on MPI's world with PETSc initialised (and finalised before MPI is): on success
+/// rank 0 calls `ok` with the result; on failure rank 0 prints `<what>: error: <message>`. The
+/// exit status is the same on every rank (`work` returns the same outcome on all).
+fn on_mpi_with_petsc<T>(
+    petsc_args: &[String],
+    what: &str,
+    work: impl FnOnce(&mpi::topology::SimpleCommunicator) -> Result<T, String>,
+    ok: impl FnOnce(T),
+) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("tdyn: MPI could not be initialised");
+        return ExitCode::FAILURE;
+    };
+    let world = universe.world();
+    let rank = world.rank();
+    let petsc = match Petsc::init(world.as_raw(), petsc_args) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("tdyn: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let res = work(&world);
+    drop(petsc);
+    match res {
+        Ok(v) => {
+            if rank == 0 {
+                ok(v);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            if rank == 0 {
+                eprintln!("{what}: error: {e}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn parse_var(s: &str) -> Result<(String, String), String> {
     let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
     Ok((k.to_string(), v.to_string()))
@@ -288,19 +328,6 @@ fn main() -> ExitCode {
             out,
             quiet,
         } => {
-            let Some(universe) = mpi::initialize() else {
-                eprintln!("tdyn: MPI could not be initialised");
-                return ExitCode::FAILURE;
-            };
-            let world = universe.world();
-            let rank = world.rank();
-            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
-                Ok(p) => p,
-                Err(e) => {
-                    eprintln!("tdyn: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
             let opts = coupling::compare::CompareOptions {
                 scene,
                 modes,
@@ -308,25 +335,19 @@ fn main() -> ExitCode {
                 out,
                 quiet,
             };
-            let res = coupling::compare::compare(&world, &opts);
-            drop(petsc);
-            match res {
-                Ok(dir) => {
-                    if rank == 0 && !quiet {
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn compare",
+                |world| coupling::compare::compare(world, &opts),
+                |dir| {
+                    if !quiet {
                         println!(
                             "tdyn compare: compare.csv, compare.png and compare.svg in {}/",
                             dir.display()
                         );
                     }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    if rank == 0 {
-                        eprintln!("tdyn compare: error: {e}");
-                    }
-                    ExitCode::FAILURE
-                }
-            }
+                },
+            )
         }
         Cmd::ChartScaling { dir, title } => match coupling::scaling::chart_scaling(&dir, &title) {
             Ok(rows) => {
@@ -350,19 +371,6 @@ fn main() -> ExitCode {
             out,
             quiet,
         } => {
-            let Some(universe) = mpi::initialize() else {
-                eprintln!("tdyn: MPI could not be initialised");
-                return ExitCode::FAILURE;
-            };
-            let world = universe.world();
-            let rank = world.rank();
-            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
-                Ok(p) => p,
-                Err(e) => {
-                    eprintln!("tdyn: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
             let opts = coupling::sweep::SweepOptions {
                 scene,
                 params,
@@ -371,25 +379,19 @@ fn main() -> ExitCode {
                 out,
                 quiet,
             };
-            let res = coupling::sweep::sweep(&world, &opts);
-            drop(petsc);
-            match res {
-                Ok(dir) => {
-                    if rank == 0 && !quiet {
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn sweep",
+                |world| coupling::sweep::sweep(world, &opts),
+                |dir| {
+                    if !quiet {
                         println!(
                             "tdyn sweep: accuracy_cost.csv, accuracy_cost.png and accuracy_cost.svg in {}/",
                             dir.display()
                         );
                     }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    if rank == 0 {
-                        eprintln!("tdyn sweep: error: {e}");
-                    }
-                    ExitCode::FAILURE
-                }
-            }
+                },
+            )
         }
         Cmd::Run {
             scene,
@@ -415,19 +417,6 @@ fn main() -> ExitCode {
                     }
                 }
             }
-            let Some(universe) = mpi::initialize() else {
-                eprintln!("tdyn: MPI could not be initialised");
-                return ExitCode::FAILURE;
-            };
-            let world = universe.world();
-            let rank = world.rank();
-            let petsc = match Petsc::init(world.as_raw(), &petsc_args) {
-                Ok(p) => p,
-                Err(e) => {
-                    eprintln!("tdyn: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
             let opts = RunOptions {
                 scene,
                 out,
@@ -435,24 +424,18 @@ fn main() -> ExitCode {
                 overrides,
                 ..Default::default()
             };
-            // A scene of particles only runs the SPH stage alone.
-            if let Some(r) = coupling::sph_run::run_if_particles_only(&world, &opts) {
-                drop(petsc);
-                return match r {
-                    Ok(_) => ExitCode::SUCCESS,
-                    Err(e) => {
-                        if rank == 0 {
-                            eprintln!("tdyn: error: {e}");
-                        }
-                        ExitCode::FAILURE
-                    }
-                };
-            }
-            let res = driver::run(&world, &opts);
-            drop(petsc);
-            match res {
-                Ok(s) => {
-                    if rank == 0 && !quiet {
+            // A scene of particles only runs the SPH stage alone (it prints its own summary).
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn",
+                |world| match coupling::sph_run::run_if_particles_only(world, &opts) {
+                    Some(r) => r.map(|_| None),
+                    None => driver::run(world, &opts)
+                        .map(Some)
+                        .map_err(|e| e.to_string()),
+                },
+                |s| {
+                    if let (Some(s), false) = (s, quiet) {
                         println!(
                             "tdyn: {} steps, energy error max {:.2e}, {:.1} ns per element-cycle",
                             s.steps, s.energy_error_max, s.ns_per_element_cycle
@@ -462,15 +445,8 @@ fn main() -> ExitCode {
                             s.out.display()
                         );
                     }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    if rank == 0 {
-                        eprintln!("tdyn: error: {e}");
-                    }
-                    ExitCode::FAILURE
-                }
-            }
+                },
+            )
         }
     }
 }
