@@ -6,7 +6,7 @@
 //! travels with a face (ghost copies included). Push-back results go back to the owners as
 //! `(node gid, force)` pairs ([`crate::PushBack::contributions`]), summed there.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -239,7 +239,8 @@ impl ContactBox {
             });
         }
         let mut b = ContactBox::default();
-        let mut index: HashMap<u64, u32> = HashMap::with_capacity(nodes.len());
+        let mut index: HashMap<u64, u32> =
+            HashMap::with_capacity_and_hasher(nodes.len(), Default::default());
         for (i, r) in nodes.iter().enumerate() {
             if index.insert(r.gid, i as u32).is_some() {
                 return Err(ContactError::DuplicateNode { gid: r.gid });

@@ -28,7 +28,7 @@ use contact::{
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 use std::time::Instant;
 
 /// Parametric tolerance of "the node projects inside the face" in runs: `|xi|, |eta| <= 1.02`.
@@ -170,7 +170,7 @@ fn solve_together(
         (p.contact.node_gid, p.contact.face_gid).cmp(&(q.contact.node_gid, q.contact.face_gid))
     });
     let mut nodes: Vec<NodeRecord> = Vec::new();
-    let mut slot: HashMap<u64, usize> = HashMap::new();
+    let mut slot: HashMap<u64, usize> = HashMap::default();
     for p in &packets {
         slot.entry(p.node.gid).or_insert_with(|| {
             nodes.push(p.node);
@@ -179,7 +179,7 @@ fn solve_together(
     }
     let n_contact_nodes = nodes.len();
     let mut faces: Vec<FaceRecord> = Vec::new();
-    let mut face_slot: HashMap<u64, usize> = HashMap::new();
+    let mut face_slot: HashMap<u64, usize> = HashMap::default();
     for p in &packets {
         for r in &p.corners {
             slot.entry(r.gid).or_insert_with(|| {
@@ -335,7 +335,8 @@ impl ContactStage {
             recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
         let n_owned = recs.len();
         let mut face_recs = Vec::with_capacity(held.len());
-        let mut seen_faces: HashMap<u64, ()> = HashMap::with_capacity(held.len());
+        let mut seen_faces: HashMap<u64, ()> =
+            HashMap::with_capacity_and_hasher(held.len(), Default::default());
         for f in &held {
             if seen_faces.insert(f.face.gid, ()).is_some() {
                 continue;
