@@ -97,6 +97,8 @@ pub struct SphStage {
     /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
     /// weight is one more).
     pair_count: Vec<u32>,
+    /// Whether the decomposition was balanced at least once.
+    balanced_once: bool,
 }
 
 impl SphStage {
@@ -117,6 +119,7 @@ impl SphStage {
             x_start: Vec::new(),
             drift_s: 0.0,
             pair_count: Vec::new(),
+            balanced_once: false,
         }
     }
 
@@ -246,6 +249,15 @@ impl SphStage {
     /// 1. RCB over the owned particles, from the previous cuts.
     fn rebalance(&mut self) -> Result<(), String> {
         self.parts.truncate_ghosts();
+        // One rank: its box is all of space and every particle stays; after the first call
+        // (which sets up the cut tree) there is nothing to rebalance.
+        if self.comm.size() == 1 && self.box_lo[0] == f64::NEG_INFINITY && self.balanced_once {
+            self.stats.rcb.migrated = 0;
+            self.stats.rcb.bytes_sent = 0;
+            self.stats.rcb.wall_s = 0.0;
+            return Ok(());
+        }
+        self.balanced_once = true;
         let items: Vec<Item> = (0..self.parts.n_owned)
             .map(|i| Item {
                 rec: self.parts.record(i),
@@ -284,14 +296,16 @@ impl SphStage {
         let mut recs = Vec::new();
         let mut src = Vec::new();
         let mut ranks = Vec::new();
+        let mut shifts = Vec::new();
         for i in 0..self.parts.n_owned {
             let x = self.parts.x_real[i];
             let r = self.parts.h[i] * (1.0 + REACH_MARGIN);
-            let mut shifts = vec![[0.0; 3]];
+            shifts.clear();
+            shifts.push([0.0; 3]);
             if let Some(p) = &per {
                 shifts.extend(periodic_images(x, r, p));
             }
-            for s in shifts {
+            for &s in &shifts {
                 let c: [f64; 3] = std::array::from_fn(|k| x[k] + s[k]);
                 let lo = [c[0] - r, c[1] - r, c[2] - r];
                 let hi = [c[0] + r, c[1] + r, c[2] + r];

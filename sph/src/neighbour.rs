@@ -467,14 +467,16 @@ fn pairs_with_interior(
             .collect();
         cells = cells.with_primary(&primary);
     }
+    // Image indices (all zero, and not stored, without a periodic box).
     let images: Vec<[i64; 3]> = match per {
         Some(per) => parts.shift.iter().map(|s| per.image_index(*s)).collect(),
-        None => vec![[0; 3]; parts.len()],
+        None => Vec::new(),
     };
+    let image = |i: usize| images.get(i).copied().unwrap_or([0; 3]);
     let end = |i: usize| PairEnd {
         id: parts.id[i],
         x_real: parts.x_real[i],
-        image: images[i],
+        image: image(i),
         h: parts.h[i],
     };
     // room for the typical ~16 listed pairs per entry (3D, support 2h = 2.4 spacings) up
@@ -483,7 +485,7 @@ fn pairs_with_interior(
     cells.for_each_close_pair(|i, j| {
         let (i, j) = if i < j { (i, j) } else { (j, i) };
         let (iu, ju) = (i as usize, j as usize);
-        if parts.id[iu] == parts.id[ju] && images[iu] == images[ju] {
+        if parts.id[iu] == parts.id[ju] && image(iu) == image(ju) {
             return; // two copies of one particle at the same place
         }
         if opts.skip_fixed_pairs && parts.fixed[iu] && parts.fixed[ju] {
