@@ -39,6 +39,24 @@ pub trait Figure {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String>;
 }
 
+/// A chart's canvas: `root` filled white, with `title` above when a font is available.
+/// Returns the area left for the panels and whether text can be drawn.
+pub fn canvas<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<(DrawingArea<DB, Shift>, bool), String> {
+    let text = font_ready();
+    root.fill(&plotters::style::WHITE)
+        .map_err(|x| x.to_string())?;
+    let root = if text {
+        root.titled(title, ("sans-serif", 22))
+            .map_err(|x| x.to_string())?
+    } else {
+        root
+    };
+    Ok((root, text))
+}
+
 /// Writes `fig` to `stem`.png and `stem`.svg.
 pub fn save(fig: &impl Figure, stem: &Path) -> Result<(), String> {
     let png = stem.with_extension("png");

@@ -623,14 +623,8 @@ impl crate::chart::Figure for Chart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let text = crate::chart::font_ready();
         let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        root.fill(&WHITE).map_err(e)?;
-        let root = if text {
-            root.titled(&self.title, ("sans-serif", 22)).map_err(e)?
-        } else {
-            root
-        };
+        let (root, text) = crate::chart::canvas(root, &self.title)?;
         let (left, right) = root.split_horizontally(CHART_SIZE.0 / 2);
         let finished: Vec<&CompareRow> = self
             .rows

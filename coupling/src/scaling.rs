@@ -255,14 +255,8 @@ impl Figure for ScalingChart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let text = chart::font_ready();
         let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        root.fill(&WHITE).map_err(e)?;
-        let root = if text {
-            root.titled(&self.title, ("sans-serif", 22)).map_err(e)?
-        } else {
-            root
-        };
+        let (root, text) = chart::canvas(root, &self.title)?;
         let panels = root.split_evenly((2, 2));
         let max_np = self.rows.iter().map(|r| r.np).max().unwrap_or(1);
         let (xa, xb) = (-0.6, xpos(max_np) + 0.6);

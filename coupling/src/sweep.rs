@@ -744,14 +744,8 @@ impl Figure for SweepChart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let text = chart::font_ready();
         let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        root.fill(&WHITE).map_err(e)?;
-        let root = if text {
-            root.titled(&self.title, ("sans-serif", 22)).map_err(e)?
-        } else {
-            root
-        };
+        let (root, text) = chart::canvas(root, &self.title)?;
         let panels = root.split_evenly((1, 3));
         let ok: Vec<&SweepRow> = self.rows.iter().filter(|r| r.status == "ok").collect();
         let (y0, y1) = chart::log_span(
