@@ -41,21 +41,31 @@ pub fn workdir(name: &str) -> PathBuf {
     d
 }
 
+/// `timeout LIMIT_S mpirun -np NP`, with the environment mpirun needs here (as root, more
+/// ranks than cores); add the program and its arguments (and mpirun's own `-x` first).
+pub fn mpirun(np: usize, limit_s: u32) -> Command {
+    let mut c = Command::new("timeout");
+    c.args([&limit_s.to_string(), "mpirun", "-np", &np.to_string()]);
+    mpi_env(&mut c);
+    c
+}
+
+/// Sets the environment mpirun needs here on `c` (as root, more ranks than cores).
+pub fn mpi_env(c: &mut Command) -> &mut Command {
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+}
+
 /// Runs `mpirun -np N tdyn run scene --out out --quiet` (10 min limit) and returns its output.
 pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
-    Command::new("timeout")
-        .arg("600")
-        .arg("mpirun")
-        .args(["-np", &np.to_string()])
+    mpirun(np, 600)
         .arg(tdyn())
         .arg("run")
         .arg(scene)
         .arg("--out")
         .arg(out)
         .arg("--quiet")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
         .output()
         .expect("mpirun")
 }
@@ -128,13 +138,9 @@ pub fn c_dilatational() -> f64 {
 /// Runs `mpirun -np NP tdyn selftest KERNEL --seed SEED` and asserts it passed (the self-test
 /// itself compares with its references and says "passed").
 pub fn selftest(np: usize, kernel: &str, seed: u64, timeout_s: u32) {
-    let o = std::process::Command::new("timeout")
-        .args([&timeout_s.to_string(), "mpirun", "-np", &np.to_string()])
+    let o = mpirun(np, timeout_s)
         .arg(tdyn())
         .args(["selftest", kernel, "--seed", &seed.to_string()])
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
         .output()
         .expect("mpirun could not be started");
     let out = String::from_utf8_lossy(&o.stdout);

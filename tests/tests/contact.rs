@@ -405,8 +405,7 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
     let mut rows = Vec::new();
     for (mode, name) in [("0", "dynamic_rcb"), ("1", "static_fe_baseline")] {
         let out = dir.join(format!("out{mode}"));
-        let o = std::process::Command::new("timeout")
-            .args(["600", "mpirun", "-np", &np.to_string()])
+        let o = mpirun(np, 600)
             .args(["-x", &format!("TDYN_CONTACT_BASELINE={mode}")])
             .arg(tdyn())
             .arg("run")
@@ -414,9 +413,6 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
             .arg("--out")
             .arg(&out)
             .arg("--quiet")
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
             .output()
             .expect("mpirun");
         assert!(

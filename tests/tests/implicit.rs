@@ -449,19 +449,13 @@ fn compare_charts_both_modes_and_exits_0_on_unstable_runs() {
         .replace("../meshes/bar.geo", &geo);
     let scene = dir.join("bar_vibration.toml");
     std::fs::write(&scene, text).unwrap();
-    let o = std::process::Command::new("timeout")
-        .arg("600")
-        .arg("mpirun")
-        .args(["-np", "2"])
+    let o = mpirun(2, 600)
         .arg(tdyn())
         .arg("compare")
         .arg(&scene)
         .args(["--dt-factors", "0.9,10,30", "--out"])
         .arg(&out)
         .arg("--quiet")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
         .output()
         .expect("mpirun");
     assert!(

@@ -69,8 +69,8 @@ fn crosscheck(
     extra: &[&str],
 ) -> (Vec<String>, Vec<Vec<f64>>) {
     let dir = workdir(tag);
-    let o = std::process::Command::new("timeout")
-        .arg("900")
+    // crosscheck is not an MPI program: it launches mpirun itself, which needs the environment
+    let o = mpi_env(std::process::Command::new("timeout").arg("900"))
         .arg(tdyn())
         .arg("crosscheck")
         .arg(root().join(scene))
@@ -79,9 +79,6 @@ fn crosscheck(
         .args(["--np", &np.to_string(), "--out"])
         .arg(&dir)
         .args(extra)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
         .output()
         .expect("tdyn crosscheck");
     println!("{}", String::from_utf8_lossy(&o.stdout));
