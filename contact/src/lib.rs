@@ -42,7 +42,8 @@ pub use data::{
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{push_back, PushBack, PushBackParams};
 pub use search::{
-    face_records_search_aabb, face_search_aabb, node_search_aabb, search, Contact, SearchParams,
+    face_records_search_aabb, face_search_aabb, node_search_aabb, search, search_candidates,
+    within_skin, Candidates, Contact, SearchParams,
 };
 pub use surfaces::{bodies, face_key, surfaces, BoundaryFace, Surfaces, HEX_FACES};
 pub use vec3::V3;

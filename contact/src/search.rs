@@ -138,7 +138,8 @@ pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
 /// Finds, for every owned node (`0..n_owned`), the face it penetrated during the step, if any.
 ///
 /// Broad phase: a bucket grid over the faces' [`face_search_aabb`]s, queried with each node's
-/// [`node_search_aabb`]. Narrow phase: [`crate::pair::test`]. If a node crossed several faces the contact is
+/// [`node_search_aabb`] ([`Candidates::build`] with no skin). Narrow phase: [`crate::pair::test`].
+/// If a node crossed several faces the contact is
 /// the deepest, then the lowest face gid. A particle (a sphere) can touch two or three faces at
 /// once at an edge or a corner of a cavity, and one contact would leave it inside the others'
 /// offset surfaces, where the next step's crossing test no longer sees it: a particle keeps, in
@@ -147,35 +148,168 @@ pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
 /// gid, then depth and face gid; it depends only on the geometry and the gids, never on the
 /// storage order of nodes or faces.
 pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
+    let cands = Candidates::build(b, params, 0.0);
+    search_candidates(b, params, &cands)
+}
+
+/// Candidate faces of every owned node, kept over several steps: a Verlet list with a skin.
+///
+/// [`Candidates::build`] lists, for each owned node, the faces whose [`face_search_aabb`]
+/// overlaps the node's [`node_search_aabb`] grown by `skin` (and that the pair rules do not
+/// exclude outright: a corner of the face, the same body without self-contact, the wrong order
+/// in one pass). While the box's nodes have moved little since, the list still holds every face
+/// the node can contact, and [`search_candidates`] gives exactly what [`search`] gives, without
+/// the grid. The bound ([`Candidates::still_valid`]): with `D` the largest displacement of any
+/// node of the box since the build and `m` the largest motion of any node over the current step,
+/// a node's box now lies within `D + m` of its end position at the build, and a face's box within
+/// `D + 2m + 2 tau (D + m)` of its own box then (corners moved by `D`, the start configuration
+/// within `m` of the end, the diameter term `tau d` with `tau = gap_tol + 2 param_tol` grown by
+/// the corners' motion); so the list is complete while `(2 + 2 tau) D + (3 + 2 tau) m <= skin`
+/// and the largest contact radius has not grown. Hand-written (not parry's BVH): the boxes are
+/// rebuilt from raw records every few steps and a uniform grid over faces of one size is the
+/// cheaper structure for that.
+#[derive(Debug, Clone, Default)]
+pub struct Candidates {
+    /// `faces[start[j]..start[j + 1]]`: the candidate faces of owned node `j`.
+    start: Vec<u32>,
+    faces: Vec<u32>,
+    /// End positions of every node of the box at the build.
+    x_ref: Vec<V3>,
+    skin: f64,
+    max_radius: f64,
+    n_faces: usize,
+}
+
+impl Candidates {
+    /// The candidate list of `b`'s owned nodes with skin `skin` (m, >= 0).
+    pub fn build(b: &ContactBox, params: &SearchParams, skin: f64) -> Candidates {
+        let max_radius = b.max_radius();
+        let boxes: Vec<Aabb> = (0..b.faces.len())
+            .map(|f| face_search_aabb(b, f, params, max_radius))
+            .collect();
+        let grid = Grid::build(&boxes);
+        // stamp[f] = 1 + the last node that visited face f (removes the grid's repeats).
+        let mut stamp = vec![0usize; b.faces.len()];
+        let mut start = Vec::with_capacity(b.nodes.n_owned + 1);
+        let mut faces = Vec::new();
+        start.push(0u32);
+        for j in 0..b.nodes.n_owned {
+            let q = node_search_aabb(b, j).grown(skin);
+            grid.query(&q, |f| {
+                let fu = f as usize;
+                if stamp[fu] == j + 1 {
+                    return;
+                }
+                stamp[fu] = j + 1;
+                if boxes[fu].overlaps(&q) && !pair::excluded(b, j, fu, params) {
+                    faces.push(f);
+                }
+            });
+            start.push(faces.len() as u32);
+        }
+        Candidates {
+            start,
+            faces,
+            x_ref: if skin > 0.0 {
+                b.nodes.x1.clone()
+            } else {
+                Vec::new()
+            },
+            skin,
+            max_radius,
+            n_faces: b.faces.len(),
+        }
+    }
+
+    /// Number of (node, face) candidate pairs.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Whether there is no candidate pair.
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+
+    /// The skin the list was built with, m.
+    pub fn skin(&self) -> f64 {
+        self.skin
+    }
+
+    /// Whether the list still holds every face each owned node of `b` can contact in `b`'s
+    /// current step (see the type's documentation). `b` must hold the same nodes and faces, in
+    /// the same order, as at the build, with new positions.
+    pub fn still_valid(&self, b: &ContactBox, params: &SearchParams) -> bool {
+        if b.nodes.len() != self.x_ref.len()
+            || b.faces.len() != self.n_faces
+            || b.nodes.n_owned + 1 != self.start.len()
+            || b.max_radius() > self.max_radius
+        {
+            return false;
+        }
+        let mut d2 = 0.0f64;
+        let mut m2 = 0.0f64;
+        for i in 0..b.nodes.len() {
+            d2 = d2.max(norm2(sub(b.nodes.x1[i], self.x_ref[i])));
+            m2 = m2.max(norm2(sub(b.nodes.x1[i], b.nodes.x0[i])));
+        }
+        within_skin(d2.sqrt(), m2.sqrt(), params, self.skin)
+    }
+}
+
+/// The completeness bound of a list built with `skin` (see [`Candidates`]): `d`, the largest
+/// displacement since the build, and `m`, the largest motion over the current step.
+pub fn within_skin(d: f64, m: f64, params: &SearchParams, skin: f64) -> bool {
+    let tau = params.gap_tol + PARAM_REACH * params.param_tol.max(params.self_param_tol);
+    (2.0 + 2.0 * tau) * d + (3.0 + 2.0 * tau) * m <= skin
+}
+
+fn norm2(a: V3) -> f64 {
+    dot(a, a)
+}
+
+/// [`search`] over a candidate list built earlier on the same box (same nodes and faces, same
+/// order, new positions) and still valid for it ([`Candidates::still_valid`]): the same contacts
+/// as [`search`], bit for bit.
+pub fn search_candidates(
+    b: &ContactBox,
+    params: &SearchParams,
+    cands: &Candidates,
+) -> Vec<Contact> {
     let max_radius = b.max_radius();
-    let boxes: Vec<Aabb> = (0..b.faces.len())
-        .map(|f| face_search_aabb(b, f, params, max_radius))
-        .collect();
-    let grid = Grid::build(&boxes);
-    // stamp[f] = 1 + the last node that visited face f (removes the grid's repeats).
-    let mut stamp = vec![0usize; b.faces.len()];
+    // A face's search box, computed once per step and only for faces some node lists.
+    let mut boxes: Vec<Option<Aabb>> = vec![None; b.faces.len()];
     let mut out = Vec::new();
+    let mut hits: Vec<(pair::Hit, usize)> = Vec::new();
+    let mut kept: Vec<(pair::Hit, usize)> = Vec::new();
     for j in 0..b.nodes.n_owned {
+        let list = &cands.faces[cands.start[j] as usize..cands.start[j + 1] as usize];
+        if list.is_empty() {
+            continue;
+        }
         let q = node_search_aabb(b, j);
-        let mut hits: Vec<(pair::Hit, usize)> = Vec::new();
-        grid.query(&q, |f| {
+        hits.clear();
+        for &f in list {
             let f = f as usize;
-            if stamp[f] == j + 1 || !boxes[f].overlaps(&q) {
-                return;
+            let fb = *boxes[f].get_or_insert_with(|| face_search_aabb(b, f, params, max_radius));
+            if !fb.overlaps(&q) {
+                continue;
             }
-            stamp[f] = j + 1;
             if let Some(hit) = pair::test(b, j, f, params) {
                 hits.push((hit, f));
             }
-        });
+        }
+        if hits.is_empty() {
+            continue;
+        }
         // Deepest first, then the lowest face gid.
         hits.sort_by(|(h, f), (k, g)| {
             k.depth
                 .total_cmp(&h.depth)
                 .then(b.faces.gid[*f].cmp(&b.faces.gid[*g]))
         });
-        let mut kept: Vec<(pair::Hit, usize)> = Vec::new();
-        for (h, f) in hits {
+        kept.clear();
+        for &(h, f) in &hits {
             let distinct = kept
                 .iter()
                 .all(|(k, _)| dot(k.normal, h.normal).abs() < PARTICLE_SAME_NORMAL_COS);
@@ -183,7 +317,7 @@ pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
                 kept.push((h, f));
             }
         }
-        for (h, f) in kept {
+        for &(h, f) in &kept {
             out.push(Contact {
                 node: j as u32,
                 face: f as u32,

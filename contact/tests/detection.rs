@@ -269,3 +269,75 @@ fn small_faces_far_from_the_origin() {
         assert!((c.depth - 0.05 * h).abs() <= 1e-9, "depth {}", c.depth);
     }
 }
+
+/// A candidate list kept from an earlier configuration (a Verlet list with a skin) gives exactly
+/// what a fresh search gives, as long as the skin covers the motion since (the bound of
+/// `contact::Candidates`). Reference: `search` on the current configuration (itself checked
+/// against the all-pairs reference above); bit-identical contacts required. The earlier
+/// configuration moves every node by its own random displacement of up to 1.5 (faces are 1 to 3 across), far
+/// more than a real step, so a list missing any face would show.
+#[test]
+fn candidate_list_with_skin_equals_fresh_search() {
+    let mut rng = Rng(31337);
+    let mut compared = 0;
+    for round in 0..3 {
+        let scene = random_scene(
+            &mut rng,
+            &SceneSpec {
+                faces: 250,
+                free_nodes: 300,
+                crossing_nodes: 700,
+                bodies: 3,
+                particles: true,
+                size: 8.0,
+            },
+        );
+        for self_contact in [false, true] {
+            let params = contact::SearchParams {
+                self_contact,
+                one_pass: round == 1,
+                ..contact::SearchParams::default()
+            };
+            let d_max = 1.5;
+            let mut earlier = scene.nodes.clone();
+            let mut motion: f64 = 0.0;
+            for n in earlier.iter_mut() {
+                let dv = rng.unit();
+                let r = rng.range(0.0, d_max);
+                for (k, d) in dv.iter().enumerate() {
+                    n.x0[k] -= r * d;
+                    n.x1[k] -= r * d;
+                }
+                let m: f64 = (0..3).map(|k| (n.x1[k] - n.x0[k]).powi(2)).sum::<f64>();
+                motion = motion.max(m.sqrt());
+            }
+            let n_owned = scene.nodes.len();
+            let now = ContactBox::from_records(&scene.nodes, n_owned, &scene.faces).unwrap();
+            let then = ContactBox::from_records(&earlier, n_owned, &scene.faces).unwrap();
+            let mut skin = 0.0;
+            while !contact::within_skin(d_max, motion, &params, skin) {
+                skin += 0.01;
+            }
+            let cands = contact::Candidates::build(&then, &params, skin);
+            assert!(
+                cands.still_valid(&now, &params),
+                "round {round}: the bound refused a list within it"
+            );
+            let want = search(&now, &params);
+            let got = contact::search_candidates(&now, &params, &cands);
+            assert_eq!(got, want, "round {round}, self_contact {self_contact}");
+            compared += want.len();
+            // A list whose skin does not cover the motion is refused.
+            let thin = contact::Candidates::build(&then, &params, 0.5 * motion);
+            assert!(
+                !thin.still_valid(&now, &params),
+                "a skin of half a step was accepted"
+            );
+        }
+    }
+    println!("candidate lists: {compared} contacts compared bit for bit");
+    assert!(
+        compared > 1000,
+        "too few contacts ({compared}) to test anything"
+    );
+}

@@ -44,7 +44,9 @@ fn configuration(seed: u64, step: usize, n_faces: usize) -> (Vec<NodeRecord>, Ve
     let mut nodes = Vec::new();
     let mut free = Vec::new();
     let mut faces = Vec::new();
-    let drift = 0.002 * step as f64;
+    // Small drifts from step to step (the stage keeps its decomposition), a jump at step 3 (it
+    // must rebuild).
+    let drift = 0.002 * step as f64 + if step >= 3 { 0.1 } else { 0.0 };
     for k in 0..n_faces {
         let c = [rng.unit(), rng.unit(), rng.unit()];
         let n = unit([rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5]);
@@ -141,7 +143,9 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
     let mut stage = ContactStage::new(comm, false);
     let mut total_contacts = 0;
     let mut lines = Vec::new();
-    for step in 0..3 {
+    let steps = 6;
+    for step in 0..steps {
+        let before = stage.rebuilds.decomposition;
         let (nodes, faces) = configuration(seed, step, n_faces);
         // FE/SPH owners at random; faces on another random rank, with their nodes' records.
         let home = |gid: u64| (gid.wrapping_mul(2654435761) >> 5) % p;
@@ -158,7 +162,7 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
                 nodes: std::array::from_fn(|q| nodes[f.nodes[q] as usize]),
             })
             .collect();
-        let out = stage.step(&mine, &my_faces, 1.0)?;
+        let out = stage.step(&mine, || my_faces, 1.0)?;
         let found = gather_found(comm, &out.found);
         // The reference: one box holding everything, searched serially.
         let b = ContactBox::from_records(&nodes, nodes.len(), &faces).map_err(|e| e.to_string())?;
@@ -221,15 +225,26 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
         first_error(comm, err)?;
         total_contacts += found.len();
         lines.push(format!(
-            "step {step}: {} contacts (= serial), imbalance {:.3}, {} bytes, rcb migrated {}",
+            "step {step}: {} contacts (= serial), decomposition {}, imbalance {:.3}, {} bytes, rcb migrated {}",
             found.len(),
+            if stage.rebuilds.decomposition > before { "rebuilt" } else { "kept" },
             out.imbalance,
             out.bytes_sent,
             out.rcb.migrated
         ));
     }
+    // The kept decomposition must have served: rebuilt at steps 0 and 3 only (unless switched
+    // off with TDYN_CONTACT_STICKY=0, when every step rebuilds).
+    let sticky = std::env::var("TDYN_CONTACT_STICKY").map_or(true, |v| v != "0");
+    let want = if sticky { 2 } else { steps as u64 };
+    if stage.rebuilds.decomposition != want {
+        return Err(format!(
+            "the decomposition was rebuilt {} times over {steps} steps, expected {want}",
+            stage.rebuilds.decomposition
+        ));
+    }
     Ok(format!(
-        "contact selftest passed at np {p}: {total_contacts} contacts over 3 steps\n  {}",
+        "contact selftest passed at np {p}: {total_contacts} contacts over {steps} steps\n  {}",
         lines.join("\n  ")
     ))
 }

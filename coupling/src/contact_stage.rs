@@ -22,8 +22,8 @@ use crate::comm::CommPlan;
 use crate::rcb::{CutTree, Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
 use contact::{
-    face_records_search_aabb, push_back, search, Contact, ContactBox, FaceRecord, NodeRecord,
-    PushBackParams, SearchParams,
+    face_records_search_aabb, push_back, search_candidates, within_skin, Candidates, Contact,
+    ContactBox, FaceRecord, NodeRecord, PushBackParams, SearchParams,
 };
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -137,7 +137,7 @@ fn solve_together(
     comm: &SimpleCommunicator,
     b: &ContactBox,
     contacts: &[Contact],
-    owned: &[NodeRecord],
+    owned: &[u64],
     dt: f64,
 ) -> Result<(Vec<[f64; 3]>, f64, u64), String> {
     let rec = |i: usize| b.nodes.record(i);
@@ -203,12 +203,67 @@ fn solve_together(
         })
         .collect();
     let pb = push_back(&gb, &gc, &PushBackParams::new(dt));
-    for (i, r) in owned.iter().enumerate() {
-        if let Some(&k) = slot.get(&r.gid) {
+    for (i, g) in owned.iter().enumerate() {
+        if let Some(&k) = slot.get(g) {
             force[i] = pb.force[k];
         }
     }
     Ok((force, pb.work, sent))
+}
+
+/// Ghost skin as a multiple of the step's largest node motion `m`: the decomposition, the
+/// ghost faces and the record plan are kept while `(2 + 2 tau) D + (3 + 2 tau) m` stays under
+/// the skin (`D`: the largest node displacement since the build; see `contact::Candidates`,
+/// whose bound is the same for a rank's region as for a node's box). 30 m: a rebuild about
+/// every 13 steps at constant speed, and a ghost layer about a step's motion times 30 thick.
+pub const GHOST_SKIN_STEPS: f64 = 30.0;
+/// Skin of each box's candidate lists, as a multiple of the step's largest motion: a list is
+/// rebuilt (on its rank alone, no communication) about every 4 steps at constant speed.
+pub const CANDIDATE_SKIN_STEPS: f64 = 12.0;
+
+/// What the stage keeps between rebuilds of its decomposition ("sticky" steps, see
+/// [`ContactStage::step`]).
+struct Sticky {
+    /// The contact node gids given at the build, in that order (another list forces a rebuild).
+    gids: Vec<u64>,
+    /// Their predicted end positions at the build.
+    x_ref: Vec<[f64; 3]>,
+    /// The ghost skin the faces were sent with, m.
+    skin: f64,
+    /// The largest contact radius at the build (the faces' search boxes hold it).
+    max_radius: f64,
+    /// Records go from the FE and SPH owners straight to every box holding a copy:
+    /// `send_idx[k]` is the input node sent as the plan's item k.
+    send_idx: Vec<u32>,
+    plan: CommPlan,
+    /// Box slot of each record received through `plan`, in arrival order.
+    recv_slot: Vec<u32>,
+    /// This rank's box (owned nodes first), positions updated in place each step.
+    b: ContactBox,
+    /// Home rank and index of each owned node (where its force goes).
+    owned_home: Vec<(i32, u64)>,
+    /// The box's candidate lists.
+    cands: Candidates,
+    /// Owned nodes + faces held.
+    work_items: f64,
+}
+
+/// A request for a node's record: "send input node `idx` to rank `to`" (to the node's home), or
+/// "who holds `gid`? send it to `to`" (to its contact owner, who forwards it to the home).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Ask {
+    key: u64,
+    to: u64,
+}
+
+/// Counts of the stage's rebuilds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RebuildStats {
+    /// Steps that rebuilt the decomposition (RCB, faces, ghosts, plans).
+    pub decomposition: u64,
+    /// Candidate-list rebuilds, summed over ranks.
+    pub candidates: u64,
 }
 
 /// The contact stage of one run.
@@ -218,6 +273,15 @@ pub struct ContactStage {
     tree: Option<CutTree>,
     /// Search parameters (`self_contact` from the scene).
     pub params: SearchParams,
+    /// Keep the decomposition between steps while the skin allows (off: `TDYN_CONTACT_STICKY=0`,
+    /// every step rebuilds; the results are the same, which a test checks).
+    sticky_enabled: bool,
+    sticky: Option<Box<Sticky>>,
+    /// The skins, as multiples of the step's largest motion: ghosts and candidate lists
+    /// ([`GHOST_SKIN_STEPS`], [`CANDIDATE_SKIN_STEPS`]; `TDYN_CONTACT_SKINS=G,C` for tuning).
+    skins: (f64, f64),
+    /// Rebuilds so far.
+    pub rebuilds: RebuildStats,
 }
 
 impl ContactStage {
@@ -233,6 +297,16 @@ impl ContactStage {
                 self_param_tol: MESH_PARAM_TOL,
                 ..SearchParams::default()
             },
+            sticky_enabled: std::env::var("TDYN_CONTACT_STICKY").map_or(true, |v| v != "0"),
+            sticky: None,
+            skins: std::env::var("TDYN_CONTACT_SKINS")
+                .ok()
+                .and_then(|v| {
+                    let (a, b) = v.split_once(',')?;
+                    Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
+                })
+                .unwrap_or((GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS)),
+            rebuilds: RebuildStats::default(),
         }
     }
 
@@ -243,17 +317,134 @@ impl ContactStage {
 
     /// One detection and push-back (collective). `nodes`: the contact nodes this rank owns in
     /// the FE or SPH decomposition (start and predicted end positions, predicted velocity);
-    /// `faces`: the faces this rank is responsible for, each with its nodes' records. Returns the
-    /// push-back force on each of `nodes` over the step `dt`.
+    /// `faces`: the faces this rank is responsible for, each with its nodes' records (called only
+    /// when the decomposition is rebuilt). Returns the push-back force on each of `nodes` over
+    /// the step `dt`.
+    ///
+    /// The decomposition (steps 1-6) is rebuilt only when the nodes have moved too far for the
+    /// ghost skin since the last rebuild, or the node lists changed; in between, each step sends
+    /// the nodes' records along the plan of the last rebuild straight into the boxes and
+    /// searches there (step 7, with candidate lists), then 7b and 8 as always. The contacts and
+    /// forces are those of a rebuild at every step: every node a face can reach in the step is
+    /// still in a box holding that face (the skin's bound).
     pub fn step(
         &mut self,
         nodes: &[NodeRecord],
-        faces: &[FullFace],
+        faces: impl FnOnce() -> Vec<FullFace>,
         dt: f64,
     ) -> Result<ContactOutcome, String> {
         let t0 = Instant::now();
+        // The step's largest motion and radius, and how far the nodes moved since the build.
+        let (mut motion, mut radius, mut moved) = (0.0f64, 0.0f64, 0.0f64);
+        for r in nodes {
+            motion = motion.max(dist(&r.x1, &r.x0));
+            radius = radius.max(r.radius);
+        }
+        let same = match &self.sticky {
+            Some(st) if st.gids.len() == nodes.len() => {
+                let mut same = true;
+                for (i, r) in nodes.iter().enumerate() {
+                    same &= st.gids[i] == r.gid;
+                    moved = moved.max(dist(&r.x1, &st.x_ref[i]));
+                }
+                same
+            }
+            _ => false,
+        };
+        let mut g = [0.0f64; 4];
+        self.comm.all_reduce_into(
+            &[motion, radius, moved, if same { 0.0 } else { 1.0 }][..],
+            &mut g[..],
+            SystemOperation::max(),
+        );
+        let (motion, radius, moved, changed) = (g[0], g[1], g[2], g[3] > 0.0);
+        let keep = match &self.sticky {
+            Some(st) => {
+                !changed
+                    && radius <= st.max_radius
+                    && within_skin(moved, motion, &self.params, st.skin)
+            }
+            None => false,
+        };
+        if keep {
+            self.sticky_step(nodes, motion, dt, t0)
+        } else {
+            self.rebuilds.decomposition += 1;
+            self.full_step(nodes, faces(), motion, radius, dt, t0)
+        }
+    }
+
+    /// A step on the kept decomposition (see [`ContactStage::step`]).
+    fn sticky_step(
+        &mut self,
+        nodes: &[NodeRecord],
+        motion: f64,
+        dt: f64,
+        t0: Instant,
+    ) -> Result<ContactOutcome, String> {
         let comm = &self.comm;
-        let me = comm.rank();
+        let st = self.sticky.as_mut().expect("a kept decomposition");
+        let mut bytes = 0u64;
+        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
+        // 1 (and 3, 5-6). The records straight to the boxes holding them, written in place.
+        let tt = Instant::now();
+        let send: Vec<NodeRecord> = st.send_idx.iter().map(|&i| nodes[i as usize]).collect();
+        let before = st.plan.bytes_sent;
+        let got = st.plan.exchange(&send);
+        let sent = st.plan.bytes_sent - before;
+        bytes += sent;
+        t_bytes += sent;
+        let n = &mut st.b.nodes;
+        for (r, &slot) in got.iter().zip(&st.recv_slot) {
+            let i = slot as usize;
+            n.mass[i] = r.mass;
+            n.radius[i] = r.radius;
+            n.x0[i] = r.x0;
+            n.x1[i] = r.x1;
+            n.v[i] = r.v;
+        }
+        t_s += tt.elapsed().as_secs_f64();
+        // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
+        if !st.cands.still_valid(&st.b, &self.params) {
+            st.cands = Candidates::build(&st.b, &self.params, self.skins.1 * motion);
+            self.rebuilds.candidates += 1;
+        }
+        let contacts = search_candidates(&st.b, &self.params, &st.cands);
+        let n_owned = st.b.nodes.n_owned;
+        let (owned_force, pb_work, gather_bytes) =
+            solve_together(comm, &st.b, &contacts, &st.b.nodes.gid[..n_owned], dt)?;
+        bytes += gather_bytes;
+        // 8. Forces back to the homes.
+        let tt = Instant::now();
+        let (force, back_bytes) = send_home(comm, &owned_force, &st.owned_home, nodes.len());
+        bytes += back_bytes;
+        t_bytes += back_bytes;
+        t_s += tt.elapsed().as_secs_f64();
+        let work_items = st.work_items;
+        self.outcome(OutcomeParts {
+            force,
+            contacts: &contacts,
+            pb_work,
+            bytes,
+            work_items,
+            t_bytes,
+            t_s,
+            rcb: RcbStats::default(),
+            t0,
+        })
+    }
+
+    /// A step that rebuilds the decomposition: the paper's Fig. 10 in full.
+    fn full_step(
+        &mut self,
+        nodes: &[NodeRecord],
+        faces: Vec<FullFace>,
+        motion: f64,
+        radius: f64,
+        dt: f64,
+        t0: Instant,
+    ) -> Result<ContactOutcome, String> {
+        let me = self.comm.rank();
         let mut bytes = 0u64;
         let items: Vec<CNode> = nodes
             .iter()
@@ -275,7 +466,7 @@ impl ContactStage {
                     .iter()
                     .map(|n| t.owner_of_item(&n.rec.x1, n.rec.gid))
                     .collect();
-                let mut plan = CommPlan::new(comm, &dest);
+                let mut plan = CommPlan::new(&self.comm, &dest);
                 let got = plan.exchange(&items);
                 bytes += plan.bytes_sent;
                 t_bytes += plan.bytes_sent;
@@ -288,6 +479,7 @@ impl ContactStage {
         let (mine, rcb_stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
         bytes += rcb_stats.bytes_sent;
         let tree = self.rcb.tree().clone();
+        let comm = &self.comm;
         // 3. Faces with their nodes to the contact owner of their first node.
         let tt = Instant::now();
         let dest: Vec<i32> = faces
@@ -295,29 +487,23 @@ impl ContactStage {
             .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
             .collect();
         let mut plan = CommPlan::new(comm, &dest);
-        let my_faces = plan.exchange(faces);
+        let my_faces = plan.exchange(&faces);
         bytes += plan.bytes_sent;
         t_bytes += plan.bytes_sent;
         t_s += tt.elapsed().as_secs_f64();
         // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
-        // influence: the largest node motion of the step and the largest particle radius.
-        let (mut motion, mut radius) = (0.0f64, 0.0f64);
-        for n in &mine {
-            let d: f64 = (0..3)
-                .map(|k| (n.rec.x1[k] - n.rec.x0[k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            motion = motion.max(d);
-            radius = radius.max(n.rec.radius);
-        }
-        let mut g = [0.0f64; 2];
-        comm.all_reduce_into(&[motion, radius][..], &mut g[..], SystemOperation::max());
-        let (motion, radius) = (g[0], g[1]);
+        // influence: the largest node motion of the step and the largest particle radius (the
+        // face's search box), and the skin the kept decomposition needs (at least the motion).
+        let skin = if self.sticky_enabled {
+            self.skins.0 * motion
+        } else {
+            motion
+        };
         let mut dest = Vec::new();
         let mut ghosts = Vec::new();
         let mut ranks = Vec::new();
         for f in &my_faces {
-            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(motion);
+            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(skin);
             ranks.clear();
             tree.ranks_overlapping(&bb.min, &bb.max, &mut ranks);
             for &r in &ranks {
@@ -353,7 +539,13 @@ impl ContactStage {
         let b = ContactBox::from_records(&recs, n_owned, &face_recs);
         crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
         let b = b.expect("checked on every rank");
-        let contacts = search(&b, &self.params);
+        let cand_skin = if self.sticky_enabled {
+            self.skins.1 * motion
+        } else {
+            0.0
+        };
+        let cands = Candidates::build(&b, &self.params, cand_skin);
+        let contacts = search_candidates(&b, &self.params, &cands);
 
         // 7b. The push-back of all contacts together. Contacts that share face nodes but were
         // found in different boxes must be solved together for the answer not to depend on the
@@ -363,60 +555,87 @@ impl ContactStage {
         // solves the same problem in the same order, so the forces are those of one box holding
         // everything, at any rank count. The price: bytes grow as P x contacts (reported in
         // `bytes_sent`); contacts are few next to the nodes searched.
+        let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
         let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &b, &contacts, &recs[..n_owned], dt)?;
+            solve_together(comm, &b, &contacts, &owned_gids, dt)?;
         bytes += gather_bytes;
         let tt = Instant::now();
-        let mut dest = Vec::new();
-        let mut back = Vec::new();
-        for (i, n) in mine.iter().enumerate() {
-            if owned_force[i].iter().any(|c| *c != 0.0) {
-                dest.push(n.home as i32);
-                back.push(Back {
-                    key: n.home_idx,
-                    f: owned_force[i],
-                });
-            }
-        }
-        let mut plan = CommPlan::new(comm, &dest);
-        let got = plan.exchange(&back);
-        bytes += plan.bytes_sent;
-        t_bytes += plan.bytes_sent;
-        let mut force = vec![[0.0; 3]; nodes.len()];
-        for bk in &got {
-            let f = &mut force[bk.key as usize];
-            for k in 0..3 {
-                f[k] += bk.f[k];
-            }
-        }
+        let owned_home: Vec<(i32, u64)> =
+            mine.iter().map(|n| (n.home as i32, n.home_idx)).collect();
+        let (force, back_bytes) = send_home(comm, &owned_force, &owned_home, nodes.len());
+        bytes += back_bytes;
+        t_bytes += back_bytes;
         t_s += tt.elapsed().as_secs_f64();
 
-        // Statistics.
+        // The plan for the steps that keep this decomposition.
+        self.sticky = None;
+        if self.sticky_enabled {
+            let (st, setup_bytes) = build_sticky(
+                comm,
+                &tree,
+                nodes,
+                &mine,
+                &index,
+                SetupBox {
+                    b,
+                    cands,
+                    owned_home,
+                    skin,
+                    max_radius: radius,
+                    work_items,
+                },
+            );
+            bytes += setup_bytes;
+            self.sticky = st.map(Box::new);
+        }
+        self.tree = Some(tree);
+        self.outcome(OutcomeParts {
+            force,
+            contacts: &contacts,
+            pb_work,
+            bytes,
+            work_items,
+            t_bytes,
+            t_s,
+            rcb: rcb_stats,
+            t0,
+        })
+    }
+
+    /// The step's statistics over all ranks (collective).
+    fn outcome(&self, p: OutcomeParts) -> Result<ContactOutcome, String> {
+        let comm = &self.comm;
+        let me = comm.rank();
         let mut sums = [0.0f64; 5];
         comm.all_reduce_into(
             &[
-                contacts.len() as f64,
-                if me == 0 { pb_work } else { 0.0 },
-                bytes as f64,
-                work_items,
-                t_bytes as f64,
+                p.contacts.len() as f64,
+                if me == 0 { p.pb_work } else { 0.0 },
+                p.bytes as f64,
+                p.work_items,
+                p.t_bytes as f64,
             ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
         let mut maxes = [0.0f64; 4];
         comm.all_reduce_into(
-            &[work_items, t0.elapsed().as_secs_f64(), t_bytes as f64, t_s][..],
+            &[
+                p.work_items,
+                p.t0.elapsed().as_secs_f64(),
+                p.t_bytes as f64,
+                p.t_s,
+            ][..],
             &mut maxes[..],
             SystemOperation::max(),
         );
         let t_mean = sums[4] / comm.size() as f64;
         let mean = sums[3] / comm.size() as f64;
-        self.tree = Some(tree);
         Ok(ContactOutcome {
-            force,
+            force: p.force,
             contacts: sums[0] as u64,
-            found: contacts
+            found: p
+                .contacts
                 .iter()
                 .map(|c| (c.node_gid, c.face_gid, c.depth))
                 .collect(),
@@ -425,7 +644,7 @@ impl ContactStage {
             work_items_max: maxes[0],
             work_items_total: sums[3],
             bytes_sent: sums[2] as u64,
-            rcb: rcb_stats,
+            rcb: p.rcb,
             wall_s: maxes[1],
             transfer: TransferStats {
                 bytes_sent: sums[4] as u64,
@@ -434,4 +653,155 @@ impl ContactStage {
             },
         })
     }
+}
+
+/// What a step's statistics are made from.
+struct OutcomeParts<'a> {
+    force: Vec<[f64; 3]>,
+    contacts: &'a [Contact],
+    pb_work: f64,
+    bytes: u64,
+    work_items: f64,
+    t_bytes: u64,
+    t_s: f64,
+    rcb: RcbStats,
+    t0: Instant,
+}
+
+/// The box a rebuild made, for [`build_sticky`].
+struct SetupBox {
+    b: ContactBox,
+    cands: Candidates,
+    owned_home: Vec<(i32, u64)>,
+    skin: f64,
+    max_radius: f64,
+    work_items: f64,
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Step 8: each owned node's nonzero force to its home; returns the force on each of the
+/// home's `n_home` input nodes and the bytes sent (collective).
+fn send_home(
+    comm: &SimpleCommunicator,
+    owned_force: &[[f64; 3]],
+    owned_home: &[(i32, u64)],
+    n_home: usize,
+) -> (Vec<[f64; 3]>, u64) {
+    let mut dest = Vec::new();
+    let mut back = Vec::new();
+    for (f, &(home, idx)) in owned_force.iter().zip(owned_home) {
+        if f.iter().any(|c| *c != 0.0) {
+            dest.push(home);
+            back.push(Back { key: idx, f: *f });
+        }
+    }
+    let mut plan = CommPlan::new(comm, &dest);
+    let got = plan.exchange(&back);
+    let mut force = vec![[0.0; 3]; n_home];
+    for bk in &got {
+        let f = &mut force[bk.key as usize];
+        for k in 0..3 {
+            f[k] += bk.f[k];
+        }
+    }
+    (force, plan.bytes_sent)
+}
+
+/// After a rebuild: the plan that sends each input node's record straight to every box holding
+/// it (its contact owner and the boxes holding a face it is a corner of), so that the next steps
+/// skip steps 1-6 (collective). Requests for owned nodes go to their homes; requests for a
+/// face's corner copy go to the corner's contact owner (the cut tree's owner of its position),
+/// which forwards them to the home. `None` (on every rank) if a request finds no owner, which
+/// keeps rebuilding at every step.
+fn build_sticky(
+    comm: &SimpleCommunicator,
+    tree: &CutTree,
+    nodes: &[NodeRecord],
+    mine: &[CNode],
+    index: &HashMap<u64, usize>,
+    sb: SetupBox,
+) -> (Option<Sticky>, u64) {
+    let me = comm.rank() as u64;
+    let mut bytes = 0u64;
+    let n_owned = sb.b.nodes.n_owned;
+    // Corner copies: ask their contact owners.
+    let mut dest = Vec::new();
+    let mut asks = Vec::new();
+    for i in n_owned..sb.b.nodes.len() {
+        let gid = sb.b.nodes.gid[i];
+        dest.push(tree.owner_of_item(&sb.b.nodes.x1[i], gid));
+        asks.push(Ask { key: gid, to: me });
+    }
+    let mut plan = CommPlan::new(comm, &dest);
+    let got = plan.exchange(&asks);
+    bytes += plan.bytes_sent;
+    let mut ok = true;
+    // Requests to the homes: this rank's owned nodes, and the forwarded corner requests.
+    let mut dest = Vec::new();
+    let mut reqs = Vec::new();
+    for n in mine {
+        dest.push(n.home as i32);
+        reqs.push(Ask {
+            key: n.home_idx,
+            to: me,
+        });
+    }
+    for a in &got {
+        match index.get(&a.key) {
+            Some(&i) if i < n_owned => {
+                dest.push(mine[i].home as i32);
+                reqs.push(Ask {
+                    key: mine[i].home_idx,
+                    to: a.to,
+                });
+            }
+            _ => ok = false,
+        }
+    }
+    let mut plan = CommPlan::new(comm, &dest);
+    let mut got = plan.exchange(&reqs);
+    bytes += plan.bytes_sent;
+    // The home's plan: by destination, input order inside each.
+    got.sort_unstable_by_key(|a| (a.to, a.key));
+    let send_idx: Vec<u32> = got.iter().map(|a| a.key as u32).collect();
+    let dest: Vec<i32> = got.iter().map(|a| a.to as i32).collect();
+    let mut plan = CommPlan::new(comm, &dest);
+    let send: Vec<NodeRecord> = send_idx.iter().map(|&i| nodes[i as usize]).collect();
+    let arrived = plan.exchange(&send);
+    bytes += plan.bytes_sent;
+    // Where each arriving record goes in the box: every slot exactly once.
+    let mut filled = vec![false; sb.b.nodes.len()];
+    let mut recv_slot = Vec::with_capacity(arrived.len());
+    for r in &arrived {
+        match index.get(&r.gid) {
+            Some(&i) if !filled[i] => {
+                filled[i] = true;
+                recv_slot.push(i as u32);
+            }
+            _ => ok = false,
+        }
+    }
+    ok &= filled.iter().all(|f| *f);
+    let mut all_ok = 0i32;
+    comm.all_reduce_into(&(ok as i32), &mut all_ok, SystemOperation::min());
+    if all_ok == 0 {
+        return (None, bytes);
+    }
+    let st = Sticky {
+        gids: nodes.iter().map(|r| r.gid).collect(),
+        x_ref: nodes.iter().map(|r| r.x1).collect(),
+        skin: sb.skin,
+        max_radius: sb.max_radius,
+        send_idx,
+        plan,
+        recv_slot,
+        b: sb.b,
+        owned_home: sb.owned_home,
+        cands: sb.cands,
+        work_items: sb.work_items,
+    };
+    (Some(st), bytes)
 }

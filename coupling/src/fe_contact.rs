@@ -245,20 +245,23 @@ impl FeContact {
         }
     }
 
-    /// This step's records, after `kick_drift`: owned contact nodes, and faces with their
-    /// nodes' records. `node_gid`: global id of each local node.
-    pub fn records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> (Vec<NodeRecord>, Vec<FullFace>) {
+    /// This step's records of the owned contact nodes, after `kick_drift`. `node_gid`: global
+    /// id of each local node.
+    pub fn node_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<NodeRecord> {
         let infinite = fe.fully_constrained();
-        let nodes = self
-            .nodes
+        self.nodes
             .iter()
             .map(|&(n, body)| NodeRecord {
                 gid: node_gid[n as usize],
                 ..self.record(fe, n, body, &infinite)
             })
-            .collect();
-        let faces = self
-            .faces
+            .collect()
+    }
+
+    /// This step's faces with their nodes' records, after `kick_drift`.
+    pub fn face_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<FullFace> {
+        let infinite = fe.fully_constrained();
+        self.faces
             .iter()
             .map(|(f, loc)| FullFace {
                 face: *f,
@@ -267,8 +270,15 @@ impl FeContact {
                     ..self.record(fe, loc[k], f.body, &infinite)
                 }),
             })
-            .collect();
-        (nodes, faces)
+            .collect()
+    }
+
+    /// [`FeContact::node_records`] and [`FeContact::face_records`].
+    pub fn records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> (Vec<NodeRecord>, Vec<FullFace>) {
+        (
+            self.node_records(fe, node_gid),
+            self.face_records(fe, node_gid),
+        )
     }
 
     /// Adds forces on the corners of this rank's faces (aligned with `records`' faces) to the

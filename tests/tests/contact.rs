@@ -278,7 +278,50 @@ fn tilted_block_dropped_on_a_plate_never_enters_it() {
             d > 0.25 * BLOCK_DROP_H,
             "np {np}: the check missed a block corner sunk to half an element below z = 0 ({d} m)"
         );
+        if np == 3 {
+            // The kept decomposition (contact_stage: skins, candidate lists) served most steps.
+            let steps = report["steps"].as_f64().unwrap();
+            let rebuilds = report["contact_rebuilds"].as_f64().unwrap();
+            assert!(
+                rebuilds < 0.5 * steps,
+                "np 3: the contact decomposition was rebuilt at {rebuilds} of {steps} steps"
+            );
+        }
         histories.push(rows);
+    }
+    // The kept decomposition gives what a rebuild at every step gives: the same history, bit for
+    // bit (reference: TDYN_CONTACT_STICKY=0, steps 1-6 of Fig. 10 at every step), at np 3.
+    let dir = workdir("block_drop_np3_rebuild_every_step");
+    let out = dir.join("out");
+    let o = mpirun(3, 600)
+        .args(["-x", "TDYN_CONTACT_STICKY"])
+        .env("TDYN_CONTACT_STICKY", "0")
+        .arg(tdyn())
+        .arg("run")
+        .arg(root().join("scenes/block_drop.toml"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .expect("mpirun");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["contact_rebuilds"], report["steps"],
+        "TDYN_CONTACT_STICKY=0 must rebuild at every step"
+    );
+    let (_, every) = read_csv(&out.join("history.csv"));
+    let d = column_differences(&histories[2], &every);
+    for (c, name) in header.iter().enumerate() {
+        if matches!(name.as_str(), "contact_bytes" | "contact_imbalance") {
+            continue;
+        }
+        assert!(
+            d[c] == 0.0,
+            "np 3: history column {name} with the kept decomposition differs from a rebuild at every step by {:e} of its largest value (must be identical)",
+            d[c]
+        );
     }
     for (k, rows) in histories.iter().enumerate().skip(1) {
         let d = column_differences(&histories[0], rows);

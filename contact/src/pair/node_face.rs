@@ -8,16 +8,17 @@ use super::{crossing, Hit};
 use crate::data::ContactBox;
 use crate::SearchParams;
 
+/// Whether the rules exclude the pair whatever the geometry: the node is a corner of the face,
+/// the same body without self-contact, or the wrong order of bodies in one pass.
+pub(super) fn excluded(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> bool {
+    b.faces.node_gid[f].contains(&b.nodes.gid[j])
+        || (!params.self_contact && b.nodes.body[j] == b.faces.body[f])
+        || (params.one_pass && b.nodes.body[j] < b.faces.body[f])
+}
+
 /// See [`super::test`].
 pub(super) fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> Option<Hit> {
-    let gid = b.nodes.gid[j];
-    if b.faces.node_gid[f].contains(&gid) {
-        return None;
-    }
-    if !params.self_contact && b.nodes.body[j] == b.faces.body[f] {
-        return None;
-    }
-    if params.one_pass && b.nodes.body[j] < b.faces.body[f] {
+    if excluded(b, j, f, params) {
         return None;
     }
     let tol = if b.nodes.body[j] == b.faces.body[f] {
