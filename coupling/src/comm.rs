@@ -22,6 +22,8 @@ use mpi::traits::*;
 const TAG_SIZES: i32 = 7001;
 /// Message tag for data.
 const TAG_DATA: i32 = 7002;
+/// Message tag for [`CommPlan::reverse_lists`].
+const TAG_LISTS: i32 = 7003;
 
 /// A reusable plan: who sends how many items to whom.
 pub struct CommPlan {
@@ -133,6 +135,45 @@ impl CommPlan {
         let mut out = back.clone();
         for (k, &i) in self.send_order.iter().enumerate() {
             out[i] = back[k];
+        }
+        out
+    }
+
+    /// Sends back to each rank this rank receives from in `exchange` a list of any length
+    /// (`lists[k]` to the k-th source of [`CommPlan::sources`], possibly empty), and returns
+    /// the lists from every rank this rank sends to, concatenated in rank order. No collective:
+    /// the plan already says who talks to whom (a sparse answer, e.g. forces on the few contacted
+    /// nodes, with no new plan).
+    pub fn reverse_lists<T: Pod>(&mut self, lists: &[Vec<T>]) -> Vec<T> {
+        assert_eq!(lists.len(), self.recv_ranks.len(), "one list per source");
+        let comm = &self.comm;
+        let me = comm.rank();
+        let mut out: Vec<T> = Vec::new();
+        mpi::request::scope(|scope| {
+            let mut guards = Vec::with_capacity(lists.len());
+            for (k, &r) in self.recv_ranks.iter().enumerate() {
+                let bytes: &[u8] = bytemuck::cast_slice(&lists[k]);
+                let req = comm
+                    .process_at_rank(r)
+                    .immediate_send_with_tag(scope, bytes, TAG_LISTS);
+                guards.push(WaitGuard::from(req));
+            }
+            for &r in &self.send_ranks {
+                let (bytes, _) = comm
+                    .process_at_rank(r)
+                    .receive_vec_with_tag::<u8>(TAG_LISTS);
+                out.extend(
+                    bytes
+                        .chunks_exact(std::mem::size_of::<T>())
+                        .map(bytemuck::pod_read_unaligned::<T>),
+                );
+            }
+        });
+        for (k, &r) in self.recv_ranks.iter().enumerate() {
+            if r != me {
+                self.bytes_sent += std::mem::size_of_val(&lists[k][..]) as u64;
+                self.messages_sent += 1;
+            }
         }
         out
     }
@@ -286,6 +327,30 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
                     2.0 * vals[i]
                 ));
             }
+        }
+        // Sparse answers: each receiver returns to each source the items it got from it whose
+        // local index is even; each sender must get exactly its even-indexed items back.
+        let mut lists: Vec<Vec<[u64; 3]>> = Vec::new();
+        let mut off = 0;
+        for (_, n_from) in plan.sources() {
+            lists.push(
+                got[off..off + n_from]
+                    .iter()
+                    .filter(|it| it[1] % 2 == 0)
+                    .copied()
+                    .collect(),
+            );
+            off += n_from;
+        }
+        let mut back = plan.reverse_lists(&lists);
+        back.sort_unstable();
+        let want: Vec<[u64; 3]> = items.iter().filter(|it| it[1] % 2 == 0).copied().collect();
+        if back != want {
+            return Err(format!(
+                "pattern {pattern}: reverse_lists gave rank {me} {} items, expected {}",
+                back.len(),
+                want.len()
+            ));
         }
         checked += got.len();
     }

@@ -214,12 +214,38 @@ fn solve_together(
 /// Ghost skin as a multiple of the step's largest node motion `m`: the decomposition, the
 /// ghost faces and the record plan are kept while `(2 + 2 tau) D + (3 + 2 tau) m` stays under
 /// the skin (`D`: the largest node displacement since the build; see `contact::Candidates`,
-/// whose bound is the same for a rank's region as for a node's box). 30 m: a rebuild about
-/// every 13 steps at constant speed, and a ghost layer about a step's motion times 30 thick.
-pub const GHOST_SKIN_STEPS: f64 = 30.0;
+/// whose bound is the same for a rank's region as for a node's box): at constant speed a
+/// rebuild about every 90 steps. Capped at [`GHOST_SKIN_FACES`] mean face diameters (fast
+/// bodies: the ghost layer would otherwise grow past a face and bring every face of the
+/// neighbouring boxes), and never under [`MIN_SKIN_STEPS`] motions.
+pub const GHOST_SKIN_STEPS: f64 = 200.0;
+/// See [`GHOST_SKIN_STEPS`].
+pub const GHOST_SKIN_FACES: f64 = 2.0;
 /// Skin of each box's candidate lists, as a multiple of the step's largest motion: a list is
-/// rebuilt (on its rank alone, no communication) about every 4 steps at constant speed.
-pub const CANDIDATE_SKIN_STEPS: f64 = 12.0;
+/// rebuilt (on its rank alone, no communication) about every 13 steps at constant speed. Capped
+/// at [`CANDIDATE_SKIN_FACES`] mean face diameters (more candidates per node cost more per
+/// step than the rebuilds they save), never under [`MIN_SKIN_STEPS`] motions nor over the ghost
+/// skin. Measured on `container_crush` (np 2, the first 1.2 ms): contact share 0.20 with skins of
+/// (30, 12) motions, 0.13 with (200, 30); on `bricks` (0.036 elements per step) larger ghost
+/// skins than 20 motions only added ghost faces.
+pub const CANDIDATE_SKIN_STEPS: f64 = 30.0;
+/// See [`CANDIDATE_SKIN_STEPS`].
+pub const CANDIDATE_SKIN_FACES: f64 = 0.25;
+/// The smallest skin, in step motions: under `3 + 2 tau` a kept decomposition would be
+/// refused at the very next step.
+pub const MIN_SKIN_STEPS: f64 = 12.0;
+
+/// The ghost and candidate skins for a step of largest motion `motion` over faces of mean
+/// diameter `face`, with the multiples `k` (ghost, candidates) of the motion.
+fn skins(motion: f64, face: f64, k: (f64, f64)) -> (f64, f64) {
+    let floor = MIN_SKIN_STEPS * motion;
+    let ghost = (k.0 * motion).min(GHOST_SKIN_FACES * face).max(floor);
+    let cand = (k.1 * motion)
+        .min(CANDIDATE_SKIN_FACES * face)
+        .max(floor)
+        .min(ghost);
+    (ghost, cand)
+}
 
 /// What the stage keeps between rebuilds of its decomposition ("sticky" steps, see
 /// [`ContactStage::step`]).
@@ -230,6 +256,8 @@ struct Sticky {
     x_ref: Vec<[f64; 3]>,
     /// The ghost skin the faces were sent with, m.
     skin: f64,
+    /// Mean face diameter at the build, m.
+    face_size: f64,
     /// The largest contact radius at the build (the faces' search boxes hold it).
     max_radius: f64,
     /// Records go from the FE and SPH owners straight to every box holding a copy:
@@ -242,6 +270,8 @@ struct Sticky {
     b: ContactBox,
     /// Home rank and index of each owned node (where its force goes).
     owned_home: Vec<(i32, u64)>,
+    /// For each rank, its position among `plan`'s sources (`u32::MAX`: not a source).
+    source_of_home: Vec<u32>,
     /// The box's candidate lists.
     cands: Candidates,
     /// Owned nodes + faces held.
@@ -406,7 +436,8 @@ impl ContactStage {
         t_s += tt.elapsed().as_secs_f64();
         // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
         if !st.cands.still_valid(&st.b, &self.params) {
-            st.cands = Candidates::build(&st.b, &self.params, self.skins.1 * motion);
+            let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+            st.cands = Candidates::build(&st.b, &self.params, cand_skin);
             self.rebuilds.candidates += 1;
         }
         let contacts = search_candidates(&st.b, &self.params, &st.cands);
@@ -415,8 +446,25 @@ impl ContactStage {
             solve_together(comm, &st.b, &contacts, &st.b.nodes.gid[..n_owned], dt)?;
         bytes += gather_bytes;
         // 8. Forces back to the homes.
+        // 8. Forces back to the homes: the nonzero ones, along the plan's own pairs of ranks.
         let tt = Instant::now();
-        let (force, back_bytes) = send_home(comm, &owned_force, &st.owned_home, nodes.len());
+        let mut lists: Vec<Vec<Back>> = vec![Vec::new(); st.plan.sources().count()];
+        for (f, &(home, idx)) in owned_force.iter().zip(&st.owned_home) {
+            if f.iter().any(|c| *c != 0.0) {
+                let k = st.source_of_home[home as usize];
+                lists[k as usize].push(Back { key: idx, f: *f });
+            }
+        }
+        let before = st.plan.bytes_sent;
+        let got = st.plan.reverse_lists(&lists);
+        let back_bytes = st.plan.bytes_sent - before;
+        let mut force = vec![[0.0; 3]; nodes.len()];
+        for bk in &got {
+            let f = &mut force[bk.key as usize];
+            for k in 0..3 {
+                f[k] += bk.f[k];
+            }
+        }
         bytes += back_bytes;
         t_bytes += back_bytes;
         t_s += tt.elapsed().as_secs_f64();
@@ -494,10 +542,21 @@ impl ContactStage {
         // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
         // influence: the largest node motion of the step and the largest particle radius (the
         // face's search box), and the skin the kept decomposition needs (at least the motion).
-        let skin = if self.sticky_enabled {
-            self.skins.0 * motion
+        let (skin, cand_skin, face_size) = if self.sticky_enabled {
+            // The faces' mean diameter (caps the skins).
+            let mut sum = [0.0f64; 2];
+            for f in &my_faces {
+                let x: [[f64; 3]; 4] = std::array::from_fn(|k| f.nodes[k].x1);
+                sum[0] += dist(&x[0], &x[2]).max(dist(&x[1], &x[3]));
+                sum[1] += 1.0;
+            }
+            let mut g = [0.0f64; 2];
+            comm.all_reduce_into(&sum[..], &mut g[..], SystemOperation::sum());
+            let face = if g[1] > 0.0 { g[0] / g[1] } else { 0.0 };
+            let (a, b) = skins(motion, face, self.skins);
+            (a, b, face)
         } else {
-            motion
+            (motion, 0.0, 0.0)
         };
         let mut dest = Vec::new();
         let mut ghosts = Vec::new();
@@ -539,11 +598,6 @@ impl ContactStage {
         let b = ContactBox::from_records(&recs, n_owned, &face_recs);
         crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
         let b = b.expect("checked on every rank");
-        let cand_skin = if self.sticky_enabled {
-            self.skins.1 * motion
-        } else {
-            0.0
-        };
         let cands = Candidates::build(&b, &self.params, cand_skin);
         let contacts = search_candidates(&b, &self.params, &cands);
 
@@ -581,6 +635,7 @@ impl ContactStage {
                     cands,
                     owned_home,
                     skin,
+                    face_size,
                     max_radius: radius,
                     work_items,
                 },
@@ -674,6 +729,7 @@ struct SetupBox {
     cands: Candidates,
     owned_home: Vec<(i32, u64)>,
     skin: f64,
+    face_size: f64,
     max_radius: f64,
     work_items: f64,
 }
@@ -790,10 +846,16 @@ fn build_sticky(
     if all_ok == 0 {
         return (None, bytes);
     }
+    let mut source_of_home = vec![u32::MAX; comm.size() as usize];
+    for (k, (r, _)) in plan.sources().enumerate() {
+        source_of_home[r as usize] = k as u32;
+    }
     let st = Sticky {
+        source_of_home,
         gids: nodes.iter().map(|r| r.gid).collect(),
         x_ref: nodes.iter().map(|r| r.x1).collect(),
         skin: sb.skin,
+        face_size: sb.face_size,
         max_radius: sb.max_radius,
         send_idx,
         plan,
