@@ -306,6 +306,12 @@ pub struct ContactStage {
     /// Keep the decomposition between steps while the skin allows (off: `TDYN_CONTACT_STICKY=0`,
     /// every step rebuilds; the results are the same, which a test checks).
     sticky_enabled: bool,
+    /// Steps so far, steps the current kept decomposition served, and the back-off of set-ups
+    /// that never served (see [`ContactStage::step`]).
+    step_count: u64,
+    kept_steps: u64,
+    backoff: u64,
+    retry_at: u64,
     sticky: Option<Box<Sticky>>,
     /// The skins, as multiples of the step's largest motion: ghosts and candidate lists
     /// ([`GHOST_SKIN_STEPS`], [`CANDIDATE_SKIN_STEPS`]; `TDYN_CONTACT_SKINS=G,C` for tuning).
@@ -328,6 +334,10 @@ impl ContactStage {
                 ..SearchParams::default()
             },
             sticky_enabled: std::env::var("TDYN_CONTACT_STICKY").map_or(true, |v| v != "0"),
+            step_count: 0,
+            kept_steps: 0,
+            backoff: 0,
+            retry_at: 0,
             sticky: None,
             skins: std::env::var("TDYN_CONTACT_SKINS")
                 .ok()
@@ -396,11 +406,25 @@ impl ContactStage {
             }
             None => false,
         };
+        self.step_count += 1;
         if keep {
+            self.kept_steps += 1;
             self.sticky_step(nodes, motion, dt, t0)
         } else {
             self.rebuilds.decomposition += 1;
-            self.full_step(nodes, faces(), motion, radius, dt, t0)
+            // A kept decomposition that never served because the node lists changed (SPH
+            // particles moving between SPH ranks every step) cost its set-up for nothing: try
+            // again after 1, 2, 4 ... 64 steps (the same on every rank: `changed` is global).
+            if self.sticky.is_some() {
+                if self.kept_steps == 0 && changed {
+                    self.backoff = (2 * self.backoff).clamp(1, 64);
+                    self.retry_at = self.step_count + self.backoff;
+                } else {
+                    self.backoff = 0;
+                }
+            }
+            self.kept_steps = 0;
+            self.full_step(nodes, faces(), (motion, radius), dt, t0)
         }
     }
 
@@ -487,11 +511,12 @@ impl ContactStage {
         &mut self,
         nodes: &[NodeRecord],
         faces: Vec<FullFace>,
-        motion: f64,
-        radius: f64,
+        (motion, radius): (f64, f64),
         dt: f64,
         t0: Instant,
     ) -> Result<ContactOutcome, String> {
+        // Set up a kept decomposition for the next steps?
+        let keep_next = self.sticky_enabled && self.step_count >= self.retry_at;
         let me = self.comm.rank();
         let mut bytes = 0u64;
         let items: Vec<CNode> = nodes
@@ -542,7 +567,7 @@ impl ContactStage {
         // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
         // influence: the largest node motion of the step and the largest particle radius (the
         // face's search box), and the skin the kept decomposition needs (at least the motion).
-        let (skin, cand_skin, face_size) = if self.sticky_enabled {
+        let (skin, cand_skin, face_size) = if keep_next {
             // The faces' mean diameter (caps the skins).
             let mut sum = [0.0f64; 2];
             for f in &my_faces {
@@ -623,7 +648,7 @@ impl ContactStage {
 
         // The plan for the steps that keep this decomposition.
         self.sticky = None;
-        if self.sticky_enabled {
+        if keep_next {
             let (st, setup_bytes) = build_sticky(
                 comm,
                 &tree,
