@@ -3,7 +3,8 @@
 # against the baseline the paper argues against (contact searched on the static FE
 # decomposition, each rank's box exchanged; selected by TDYN_CONTACT_BASELINE=1, for
 # benchmarks only). Scenes: scenes/bricks.toml (64 bricks flying apart),
-# scenes/bricks_table.toml (the bricks lifting off a finely meshed table) and
+# scenes/bricks_table.toml (the bricks lifting off a finely meshed table),
+# scenes/bricks_pedestal.toml (the bricks on a tall column: the baseline leaves ranks idle) and
 # scenes/container_crush.toml (contact active everywhere: the paper's crushed container, its
 # first CONTAINER_END = 1.2 ms unless set), at np 2 and 4,
 # medians of REPEATS runs. Per run (report.json): the imbalance of the contact work (max/mean
@@ -14,7 +15,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEATS=${REPEATS:-3}
-SCENES=${SCENES:-"bricks bricks_table container_crush"}
+SCENES=${SCENES:-"bricks bricks_table bricks_pedestal container_crush"}
 CONTAINER_END=${CONTAINER_END:-1.2e-3}
 NPS=${NPS:-"2 4"}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
