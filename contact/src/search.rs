@@ -178,6 +178,17 @@ pub struct Candidates {
     skin: f64,
     max_radius: f64,
     n_faces: usize,
+    /// Per-step work space of [`search_candidates`] (face boxes computed this step), kept so
+    /// that a step allocates nothing.
+    scratch: std::cell::RefCell<Scratch>,
+}
+
+/// See [`Candidates::scratch`]: `boxes[f]` is face f's search box when `stamp[f] == epoch`.
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    boxes: Vec<Aabb>,
+    stamp: Vec<u32>,
+    epoch: u32,
 }
 
 impl Candidates {
@@ -218,6 +229,7 @@ impl Candidates {
             skin,
             max_radius,
             n_faces: b.faces.len(),
+            scratch: Default::default(),
         }
     }
 
@@ -278,7 +290,20 @@ pub fn search_candidates(
 ) -> Vec<Contact> {
     let max_radius = b.max_radius();
     // A face's search box, computed once per step and only for faces some node lists.
-    let mut boxes: Vec<Option<Aabb>> = vec![None; b.faces.len()];
+    let mut sc = cands.scratch.borrow_mut();
+    let nf = b.faces.len();
+    if sc.stamp.len() != nf {
+        sc.boxes = vec![Aabb::EMPTY; nf];
+        sc.stamp = vec![0; nf];
+        sc.epoch = 0;
+    }
+    sc.epoch = sc.epoch.wrapping_add(1);
+    if sc.epoch == 0 {
+        sc.stamp.fill(0);
+        sc.epoch = 1;
+    }
+    let epoch = sc.epoch;
+    let Scratch { boxes, stamp, .. } = &mut *sc;
     let mut out = Vec::new();
     let mut hits: Vec<(pair::Hit, usize)> = Vec::new();
     let mut kept: Vec<(pair::Hit, usize)> = Vec::new();
@@ -291,7 +316,13 @@ pub fn search_candidates(
         hits.clear();
         for &f in list {
             let f = f as usize;
-            let fb = *boxes[f].get_or_insert_with(|| face_search_aabb(b, f, params, max_radius));
+            let fb = if stamp[f] == epoch {
+                boxes[f]
+            } else {
+                stamp[f] = epoch;
+                boxes[f] = face_search_aabb(b, f, params, max_radius);
+                boxes[f]
+            };
             if !fb.overlaps(&q) {
                 continue;
             }

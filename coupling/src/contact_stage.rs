@@ -14,6 +14,13 @@
 //!    computes the push-back;
 //! 8. every contact owner sends the force of its nodes back to the node's FE or SPH owner.
 //!
+//! Steps 1-6 are not repeated every step: after a rebuild the stage keeps the decomposition, the
+//! ghost faces (sent with a skin) and a plan that sends each node's record from its FE or SPH
+//! owner straight to every box holding it, and each box keeps candidate lists (a Verlet list
+//! per node, `contact::Candidates`); both stay valid while the nodes move less than the skins
+//! allow (see [`ContactStage::step`] and [`GHOST_SKIN_STEPS`]), and every step then finds what a
+//! rebuild would.
+//!
 //! Every contact is found in exactly one box (a node is owned by one rank), so nothing is counted
 //! twice. The push-back of all contacts is solved together (step 7b: the step's contacts are
 //! gathered on every rank and solved as one box, Gauss-Seidel in the `contact` crate), so the
@@ -263,6 +270,8 @@ struct Sticky {
     /// Records go from the FE and SPH owners straight to every box holding a copy:
     /// `send_idx[k]` is the input node sent as the plan's item k.
     send_idx: Vec<u32>,
+    /// The records in plan order (kept to reuse its memory).
+    send_buf: Vec<NodeRecord>,
     plan: CommPlan,
     /// Box slot of each record received through `plan`, in arrival order.
     recv_slot: Vec<u32>,
@@ -442,9 +451,11 @@ impl ContactStage {
         let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
         // 1 (and 3, 5-6). The records straight to the boxes holding them, written in place.
         let tt = Instant::now();
-        let send: Vec<NodeRecord> = st.send_idx.iter().map(|&i| nodes[i as usize]).collect();
+        st.send_buf.clear();
+        st.send_buf
+            .extend(st.send_idx.iter().map(|&i| nodes[i as usize]));
         let before = st.plan.bytes_sent;
-        let got = st.plan.exchange(&send);
+        let got = st.plan.exchange(&st.send_buf);
         let sent = st.plan.bytes_sent - before;
         bytes += sent;
         t_bytes += sent;
@@ -883,6 +894,7 @@ fn build_sticky(
         face_size: sb.face_size,
         max_radius: sb.max_radius,
         send_idx,
+        send_buf: Vec::new(),
         plan,
         recv_slot,
         b: sb.b,
