@@ -148,12 +148,17 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
         let before = stage.rebuilds.decomposition;
         let (nodes, faces) = configuration(seed, step, n_faces);
         // FE/SPH owners at random; faces on another random rank, with their nodes' records.
-        let home = |gid: u64| (gid.wrapping_mul(2654435761) >> 5) % p;
-        let mine: Vec<NodeRecord> = nodes
-            .iter()
-            .filter(|n| home(n.gid) == me)
-            .copied()
-            .collect();
+        // Particles change homes every step (SPH migration), mesh nodes never: the kept
+        // decomposition must serve anyway.
+        let home = |n: &NodeRecord| {
+            let salt = if n.flags & FLAG_PARTICLE != 0 {
+                step as u64 * 7919
+            } else {
+                0
+            };
+            ((n.gid + salt).wrapping_mul(2654435761) >> 5) % p
+        };
+        let mine: Vec<NodeRecord> = nodes.iter().filter(|n| home(n) == me).copied().collect();
         let my_faces: Vec<FullFace> = faces
             .iter()
             .filter(|f| (f.gid * 7 + 3) % p == me)

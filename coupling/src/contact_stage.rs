@@ -58,6 +58,8 @@ struct CNode {
     rec: NodeRecord,
     home: u64,
     home_idx: u64,
+    /// Position among the home's mesh (non-particle) nodes; `u64::MAX` for a particle.
+    fe_idx: u64,
 }
 
 impl RcbItem for CNode {
@@ -137,20 +139,19 @@ struct ContactPacket {
     corners: [NodeRecord; 4],
 }
 
-/// Gathers every rank's contacts on every rank and solves their push-back as one box (see step
-/// 7b). Returns the forces on `owned` (this rank's contact nodes), the push-back's work (the
+/// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
+/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact nodes), the push-back's work (the
 /// same on every rank) and the bytes this rank sent.
 fn solve_together(
     comm: &SimpleCommunicator,
-    b: &ContactBox,
-    contacts: &[Contact],
+    parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
 ) -> Result<(Vec<[f64; 3]>, f64, u64), String> {
-    let rec = |i: usize| b.nodes.record(i);
-    let mine: Vec<ContactPacket> = contacts
-        .iter()
-        .map(|c| {
+    let mut mine: Vec<ContactPacket> = Vec::new();
+    for (b, contacts) in parts {
+        let rec = |i: usize| b.nodes.record(i);
+        mine.extend(contacts.iter().map(|c| {
             let f = c.face as usize;
             ContactPacket {
                 contact: *c,
@@ -158,8 +159,8 @@ fn solve_together(
                 face: b.faces.record(f),
                 corners: std::array::from_fn(|k| rec(b.faces.nodes[f][k] as usize)),
             }
-        })
-        .collect();
+        }));
+    }
     let sent = (std::mem::size_of_val(&mine[..]) * (comm.size() as usize - 1)) as u64;
     let bytes: Vec<u8> = bytemuck::cast_slice(&mine).to_vec();
     let all = crate::collective::all_gather_varcount(comm, &bytes);
@@ -238,6 +239,10 @@ pub const GHOST_SKIN_FACES: f64 = 2.0;
 pub const CANDIDATE_SKIN_STEPS: f64 = 30.0;
 /// See [`CANDIDATE_SKIN_STEPS`].
 pub const CANDIDATE_SKIN_FACES: f64 = 0.25;
+/// A kept decomposition is rebuilt (and so rebalanced) when the contact work's imbalance
+/// (max/mean over ranks) has grown this much over its value at the rebuild.
+pub const IMBALANCE_DRIFT: f64 = 0.05;
+
 /// The smallest skin, in step motions: under `3 + 2 tau` a kept decomposition would be
 /// refused at the very next step.
 pub const MIN_SKIN_STEPS: f64 = 12.0;
@@ -283,8 +288,12 @@ struct Sticky {
     source_of_home: Vec<u32>,
     /// The box's candidate lists.
     cands: Candidates,
+    /// The particles' box of the last step (their gids, the box, its candidate lists).
+    pbox: Option<(Vec<u64>, ContactBox, Candidates)>,
     /// Owned nodes + faces held.
     work_items: f64,
+    /// The contact work's imbalance at the rebuild.
+    imbalance: f64,
 }
 
 /// A request for a node's record: "send input node `idx` to rank `to`" (to the node's home), or
@@ -327,6 +336,8 @@ pub struct ContactStage {
     skins: (f64, f64),
     /// Rebuilds so far.
     pub rebuilds: RebuildStats,
+    /// The contact work's imbalance at the last step.
+    last_imbalance: f64,
 }
 
 impl ContactStage {
@@ -356,6 +367,7 @@ impl ContactStage {
                 })
                 .unwrap_or((GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS)),
             rebuilds: RebuildStats::default(),
+            last_imbalance: 1.0,
         }
     }
 
@@ -389,36 +401,50 @@ impl ContactStage {
             motion = motion.max(dist(&r.x1, &r.x0));
             radius = radius.max(r.radius);
         }
+        // The mesh nodes must be the same, in the same order (particles may come and go: they
+        // are sent each step to the box their position falls in).
+        let n_particles = nodes.iter().filter(|r| is_particle(r)).count();
         let same = match &self.sticky {
-            Some(st) if st.gids.len() == nodes.len() => {
+            Some(st) if st.gids.len() + n_particles == nodes.len() => {
                 let mut same = true;
-                for (i, r) in nodes.iter().enumerate() {
-                    same &= st.gids[i] == r.gid;
-                    moved = moved.max(dist(&r.x1, &st.x_ref[i]));
+                for (k, r) in nodes.iter().filter(|r| !is_particle(r)).enumerate() {
+                    same &= st.gids[k] == r.gid;
+                    moved = moved.max(dist(&r.x1, &st.x_ref[k]));
                 }
                 same
             }
             _ => false,
         };
-        let mut g = [0.0f64; 4];
+        let mut g = [0.0f64; 5];
         self.comm.all_reduce_into(
-            &[motion, radius, moved, if same { 0.0 } else { 1.0 }][..],
+            &[
+                motion,
+                radius,
+                moved,
+                if same { 0.0 } else { 1.0 },
+                n_particles as f64,
+            ][..],
             &mut g[..],
             SystemOperation::max(),
         );
         let (motion, radius, moved, changed) = (g[0], g[1], g[2], g[3] > 0.0);
+        let any_particles = g[4] > 0.0;
+        // Kept while the skin covers, and while the balance has not drifted (particles, owned
+        // by where they are, can gather in one box) more than IMBALANCE_DRIFT over the
+        // rebuild's own.
         let keep = match &self.sticky {
             Some(st) => {
                 !changed
                     && radius <= st.max_radius
                     && within_skin(moved, motion, &self.params, st.skin)
+                    && self.last_imbalance <= st.imbalance + IMBALANCE_DRIFT
             }
             None => false,
         };
         self.step_count += 1;
         if keep {
             self.kept_steps += 1;
-            self.sticky_step(nodes, motion, dt, t0)
+            self.sticky_step(nodes, (motion, any_particles), dt, t0)
         } else {
             self.rebuilds.decomposition += 1;
             // A kept decomposition that never served because the node lists changed (SPH
@@ -441,19 +467,31 @@ impl ContactStage {
     fn sticky_step(
         &mut self,
         nodes: &[NodeRecord],
-        motion: f64,
+        (motion, any_particles): (f64, bool),
         dt: f64,
         t0: Instant,
     ) -> Result<ContactOutcome, String> {
         let comm = &self.comm;
+        let me = comm.rank();
         let st = self.sticky.as_mut().expect("a kept decomposition");
+        let tree = self
+            .tree
+            .as_ref()
+            .expect("the cut tree of the last rebuild");
         let mut bytes = 0u64;
         let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
-        // 1 (and 3, 5-6). The records straight to the boxes holding them, written in place.
+        // 1 (and 3, 5-6). The mesh nodes' records straight to the boxes holding them, written
+        // in place.
         let tt = Instant::now();
+        let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
+            .filter(|&i| !is_particle(&nodes[i as usize]))
+            .collect();
         st.send_buf.clear();
-        st.send_buf
-            .extend(st.send_idx.iter().map(|&i| nodes[i as usize]));
+        st.send_buf.extend(
+            st.send_idx
+                .iter()
+                .map(|&k| nodes[fe_inputs[k as usize] as usize]),
+        );
         let before = st.plan.bytes_sent;
         let got = st.plan.exchange(&st.send_buf);
         let sent = st.plan.bytes_sent - before;
@@ -468,6 +506,28 @@ impl ContactStage {
             n.x1[i] = r.x1;
             n.v[i] = r.v;
         }
+        // Particles (never face corners) to the box their predicted position falls in: the
+        // ghost skin's bound holds for a node inside its box's region.
+        let mut pitems = Vec::new();
+        let mut pplan = None;
+        let mut pgot = Vec::new();
+        if any_particles {
+            let mut pdest = Vec::new();
+            for (i, r) in nodes.iter().enumerate().filter(|(_, r)| is_particle(r)) {
+                pdest.push(tree.owner_of_item(&r.x1, r.gid));
+                pitems.push(CNode {
+                    rec: *r,
+                    home: me as u64,
+                    home_idx: i as u64,
+                    fe_idx: u64::MAX,
+                });
+            }
+            let mut plan = CommPlan::new(comm, &pdest);
+            pgot = plan.exchange(&pitems);
+            bytes += plan.bytes_sent;
+            t_bytes += plan.bytes_sent;
+            pplan = Some(plan);
+        }
         t_s += tt.elapsed().as_secs_f64();
         // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
         if !st.cands.still_valid(&st.b, &self.params) {
@@ -477,14 +537,64 @@ impl ContactStage {
         }
         let contacts = search_candidates(&st.b, &self.params, &st.cands);
         let n_owned = st.b.nodes.n_owned;
-        let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &st.b, &contacts, &st.b.nodes.gid[..n_owned], dt)?;
+        let mut owned_gids: Vec<u64> = st.b.nodes.gid[..n_owned].to_vec();
+        // The particles this box holds now, searched against its faces (a box of their own:
+        // the particles owned, every node of the kept box as copies, the same faces). The same
+        // particles as at the last step, in the same order: that box is updated in place and
+        // its candidate lists kept while their skin covers; others: a new box and lists.
+        let same_particles = match &st.pbox {
+            Some((gids, _, _)) => {
+                gids.len() == pgot.len() && gids.iter().zip(&pgot).all(|(g, c)| *g == c.rec.gid)
+            }
+            None => pgot.is_empty(),
+        };
+        if !same_particles {
+            st.pbox = particle_box(&st.b, &pgot).map(|pb| {
+                let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+                let pc = Candidates::build(&pb, &self.params, cand_skin);
+                self.rebuilds.candidates += 1;
+                (pgot.iter().map(|c| c.rec.gid).collect(), pb, pc)
+            });
+        } else if let Some((_, pb, pc)) = &mut st.pbox {
+            let np = pgot.len();
+            let q = &mut pb.nodes;
+            for (i, c) in pgot.iter().enumerate() {
+                q.mass[i] = c.rec.mass;
+                q.radius[i] = c.rec.radius;
+                q.x0[i] = c.rec.x0;
+                q.x1[i] = c.rec.x1;
+                q.v[i] = c.rec.v;
+            }
+            let n = &st.b.nodes;
+            q.mass[np..].copy_from_slice(&n.mass);
+            q.radius[np..].copy_from_slice(&n.radius);
+            q.x0[np..].copy_from_slice(&n.x0);
+            q.x1[np..].copy_from_slice(&n.x1);
+            q.v[np..].copy_from_slice(&n.v);
+            if !pc.still_valid(pb, &self.params) {
+                let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+                *pc = Candidates::build(pb, &self.params, cand_skin);
+                self.rebuilds.candidates += 1;
+            }
+        }
+        let pcontacts = match &st.pbox {
+            Some((_, pb, pc)) => {
+                owned_gids.extend(pgot.iter().map(|c| c.rec.gid));
+                search_candidates(pb, &self.params, pc)
+            }
+            None => Vec::new(),
+        };
+        let mut parts: Vec<(&ContactBox, &[Contact])> = vec![(&st.b, &contacts[..])];
+        if let Some((_, pb, _)) = &st.pbox {
+            parts.push((pb, &pcontacts[..]));
+        }
+        let (owned_force, pb_work, gather_bytes) = solve_together(comm, &parts, &owned_gids, dt)?;
         bytes += gather_bytes;
-        // 8. Forces back to the homes.
-        // 8. Forces back to the homes: the nonzero ones, along the plan's own pairs of ranks.
+        // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
+        // of ranks, the particles' back along their plan.
         let tt = Instant::now();
         let mut lists: Vec<Vec<Back>> = vec![Vec::new(); st.plan.sources().count()];
-        for (f, &(home, idx)) in owned_force.iter().zip(&st.owned_home) {
+        for (f, &(home, idx)) in owned_force[..n_owned].iter().zip(&st.owned_home) {
             if f.iter().any(|c| *c != 0.0) {
                 let k = st.source_of_home[home as usize];
                 lists[k as usize].push(Back { key: idx, f: *f });
@@ -495,18 +605,29 @@ impl ContactStage {
         let back_bytes = st.plan.bytes_sent - before;
         let mut force = vec![[0.0; 3]; nodes.len()];
         for bk in &got {
-            let f = &mut force[bk.key as usize];
+            let f = &mut force[fe_inputs[bk.key as usize] as usize];
             for k in 0..3 {
                 f[k] += bk.f[k];
             }
         }
         bytes += back_bytes;
         t_bytes += back_bytes;
+        if let Some(mut plan) = pplan {
+            let before = plan.bytes_sent;
+            let back = plan.reverse(&owned_force[n_owned..]);
+            for (item, f) in pitems.iter().zip(&back) {
+                force[item.home_idx as usize] = *f;
+            }
+            bytes += plan.bytes_sent - before;
+            t_bytes += plan.bytes_sent - before;
+        }
         t_s += tt.elapsed().as_secs_f64();
-        let work_items = st.work_items;
+        let work_items = st.work_items + pgot.len() as f64;
+        let mut all_contacts = contacts;
+        all_contacts.extend(pcontacts);
         self.outcome(OutcomeParts {
             force,
-            contacts: &contacts,
+            contacts: &all_contacts,
             pb_work,
             bytes,
             work_items,
@@ -530,6 +651,7 @@ impl ContactStage {
         let keep_next = self.sticky_enabled && self.step_count >= self.retry_at;
         let me = self.comm.rank();
         let mut bytes = 0u64;
+        let mut n_fe = 0u64;
         let items: Vec<CNode> = nodes
             .iter()
             .enumerate()
@@ -537,6 +659,12 @@ impl ContactStage {
                 rec: *r,
                 home: me as u64,
                 home_idx: i as u64,
+                fe_idx: if is_particle(r) {
+                    u64::MAX
+                } else {
+                    n_fe += 1;
+                    n_fe - 1
+                },
             })
             .collect();
         // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
@@ -647,7 +775,7 @@ impl ContactStage {
         // `bytes_sent`); contacts are few next to the nodes searched.
         let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
         let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &b, &contacts, &owned_gids, dt)?;
+            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt)?;
         bytes += gather_bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
@@ -667,15 +795,14 @@ impl ContactStage {
                 &mine,
                 &index,
                 SetupBox {
-                    b,
-                    cands,
-                    owned_home,
+                    b: &b,
+                    params: &self.params,
                     skin,
+                    cand_skin,
                     face_size,
                     max_radius: radius,
-                    work_items,
                 },
-            );
+            )?;
             bytes += setup_bytes;
             self.sticky = st.map(Box::new);
         }
@@ -694,7 +821,7 @@ impl ContactStage {
     }
 
     /// The step's statistics over all ranks (collective).
-    fn outcome(&self, p: OutcomeParts) -> Result<ContactOutcome, String> {
+    fn outcome(&mut self, p: OutcomeParts) -> Result<ContactOutcome, String> {
         let comm = &self.comm;
         let me = comm.rank();
         let mut sums = [0.0f64; 5];
@@ -722,6 +849,13 @@ impl ContactStage {
         );
         let t_mean = sums[4] / comm.size() as f64;
         let mean = sums[3] / comm.size() as f64;
+        let imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
+        self.last_imbalance = imbalance;
+        if let Some(st) = &mut self.sticky {
+            if st.imbalance.is_infinite() {
+                st.imbalance = imbalance;
+            }
+        }
         Ok(ContactOutcome {
             force: p.force,
             contacts: sums[0] as u64,
@@ -731,7 +865,7 @@ impl ContactStage {
                 .map(|c| (c.node_gid, c.face_gid, c.depth))
                 .collect(),
             work: sums[1],
-            imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
+            imbalance,
             work_items_max: maxes[0],
             work_items_total: sums[3],
             bytes_sent: sums[2] as u64,
@@ -760,14 +894,52 @@ struct OutcomeParts<'a> {
 }
 
 /// The box a rebuild made, for [`build_sticky`].
-struct SetupBox {
-    b: ContactBox,
-    cands: Candidates,
-    owned_home: Vec<(i32, u64)>,
+struct SetupBox<'a> {
+    b: &'a ContactBox,
+    params: &'a SearchParams,
     skin: f64,
+    cand_skin: f64,
     face_size: f64,
     max_radius: f64,
-    work_items: f64,
+}
+
+fn is_particle(r: &NodeRecord) -> bool {
+    r.flags & contact::FLAG_PARTICLE != 0
+}
+
+/// The box in which a kept decomposition searches the particles it holds this step: the
+/// particles owned, then every node of the kept box `b` as a copy, and `b`'s faces. `None`
+/// without particles.
+fn particle_box(b: &ContactBox, particles: &[CNode]) -> Option<ContactBox> {
+    if particles.is_empty() {
+        return None;
+    }
+    let mut pb = ContactBox::default();
+    for c in particles {
+        pb.nodes.push(&c.rec);
+    }
+    let np = particles.len();
+    pb.nodes.n_owned = np;
+    let n = &b.nodes;
+    let q = &mut pb.nodes;
+    q.gid.extend_from_slice(&n.gid);
+    q.body.extend_from_slice(&n.body);
+    q.mass.extend_from_slice(&n.mass);
+    q.radius.extend_from_slice(&n.radius);
+    q.particle.extend_from_slice(&n.particle);
+    q.x0.extend_from_slice(&n.x0);
+    q.x1.extend_from_slice(&n.x1);
+    q.v.extend_from_slice(&n.v);
+    pb.faces.gid = b.faces.gid.clone();
+    pb.faces.node_gid = b.faces.node_gid.clone();
+    pb.faces.body = b.faces.body.clone();
+    pb.faces.nodes = b
+        .faces
+        .nodes
+        .iter()
+        .map(|c| c.map(|i| i + np as u32))
+        .collect();
+    Some(pb)
 }
 
 fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
@@ -802,12 +974,14 @@ fn send_home(
     (force, plan.bytes_sent)
 }
 
-/// After a rebuild: the plan that sends each input node's record straight to every box holding
-/// it (its contact owner and the boxes holding a face it is a corner of), so that the next steps
-/// skip steps 1-6 (collective). Requests for owned nodes go to their homes; requests for a
-/// face's corner copy go to the corner's contact owner (the cut tree's owner of its position),
-/// which forwards them to the home. `None` (on every rank) if a request finds no owner, which
-/// keeps rebuilding at every step.
+/// After a rebuild: the kept box (the rebuild's box without its particles) and the plan that
+/// sends each mesh node's record straight to every box holding it (its contact owner and the
+/// boxes holding a face it is a corner of), so that the next steps skip steps 1-6 (collective).
+/// Requests for owned nodes go to their homes; requests for a face's corner copy go to the
+/// corner's contact owner (the cut tree's owner of its position), which forwards them to the
+/// home. Nodes are named by their position among the home's mesh nodes (`CNode::fe_idx`), which
+/// particles coming and going do not change. `None` (on every rank) if a request finds no owner,
+/// which keeps rebuilding.
 fn build_sticky(
     comm: &SimpleCommunicator,
     tree: &CutTree,
@@ -815,38 +989,51 @@ fn build_sticky(
     mine: &[CNode],
     index: &HashMap<u64, usize>,
     sb: SetupBox,
-) -> (Option<Sticky>, u64) {
+) -> Result<(Option<Sticky>, u64), String> {
     let me = comm.rank() as u64;
     let mut bytes = 0u64;
-    let n_owned = sb.b.nodes.n_owned;
+    let full = sb.b;
+    let n_owned = full.nodes.n_owned;
+    // The kept box: the owned mesh nodes, then the corner copies (never particles), the faces.
+    let owned_fe: Vec<&CNode> = mine.iter().filter(|n| !is_particle(&n.rec)).collect();
+    let mut recs: Vec<NodeRecord> = owned_fe.iter().map(|n| n.rec).collect();
+    let n_fe_owned = recs.len();
+    recs.extend((n_owned..full.nodes.len()).map(|i| full.nodes.record(i)));
+    let face_recs: Vec<FaceRecord> = (0..full.faces.len())
+        .map(|f| full.faces.record(f))
+        .collect();
+    let b = ContactBox::from_records(&recs, n_fe_owned, &face_recs);
+    crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
+    let b = b.expect("checked on every rank");
+    let slot_of: HashMap<u64, usize> = recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
     // Corner copies: ask their contact owners.
     let mut dest = Vec::new();
     let mut asks = Vec::new();
-    for i in n_owned..sb.b.nodes.len() {
-        let gid = sb.b.nodes.gid[i];
-        dest.push(tree.owner_of_item(&sb.b.nodes.x1[i], gid));
+    for i in n_owned..full.nodes.len() {
+        let gid = full.nodes.gid[i];
+        dest.push(tree.owner_of_item(&full.nodes.x1[i], gid));
         asks.push(Ask { key: gid, to: me });
     }
     let mut plan = CommPlan::new(comm, &dest);
     let got = plan.exchange(&asks);
     bytes += plan.bytes_sent;
     let mut ok = true;
-    // Requests to the homes: this rank's owned nodes, and the forwarded corner requests.
+    // Requests to the homes: this rank's owned mesh nodes, and the forwarded corner requests.
     let mut dest = Vec::new();
     let mut reqs = Vec::new();
-    for n in mine {
+    for n in &owned_fe {
         dest.push(n.home as i32);
         reqs.push(Ask {
-            key: n.home_idx,
+            key: n.fe_idx,
             to: me,
         });
     }
     for a in &got {
         match index.get(&a.key) {
-            Some(&i) if i < n_owned => {
+            Some(&i) if i < n_owned && !is_particle(&mine[i].rec) => {
                 dest.push(mine[i].home as i32);
                 reqs.push(Ask {
-                    key: mine[i].home_idx,
+                    key: mine[i].fe_idx,
                     to: a.to,
                 });
             }
@@ -856,19 +1043,26 @@ fn build_sticky(
     let mut plan = CommPlan::new(comm, &dest);
     let mut got = plan.exchange(&reqs);
     bytes += plan.bytes_sent;
-    // The home's plan: by destination, input order inside each.
+    // The home's plan: by destination, mesh-node order inside each.
     got.sort_unstable_by_key(|a| (a.to, a.key));
+    let fe_inputs: Vec<usize> = (0..nodes.len())
+        .filter(|&i| !is_particle(&nodes[i]))
+        .collect();
+    ok &= got.iter().all(|a| (a.key as usize) < fe_inputs.len());
     let send_idx: Vec<u32> = got.iter().map(|a| a.key as u32).collect();
     let dest: Vec<i32> = got.iter().map(|a| a.to as i32).collect();
     let mut plan = CommPlan::new(comm, &dest);
-    let send: Vec<NodeRecord> = send_idx.iter().map(|&i| nodes[i as usize]).collect();
+    let send: Vec<NodeRecord> = send_idx
+        .iter()
+        .map(|&k| nodes[fe_inputs.get(k as usize).copied().unwrap_or(0)])
+        .collect();
     let arrived = plan.exchange(&send);
     bytes += plan.bytes_sent;
     // Where each arriving record goes in the box: every slot exactly once.
-    let mut filled = vec![false; sb.b.nodes.len()];
+    let mut filled = vec![false; b.nodes.len()];
     let mut recv_slot = Vec::with_capacity(arrived.len());
     for r in &arrived {
-        match index.get(&r.gid) {
+        match slot_of.get(&r.gid) {
             Some(&i) if !filled[i] => {
                 filled[i] = true;
                 recv_slot.push(i as u32);
@@ -880,16 +1074,18 @@ fn build_sticky(
     let mut all_ok = 0i32;
     comm.all_reduce_into(&(ok as i32), &mut all_ok, SystemOperation::min());
     if all_ok == 0 {
-        return (None, bytes);
+        return Ok((None, bytes));
     }
     let mut source_of_home = vec![u32::MAX; comm.size() as usize];
     for (k, (r, _)) in plan.sources().enumerate() {
         source_of_home[r as usize] = k as u32;
     }
+    let cands = Candidates::build(&b, sb.params, sb.cand_skin);
+    let work_items = (n_fe_owned + b.faces.len()) as f64;
     let st = Sticky {
         source_of_home,
-        gids: nodes.iter().map(|r| r.gid).collect(),
-        x_ref: nodes.iter().map(|r| r.x1).collect(),
+        gids: fe_inputs.iter().map(|&i| nodes[i].gid).collect(),
+        x_ref: fe_inputs.iter().map(|&i| nodes[i].x1).collect(),
         skin: sb.skin,
         face_size: sb.face_size,
         max_radius: sb.max_radius,
@@ -897,10 +1093,12 @@ fn build_sticky(
         send_buf: Vec::new(),
         plan,
         recv_slot,
-        b: sb.b,
-        owned_home: sb.owned_home,
-        cands: sb.cands,
-        work_items: sb.work_items,
+        b,
+        owned_home: owned_fe.iter().map(|n| (n.home as i32, n.fe_idx)).collect(),
+        cands,
+        pbox: None,
+        work_items,
+        imbalance: f64::INFINITY,
     };
-    (Some(st), bytes)
+    Ok((Some(st), bytes))
 }
