@@ -17,6 +17,7 @@ use mpi::collective::SystemOperation;
 use mpi::request::WaitGuard;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use std::rc::Rc;
 
 /// Message tag for the sizes of a plan's messages.
 const TAG_SIZES: i32 = 7001;
@@ -27,7 +28,9 @@ const TAG_LISTS: i32 = 7003;
 
 /// A reusable plan: who sends how many items to whom.
 pub struct CommPlan {
-    comm: SimpleCommunicator,
+    /// The plan's own duplicate of the communicator ([`CommPlan::new`]), or one shared with the
+    /// caller's other plans ([`CommPlan::new_shared`]).
+    comm: Rc<SimpleCommunicator>,
     /// Destination ranks with a message, ascending, and the item count for each.
     send_ranks: Vec<i32>,
     send_counts: Vec<usize>,
@@ -43,8 +46,18 @@ pub struct CommPlan {
 }
 
 impl CommPlan {
-    /// Builds the plan from each item's destination rank (collective).
+    /// Builds the plan from each item's destination rank (collective), on a duplicate of `comm`
+    /// (its messages cannot meet anyone else's).
     pub fn new(comm: &SimpleCommunicator, dest: &[i32]) -> CommPlan {
+        Self::new_shared(&Rc::new(comm.duplicate()), dest)
+    }
+
+    /// [`CommPlan::new`] on `comm` itself, shared with other plans of the caller (no
+    /// duplicate: one collective fewer). Safe for plans used one after the other: a plan's
+    /// data receives name their source, and its size messages (from any source) cannot meet
+    /// the next plan's, which are sent only after the next plan's reduce-scatter, which no
+    /// rank leaves before every rank has entered it.
+    pub fn new_shared(comm: &Rc<SimpleCommunicator>, dest: &[i32]) -> CommPlan {
         let p = comm.size() as usize;
         let mut per_rank = vec![0usize; p];
         for &d in dest {
@@ -86,7 +99,7 @@ impl CommPlan {
         });
         recv.sort_unstable();
         CommPlan {
-            comm: comm.duplicate(),
+            comm: Rc::clone(comm),
             send_ranks,
             send_counts,
             send_order,

@@ -36,6 +36,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use rustc_hash::FxHashMap as HashMap;
+use std::rc::Rc;
 use std::time::Instant;
 
 /// Parametric tolerance of "the node projects inside the face" in runs: `|xi|, |eta| <= 1.02`.
@@ -143,7 +144,7 @@ struct ContactPacket {
 /// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact nodes), the push-back's work (the
 /// same on every rank) and the bytes this rank sent.
 fn solve_together(
-    comm: &SimpleCommunicator,
+    comm: &Rc<SimpleCommunicator>,
     parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
@@ -316,7 +317,8 @@ pub struct RebuildStats {
 
 /// The contact stage of one run.
 pub struct ContactStage {
-    comm: SimpleCommunicator,
+    /// The stage's communicator, shared by its plans.
+    comm: Rc<SimpleCommunicator>,
     rcb: Rcb,
     tree: Option<CutTree>,
     /// Search parameters (`self_contact` from the scene).
@@ -344,7 +346,7 @@ impl ContactStage {
     /// A stage over `comm` (collective).
     pub fn new(comm: &SimpleCommunicator, self_contact: bool) -> ContactStage {
         ContactStage {
-            comm: comm.duplicate(),
+            comm: Rc::new(comm.duplicate()),
             rcb: Rcb::new(comm),
             tree: None,
             params: SearchParams {
@@ -522,7 +524,7 @@ impl ContactStage {
                     fe_idx: u64::MAX,
                 });
             }
-            let mut plan = CommPlan::new(comm, &pdest);
+            let mut plan = CommPlan::new_shared(comm, &pdest);
             pgot = plan.exchange(&pitems);
             bytes += plan.bytes_sent;
             t_bytes += plan.bytes_sent;
@@ -678,7 +680,7 @@ impl ContactStage {
                     .iter()
                     .map(|n| t.owner_of_item(&n.rec.x1, n.rec.gid))
                     .collect();
-                let mut plan = CommPlan::new(&self.comm, &dest);
+                let mut plan = CommPlan::new_shared(&self.comm, &dest);
                 let got = plan.exchange(&items);
                 bytes += plan.bytes_sent;
                 t_bytes += plan.bytes_sent;
@@ -698,7 +700,7 @@ impl ContactStage {
             .iter()
             .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
             .collect();
-        let mut plan = CommPlan::new(comm, &dest);
+        let mut plan = CommPlan::new_shared(comm, &dest);
         let my_faces = plan.exchange(&faces);
         bytes += plan.bytes_sent;
         t_bytes += plan.bytes_sent;
@@ -734,7 +736,7 @@ impl ContactStage {
                 ghosts.push(*f);
             }
         }
-        let mut plan = CommPlan::new(comm, &dest);
+        let mut plan = CommPlan::new_shared(comm, &dest);
         let held = plan.exchange(&ghosts);
         bytes += plan.bytes_sent;
 
@@ -949,7 +951,7 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 /// Step 8: each owned node's nonzero force to its home; returns the force on each of the
 /// home's `n_home` input nodes and the bytes sent (collective).
 fn send_home(
-    comm: &SimpleCommunicator,
+    comm: &Rc<SimpleCommunicator>,
     owned_force: &[[f64; 3]],
     owned_home: &[(i32, u64)],
     n_home: usize,
@@ -962,7 +964,7 @@ fn send_home(
             back.push(Back { key: idx, f: *f });
         }
     }
-    let mut plan = CommPlan::new(comm, &dest);
+    let mut plan = CommPlan::new_shared(comm, &dest);
     let got = plan.exchange(&back);
     let mut force = vec![[0.0; 3]; n_home];
     for bk in &got {
@@ -983,7 +985,7 @@ fn send_home(
 /// particles coming and going do not change. `None` (on every rank) if a request finds no owner,
 /// which keeps rebuilding.
 fn build_sticky(
-    comm: &SimpleCommunicator,
+    comm: &Rc<SimpleCommunicator>,
     tree: &CutTree,
     nodes: &[NodeRecord],
     mine: &[CNode],
@@ -1014,7 +1016,7 @@ fn build_sticky(
         dest.push(tree.owner_of_item(&full.nodes.x1[i], gid));
         asks.push(Ask { key: gid, to: me });
     }
-    let mut plan = CommPlan::new(comm, &dest);
+    let mut plan = CommPlan::new_shared(comm, &dest);
     let got = plan.exchange(&asks);
     bytes += plan.bytes_sent;
     let mut ok = true;
@@ -1040,7 +1042,7 @@ fn build_sticky(
             _ => ok = false,
         }
     }
-    let mut plan = CommPlan::new(comm, &dest);
+    let mut plan = CommPlan::new_shared(comm, &dest);
     let mut got = plan.exchange(&reqs);
     bytes += plan.bytes_sent;
     // The home's plan: by destination, mesh-node order inside each.
@@ -1051,7 +1053,7 @@ fn build_sticky(
     ok &= got.iter().all(|a| (a.key as usize) < fe_inputs.len());
     let send_idx: Vec<u32> = got.iter().map(|a| a.key as u32).collect();
     let dest: Vec<i32> = got.iter().map(|a| a.to as i32).collect();
-    let mut plan = CommPlan::new(comm, &dest);
+    let mut plan = CommPlan::new_shared(comm, &dest);
     let send: Vec<NodeRecord> = send_idx
         .iter()
         .map(|&k| nodes[fe_inputs.get(k as usize).copied().unwrap_or(0)])

@@ -73,7 +73,8 @@ pub struct SphStats {
 
 /// The SPH stage of one run.
 pub struct SphStage {
-    comm: SimpleCommunicator,
+    /// The stage's communicator, shared by its plans.
+    comm: std::rc::Rc<SimpleCommunicator>,
     rcb: Rcb,
     /// The particles this rank holds (owned first, then this step's ghosts).
     pub parts: Particles,
@@ -105,7 +106,7 @@ impl SphStage {
     /// A stage over `comm` (collective) with this rank's initial particles (owned).
     pub fn new(comm: &SimpleCommunicator, parts: Particles, params: Params) -> SphStage {
         SphStage {
-            comm: comm.duplicate(),
+            comm: std::rc::Rc::new(comm.duplicate()),
             rcb: Rcb::new(comm),
             parts,
             params,
@@ -323,7 +324,7 @@ impl SphStage {
                 }
             }
         }
-        let mut plan = CommPlan::new(&self.comm, &dest);
+        let mut plan = CommPlan::new_shared(&self.comm, &dest);
         let got = plan.exchange(&recs);
         for g in &got {
             self.parts.push_ghost(g);
