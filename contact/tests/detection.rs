@@ -15,6 +15,16 @@ const DEPTH_TOL: f64 = 1e-12;
 const XI_TOL: f64 = 1e-9;
 const BORDERLINE: f64 = 1e-9;
 
+/// Random faces of three bodies, free nodes and crossing nodes, some of them particles.
+const MIXED: SceneSpec = SceneSpec {
+    faces: 250,
+    free_nodes: 300,
+    crossing_nodes: 700,
+    bodies: 3,
+    particles: true,
+    size: 8.0,
+};
+
 #[test]
 fn bucket_search_equals_all_pairs_reference() {
     let mut rng = Rng(20240611);
@@ -22,17 +32,7 @@ fn bucket_search_equals_all_pairs_reference() {
     let mut worst_depth: f64 = 0.0;
     let mut borderline = 0;
     for round in 0..4 {
-        let scene = random_scene(
-            &mut rng,
-            &SceneSpec {
-                faces: 250,
-                free_nodes: 300,
-                crossing_nodes: 700,
-                bodies: 3,
-                particles: true,
-                size: 8.0,
-            },
-        );
+        let scene = random_scene(&mut rng, &MIXED);
         let b = ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
         for self_contact in [false, true] {
             let params = SearchParams {
@@ -281,17 +281,7 @@ fn candidate_list_with_skin_equals_fresh_search() {
     let mut rng = Rng(31337);
     let mut compared = 0;
     for round in 0..3 {
-        let scene = random_scene(
-            &mut rng,
-            &SceneSpec {
-                faces: 250,
-                free_nodes: 300,
-                crossing_nodes: 700,
-                bodies: 3,
-                particles: true,
-                size: 8.0,
-            },
-        );
+        let scene = random_scene(&mut rng, &MIXED);
         for self_contact in [false, true] {
             let params = contact::SearchParams {
                 self_contact,

@@ -70,6 +70,29 @@ pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
         .expect("mpirun")
 }
 
+/// `run` with the environment variable `var=value` passed to every rank and `extra` arguments
+/// after the scene (e.g. `--end-time`); insists on success.
+pub fn run_with_env(np: usize, scene: &Path, out: &Path, var: &str, value: &str, extra: &[&str]) {
+    let o = mpirun(np, 600)
+        .args(["-x", var])
+        .env(var, value)
+        .arg(tdyn())
+        .arg("run")
+        .arg(scene)
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .expect("mpirun");
+    assert!(
+        o.status.success(),
+        "tdyn at np {np} with {var}={value} failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 /// Runs and insists on success.
 pub fn run_ok(np: usize, scene: &Path, out: &Path) {
     let o = run(np, scene, out);

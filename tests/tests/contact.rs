@@ -293,18 +293,8 @@ fn tilted_block_dropped_on_a_plate_never_enters_it() {
     // bit (reference: TDYN_CONTACT_STICKY=0, steps 1-6 of Fig. 10 at every step), at np 3.
     let dir = workdir("block_drop_np3_rebuild_every_step");
     let out = dir.join("out");
-    let o = mpirun(3, 600)
-        .args(["-x", "TDYN_CONTACT_STICKY"])
-        .env("TDYN_CONTACT_STICKY", "0")
-        .arg(tdyn())
-        .arg("run")
-        .arg(root().join("scenes/block_drop.toml"))
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .expect("mpirun");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let scene = root().join("scenes/block_drop.toml");
+    run_with_env(3, &scene, &out, "TDYN_CONTACT_STICKY", "0", &[]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(
@@ -448,21 +438,7 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
     let mut rows = Vec::new();
     for (mode, name) in [("0", "dynamic_rcb"), ("1", "static_fe_baseline")] {
         let out = dir.join(format!("out{mode}"));
-        let o = mpirun(np, 600)
-            .args(["-x", &format!("TDYN_CONTACT_BASELINE={mode}")])
-            .arg(tdyn())
-            .arg("run")
-            .arg(&scene)
-            .arg("--out")
-            .arg(&out)
-            .arg("--quiet")
-            .output()
-            .expect("mpirun");
-        assert!(
-            o.status.success(),
-            "TDYN_CONTACT_BASELINE={mode} failed:\n{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        run_with_env(np, &scene, &out, "TDYN_CONTACT_BASELINE", mode, &[]);
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
                 .unwrap();
@@ -505,16 +481,14 @@ fn rcb_balances_the_contact_work_where_the_static_decomposition_cannot() {
         let mut imb = Vec::new();
         for mode in ["0", "1"] {
             let out = dir.join(format!("np{np}_b{mode}"));
-            let o = mpirun(np, 600)
-                .args(["-x", &format!("TDYN_CONTACT_BASELINE={mode}")])
-                .arg(tdyn())
-                .arg("run")
-                .arg(&scene)
-                .args(["--end-time", "3e-5", "--quiet", "--out"])
-                .arg(&out)
-                .output()
-                .expect("mpirun");
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            run_with_env(
+                np,
+                &scene,
+                &out,
+                "TDYN_CONTACT_BASELINE",
+                mode,
+                &["--end-time", "3e-5"],
+            );
             let report: serde_json::Value =
                 serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
                     .unwrap();
