@@ -205,3 +205,82 @@ fn liggghts_dam_break_2000_steps_kinetic_energy_and_front_within_1_percent() {
         );
     }
 }
+
+#[test]
+fn kept_pair_candidates_give_the_pairs_of_a_fresh_search() {
+    // On one rank without a periodic box the SPH stage keeps its pair candidates between steps
+    // (a Verlet list, sph_stage::VerletPairs) and filters them with the search's own overlap
+    // test. Reference: the same run searching afresh every step (TDYN_SPH_VERLET=0), itself
+    // checked against LIGGGHTS above. scenes/liggghts_dambreak.toml for 600 steps (the fluid
+    // falls far enough for several rebuilds): the pair count of the last step identical, and
+    // every history column within 1e-10 of its largest value (the pairs come in another order,
+    // so sums differ at round-off; measured ~1e-14): momentum against its largest component,
+    // the energy error absolutely.
+    let dir = workdir("sph_verlet_against_fresh");
+    let scene = root().join("scenes/liggghts_dambreak.toml");
+    let mut runs = Vec::new();
+    for v in ["0", "1"] {
+        let out = dir.join(format!("verlet{v}"));
+        run_with_env(
+            1,
+            &scene,
+            &out,
+            "TDYN_SPH_VERLET",
+            v,
+            &["--end-time", "0.03"],
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        let pairs = report["sph_pairs_last_step"].as_f64().unwrap();
+        let searches = report["sph_pair_searches"].as_f64().unwrap();
+        let steps = report["steps"].as_f64().unwrap();
+        if v == "0" {
+            assert!(
+                searches > steps,
+                "a fresh search every evaluation: {searches} in {steps} steps"
+            );
+        } else {
+            assert!(
+                (2.0..0.2 * steps).contains(&searches),
+                "the kept list must be rebuilt, and rarely: {searches} searches in {steps} steps"
+            );
+        }
+        runs.push((pairs, read_csv(&out.join("history.csv"))));
+    }
+    assert!(
+        runs[0].0 > 10_000.0,
+        "too few pairs ({}) to test anything",
+        runs[0].0
+    );
+    assert_eq!(
+        runs[0].0, runs[1].0,
+        "pairs at the last step: fresh search against kept list"
+    );
+    let (h, fresh) = &runs[0].1;
+    let (_, kept) = &runs[1].1;
+    assert_eq!(fresh.len(), kept.len(), "history rows");
+    let largest = |c: usize| fresh.iter().map(|r| r[c].abs()).fold(0.0, f64::max);
+    // Momentum components against the largest of them (a component that is zero by symmetry
+    // carries only round-off), the energy error (a ratio) absolutely.
+    let momentum = (0..h.len())
+        .filter(|&c| h[c].starts_with("momentum"))
+        .map(largest)
+        .fold(0.0, f64::max);
+    for (c, name) in h.iter().enumerate() {
+        let scale = match name.as_str() {
+            n if n.starts_with("momentum") => momentum,
+            "energy_error" => 1.0,
+            _ => largest(c),
+        };
+        let d = fresh
+            .iter()
+            .zip(kept)
+            .map(|(a, b)| (a[c] - b[c]).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            d <= 1e-10 * scale.max(1e-300),
+            "{name}: kept pair list differs from a fresh search by {d:e} (scale {scale:e}, limit 1e-10)"
+        );
+    }
+}
