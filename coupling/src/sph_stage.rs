@@ -451,7 +451,11 @@ impl SphStage {
         }
         let v = self.verlet.as_ref().expect("just built");
         // The search's own test for interior pairs: r^2 < (h_a + h_b)^2 on real positions.
+        // Pairs per particle counted on the way (every entry is owned: no ghosts here).
         let (x, h) = (&p.x_real, &p.h);
+        self.pair_count.clear();
+        self.pair_count.resize(p.n_owned, 0);
+        let count = &mut self.pair_count;
         let mut list: Vec<(u32, u32)> = Vec::with_capacity(v.pairs.len());
         for &(i, j) in &v.pairs {
             let (a, b) = (x[i as usize], x[j as usize]);
@@ -459,9 +463,10 @@ impl SphStage {
             let reach = h[i as usize] + h[j as usize];
             if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
                 list.push((i, j));
+                count[i as usize] += 1;
+                count[j as usize] += 1;
             }
         }
-        self.count_pairs(&list);
         list
     }
 
