@@ -22,8 +22,7 @@
 use crate::comm::CommPlan;
 use crate::contact_stage::{ContactOutcome, FullFace};
 use contact::{
-    face_records_search_aabb, push_back, search, Aabb, ContactBox, NodeRecord, PushBackParams,
-    SearchParams,
+    face_records_search_aabb, push_back, search, Aabb, NodeRecord, PushBackParams, SearchParams,
 };
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -169,9 +168,7 @@ impl BaselineStage {
             }
         }
         let work_items = (n_owned + face_recs.len()) as f64;
-        let b = ContactBox::from_records(&recs, n_owned, &face_recs);
-        crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
-        let b = b.expect("checked on every rank");
+        let b = crate::contact_stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let contacts = search(&b, &self.params);
         let pb = push_back(&b, &contacts, &PushBackParams::new(dt));
 

@@ -761,9 +761,7 @@ impl ContactStage {
             face_recs.push(f.face);
         }
         let work_items = (n_owned + face_recs.len()) as f64;
-        let b = ContactBox::from_records(&recs, n_owned, &face_recs);
-        crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
-        let b = b.expect("checked on every rank");
+        let b = box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let cands = Candidates::build(&b, &self.params, cand_skin);
         let contacts = search_candidates(&b, &self.params, &cands);
 
@@ -905,6 +903,19 @@ struct SetupBox<'a> {
     max_radius: f64,
 }
 
+/// `ContactBox::from_records` on every rank (collective): a rank's error (a face corner missing,
+/// a node twice) stops every rank with that rank's message.
+pub(crate) fn box_on_every_rank(
+    comm: &SimpleCommunicator,
+    nodes: &[NodeRecord],
+    n_owned: usize,
+    faces: &[FaceRecord],
+) -> Result<ContactBox, String> {
+    let b = ContactBox::from_records(nodes, n_owned, faces);
+    crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
+    Ok(b.expect("checked on every rank"))
+}
+
 fn is_particle(r: &NodeRecord) -> bool {
     r.flags & contact::FLAG_PARTICLE != 0
 }
@@ -1004,9 +1015,7 @@ fn build_sticky(
     let face_recs: Vec<FaceRecord> = (0..full.faces.len())
         .map(|f| full.faces.record(f))
         .collect();
-    let b = ContactBox::from_records(&recs, n_fe_owned, &face_recs);
-    crate::collective::first_error(comm, b.as_ref().err().map(|e| e.to_string()))?;
-    let b = b.expect("checked on every rank");
+    let b = box_on_every_rank(comm, &recs, n_fe_owned, &face_recs)?;
     let slot_of: HashMap<u64, usize> = recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
     // Corner copies: ask their contact owners.
     let mut dest = Vec::new();
