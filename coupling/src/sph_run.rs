@@ -453,7 +453,7 @@ pub fn run(
     ex.insert("loop_s".into(), loop_s.into());
     ex.insert("sph_pairs_last_step".into(), st.stats.pairs.into());
     // Pair searches run (on one rank without a periodic box the candidates are kept between
-    // steps: sph_stage::VerletPairs); the sum over ranks.
+    // steps: sph::KeptPairs); the sum over ranks.
     ex.insert(
         "sph_pair_searches".into(),
         (crate::collective::sum(world, st.pair_searches as f64) as u64).into(),

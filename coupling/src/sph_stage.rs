@@ -102,32 +102,11 @@ pub struct SphStage {
     balanced_once: bool,
     /// The kept pair candidates of a run on one rank without a periodic box (see
     /// `SphStage::pair_list`); `None` elsewhere, or until the first search.
-    verlet: Option<VerletPairs>,
+    verlet: Option<sph::KeptPairs>,
     /// Whether such a list may be kept (`TDYN_SPH_VERLET=0` searches afresh every step).
     verlet_enabled: bool,
     /// Pair searches run so far (fresh lists and candidate builds).
     pub pair_searches: u64,
-}
-
-fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-/// Skin of the kept pair candidates, in smoothing lengths (the smallest h): the list is rebuilt
-/// when a particle has moved half of it. Measured on the dam break (np 1): 0.1 ... 0.3 h.
-pub const VERLET_SKIN_H: f64 = 0.2;
-
-/// Pair candidates kept over several steps (a Verlet list): every pair whose spheres, grown by
-/// half the skin each, overlapped at the build. While no particle has moved half the skin
-/// since, every overlapping pair is among them (the distance of a pair changes by at most the
-/// two motions), and filtering them with the search's own overlap test gives the pairs a fresh
-/// search gives.
-struct VerletPairs {
-    pairs: Vec<(u32, u32)>,
-    x_ref: Vec<[f64; 3]>,
-    h_ref: Vec<f64>,
-    id_ref: Vec<u64>,
-    skin: f64,
 }
 
 impl SphStage {
@@ -402,7 +381,7 @@ impl SphStage {
     /// The pairs this box computes (COI in its box), counted per owned particle.
     ///
     /// On one rank without a periodic box (no ghosts, no migration, every pair interior) the
-    /// candidates are kept between steps ([`VerletPairs`]) and filtered with the search's overlap
+    /// candidates are kept between steps ([`sph::KeptPairs`]) and filtered with the search's overlap
     /// test: the same pairs as a fresh search (in another order, so sums differ at round-off).
     fn pair_list(&mut self) -> Vec<(u32, u32)> {
         let opts = self.params.search_options();
@@ -420,54 +399,13 @@ impl SphStage {
             self.count_pairs(&list);
             return list;
         }
-        let valid = self.verlet.as_ref().is_some_and(|v| {
-            v.id_ref.len() == p.len()
-                && v.id_ref == p.id
-                && v.h_ref == p.h
-                && p.x_real
-                    .iter()
-                    .zip(&v.x_ref)
-                    .all(|(a, b)| 2.0 * dist(a, b) < v.skin)
-        });
-        if !valid {
-            let h_min = p.h.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-            let skin = if h_min.is_finite() {
-                VERLET_SKIN_H * h_min
-            } else {
-                0.0
-            };
+        if !self.verlet.as_ref().is_some_and(|v| v.still_valid(p)) {
             self.pair_searches += 1;
-            let mut grown = p.clone();
-            for h in grown.h.iter_mut() {
-                *h += 0.5 * skin;
-            }
-            self.verlet = Some(VerletPairs {
-                pairs: pairs_in_box(&grown, &opts, self.box_lo, self.box_hi),
-                x_ref: p.x_real.clone(),
-                h_ref: p.h.clone(),
-                id_ref: p.id.clone(),
-                skin,
-            });
+            self.verlet = Some(sph::KeptPairs::build(p, &opts, self.box_lo, self.box_hi));
         }
         let v = self.verlet.as_ref().expect("just built");
-        // The search's own test for interior pairs: r^2 < (h_a + h_b)^2 on real positions.
-        // Pairs per particle counted on the way (every entry is owned: no ghosts here).
-        let (x, h) = (&p.x_real, &p.h);
-        self.pair_count.clear();
-        self.pair_count.resize(p.n_owned, 0);
-        let count = &mut self.pair_count;
-        let mut list: Vec<(u32, u32)> = Vec::with_capacity(v.pairs.len());
-        for &(i, j) in &v.pairs {
-            let (a, b) = (x[i as usize], x[j as usize]);
-            let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let reach = h[i as usize] + h[j as usize];
-            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
-                list.push((i, j));
-                count[i as usize] += 1;
-                count[j as usize] += 1;
-            }
-        }
-        list
+        // every entry is owned here (no ghosts), so the counts are the owned particles'
+        v.filter(p, &mut self.pair_count)
     }
 
     /// Pairs per owned particle in this evaluation (the next rebalance's weights).

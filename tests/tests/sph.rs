@@ -209,13 +209,14 @@ fn liggghts_dam_break_2000_steps_kinetic_energy_and_front_within_1_percent() {
 #[test]
 fn kept_pair_candidates_give_the_pairs_of_a_fresh_search() {
     // On one rank without a periodic box the SPH stage keeps its pair candidates between steps
-    // (a Verlet list, sph_stage::VerletPairs) and filters them with the search's own overlap
+    // (a Verlet list, sph::KeptPairs) and filters them with the search's own overlap
     // test. Reference: the same run searching afresh every step (TDYN_SPH_VERLET=0), itself
     // checked against LIGGGHTS above. scenes/liggghts_dambreak.toml for 600 steps (the fluid
     // falls far enough for several rebuilds): the pair count of the last step identical, and
     // every history column within 1e-10 of its largest value (the pairs come in another order,
     // so sums differ at round-off; measured ~1e-14): momentum against its largest component,
-    // the energy error absolutely.
+    // the energy error absolutely. At np 1 only: the one rank count where the list is kept (at
+    // np > 1 the stage searches afresh every step, as the LIGGGHTS tests above check at np 2-4).
     let dir = workdir("sph_verlet_against_fresh");
     let scene = root().join("scenes/liggghts_dambreak.toml");
     let mut runs = Vec::new();
