@@ -573,8 +573,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     }
     let inputs = fe_setup::prepare(world, &scene, &groups, &mut dm)?;
     let controls = HexControls {
-        hg_stiffness: scene.run.hourglass.stiffness,
-        hg_viscosity: scene.run.hourglass.viscosity,
+        hourglass: scene.run.hourglass.control(),
         bv_linear: scene.run.bulk_viscosity.linear,
         bv_quadratic: scene.run.bulk_viscosity.quadratic,
     };

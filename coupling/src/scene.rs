@@ -39,16 +39,38 @@ pub struct BulkViscosity {
     pub quadratic: f64,
 }
 
-/// Flanagan-Belytschko hourglass coefficients.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+/// `run.hourglass`: the kind of hourglass control and its coefficient (docs/scene.md).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Hourglass {
-    /// Stiffness coefficient (default 0.05).
-    #[serde(default = "d_hg_stiff")]
-    pub stiffness: f64,
-    /// Viscosity coefficient (default 0).
+    /// "physical" (default), "stiffness" or "viscous".
+    #[serde(default = "d_hg_kind")]
+    pub kind: String,
+    /// The kind's coefficient: physical 1 (a multiplier of the physical stiffness), stiffness
+    /// 0.05, viscous 0.1 by default.
     #[serde(default)]
-    pub viscosity: f64,
+    pub coefficient: Option<f64>,
+}
+
+/// The hourglass kinds a scene may name.
+pub const HOURGLASS_KINDS: [&str; 3] = ["physical", "stiffness", "viscous"];
+
+impl Hourglass {
+    /// The element's hourglass control (the kind checked by `parse`).
+    pub fn control(&self) -> fe_petsc::hourglass::Hourglass {
+        use fe_petsc::hourglass::{Hourglass as H, DEFAULT_STIFFNESS, DEFAULT_VISCOUS};
+        match self.kind.as_str() {
+            "stiffness" => H::Stiffness {
+                coefficient: self.coefficient.unwrap_or(DEFAULT_STIFFNESS),
+            },
+            "viscous" => H::Viscous {
+                coefficient: self.coefficient.unwrap_or(DEFAULT_VISCOUS),
+            },
+            _ => H::Physical {
+                scale: self.coefficient.unwrap_or(1.0),
+            },
+        }
+    }
 }
 
 fn d_bv_lin() -> f64 {
@@ -57,8 +79,8 @@ fn d_bv_lin() -> f64 {
 fn d_bv_quad() -> f64 {
     1.2
 }
-fn d_hg_stiff() -> f64 {
-    0.05
+fn d_hg_kind() -> String {
+    "physical".into()
 }
 fn d_safety() -> f64 {
     0.9
@@ -77,8 +99,8 @@ fn d_bv() -> BulkViscosity {
 }
 fn d_hg() -> Hourglass {
     Hourglass {
-        stiffness: d_hg_stiff(),
-        viscosity: 0.0,
+        kind: d_hg_kind(),
+        coefficient: None,
     }
 }
 fn d_h_factor() -> f64 {
@@ -640,12 +662,25 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     for (k, v) in [
         ("run.bulk_viscosity.linear", r.bulk_viscosity.linear),
         ("run.bulk_viscosity.quadratic", r.bulk_viscosity.quadratic),
-        ("run.hourglass.stiffness", r.hourglass.stiffness),
-        ("run.hourglass.viscosity", r.hourglass.viscosity),
+        (
+            "run.hourglass.coefficient",
+            r.hourglass.coefficient.unwrap_or(0.0),
+        ),
     ] {
         if !(v >= 0.0 && v.is_finite()) {
             return Err(err(k, format!("expected a coefficient >= 0, got {v}")));
         }
+    }
+
+    if !HOURGLASS_KINDS.contains(&r.hourglass.kind.as_str()) {
+        return Err(err(
+            "run.hourglass.kind",
+            format!(
+                "expected one of {}, got \"{}\"",
+                HOURGLASS_KINDS.join(", "),
+                r.hourglass.kind
+            ),
+        ));
     }
 
     let mut meshes = Vec::new();

@@ -1,9 +1,11 @@
-//! The PRONTO-3D hexahedron: 8 nodes, one-point (mean-gradient) integration, Flanagan-Belytschko
-//! hourglass control, linear and quadratic bulk viscosity, Hughes-Winget objective stress update.
+//! The PRONTO-3D hexahedron: 8 nodes, one-point (mean-gradient) integration, hourglass control
+//! (`crate::hourglass`: physical assumed-strain stabilisation by default), linear and quadratic
+//! bulk viscosity, Hughes-Winget objective stress update.
 //!
 //! Reference: D. P. Flanagan and T. Belytschko, "A uniform strain hexahedron and quadrilateral
 //! with orthogonal hourglass control", IJNME 17 (1981) 679-706 (FB below).
 //! Node order: gmsh/VTK (0-3 the face zeta = -1 counter-clockwise seen from +zeta, 4-7 above).
+use crate::hourglass::{self, Hourglass, HourglassMaterial, HourglassStep};
 use crate::material::Material;
 
 /// Nodes of the element.
@@ -21,29 +23,11 @@ pub const NODE_XI: [[f64; 3]; 8] = [
     [-1.0, 1.0, 1.0],
 ];
 
-/// FB hourglass base vectors Gamma_alpha at the nodes: eta zeta, zeta xi, xi eta, xi eta zeta.
-/// They are orthogonal to 1, xi, eta, zeta over the nodes (the linear fields).
-const GAMMA: [[f64; 8]; 4] = {
-    let mut g = [[0.0; 8]; 4];
-    let mut i = 0;
-    while i < 8 {
-        let [x, y, z] = NODE_XI[i];
-        g[0][i] = y * z;
-        g[1][i] = z * x;
-        g[2][i] = x * y;
-        g[3][i] = x * y * z;
-        i += 1;
-    }
-    g
-};
-
 /// Hourglass and bulk-viscosity coefficients (SCENE.md `run.hourglass`, `run.bulk_viscosity`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HexControls {
-    /// FB stiffness coefficient (default 0.05).
-    pub hg_stiffness: f64,
-    /// FB viscosity coefficient (default 0).
-    pub hg_viscosity: f64,
+    /// Hourglass control (default: physical stabilisation, see [`crate::hourglass`]).
+    pub hourglass: Hourglass,
     /// Linear bulk-viscosity coefficient b1 (default 0.06).
     pub bv_linear: f64,
     /// Quadratic bulk-viscosity coefficient b2 (default 1.2; enters squared).
@@ -53,8 +37,7 @@ pub struct HexControls {
 impl Default for HexControls {
     fn default() -> Self {
         HexControls {
-            hg_stiffness: 0.05,
-            hg_viscosity: 0.0,
+            hourglass: Hourglass::default(),
             bv_linear: 0.06,
             bv_quadratic: 1.2,
         }
@@ -66,7 +49,7 @@ impl Default for HexControls {
 pub struct HexState {
     /// Cauchy stress, Voigt xx,yy,zz,xy,yz,zx, Pa, tension positive (no bulk viscosity).
     pub stress: [f64; 6],
-    /// FB stiffness hourglass generalised forces Q_alpha (global axes), N.
+    /// Generalised hourglass forces H (mode, element-frame axis), N: see [`crate::hourglass`].
     pub hg: [[f64; 3]; 4],
 }
 
@@ -338,15 +321,32 @@ fn critical_dt(bb: f64, c: f64, xi: f64) -> f64 {
     (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi)
 }
 
-/// The element's characteristic length for the bulk viscosity: the one its FB frequency bound
-/// implies, l = sqrt(3) / sqrt(2 sum b^2) (= h for a cube of side h, as V^(1/3) is; for a flat
-/// brick close to its thinnest side rather than V^(1/3)). The damping ratio the stable step
-/// assumes, xi = b1 + b2^2 l |eps_v| / c, is the highest mode's only with this length: with
-/// V^(1/3) a brick 8:1 thin was damped 2.4 times more than its step allowed and blew up
-/// (bar_wave with N = 160, M = 1; a thin wall's elements likewise).
+/// The bulk viscosity's length, l = sqrt(3) / sqrt(2 sum b^2): h for a cube of side h (as
+/// V^(1/3) is), close to the thinnest side of a flat brick (V^(1/3) damped an 8:1 brick 2.4 times
+/// more than its step allowed: bar_wave at N = 160, M = 1 blew up).
 #[inline]
 fn bulk_viscosity_length(bb: f64) -> f64 {
     3f64.sqrt() / (2.0 * bb).sqrt()
+}
+
+/// The bulk viscosity: the pressure q it adds to the normal stresses and the damping ratio it
+/// gives the element's highest mode, one definition for the force and the stable step.
+///
+/// q = rho l eps_v (b1 c + b2^2 l max(0, -eps_v)) (PRONTO/LS-DYNA convention, quadratic
+/// coefficient squared; eps_v = tr D, 1/s). As a viscosity on the mode of frequency
+/// omega_max = 2 c sqrt(2 b.b), whose stiffness is rho c^2 times the same geometric factor, it
+/// gives the damping ratio xi = (q / (rho c^2 eps_v)) omega_max / 2
+/// = (b1 + b2^2 l |eps_v| / c) l sqrt(2 b.b) = sqrt(3) (b1 + b2^2 l |eps_v| / c): sqrt(3) times
+/// what the bare coefficients say (the stable step once assumed b1 alone, and bar_wave with
+/// 8:1 bricks and b1 = 0.3 blew up at dt_safety 0.86).
+#[inline]
+fn bulk_viscosity(ctl: &HexControls, bb: f64, rho: f64, c: f64, ev: f64) -> (f64, f64) {
+    let len = bulk_viscosity_length(bb);
+    let comp = (-ev).max(0.0);
+    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
+    let q = rho * len * c * ev * lin_quad;
+    let xi = lin_quad * len * (2.0 * bb).sqrt();
+    (q, xi)
 }
 
 /// Stable step of an element at density `rho` with volumetric strain rate `div_v`.
@@ -360,15 +360,14 @@ pub fn stable_dt(
     let (b, _) = gradient(x);
     let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
     let c = (mat.dilatational_modulus() / rho).sqrt();
-    let l = bulk_viscosity_length(bb);
-    let xi = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * l * (-div_v).max(0.0) / c;
+    let (_, xi) = bulk_viscosity(ctl, bb, rho, c, div_v);
     critical_dt(bb, c, xi)
 }
 
 /// One explicit update of one element.
 ///
 /// `x`: nodal coordinates at t(n+1); `v`: nodal velocities at t(n+1/2); `dt`: the step just taken;
-/// `rho0`, `vol0`: reference density and volume. Rotates the stress and hourglass forces with the
+/// `rho0`, `vol0`: reference density and volume. Rotates the stress with the
 /// Hughes-Winget increment, calls the material with D dt, adds bulk viscosity for the force only.
 ///
 /// Cost: about 2 x 450 flops for the gradients (mid-step and end), 150 for L/D/W and the rotation, 200 for the
@@ -466,19 +465,15 @@ pub fn update(
     let deps: [f64; 6] = std::array::from_fn(|k| d[k] * dt);
     // rho = m / V with the exact volume (a fluid's EOS reads it).
     let rho = rho0 * vol0 * iv;
+    let rotated = stress;
     mat.update_stress(&mut stress, mat_state, &deps, dt, rho);
     st.stress = stress;
 
-    // Bulk viscosity (PRONTO/LS-DYNA convention, quadratic coefficient squared):
-    // q = rho l eps_v (b1 c + b2^2 l max(0, -eps_v)), added to the normal stresses; c from the
-    // material's current rho c^2 (constant for a solid, the EOS's for a fluid).
+    // Bulk viscosity, added to the normal stresses for the force only; c from the material's
+    // current rho c^2 (constant for a solid, the EOS's for a fluid).
     let modulus = mat.wave_modulus(rho, mat_state);
     let c = (modulus / rho).sqrt();
-    let ev = d[0] + d[1] + d[2];
-    let len = bulk_viscosity_length(bb);
-    let comp = (-ev).max(0.0);
-    let q = rho * len * ev * (ctl.bv_linear * c + ctl.bv_quadratic * ctl.bv_quadratic * len * comp);
-    let xi = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
+    let (q, xi) = bulk_viscosity(ctl, bb, rho, c, d[0] + d[1] + d[2]);
     let dt_stable = critical_dt(bb, c, xi);
 
     let st_tot = [
@@ -499,51 +494,25 @@ pub fn update(
         ];
     }
 
-    // FB hourglass control. gamma_alpha = Gamma_alpha - (Gamma_alpha . x_i) b_i is orthogonal
-    // to every linear velocity field; qdot_i,alpha = sum_I v_iI gamma_alpha,I.
-    // Stiffness: dQ_s/dt = kappa_s * (lambda + 2 mu) * V * (b . b) / 8 * qdot, so the mode's
-    // stiffness is kappa_s times the element's (lambda + 2 mu) h scale (rho c^2 for a fluid).
-    // Viscous (FB eq. 35): Q_v = 1/2 kappa_v rho c V^(2/3) qdot.
-    let mut hg_work = 0.0;
-    if ctl.hg_stiffness != 0.0 || ctl.hg_viscosity != 0.0 {
-        let ks = ctl.hg_stiffness * modulus * vol * bb / 8.0;
-        let kv = if ctl.hg_viscosity > 0.0 {
-            0.5 * ctl.hg_viscosity * rho * c * len * len
-        } else {
-            0.0
-        };
-        for (al, g) in GAMMA.iter().enumerate() {
-            let mut gx = [0.0; 3];
-            for k in 0..8 {
-                for a in 0..3 {
-                    gx[a] += g[k] * x[k][a];
-                }
-            }
-            let mut gam = [0.0; 8];
-            let mut qd = [0.0; 3];
-            for k in 0..8 {
-                gam[k] = g[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2]);
-                for a in 0..3 {
-                    qd[a] += v[k][a] * gam[k];
-                }
-            }
-            let old = st.hg[al];
-            let old_rot: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| r[i][k] * old[k]).sum());
-            let mut qtot = [0.0; 3];
-            for a in 0..3 {
-                let new = old_rot[a] + dt * ks * qd[a];
-                let qv = kv * qd[a];
-                hg_work += dt * (0.5 * (old_rot[a] + new) + qv) * qd[a];
-                st.hg[al][a] = new;
-                qtot[a] = new + qv;
-            }
-            for k in 0..8 {
-                for a in 0..3 {
-                    force[k][a] -= qtot[a] * gam[k];
-                }
-            }
-        }
-    }
+    // Hourglass control with the material's current tangent (see `crate::hourglass`).
+    let mu = mat.shear_modulus();
+    let dsig: [f64; 6] = std::array::from_fn(|k| stress[k] - rotated[k]);
+    let hg_mat = HourglassMaterial {
+        mu,
+        nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
+        rho,
+        c,
+        tangent_ratio: hourglass::tangent_ratio(&dsig, &deps, mu),
+    };
+    let step = HourglassStep {
+        x,
+        v,
+        b: &b,
+        bb,
+        vol,
+        dt,
+    };
+    let hg_work = ctl.hourglass.apply(&step, &hg_mat, &mut st.hg, &mut force);
     Ok(HexOutput {
         force,
         hg_work,

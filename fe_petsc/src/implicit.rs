@@ -15,17 +15,16 @@
 //! conserves; its period elongation is (omega dt)^2 / 12 to leading order.
 //!
 //! **Element.** The nodal forces f(u(n+1)) come from [`hex::update`] itself (mean-gradient
-//! hexahedron, Flanagan-Belytschko hourglass stiffness, Hughes-Winget incremental rotation), given
+//! hexahedron, hourglass control, Hughes-Winget incremental rotation), given
 //! the trial positions x(n) + du and the step's mean velocity du/dt, starting from the element
 //! state at t(n): the two modes differ only in time integration. Bulk viscosity is off (SCENE.md:
 //! explicit only).
 //!
-//! **Tangent** (per element, 24 x 24): K = V S^T C S + (k_s + k_v/dt) sum_a gamma_a gamma_a^T (x)
-//! I3, with S the strain-displacement matrix of the mean gradient at the trial geometry, C the
+//! **Tangent** (per element, 24 x 24): K = V S^T C S + K_hg, with K_hg the hourglass control's
+//! own linear map (`Hourglass::tangent`: elastic moduli, viscous part as c / dt), with S the strain-displacement matrix of the mean gradient at the trial geometry, C the
 //! algorithmic tangent of the material's own stress update, found by forward differences of
 //! `Material::update_stress` about the step's strain increment (exact for linear elasticity to
-//! round-off, the consistent tangent of the radial return for J2 plasticity), and gamma_a the FB
-//! hourglass vectors. Left out (stated approximation): the geometric (initial-stress) stiffness
+//! round-off, the consistent tangent of the radial return for J2 plasticity). Left out (stated approximation): the geometric (initial-stress) stiffness
 //! and the derivative of the rotation, of relative size |stress| / modulus (1e-3 at most for
 //! metals); Newton then converges linearly at about that ratio per iteration.
 //!
@@ -52,7 +51,8 @@
 //! own identity du = dt (v(n) + v(n+1))/2 makes kinetic energy + that work balance exactly for
 //! any force law, so the energy error measures how well Newton and KSP converged.
 use crate::explicit::{centroid, Constraint, ExplicitFe, ExplicitSetup, StepError};
-use crate::hex::{self, HexControls, HexState, NODE_XI};
+use crate::hex::{self, HexControls, HexState};
+use crate::hourglass::{self, HourglassMaterial, HourglassStep};
 use crate::material::Material;
 use crate::mesh::NodeExchange;
 use crate::objects::Vector;
@@ -217,21 +217,6 @@ fn mat3_vec(p: &[[f64; 3]; 3], w: &[f64; 3]) -> [f64; 3] {
 fn gather(xs: &[[f64; 3]], conn: &[u32; 8]) -> [[f64; 3]; 8] {
     std::array::from_fn(|k| xs[conn[k] as usize])
 }
-
-/// FB hourglass base vectors at the nodes: eta zeta, zeta xi, xi eta, xi eta zeta (as in `hex`).
-const GAMMA: [[f64; 8]; 4] = {
-    let mut g = [[0.0; 8]; 4];
-    let mut i = 0;
-    while i < 8 {
-        let [x, y, z] = NODE_XI[i];
-        g[0][i] = y * z;
-        g[1][i] = z * x;
-        g[2][i] = x * y;
-        g[3][i] = x * y * z;
-        i += 1;
-    }
-    g
-};
 
 /// The implicit FE stage on one rank. Its nodal and element state lives in an [`ExplicitFe`]
 /// (`fe`: the same arrays, element state and energy bookkeeping that probes and output read);
@@ -606,7 +591,7 @@ impl ImplicitFe {
                     std::array::from_fn(|bb| (0..6).map(|q| c[p][q] * s[j][q][bb]).sum())
                 })
             });
-            let hg = self.hourglass_stiffness(mat, &xe, &b, vol, self.fe.vol0[e]);
+            let hg = self.hourglass_tangent(mat, &xe, &b, vol, self.fe.vol0[e]);
             let proj: [Option<[[f64; 3]; 3]>; 8] =
                 std::array::from_fn(|k| self.dofs[conn[k] as usize].matrix());
             for i in 0..8 {
@@ -618,9 +603,8 @@ impl ImplicitFe {
                             for p in 0..6 {
                                 v += s[i][p][a] * cs[j][p][bb];
                             }
-                            kij[a][bb] = vol * v;
+                            kij[a][bb] = vol * v + hg[3 * i + a][3 * j + bb];
                         }
-                        kij[a][a] += hg.0 * hg.1[i][j];
                     }
                     if let Some(p) = proj[i] {
                         kij = mat3_mul(&p, &kij);
@@ -650,49 +634,36 @@ impl ImplicitFe {
         Ok(())
     }
 
-    /// The FB hourglass stiffness of an element as (k, G) with K_hg[Ia, Jb] = k G[I][J]
-    /// delta_ab: k = k_s + k_v / dt (k_s = kappa_s (lambda + 2 mu) V (b . b) / 8,
-    /// k_v = kappa_v rho c V^(2/3) / 2, as in `hex::update`), G = sum_a gamma_a gamma_a^T.
-    fn hourglass_stiffness(
+    /// The hourglass tangent of an element (`hourglass::Hourglass::tangent`: the elastic
+    /// physical stiffness, or the FB forms, the viscous part as c / dt).
+    fn hourglass_tangent(
         &self,
         mat: &dyn Material,
         x: &[[f64; 3]; 8],
         b: &[[f64; 3]; 8],
         vol: f64,
         vol0: f64,
-    ) -> (f64, [[f64; 8]; 8]) {
-        let ctl = &self.controls;
-        let mut g = [[0.0; 8]; 8];
-        if ctl.hg_stiffness == 0.0 && ctl.hg_viscosity == 0.0 {
-            return (0.0, g);
-        }
+    ) -> Box<[[f64; 24]; 24]> {
         let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
-        let ks = ctl.hg_stiffness * mat.dilatational_modulus() * vol * bb / 8.0;
-        let kv = if ctl.hg_viscosity > 0.0 {
-            let rho = mat.density() * vol0 / vol;
-            let c = (mat.dilatational_modulus() / rho).sqrt();
-            let len = vol.cbrt();
-            0.5 * ctl.hg_viscosity * rho * c * len * len
-        } else {
-            0.0
+        let rho = mat.density() * vol0 / vol;
+        let mu = mat.shear_modulus();
+        let hm = HourglassMaterial {
+            mu,
+            nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
+            rho,
+            c: (mat.dilatational_modulus() / rho).sqrt(),
+            tangent_ratio: 1.0,
         };
-        for gam in GAMMA.iter() {
-            let mut gx = [0.0; 3];
-            for k in 0..8 {
-                for a in 0..3 {
-                    gx[a] += gam[k] * x[k][a];
-                }
-            }
-            let v: [f64; 8] = std::array::from_fn(|k| {
-                gam[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2])
-            });
-            for i in 0..8 {
-                for j in 0..8 {
-                    g[i][j] += v[i] * v[j];
-                }
-            }
-        }
-        (ks + kv / self.dt, g)
+        let zero = [[0.0; 3]; 8];
+        let step = HourglassStep {
+            x,
+            v: &zero,
+            b,
+            bb,
+            vol,
+            dt: self.dt,
+        };
+        self.controls.hourglass.tangent(&step, &hm, self.dt)
     }
 
     /// Solves (4 M / dt^2 + K) delta = -P r and adds P delta to du on every local node.

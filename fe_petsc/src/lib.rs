@@ -10,6 +10,7 @@
 
 pub mod explicit;
 pub mod hex;
+pub mod hourglass;
 pub mod implicit;
 pub mod material;
 pub mod mesh;
