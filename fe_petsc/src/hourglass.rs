@@ -29,9 +29,10 @@
 //!   *Current stiffness*: both moduli are scaled by the element's tangent ratio
 //!   s = (dsigma' : deps') / (2 mu deps' : deps') measured from this step's stress update (primes:
 //!   deviators; 1 while elastic, about H / (H + 3 mu) while a J2 material flows with hardening
-//!   modulus H): yielded material is not held by elastic hourglass springs (the copper Taylor bar
-//!   came out 27 % narrow with the elastic FB stiffness), and hourglass forces built up before
-//!   yield are kept, not released. A material without shear stiffness (a fluid) has no physical
+//!   modulus H) while the hourglass forces are loading (sum H . qd > 0); unloading is elastic,
+//!   as in an elastic-plastic spring, so the modes dissipate and never create energy. Yielded
+//!   material is not held by elastic hourglass springs (the copper Taylor bar came out 27 %
+//!   narrow with the elastic FB stiffness). A material without shear stiffness (a fluid) has no physical
 //!   hourglass stiffness: it gets the viscous form with its default coefficient instead.
 //! * **stiffness**: FB's stiffness form as PRONTO-3D / Presto write it,
 //!   dH/dt = kappa 2 mu V (b . b) / 8 qd, kappa = `coefficient` (default 0.05), elastic.
@@ -311,7 +312,16 @@ impl Hourglass {
         // Rate of the stiffness part and the viscous part (both per unit qd already applied).
         let (rate, visc): ([[f64; 3]; 4], f64) = match kind {
             Hourglass::Physical { scale } => {
-                let mu = scale * mat.tangent_ratio * mat.mu;
+                // Loading (the hourglass forces do positive work: sum H . qd > 0) follows the
+                // material's tangent; unloading is elastic. Per mode this is a 1D
+                // elastic-plastic spring: with dH = s K dq its dissipation
+                // H dq - d(H K^-1 H)/2 = (1 - s) H . dq >= 0, so the hourglass forces never give
+                // back more energy than they took. (Scaling unloading as well let a mode stiffen
+                // while the centre was elastic and unload softly once it yielded: the container
+                // crush then drew 9 J out of its hourglass modes.)
+                let power: f64 = (0..4).map(|al| dot(&hg[al], &qd[al])).sum();
+                let s_eff = if power > 0.0 { mat.tangent_ratio } else { 1.0 };
+                let mu = scale * s_eff * mat.mu;
                 (physical_rate(&qd, &frame.a, s.vol, mu, mat.nu), 0.0)
             }
             Hourglass::Stiffness { coefficient } => {

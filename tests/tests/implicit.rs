@@ -33,7 +33,10 @@ const BV_LINEAR: f64 = 0.06;
 /// h: h / (c sqrt 3), times sqrt(1 + xi^2) - xi with xi the linear bulk-viscosity coefficient).
 fn dt_limit() -> f64 {
     let h = L / N as f64;
-    h / (c_dilatational() * 3f64.sqrt()) * ((1.0 + BV_LINEAR * BV_LINEAR).sqrt() - BV_LINEAR)
+    // The linear bulk viscosity damps a cube's highest mode (omega = 2 sqrt(3) c / h) with the
+    // ratio xi = sqrt(3) b1 (hex.rs, `bulk_viscosity`).
+    let xi = 3f64.sqrt() * BV_LINEAR;
+    h / (c_dilatational() * 3f64.sqrt()) * ((1.0 + xi * xi).sqrt() - xi)
 }
 
 /// The continuum period 4 L / c.
