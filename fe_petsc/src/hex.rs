@@ -49,7 +49,8 @@ impl Default for HexControls {
 pub struct HexState {
     /// Cauchy stress, Voigt xx,yy,zz,xy,yz,zx, Pa, tension positive (no bulk viscosity).
     pub stress: [f64; 6],
-    /// Generalised hourglass forces H (mode, element-frame axis), N: see [`crate::hourglass`].
+    /// Hourglass state in the element frame (`crate::hourglass`): the physical kind's stress
+    /// amplitudes, Pa, or the FB forms' generalised forces, N.
     pub hg: [[f64; 3]; 4],
 }
 
@@ -503,6 +504,7 @@ pub fn update(
         rho,
         c,
         tangent_ratio: hourglass::tangent_ratio(&dsig, &deps, mu),
+        yield_stress: mat.yield_stress(mat_state),
     };
     let step = HourglassStep {
         x,

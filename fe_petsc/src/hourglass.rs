@@ -25,15 +25,19 @@
 //!   sides free then gets exactly E I (the Poisson mode relaxes eps_rr = -nu eps_pp), a plate
 //!   (eps_rr held) exactly E I / (1 - nu^2). Mode 3 (xi eta zeta) gets its normal strains with the
 //!   deviatoric modulus: energy (V/9) mu sum_i q_i3^2 / a_i^2. Q = dEnergy/dq, H = Q / 8 (chain
-//!   rule through q = qd / 8), so dH/dt = K qd / 64.
+//!   rule through q = qd / 8).
 //!   *Current stiffness*: both moduli are scaled by the element's tangent ratio
 //!   s = (dsigma' : deps') / (2 mu deps' : deps') measured from this step's stress update (primes:
 //!   deviators; 1 while elastic, about H / (H + 3 mu) while a J2 material flows with hardening
-//!   modulus H) while the hourglass forces are loading (sum H . qd > 0); unloading is elastic,
-//!   as in an elastic-plastic spring, so the modes dissipate and never create energy. Yielded
-//!   material is not held by elastic hourglass springs (the copper Taylor bar came out 27 %
-//!   narrow with the elastic FB stiffness). A material without shear stiffness (a fluid) has no physical
-//!   hourglass stiffness: it gets the viscous form with its default coefficient instead.
+//!   modulus H) while the modes are loading; unloading is elastic, as in an elastic-plastic
+//!   spring, so the modes dissipate and never create energy. The state is the stress amplitudes
+//!   (sig_pp, sig_rr, tau_pr per group, the three normal stresses of mode 3), bounded by the
+//!   material's current yield stress (`Material::yield_stress`): the middle element of a bent
+//!   wall, whose centre stays elastic, cannot carry a fibre stress past yield in its modes.
+//!   Yielded material is thus not held by elastic hourglass springs (the copper Taylor bar came
+//!   out 27 % narrow with the elastic FB stiffness). A material without shear stiffness (a
+//!   fluid) has no physical hourglass stiffness: it gets the viscous form with its default
+//!   coefficient instead.
 //! * **stiffness**: FB's stiffness form as PRONTO-3D / Presto write it,
 //!   dH/dt = kappa 2 mu V (b . b) / 8 qd, kappa = `coefficient` (default 0.05), elastic.
 //! * **viscous**: FB's viscous form in LS-DYNA's normalisation (type 1),
@@ -102,6 +106,9 @@ pub struct HourglassMaterial {
     pub c: f64,
     /// Tangent ratio s in [0, 1] (see the module comment).
     pub tangent_ratio: f64,
+    /// Current yield stress, Pa, for materials with a yield surface (bounds the physical
+    /// hourglass stresses).
+    pub yield_stress: Option<f64>,
 }
 
 /// The element's frame and sizes for the physical kind: rows e_j (unit, orthonormal, e_0 along
@@ -166,44 +173,76 @@ fn scale(a: &[f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }
 
-/// Physical kind: the rate of the generalised forces, dH/dt = K qd / 64, for hourglass rates
-/// `qd` in the element frame (`qd[a][i]`: mode a, local direction i), element volume `vol`,
-/// half-lengths `a`, shear modulus `mu` and Poisson's ratio `nu` already scaled by the tangent
-/// ratio and the `scale` coefficient. About 60 flops.
-pub fn physical_rate(
-    qd: &[[f64; 3]; 4],
-    a: &[f64; 3],
-    vol: f64,
-    mu: f64,
-    nu: f64,
-) -> [[f64; 3]; 4] {
-    // q = qd / 8 and H = Q / 8: the factor 1/64 goes into the moduli.
-    let ebar = 2.0 * mu / (1.0 - nu) / 64.0;
-    let g = mu / 64.0;
-    let third = vol / 3.0;
-    let mut h = [[0.0; 3]; 4];
-    for gi in 0..3 {
-        let p = (gi + 1) % 3;
-        let r = (gi + 2) % 3;
-        // Strains linear in xi_g (the factor xi_g itself is in the integral V/3).
-        let epp = qd[r][p] / a[p];
-        let err = qd[p][r] / a[r];
-        let gpr = qd[r][r] / a[p] + qd[p][p] / a[r];
-        // Plane-stress generalised stresses of the group, times V/3.
-        let spp = third * ebar * (epp + nu * err);
-        let srr = third * ebar * (err + nu * epp);
-        let spr = third * g * gpr;
-        // dEnergy/dq by the chain rule through the strains above.
-        h[r][p] += spp / a[p];
-        h[p][r] += srr / a[r];
-        h[r][r] += spr / a[p];
-        h[p][p] += spr / a[r];
+/// Physical kind: the amplitudes of the strain rates the hourglass rates `qd` (element frame,
+/// `qd[a][i]`: mode a, local direction i) give the element with half-lengths `a`, 1/s. Group g
+/// (strains linear in xi_g, (p, r) the other two axes): [eps_pp, eps_rr, gamma_pr]; mode 3
+/// (`[3]`): the normal strains [eps_00, eps_11, eps_22] (times eta zeta, zeta xi, xi eta). The
+/// nodal amplitudes are q = qd / 8.
+pub fn physical_strain_rates(qd: &[[f64; 3]; 4], a: &[f64; 3]) -> [[f64; 3]; 4] {
+    let mut e = [[0.0; 3]; 4];
+    for g in 0..3 {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        e[g] = [
+            0.125 * qd[r][p] / a[p],
+            0.125 * qd[p][r] / a[r],
+            0.125 * (qd[r][r] / a[p] + qd[p][p] / a[r]),
+        ];
     }
-    // Mode 3: normal strains q_i3 (eta zeta / a_i, ...), integral of (eta zeta)^2 = V / 9.
     for i in 0..3 {
-        h[3][i] = 2.0 * g * vol / 9.0 * qd[3][i] / (a[i] * a[i]);
+        e[3][i] = 0.125 * qd[3][i] / a[i];
+    }
+    e
+}
+
+/// Physical kind: the generalised forces H (element frame) of the hourglass stress amplitudes
+/// `sig` (laid out as [`physical_strain_rates`], Pa): H = Q / 8 with Q = dEnergy/dq, the energy
+/// rate being (V/3) sum_g sig_g . e_g + (V/9) sig_3 . e_3. About 30 flops.
+pub fn physical_forces(sig: &[[f64; 3]; 4], a: &[f64; 3], vol: f64) -> [[f64; 3]; 4] {
+    let w = 0.125 * vol / 3.0;
+    let mut h = [[0.0; 3]; 4];
+    for g in 0..3 {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        let [spp, srr, spr] = sig[g];
+        h[r][p] += w * spp / a[p];
+        h[p][r] += w * srr / a[r];
+        h[r][r] += w * spr / a[p];
+        h[p][p] += w * spr / a[r];
+    }
+    for i in 0..3 {
+        h[3][i] = 0.125 * vol / 9.0 * sig[3][i] / a[i];
     }
     h
+}
+
+/// Physical kind: the rates of the stress amplitudes for strain-rate amplitudes `e`, with shear
+/// modulus `mu` and Poisson's ratio `nu`: plane stress in each group
+/// (Ebar = 2 mu / (1 - nu)), 2 mu on mode 3's normal strains.
+fn physical_stress_rates(e: &[[f64; 3]; 4], mu: f64, nu: f64) -> [[f64; 3]; 4] {
+    let ebar = 2.0 * mu / (1.0 - nu);
+    let mut r = [[0.0; 3]; 4];
+    for g in 0..3 {
+        let [epp, err, gpr] = e[g];
+        r[g] = [ebar * (epp + nu * err), ebar * (err + nu * epp), mu * gpr];
+    }
+    r[3] = [2.0 * mu * e[3][0], 2.0 * mu * e[3][1], 2.0 * mu * e[3][2]];
+    r
+}
+
+/// Bounds the hourglass stress amplitudes by the yield stress `sy`: a group's plane stress
+/// (sig_pp, sig_rr, tau_pr) by its von Mises value, mode 3's normal stresses one by one;
+/// scaled back radially, as a return to the yield surface.
+fn yield_bound(sig: &mut [[f64; 3]; 4], sy: f64) {
+    for g in 0..3 {
+        let [a, b, t] = sig[g];
+        let eq = (a * a - a * b + b * b + 3.0 * t * t).sqrt();
+        if eq > sy {
+            let f = sy / eq;
+            sig[g] = [a * f, b * f, t * f];
+        }
+    }
+    for v in sig[3].iter_mut() {
+        *v = v.clamp(-sy, sy);
+    }
 }
 
 /// Poisson's ratio from lambda + 2 mu and mu (0 for a fluid).
@@ -309,48 +348,33 @@ impl Hourglass {
             }
             frame.to_local(&q)
         });
-        // Rate of the stiffness part and the viscous part (both per unit qd already applied).
-        let (rate, visc): ([[f64; 3]; 4], f64) = match kind {
-            Hourglass::Physical { scale } => {
-                // Loading (the hourglass forces do positive work: sum H . qd > 0) follows the
-                // material's tangent; unloading is elastic. Per mode this is a 1D
-                // elastic-plastic spring: with dH = s K dq its dissipation
-                // H dq - d(H K^-1 H)/2 = (1 - s) H . dq >= 0, so the hourglass forces never give
-                // back more energy than they took. (Scaling unloading as well let a mode stiffen
-                // while the centre was elastic and unload softly once it yielded: the container
-                // crush then drew 9 J out of its hourglass modes.)
-                let power: f64 = (0..4).map(|al| dot(&hg[al], &qd[al])).sum();
-                let s_eff = if power > 0.0 { mat.tangent_ratio } else { 1.0 };
-                let mu = scale * s_eff * mat.mu;
-                (physical_rate(&qd, &frame.a, s.vol, mu, mat.nu), 0.0)
-            }
+        if let Hourglass::Physical { scale } = kind {
+            return physical_step(s, mat, scale, &frame, &gam, &qd, hg, force);
+        }
+        // The FB forms: H itself is the state.
+        let (rate, visc): (f64, f64) = match kind {
             Hourglass::Stiffness { coefficient } => {
-                let k = coefficient * 2.0 * mat.mu * s.vol * s.bb / 8.0;
-                (std::array::from_fn(|al| scale(&qd[al], k)), 0.0)
+                (coefficient * 2.0 * mat.mu * s.vol * s.bb / 8.0, 0.0)
             }
             Hourglass::Viscous { coefficient } => (
-                [[0.0; 3]; 4],
+                0.0,
                 0.25 * coefficient * mat.rho * mat.c * s.vol.cbrt().powi(2),
             ),
+            Hourglass::Physical { .. } => unreachable!(),
         };
         let mut work = 0.0;
+        let mut h = [[0.0; 3]; 4];
         for al in 0..4 {
-            let mut tot = [0.0; 3];
             for i in 0..3 {
                 let old = hg[al][i];
-                let new = old + s.dt * rate[al][i];
+                let new = old + s.dt * rate * qd[al][i];
                 let qv = visc * qd[al][i];
                 work += s.dt * (0.5 * (old + new) + qv) * qd[al][i];
                 hg[al][i] = new;
-                tot[i] = new + qv;
-            }
-            let tg = frame.to_global(&tot);
-            for k in 0..8 {
-                for c in 0..3 {
-                    force[k][c] -= tg[c] * gam[al][k];
-                }
+                h[al][i] = new + qv;
             }
         }
+        add_forces(&frame, &gam, &h, force);
         work
     }
 
@@ -374,6 +398,7 @@ impl Hourglass {
             let mut f = [[0.0; 3]; 8];
             let m = HourglassMaterial {
                 tangent_ratio: 1.0,
+                yield_stress: None,
                 ..*mat
             };
             // The stiffness part's H(n+1) = dt dH/dt = K u; the viscous part's c u / dt.
@@ -384,4 +409,59 @@ impl Hourglass {
         }
         k
     }
+}
+
+/// f_iI -= sum_a H_ia gamma_aI with H in the element frame.
+fn add_forces(frame: &Frame, gam: &[[f64; 8]; 4], h: &[[f64; 3]; 4], force: &mut [[f64; 3]; 8]) {
+    for al in 0..4 {
+        let tg = frame.to_global(&h[al]);
+        for k in 0..8 {
+            for c in 0..3 {
+                force[k][c] -= tg[c] * gam[al][k];
+            }
+        }
+    }
+}
+
+/// The physical kind's step: `sig` holds the hourglass stress amplitudes (element frame, Pa).
+///
+/// Loading (the hourglass stresses do positive work, sum sig . e > 0) follows the material's
+/// tangent; unloading is elastic, so that each mode is an elastic-plastic spring whose
+/// dissipation (1 - s) sig . de is never negative (scaling unloading too let a mode stiffen
+/// while the centre was elastic and unload softly once it yielded: the container crush drew 9 J
+/// out of its modes). The amplitudes are then bounded by the material's current yield stress:
+/// an element whose centre stays elastic (the middle of a bent wall) cannot carry a fibre
+/// stress past yield in its hourglass modes either.
+#[allow(clippy::too_many_arguments)]
+fn physical_step(
+    s: &HourglassStep,
+    mat: &HourglassMaterial,
+    scale: f64,
+    frame: &Frame,
+    gam: &[[f64; 8]; 4],
+    qd: &[[f64; 3]; 4],
+    sig: &mut [[f64; 3]; 4],
+    force: &mut [[f64; 3]; 8],
+) -> f64 {
+    let e = physical_strain_rates(qd, &frame.a);
+    // Energy-rate weights: V/3 for the groups, V/9 for mode 3 (only the sign matters here).
+    let power: f64 = (0..3).map(|g| dot(&sig[g], &e[g])).sum::<f64>() + dot(&sig[3], &e[3]) / 3.0;
+    let s_eff = if power > 0.0 { mat.tangent_ratio } else { 1.0 };
+    let rate = physical_stress_rates(&e, scale * s_eff * mat.mu, mat.nu);
+    let h_old = physical_forces(sig, &frame.a, s.vol);
+    for al in 0..4 {
+        for i in 0..3 {
+            sig[al][i] += s.dt * rate[al][i];
+        }
+    }
+    if let Some(sy) = mat.yield_stress {
+        yield_bound(sig, sy);
+    }
+    let h = physical_forces(sig, &frame.a, s.vol);
+    let mut work = 0.0;
+    for al in 0..4 {
+        work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));
+    }
+    add_forces(frame, gam, &h, force);
+    work
 }

@@ -653,6 +653,7 @@ impl ImplicitFe {
             rho,
             c: (mat.dilatational_modulus() / rho).sqrt(),
             tangent_ratio: 1.0,
+            yield_stress: None,
         };
         let zero = [[0.0; 3]; 8];
         let step = HourglassStep {

@@ -92,4 +92,7 @@ impl Material for J2Plastic {
     fn plastic_strain(&self, state: &[f64]) -> f64 {
         state[0]
     }
+    fn yield_stress(&self, state: &[f64]) -> Option<f64> {
+        Some(self.yield_stress + self.hardening * state[0])
+    }
 }

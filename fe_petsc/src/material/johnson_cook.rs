@@ -131,4 +131,8 @@ impl Material for JohnsonCook {
     fn plastic_strain(&self, state: &[f64]) -> f64 {
         state[0]
     }
+    fn yield_stress(&self, state: &[f64]) -> Option<f64> {
+        // Static (rate factor 1): the hourglass bound is then on the safe, softer side.
+        Some(self.flow_stress(state[0], 0.0))
+    }
 }

@@ -68,6 +68,12 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn wave_modulus(&self, _density: f64, _state: &[f64]) -> f64 {
         self.dilatational_modulus()
     }
+    /// The current (static) yield stress in von Mises terms, Pa, for models with a yield
+    /// surface; `None` for the others. The physical hourglass control bounds the hourglass
+    /// stresses with it.
+    fn yield_stress(&self, _state: &[f64]) -> Option<f64> {
+        None
+    }
     /// Equivalent plastic strain, for output (0 for elastic models).
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
