@@ -755,6 +755,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let rank_field = vec![rank; fe0.elems.len()];
     let mut output_s = 0.0;
     let mut particle_ranks = Vec::new();
+    let mut particle_labels = Vec::new();
     let mut write_frame =
         |fe: &ExplicitFe, sph: Option<&SphCtx>, writer: &mut FieldWriter| -> Result<f64, String> {
             let t0 = Instant::now();
@@ -780,7 +781,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 pressure: Some(&fe.pressure),
                 rank: Some(&rank_field),
             };
-            let parts = sph.map(|s| s.frame(&mut particle_ranks, rank));
+            let parts = sph.map(|s| s.frame(&mut particle_ranks, &mut particle_labels, rank));
             writer
                 .write_frame(fe.time, Some(&nodes), Some(&elems), parts.as_ref())
                 .map_err(|e| format!("writing fields.h5: {e}"))?;

@@ -225,7 +225,7 @@ pub fn run(
     let seeds =
         particles_setup::particles(scene, rank as usize, size as usize).map_err(|e| e.to_string());
     crate::collective::first_error(world, seeds.as_ref().err().cloned())?;
-    let seeds = seeds.expect("checked");
+    let (seeds, ids) = seeds.expect("checked");
     let mut n_total = 0u64;
     world.all_reduce_into(&(seeds.len() as u64), &mut n_total, SystemOperation::sum());
     let parts = particles_from_seeds(&seeds, &map)?;
@@ -276,9 +276,11 @@ pub fn run(
 
     let mut output_s = 0.0;
     let mut ranks = Vec::new();
+    let mut labels = Vec::new();
     let mut write_frame = |st: &SphStage, t: f64, w: &mut FieldWriter| -> Result<f64, String> {
         let t0 = Instant::now();
-        let frame = crate::sph_coupled::particle_frame(&st.parts, &mut ranks, rank);
+        let frame =
+            crate::sph_coupled::particle_frame(&st.parts, &ids, &mut ranks, &mut labels, rank);
         w.write_frame(t, None, None, Some(&frame))
             .map_err(|e| format!("writing fields.h5: {e}"))?;
         Ok(t0.elapsed().as_secs_f64())
@@ -315,7 +317,7 @@ pub fn run(
     let dump_dir = out_dir.join("dumps");
     let dump = |st: &SphStage, step: u64| -> Result<f64, String> {
         let t0 = Instant::now();
-        crate::output::write_particle_dump(world, &dump_dir, step, &st.parts)
+        crate::output::write_particle_dump(world, &dump_dir, step, &st.parts, &ids)
             .map_err(|e| format!("{}: {e}", dump_dir.display()))?;
         Ok(t0.elapsed().as_secs_f64())
     };
