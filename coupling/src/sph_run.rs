@@ -372,7 +372,8 @@ pub fn run(
         let e = g[0] + g[1];
         let err = (e - e0 - w_ext).abs() / (e0.abs() + w_ext.abs()).max(1e-30);
         err_max = err_max.max(err);
-        // Checked from step 100 on (SCENE.md; why: driver::ENERGY_CHECK_FROM_STEP).
+        // Checked from step 100 on, before it only a blow-up (SCENE.md; why:
+        // driver::ENERGY_CHECK_FROM_STEP).
         let checked = steps >= crate::driver::ENERGY_CHECK_FROM_STEP;
         if checked {
             err_max_checked = err_max_checked.max(err);
@@ -400,11 +401,12 @@ pub fn run(
                 "{file}: the SPH state became non-finite at t = {t:e} s (step {steps}); reduce run.dt_safety or check the EOS"
             ));
         }
-        if checked && err > scene.run.max_energy_error {
+        if err > crate::driver::energy_error_limit(steps, scene.run.max_energy_error) {
             let _ = history.flush();
             return Err(format!(
-                "{file}: energy error {err:.3e} at t = {t:e} s (step {steps}) exceeds run.max_energy_error = {}; the step is too large or the model unstable",
-                scene.run.max_energy_error
+                "{file}: energy error {err:.3e} at t = {t:e} s (step {steps}) exceeds run.max_energy_error = {}{}; the step is too large or the model unstable",
+                scene.run.max_energy_error,
+                crate::driver::early_note(steps)
             ));
         }
         if t >= next_frame as f64 * output_every - eps * dt || last {
