@@ -21,6 +21,8 @@ pub struct Groups {
 pub struct FeInputs {
     /// Material index of each local element.
     pub elem_material: Vec<usize>,
+    /// Block of each local element: its index in the scene's `[[block]]` list.
+    pub elem_block: Vec<u32>,
     /// Materials, in scene order.
     pub materials: Vec<Box<dyn Material>>,
     /// Initial velocity of each local node.
@@ -54,19 +56,24 @@ pub fn prepare(
             Err(e) => return Err(format!("{file}: material[{i}]: {e}")),
         }
     }
-    // block tag -> (material, velocity)
-    let mut by_tag: BTreeMap<i32, (usize, [f64; 3])> = BTreeMap::new();
-    for b in &scene.blocks {
+    // block tag -> (material, velocity, block index)
+    let mut by_tag: BTreeMap<i32, (usize, [f64; 3], u32)> = BTreeMap::new();
+    for (i, b) in scene.blocks.iter().enumerate() {
         let tag = groups.volumes[&b.group];
-        by_tag.insert(tag, (mat_index[b.material.as_str()], b.velocity));
+        by_tag.insert(tag, (mat_index[b.material.as_str()], b.velocity, i as u32));
     }
     let m: &LocalMesh = &dm.local;
     let mut err = None;
     let mut elem_material = Vec::with_capacity(m.elems.len());
+    let mut elem_block = Vec::with_capacity(m.elems.len());
     for (e, &tag) in m.elem_block.iter().enumerate() {
         match by_tag.get(&tag) {
-            Some((mi, _)) => elem_material.push(*mi),
+            Some((mi, _, bi)) => {
+                elem_material.push(*mi);
+                elem_block.push(*bi);
+            }
             None => {
+                elem_block.push(0);
                 let name = groups
                     .volumes
                     .iter()
@@ -121,6 +128,7 @@ pub fn prepare(
     let constraints = constraints(comm, scene, groups, &dm.local)?;
     Ok(FeInputs {
         elem_material,
+        elem_block,
         materials,
         velocity,
         constraints,

@@ -1,18 +1,44 @@
 //! SPH particles from the scene's `[[particles]]` tables: lattice-filled regions (box, cylinder,
 //! sphere) and particle files (CSV, or LIGGGHTS data files with `liggghts_type`), with global ids independent of the rank count.
 //!
-//! Ids are dense, 0..N (the rows of `fields.h5`): particles read from files first, in ascending
-//! order of the file's ids (so a file numbered 0..N-1 keeps its ids, and one numbered 1..N, as
-//! LIGGGHTS writes them, is shifted down by one), then generated particles, entry by entry in
-//! scene order, lattice points in x-fastest order. Each rank builds a contiguous share of the global sequence; the
-//! first RCB balance then places them.
+//! Two numberings. Inside the run a particle has a dense index 0..N (`ParticleSeed::id`, the
+//! SPH stage's `id`: rows of `fields.h5`, tie-breaks, contact node ids): particles read from
+//! files first, in ascending order of the file's ids, then generated particles, entry by entry
+//! in scene order, lattice points in x-fastest order. What the user sees (SCENE.md: `fields.h5`'s
+//! `particles/id`, the LIGGGHTS dumps) are the particle file's own ids (CSV `id` column, or the
+//! LIGGGHTS data file's atom ids), and for lattice particles the ids after the largest file id
+//! (0, 1, ... without files), in the same order: [`ParticleIds`] maps one to the other, and
+//! since the map is increasing, sorting by either gives the same order. Each rank builds a
+//! contiguous share of the global sequence; the first RCB balance then places them.
 use crate::scene::{ParticlesDef, Region, Scene};
 use std::path::Path;
+
+/// The ids users see, from the dense indices: file particles first (ascending file id), then
+/// generated ones numbered on from one past the largest file id. Held by every rank: as large
+/// as the particle files, which every rank reads anyway.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParticleIds {
+    /// The file particles' ids, ascending (dense index k < len holds `file_ids[k]`).
+    file_ids: Vec<u64>,
+    /// The id of the first generated particle: one past the largest file id, 0 without files.
+    first_generated: u64,
+}
+
+impl ParticleIds {
+    /// The user-facing id of dense index `dense`.
+    #[inline]
+    pub fn id(&self, dense: u64) -> u64 {
+        match self.file_ids.get(dense as usize) {
+            Some(&id) => id,
+            None => self.first_generated + (dense - self.file_ids.len() as u64),
+        }
+    }
+}
 
 /// One particle as set up (the SPH stage builds its own state from these).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParticleSeed {
-    /// Global id.
+    /// Dense index 0..N (the user-facing id is `ParticleIds::id` of it).
     pub id: u64,
     /// Position, m.
     pub x: [f64; 3],
@@ -225,8 +251,13 @@ fn read_liggghts_data(
 }
 
 /// All particles of the scene, every rank building the same global list, then keeping its
-/// contiguous share `[N me / P, N (me + 1) / P)`. Errors name the entry and key.
-pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<ParticleSeed>, String> {
+/// contiguous share `[N me / P, N (me + 1) / P)` (seeds with dense indices), and the map to
+/// the user-facing ids. Errors name the entry and key.
+pub fn particles(
+    scene: &Scene,
+    rank: usize,
+    nranks: usize,
+) -> Result<(Vec<ParticleSeed>, ParticleIds), String> {
     let file = scene.file.display();
     let mut from_files = Vec::new();
     let mut generated: Vec<(usize, Vec<[f64; 3]>)> = Vec::new();
@@ -267,9 +298,13 @@ pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<Partic
             w[0]
         ));
     }
-    // Dense ids 0..N (fields.h5 rows are ids): file particles in ascending file id, then the
-    // generated ones.
+    // Dense indices 0..N: file particles in ascending file id, then the generated ones; the
+    // file ids are kept in `ParticleIds` (what fields.h5 and the dumps write).
     from_files.sort_by_key(|s| s.id);
+    let ids = ParticleIds {
+        first_generated: ids.last().map_or(0, |&m| m + 1),
+        file_ids: ids,
+    };
     for (k, s) in from_files.iter_mut().enumerate() {
         s.id = k as u64;
     }
@@ -300,12 +335,25 @@ pub fn particles(scene: &Scene, rank: usize, nranks: usize) -> Result<Vec<Partic
     }
     let n = all.len();
     let (a, b) = (n * rank / nranks, n * (rank + 1) / nranks);
-    Ok(all[a..b].to_vec())
+    Ok((all[a..b].to_vec(), ids))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The user-facing ids: a file numbered 5, 7, 10 keeps them; the lattice continues at 11.
+    #[test]
+    fn file_ids_and_lattice_ids_after_them() {
+        let ids = ParticleIds {
+            file_ids: vec![5, 7, 10],
+            first_generated: 11,
+        };
+        let got: Vec<u64> = (0..5).map(|d| ids.id(d)).collect();
+        assert_eq!(got, [5, 7, 10, 11, 12], "file ids, then max + 1 onwards");
+        let none = ParticleIds::default();
+        assert_eq!(none.id(3), 3, "no file: lattice ids from 0");
+    }
 
     /// Counts against the lattice arithmetic: a 0.2 x 0.1 x 0.2 box at spacing 0.01 holds
     /// 20 x 10 x 20 points; a sphere of radius 10 s holds close to (4/3) pi 10^3 points.

@@ -2,7 +2,7 @@
 //! its own RCB decomposition, its global energies and momentum, the work of gravity on the
 //! particles, and what it cost. The driver calls `drift` and `finish` around the contact stage.
 use crate::output::ParticleFrame;
-use crate::particles_setup;
+use crate::particles_setup::{self, ParticleIds};
 use crate::scene::Scene;
 use crate::sph_run::{globals, params_from_scene, particles_from_seeds};
 use crate::sph_stage::SphStage;
@@ -15,6 +15,8 @@ pub struct SphCtx {
     pub stage: SphStage,
     /// Particles over all ranks.
     pub n_total: u64,
+    /// The user-facing particle ids (the particle file's).
+    pub ids: ParticleIds,
     /// Global energies and momentum after the last step: [kinetic, internal, px, py, pz,
     /// gravity power].
     pub globals: [f64; 6],
@@ -41,7 +43,7 @@ impl SphCtx {
         let (params, map) = params_from_scene(scene)?;
         let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
         crate::collective::first_error(world, seeds.as_ref().err().cloned())?;
-        let seeds = seeds.expect("checked");
+        let (seeds, ids) = seeds.expect("checked");
         let n_total = crate::collective::sum(world, seeds.len() as f64) as u64;
         let parts = particles_from_seeds(&seeds, &map)?;
         let mut stage = SphStage::new(world, parts, params);
@@ -50,6 +52,7 @@ impl SphCtx {
         Ok(SphCtx {
             stage,
             n_total,
+            ids,
             globals: g,
             external_work: 0.0,
             wall_s: 0.0,
@@ -83,23 +86,35 @@ impl SphCtx {
         Ok(())
     }
 
-    /// The owned particles as a field frame (ids 0..N-1, SCENE.md).
-    pub fn frame<'a>(&'a self, ranks: &'a mut Vec<i32>, rank: i32) -> ParticleFrame<'a> {
-        particle_frame(&self.stage.parts, ranks, rank)
+    /// The owned particles as a field frame (the particle file's ids, SCENE.md); `ranks` and
+    /// `labels` are its storage.
+    pub fn frame<'a>(
+        &'a self,
+        ranks: &'a mut Vec<i32>,
+        labels: &'a mut Vec<u64>,
+        rank: i32,
+    ) -> ParticleFrame<'a> {
+        particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank)
     }
 }
 
-/// The owned entries of `p` as a field frame; `ranks` is filled with `rank` (its storage).
+/// The owned entries of `p` as a field frame, rows by dense index and `particles/id` the
+/// user-facing ids; `ranks` is filled with `rank`, `labels` with the ids (their storage).
 pub fn particle_frame<'a>(
     p: &'a sph::Particles,
+    ids: &ParticleIds,
     ranks: &'a mut Vec<i32>,
+    labels: &'a mut Vec<u64>,
     rank: i32,
 ) -> ParticleFrame<'a> {
     let n = p.n_owned;
     ranks.clear();
     ranks.resize(n, rank);
+    labels.clear();
+    labels.extend(p.id[..n].iter().map(|&d| ids.id(d)));
     ParticleFrame {
         ids: &p.id[..n],
+        labels: Some(labels),
         position: &p.x_real[..n],
         velocity: Some(&p.v[..n]),
         density: Some(&p.rho[..n]),

@@ -211,7 +211,11 @@ pub fn parse_measure(spec: &str, probe_columns: &[String]) -> Result<Measure, St
     };
     let file = if probe_columns.iter().any(|c| c == column) {
         "probes.csv"
-    } else if HISTORY_COLUMNS.contains(&column) {
+    } else if HISTORY_COLUMNS.contains(&column)
+        || column.starts_with("hourglass_energy.")
+        || column.starts_with("internal_energy.")
+    {
+        // the SCENE.md columns, and the per-block energies (`hourglass_energy.<group>`)
         "history.csv"
     } else {
         return Err(format!(
@@ -946,6 +950,12 @@ mod tests {
         assert_eq!(
             (m.file, m.kind, m.reference),
             ("history.csv", Kind::Peak, None)
+        );
+        let m = parse_measure("hourglass_energy.wall:final", &cols).unwrap();
+        assert_eq!(
+            (m.file, m.kind),
+            ("history.csv", Kind::Final),
+            "a per-block history column"
         );
         for bad in [
             "mid.stress_yy",

@@ -16,6 +16,7 @@
 //! Energy bookkeeping uses the work of the nodal forces over each step's displacement,
 //! W += (f(n) + f(n+1))/2 . (x(n+1) - x(n)), which velocity Verlet balances against the kinetic
 //! energy to O(dt^2) without drift.
+use crate::blocks::BlockWork;
 use crate::hex::{self, HexControls, HexState};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
@@ -82,12 +83,29 @@ pub struct Energies {
     pub momentum: [f64; 3],
 }
 
+/// Energies of one element block (a scene's `[[block]]`), global, J.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BlockEnergy {
+    /// Stress work in the block's elements (elastic, plastic, bulk viscosity).
+    pub internal: f64,
+    /// Hourglass-force work in the block's elements.
+    pub hourglass: f64,
+    /// Kinetic energy of the block's share of the lumped masses at t = 0 (after boundary
+    /// conditions act).
+    pub kinetic0: f64,
+    internal_plus_hg: f64,
+}
+
 /// Set-up of the explicit solver.
 pub struct ExplicitSetup<'a> {
     /// The local mesh.
     pub mesh: &'a LocalMesh,
     /// One material per element (index into `materials`).
     pub elem_material: Vec<usize>,
+    /// One block per element (below `n_blocks`): energies are also kept per block.
+    pub elem_block: Vec<u32>,
+    /// Number of blocks (at least 1).
+    pub n_blocks: usize,
     /// The materials.
     pub materials: Vec<Box<dyn Material>>,
     /// Initial velocity of each local node (already consistent across ranks).
@@ -145,6 +163,10 @@ pub struct ExplicitFe {
     /// Accumulated energies (global).
     pub energies: Energies,
     internal_plus_hg: f64,
+    /// Accumulated energies per block (global).
+    pub block_energies: Vec<BlockEnergy>,
+    /// This rank's per-block work bookkeeping.
+    pub blocks: BlockWork,
     /// Smallest stable step over local elements from the last force evaluation (no safety).
     pub dt_stable_local: f64,
     /// Time.
@@ -221,6 +243,7 @@ impl ExplicitFe {
         }
         exchange.sum_shared(flat(&mut mass3))?;
         let mass: Vec<f64> = mass3.iter().map(|m| m[0]).collect();
+        let blocks = BlockWork::new(&m.elems, setup.elem_block, setup.n_blocks);
         let mut fe = ExplicitFe {
             elems: m.elems.clone(),
             elem_id: m.elem_id.clone(),
@@ -248,6 +271,8 @@ impl ExplicitFe {
             gravity: setup.gravity,
             energies: Energies::default(),
             internal_plus_hg: 0.0,
+            block_energies: vec![BlockEnergy::default(); blocks.n_blocks()],
+            blocks,
             dt_stable_local: f64::INFINITY,
             time: 0.0,
             step: 0,
@@ -393,6 +418,7 @@ impl ExplicitFe {
         let mut dt_min = f64::INFINITY;
         let mut inverted = None;
         let stride = self.mat_stride;
+        self.blocks.begin();
         for (e, conn) in self.elems.iter().enumerate() {
             let xe = gather(&self.x, conn);
             let ve = gather(&self.v, conn);
@@ -430,11 +456,17 @@ impl ExplicitFe {
                 f[2] += out.force[k][2];
             }
             hg_work += out.hg_work;
+            self.blocks.add(e, &out.force, out.hg_work);
             dt_min = dt_min.min(out.dt_stable);
             self.vol[e] = out.volume;
             self.pressure[e] = out.pressure;
         }
         self.dt_stable_local = dt_min;
+        if inverted.is_none() {
+            let (x, x_old) = (&self.x, &self.x_old);
+            self.blocks
+                .accept(|n| std::array::from_fn(|c| x[n][c] - x_old[n][c]));
+        }
         let t1 = std::time::Instant::now();
         self.timers.elements += (t1 - t0).as_secs_f64();
         exchange.sum_shared(flat(&mut self.force))?;
@@ -496,22 +528,48 @@ impl ExplicitFe {
         sums
     }
 
-    /// Applies the reduced sums of a step (from `finish_step` and the element loop's hourglass
-    /// work, summed over ranks) to the global energies.
-    pub fn accumulate(&mut self, global: &[f64; 7], dt: f64) {
+    /// The local sums of a step to be reduced over ranks (one reduction): `finish_step`'s six,
+    /// the element loop's hourglass work, then with several blocks `blocks.step_sums`.
+    pub fn step_sums(&self, finish: &[f64; 6], hg_work: f64) -> Vec<f64> {
+        let mut v = Vec::with_capacity(7 + 2 * self.block_energies.len());
+        v.extend_from_slice(finish);
+        v.push(hg_work);
+        if self.blocks.active() {
+            v.extend_from_slice(&self.blocks.step_sums);
+        }
+        v
+    }
+
+    /// Applies the reduced sums of a step (`step_sums` summed over ranks) to the global
+    /// energies.
+    pub fn accumulate(&mut self, global: &[f64], dt: f64) {
         self.energies.kinetic = global[0];
         self.internal_plus_hg += global[1];
         self.energies.external_work += global[2];
         self.energies.momentum = [global[3], global[4], global[5]];
         self.energies.hourglass += global[6];
         self.energies.internal = self.internal_plus_hg - self.energies.hourglass;
+        let nb = self.block_energies.len();
+        if self.blocks.active() {
+            for (b, be) in self.block_energies.iter_mut().enumerate() {
+                be.internal_plus_hg += global[7 + b];
+                be.hourglass += global[7 + nb + b];
+                be.internal = be.internal_plus_hg - be.hourglass;
+            }
+        } else if let Some(be) = self.block_energies.first_mut() {
+            be.internal = self.energies.internal;
+            be.hourglass = self.energies.hourglass;
+        }
         self.time += dt;
         self.step += 1;
     }
 
-    /// Global kinetic energy and momentum now (collective); used at step 0.
+    /// Global kinetic energy and momentum now (collective); used at step 0. Also each block's
+    /// kinetic energy: its elements' lumped masses (rho V0 / 8 per corner) at their nodes'
+    /// velocities, so that a node between blocks counts in each by its share of mass.
     pub fn initial_energies(&mut self, comm: &SimpleCommunicator) {
-        let mut s = [0.0; 4];
+        let nb = self.block_energies.len();
+        let mut s = vec![0.0; 4 + nb];
         for n in 0..self.x.len() {
             if self.owned[n] {
                 let m = self.mass[n];
@@ -522,10 +580,21 @@ impl ExplicitFe {
                 }
             }
         }
-        let mut g = [0.0; 4];
+        for (e, conn) in self.elems.iter().enumerate() {
+            let me = self.materials[self.elem_material[e]].density() * self.vol0[e] / 8.0;
+            let b = self.blocks.block_of(e);
+            for &n in conn {
+                let v = self.v[n as usize];
+                s[4 + b] += 0.5 * me * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            }
+        }
+        let mut g = vec![0.0; 4 + nb];
         comm.all_reduce_into(&s[..], &mut g[..], SystemOperation::sum());
         self.energies.kinetic = g[0];
         self.energies.momentum = [g[1], g[2], g[3]];
+        for (b, be) in self.block_energies.iter_mut().enumerate() {
+            be.kinetic0 = g[4 + b];
+        }
     }
 
     /// Equivalent plastic strain of element `e`.
@@ -549,6 +618,7 @@ impl ExplicitFe {
                 + std::mem::size_of::<HexState>()
                 + 8 * (3 + self.mat_stride)
                 + 8)
+            + self.blocks.bytes()
     }
 }
 

@@ -412,7 +412,7 @@ impl ImplicitFe {
         self.stats.newton_iterations += iterations as u64;
         self.stats.max_step_iterations = self.stats.max_step_iterations.max(iterations);
         let sums = self.accept();
-        let mut global = [0.0; 7];
+        let mut global = vec![0.0; sums.len()];
         comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
         self.fe.accumulate(&global, dt);
         Ok(())
@@ -449,6 +449,7 @@ impl ImplicitFe {
         let stride = self.mat_stride;
         let mut hg_work = 0.0;
         let mut failure: Option<StepError> = None;
+        self.fe.blocks.begin();
         for (e, conn) in self.fe.elems.iter().enumerate() {
             let xe = gather(&self.x_trial, conn);
             let ve = gather(&self.v_mean, conn);
@@ -475,6 +476,7 @@ impl ImplicitFe {
                         }
                     }
                     hg_work += out.hg_work;
+                    self.fe.blocks.add(e, &out.force, out.hg_work);
                     self.state_trial[e] = st;
                     self.vol_trial[e] = out.volume;
                     self.pressure_trial[e] = out.pressure;
@@ -704,13 +706,14 @@ impl ImplicitFe {
 
     /// Takes the converged increment: new accelerations, velocities, positions, reactions and
     /// element state. Returns the local sums `[kinetic, d(internal+hourglass), d(external
-    /// work), px, py, pz, hourglass work]` to be reduced.
-    fn accept(&mut self) -> [f64; 7] {
+    /// work), px, py, pz, hourglass work]` and the per-block sums (`ExplicitFe::step_sums`) to
+    /// be reduced.
+    fn accept(&mut self) -> Vec<f64> {
         let t0 = Instant::now();
         let dt = self.dt;
         let c_mass = 4.0 / (dt * dt);
         let g = self.gravity;
-        let mut sums = [0.0; 7];
+        let mut sums = [0.0; 6];
         for n in 0..self.n_nodes() {
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
             let a_raw: [f64; 3] = std::array::from_fn(|c| c_mass * (du[c] - dt * v[c]) - a[c]);
@@ -741,7 +744,9 @@ impl ImplicitFe {
             sums[1] -= w_elem;
             sums[2] += w_ext;
         }
-        sums[6] = self.hg_work_trial;
+        let du = &self.du;
+        self.fe.blocks.accept(|n| du[n]);
+        let sums = self.fe.step_sums(&sums, self.hg_work_trial);
         std::mem::swap(&mut self.force_n, &mut self.force);
         std::mem::swap(&mut self.reaction_n, &mut self.reaction);
         self.fe.force.copy_from_slice(&self.force_n);

@@ -2,14 +2,15 @@
 //! (`[output] dump_every`, `tdyn crosscheck`): one file per dumped step, `dump.tdyn.<step>`,
 //! in LIGGGHTS's own layout (`ITEM: TIMESTEP`, `NUMBER OF ATOMS`, `BOX BOUNDS`, `ATOMS ...`),
 //! rows sorted by id, numbers in `%.16e` as the peer decks dump them.
+use crate::particles_setup::ParticleIds;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::Particles;
 use std::io::Write;
 use std::path::Path;
 
-/// The columns written, after `ITEM: ATOMS`. `id` is our dense id + 1 (LIGGGHTS numbers atoms
-/// from 1, and a data file numbered 1..N becomes our 0..N-1); `type` is 1 for a moving particle
+/// The columns written, after `ITEM: ATOMS`. `id` is the particle's id as `fields.h5` writes it
+/// (SCENE.md): for particles read from a LIGGGHTS data file, LIGGGHTS's own atom ids; `type` is 1 for a moving particle
 /// and 2 for a fixed one (the peer decks' fluid and boundary types); `fx..fz` is the force
 /// m a in N as LIGGGHTS dumps it; `mass` is ours (LIGGGHTS's decks do not dump it).
 pub const DUMP_COLUMNS: &str = "id type x y z vx vy vz fx fy fz rho p mass";
@@ -23,11 +24,13 @@ pub fn write_particle_dump(
     dir: &Path,
     step: u64,
     parts: &Particles,
+    ids: &ParticleIds,
 ) -> std::io::Result<()> {
     let n = parts.n_owned;
     let mut mine = Vec::with_capacity(n * PER);
     for i in 0..n {
-        mine.push(parts.id[i] as f64 + 1.0);
+        // ids < 2^53 are exact in f64.
+        mine.push(ids.id(parts.id[i]) as f64);
         mine.push(if parts.fixed[i] { 2.0 } else { 1.0 });
         mine.extend_from_slice(&parts.x_real[i]);
         mine.extend_from_slice(&parts.v[i]);

@@ -2,6 +2,8 @@
 //!
 //! Rows are ordered by global id (row r holds id r), so that `elements/connectivity`, which holds
 //! node ids, indexes `nodes/position` directly and ParaView draws the mesh from the `.xmf`.
+//! Particles are ordered by their dense index and `particles/id` holds the ids the user gave
+//! (`ParticleFrame::labels`: the particle file's, SCENE.md).
 //! Before writing, each field is moved to the rank that owns its id range
 //! ([`redistribute_by_id`]), which then writes one contiguous hyperslab.
 use super::OutputError;
@@ -54,8 +56,11 @@ pub struct ElementFrame<'a> {
 
 /// This rank's particles for a frame.
 pub struct ParticleFrame<'a> {
-    /// Global ids.
+    /// Dense indices 0..N over all ranks (the rows).
     pub ids: &'a [u64],
+    /// The ids written to `particles/id` (the particle file's ids), in the order of `ids`;
+    /// None: the dense indices.
+    pub labels: Option<&'a [u64]>,
     /// Positions.
     pub position: &'a [[f64; 3]],
     /// Velocities.
@@ -248,7 +253,8 @@ impl FieldWriter {
     }
 
     /// Packs columns, redistributes by id, writes each column as a dataset. `cols`: (name,
-    /// width, values, is_integer).
+    /// width, values, is_integer). A column named `id` replaces the row ids as the `id`
+    /// dataset.
     fn write_set(
         &mut self,
         group: &hdf5::Group,
@@ -281,9 +287,11 @@ impl FieldWriter {
                 group.name()
             )));
         }
-        let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
         let mut items = Vec::new();
-        self.bytes += Self::put(group, "id", (n, 1), lo, &idf, true)?;
+        if !cols.iter().any(|c| c.0 == "id") {
+            let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
+            self.bytes += Self::put(group, "id", (n, 1), lo, &idf, true)?;
+        }
         let mut off = 0;
         for (name, cw, _, int) in cols {
             let mut col = Vec::with_capacity(bids.len() * cw);
@@ -291,13 +299,16 @@ impl FieldWriter {
                 col.extend_from_slice(&bvals[i * w + off..i * w + off + cw]);
             }
             self.bytes += Self::put(group, name, (n, *cw), lo, &col, *int)?;
+            off += cw;
+            if *name == "id" {
+                continue;
+            }
             items.push(Item {
                 path: format!("{}/{}", group.name(), name),
                 name: name.to_string(),
                 cols: *cw,
                 int: *int,
             });
-            off += cw;
         }
         Ok(items)
     }
@@ -369,6 +380,10 @@ impl FieldWriter {
         let mut particle_items = Vec::new();
         if let Some(pf) = particles {
             let mut cols = vec![("position", 3, flat3(pf.position), false)];
+            if let Some(l) = pf.labels {
+                // ids < 2^53 are exact in f64.
+                cols.push(("id", 1, l.iter().map(|&i| i as f64).collect(), true));
+            }
             if let (true, Some(v)) = (self.wants("velocity"), pf.velocity) {
                 cols.push(("velocity", 3, flat3(v), false));
             }

@@ -8,10 +8,13 @@ use std::path::Path;
 const FLUSH_EVERY_ROWS: usize = 64;
 
 /// A CSV file with a header row; numbers are written in Rust's shortest round-trip form, so a
-/// value read back is bit-identical.
+/// value read back is bit-identical. Columns marked integer (`integer_columns`: history.csv's
+/// `step` and `contacts`, SCENE.md) are written as integers (`12`, not `12.0`).
 pub struct History {
     out: Option<BufWriter<std::fs::File>>,
     rows: usize,
+    columns: Vec<String>,
+    integer: Vec<bool>,
 }
 
 impl History {
@@ -28,19 +31,35 @@ impl History {
         } else {
             None
         };
-        Ok(History { out, rows: 0 })
+        Ok(History {
+            out,
+            rows: 0,
+            columns: columns.iter().map(|c| c.to_string()).collect(),
+            integer: vec![false; columns.len()],
+        })
+    }
+
+    /// Writes the columns named in `names` as integers (those present; others are ignored).
+    pub fn integer_columns(mut self, names: &[&str]) -> History {
+        for (c, int) in self.columns.iter().zip(self.integer.iter_mut()) {
+            *int = names.contains(&c.as_str());
+        }
+        self
     }
 
     /// Writes one row (rank 0; a no-op elsewhere).
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
         if let Some(w) = &mut self.out {
-            let mut first = true;
-            for v in values {
-                if !first {
+            for (k, v) in values.iter().enumerate() {
+                if k > 0 {
                     w.write_all(b",")?;
                 }
-                first = false;
-                write!(w, "{v:?}")?;
+                // Integer columns hold counts (exact in f64 below 2^53).
+                if self.integer.get(k).copied().unwrap_or(false) && v.is_finite() {
+                    write!(w, "{}", *v as i64)?;
+                } else {
+                    write!(w, "{v:?}")?;
+                }
             }
             w.write_all(b"\n")?;
             self.rows += 1;

@@ -237,6 +237,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
         };
         let particles = ParticleFrame {
             ids: &part_ids,
+            labels: None,
             position: &ppos,
             velocity: Some(&pvel),
             density: first.then_some(&rho[..]),
