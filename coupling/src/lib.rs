@@ -16,6 +16,7 @@ pub mod driver;
 pub mod fe_contact;
 pub mod fe_setup;
 pub mod gmsh;
+pub mod launch;
 pub mod liggghts;
 pub mod output;
 pub mod particles_setup;
@@ -28,3 +29,4 @@ pub mod sph_run;
 pub mod sph_selftest;
 pub mod sph_stage;
 pub mod sweep;
+
