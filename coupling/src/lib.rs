@@ -29,4 +29,4 @@ pub mod sph_run;
 pub mod sph_selftest;
 pub mod sph_stage;
 pub mod sweep;
-
+pub mod validate;

@@ -168,12 +168,12 @@ fn liggghts_dam_break_2000_steps_kinetic_energy_and_front_within_1_percent() {
         column(&h, &rows, "front_ours"),
         column(&h, &rows, "front_liggghts"),
     );
-    // Against the experiment: Martin & Moyce's square column (tests/data, T = t sqrt(g/a),
+    // Against the experiment: Martin & Moyce's square column (validation/dam_break, T = t sqrt(g/a),
     // Z = front / a), here a = 0.2 m and the front is the largest particle centre x. At t =
     // 0.1 s (T = 0.70) the front must lie within 10 % of the experiment's Z interpolated at T:
     // numerical dam breaks start at rest with the gate gone, while the experiment's front lags
     // in the first instants (the release), so they run a few percent ahead (measured +6.7 %).
-    let mm = read_csv(&root().join("tests/data/martin_moyce_square_column.csv"));
+    let mm = read_csv(&root().join("validation/dam_break/martin_moyce_square_column.csv"));
     let (z_mm, t_mm) = (column(&mm.0, &mm.1, "Z"), column(&mm.0, &mm.1, "t_mean"));
     let (a, g, dt): (f64, f64, f64) = (0.2, 9.81, 5e-5);
     let t_star = steps.last().unwrap() * dt * (g / a).sqrt();
