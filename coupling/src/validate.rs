@@ -148,6 +148,9 @@ pub struct CurveDef {
     pub at: f64,
 }
 
+/// A judged measure's tolerance: (relative to the reference, absolute).
+pub type Tolerance = (Option<f64>, Option<f64>);
+
 /// One measure of a case.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -219,7 +222,7 @@ impl MeasureDef {
 
     /// Whether rung `v` (the ladder's first value; None without a ladder) is judged, and with
     /// which tolerance: (relative, absolute).
-    fn tolerance(&self, v: Option<f64>) -> Result<Option<(Option<f64>, Option<f64>)>, String> {
+    fn tolerance(&self, v: Option<f64>) -> Result<Option<Tolerance>, String> {
         let k = match (&self.at, v) {
             (None, _) => None,
             (Some(at), Some(v)) => match at.iter().position(|a| *a == v) {
@@ -374,7 +377,7 @@ pub struct Row {
     /// |ours - reference| / |reference| (absolute when the reference is 0).
     pub error: f64,
     /// The tolerance when judged: (relative, absolute).
-    pub allowed: Option<(Option<f64>, Option<f64>)>,
+    pub allowed: Option<Tolerance>,
     /// "pass", "FAIL", "info" (not judged at this rung) or "FAIL (run)" with a message.
     pub status: String,
     /// The message of a run or measure that failed.
@@ -672,7 +675,7 @@ fn num(v: f64) -> String {
 }
 
 /// The tolerance as the report shows it.
-fn allowed_text(a: Option<(Option<f64>, Option<f64>)>, unit: &str) -> String {
+fn allowed_text(a: Option<Tolerance>, unit: &str) -> String {
     match a {
         None => "(not judged)".into(),
         Some((rel, abs)) => {
