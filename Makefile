@@ -7,7 +7,7 @@ export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
 
-.PHONY: setup run test bench lint
+.PHONY: setup run test bench lint validate
 setup:
 	./scripts/setup.sh
 
@@ -24,3 +24,9 @@ bench: setup
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+
+# The validation suite (docs/validation.md): every case of validation/ at its validation
+# resolution; out/validation/report.md. FAST=1 runs the coarse meshes the tests use.
+validate: setup
+	cargo build --release -p coupling --bin tdyn
+	target/release/tdyn validate --np $(NP) $(if $(FAST),--fast,)

@@ -6,6 +6,7 @@
 //!
 //! This process does not join MPI itself: it launches `liggghts` (or `mpirun -np M liggghts`) and
 //! `mpirun -np N tdyn run` as child processes, so that neither inherits an MPI environment.
+use crate::launch::{run_logged, tdyn_run};
 use crate::liggghts::{read_dump, Dump};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -68,28 +69,6 @@ pub struct CrosscheckSummary {
     pub liggghts_us: Option<f64>,
     /// The work directory.
     pub dir: PathBuf,
-}
-
-/// Runs `cmd`, output into `log`; an error with the log's tail when it fails.
-fn run_logged(mut cmd: Command, log: &Path, what: &str) -> Result<(), String> {
-    let out = cmd
-        .output()
-        .map_err(|e| format!("cannot start {what} ({:?}): {e}", cmd.get_program()))?;
-    let mut text = out.stdout.clone();
-    text.extend_from_slice(&out.stderr);
-    std::fs::write(log, &text).map_err(|e| format!("{}: {e}", log.display()))?;
-    if !out.status.success() {
-        let s = String::from_utf8_lossy(&text);
-        let tail: Vec<&str> = s.lines().rev().take(15).collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
-        return Err(format!(
-            "{what} failed ({}); last lines of {}:\n{}",
-            out.status,
-            log.display(),
-            tail.join("\n")
-        ));
-    }
-    Ok(())
 }
 
 /// `dump.*` files of `dir` by their TIMESTEP.
@@ -249,15 +228,7 @@ pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
     }
 
     let _ = std::fs::remove_dir_all(&tdir);
-    let exe = std::env::current_exe().map_err(|e| format!("own executable: {e}"))?;
-    let mut cmd = Command::new("mpirun");
-    cmd.args(["-np", &o.np.max(1).to_string()])
-        .arg(&exe)
-        .arg("run")
-        .arg(&o.scene)
-        .arg("--out")
-        .arg(&tdir)
-        .arg("--quiet");
+    let cmd = tdyn_run(o.np, &o.scene, &tdir)?;
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     run_logged(cmd, &dir.join("tdyn.out"), "tdyn run")?;
 

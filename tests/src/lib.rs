@@ -173,3 +173,52 @@ pub fn selftest(np: usize, kernel: &str, seed: u64, timeout_s: u32) {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A case's reference.toml (validation/<case>/), parsed.
+pub fn reference_case(case: &str) -> toml::Table {
+    let path = root().join("validation").join(case).join("reference.toml");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.parse()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The reference value of the measure named `measure` in validation/<case>/reference.toml (its
+/// `reference`, or the midpoint of its `range`): the one copy of a published or analytic
+/// number that the validation suite and the tests share.
+pub fn reference_value(case: &str, measure: &str) -> f64 {
+    let t = reference_case(case);
+    let m = t["measure"]
+        .as_array()
+        .and_then(|ms| ms.iter().find(|m| m["name"].as_str() == Some(measure)))
+        .unwrap_or_else(|| panic!("validation/{case}: no measure \"{measure}\""));
+    let num = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64)).unwrap();
+    match (m.get("reference"), m.get("range")) {
+        (Some(r), _) => num(r),
+        (None, Some(toml::Value::Array(r))) => 0.5 * (num(&r[0]) + num(&r[1])),
+        _ => panic!("validation/{case}: measure \"{measure}\" has no reference value"),
+    }
+}
+
+/// `tdyn validate --fast --cases CASES --np NP --out target/test-runs/TAG` (not under mpirun:
+/// it launches its runs itself); returns (success, report.md).
+pub fn validate_fast(cases: &str, np: usize, tag: &str) -> (bool, String) {
+    let dir = workdir(tag);
+    let o = mpi_env(&mut Command::new("timeout"))
+        .arg("600")
+        .arg(tdyn())
+        .args(["validate", "--fast", "--quiet", "--cases", cases])
+        .args(["--np", &np.to_string(), "--dir"])
+        .arg(root().join("validation"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("tdyn validate");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap_or_else(|_| {
+        format!(
+            "no report.md:\n{}\n{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    (o.status.success(), report)
+}

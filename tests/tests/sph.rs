@@ -1,13 +1,13 @@
 //! The SPH stage in a run (issue 4): Sod's shock tube against the exact Riemann solution.
 use tdyn_tests::*;
 
-/// Exact star state of Sod's problem (left rho 1, p 1; right rho 0.125, p 0.1; gamma 1.4):
-/// p* = 0.30313, u* = 0.92745 (Toro, Riemann Solvers and Numerical Methods, 1999, table 4.3).
-const P_STAR: f64 = 0.30313;
-const U_STAR: f64 = 0.92745;
-
 #[test]
 fn sod_shock_tube_plateau_within_3_percent_at_1_to_4_ranks() {
+    // Exact star state of Sod's problem (left rho 1, p 1; right rho 0.125, p 0.1; gamma 1.4):
+    // p* = 0.30313, u* = 0.92745 (Toro, Riemann Solvers and Numerical Methods, 1999, table
+    // 4.3), from the validation suite's reference file (validation/sod/reference.toml).
+    let p_star = reference_value("sod", "p* (left of the contact)");
+    let u_star = reference_value("sod", "u* (left of the contact)");
     // scenes/sod_tube.toml: 1,920 + 240 particles (spacing 0.005 left, 0.01 right, equal
     // masses), periodic across the tube, Wendland kernel, summation density, h = 1.8 (m/rho)^(1/3),
     // energy equation, Monaghan alpha 1, beta 2. Probes at t = 0.2 left of the contact (x = 0.1)
@@ -27,8 +27,8 @@ fn sod_shock_tube_plateau_within_3_percent_at_1_to_4_ranks() {
             let u = column(&h, &rows, &format!("{probe}.velocity_x"));
             let (p, u) = (p.last().unwrap(), u.last().unwrap());
             assert!(
-                (p - P_STAR).abs() < 0.03 * P_STAR && (u - U_STAR).abs() < 0.03 * U_STAR,
-                "np {np}, probe {probe}: p = {p}, u = {u}; exact p* = {P_STAR}, u* = {U_STAR} (3 %)"
+                (p - p_star).abs() < 0.03 * p_star && (u - u_star).abs() < 0.03 * u_star,
+                "np {np}, probe {probe}: p = {p}, u = {u}; exact p* = {p_star}, u* = {u_star} (3 %)"
             );
         }
         let (hh, hist) = read_csv(&out.join("history.csv"));
@@ -38,7 +38,7 @@ fn sod_shock_tube_plateau_within_3_percent_at_1_to_4_ranks() {
         let _ = (ke, ie);
         // Momentum: zero at t = 0 and only pair forces act (equal and opposite), so it stays
         // zero to round-off: 1e-10 of M u* (M = 0.6 x 0.02^2 x (1 + 0.125) kg).
-        let scale = 0.6 * 0.02 * 0.02 * 1.125 * U_STAR;
+        let scale = 0.6 * 0.02 * 0.02 * 1.125 * u_star;
         for (k, p) in px.iter().enumerate() {
             assert!(
                 p.abs() < 1e-10 * scale,
@@ -168,12 +168,12 @@ fn liggghts_dam_break_2000_steps_kinetic_energy_and_front_within_1_percent() {
         column(&h, &rows, "front_ours"),
         column(&h, &rows, "front_liggghts"),
     );
-    // Against the experiment: Martin & Moyce's square column (tests/data, T = t sqrt(g/a),
+    // Against the experiment: Martin & Moyce's square column (validation/dam_break, T = t sqrt(g/a),
     // Z = front / a), here a = 0.2 m and the front is the largest particle centre x. At t =
     // 0.1 s (T = 0.70) the front must lie within 10 % of the experiment's Z interpolated at T:
     // numerical dam breaks start at rest with the gate gone, while the experiment's front lags
     // in the first instants (the release), so they run a few percent ahead (measured +6.7 %).
-    let mm = read_csv(&root().join("tests/data/martin_moyce_square_column.csv"));
+    let mm = read_csv(&root().join("validation/dam_break/martin_moyce_square_column.csv"));
     let (z_mm, t_mm) = (column(&mm.0, &mm.1, "Z"), column(&mm.0, &mm.1, "t_mean"));
     let (a, g, dt): (f64, f64, f64) = (0.2, 9.81, 5e-5);
     let t_star = steps.last().unwrap() * dt * (g / a).sqrt();

@@ -1,5 +1,5 @@
 //! `tdyn`: run a scene, compare explicit and implicit integration on it, sweep its resolution,
-//! chart a scaling study, mesh a .geo. PETSc
+//! run the validation suite, chart a scaling study, mesh a .geo. PETSc
 //! options (`-log_view`, `-ksp_type cg`, `-pc_type gamg`, `-ksp_monitor`,
 //! `-petscpartitioner_type simple`, ...) may follow the other arguments and go to PETSc unchanged.
 use clap::{Parser, Subcommand};
@@ -135,6 +135,31 @@ enum Cmd {
         /// Compare against the LIGGGHTS dumps already in the work directory.
         #[arg(long)]
         reuse_liggghts: bool,
+    },
+    /// Run the validation suite: each case of `validation/<case>/reference.toml` against its
+    /// analytic or published reference. Writes DIR/report.md (ours, reference, error, allowed,
+    /// pass/fail) and a chart per case (DIR/<case>.png, .svg); exits non-zero when a judged
+    /// measure fails or a run fails. Run it without mpirun (it launches `mpirun -np N tdyn
+    /// run` itself): `tdyn validate [--cases a,b] [--np N] [--fast] [--out DIR]`
+    Validate {
+        /// Cases to run, comma-separated (default: every folder of --dir).
+        #[arg(long, value_delimiter = ',')]
+        cases: Vec<String>,
+        /// Ranks per run.
+        #[arg(long, default_value_t = 1)]
+        np: usize,
+        /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
+        #[arg(long)]
+        fast: bool,
+        /// Output directory.
+        #[arg(long, default_value = "out/validation")]
+        out: PathBuf,
+        /// The cases' folder.
+        #[arg(long, default_value = "validation")]
+        dir: PathBuf,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
     Selftest {
@@ -286,6 +311,44 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("tdyn crosscheck: error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Validate {
+            cases,
+            np,
+            fast,
+            out,
+            dir,
+            quiet,
+        } => {
+            let opts = coupling::validate::ValidateOptions {
+                dir,
+                cases,
+                np,
+                fast,
+                out,
+                quiet,
+            };
+            match coupling::validate::validate(&opts) {
+                Ok(o) => {
+                    let failed: Vec<String> = o
+                        .rows
+                        .iter()
+                        .filter(|r| r.failed())
+                        .map(|r| format!("{} {} {}", r.case, r.rung, r.measure))
+                        .collect();
+                    println!("tdyn validate: {}", o.report.display());
+                    if failed.is_empty() {
+                        ExitCode::SUCCESS
+                    } else {
+                        eprintln!("tdyn validate: failed: {}", failed.join("; "));
+                        ExitCode::FAILURE
+                    }
+                }
+                Err(e) => {
+                    eprintln!("tdyn validate: error: {e}");
                     ExitCode::FAILURE
                 }
             }
