@@ -294,7 +294,21 @@ impl ExplicitFe {
         for (e, conn) in self.elems.iter().enumerate() {
             let xe = gather(&self.x, conn);
             let mat = &*self.materials[self.elem_material[e]];
-            dt = dt.min(hex::stable_dt(&xe, mat.density(), mat, &self.controls, 0.0));
+            // The initial volumetric rate (an impact at t = 0 compresses some elements from
+            // the first step: a cold gas has almost no sound speed, and only the bulk
+            // viscosity's damping, which grows with the rate, limits its step).
+            let ve = gather(&self.v, conn);
+            let (b, _) = hex::gradient(&xe);
+            let div_v: f64 = (0..8)
+                .map(|k| ve[k][0] * b[k][0] + ve[k][1] * b[k][1] + ve[k][2] * b[k][2])
+                .sum();
+            dt = dt.min(hex::stable_dt(
+                &xe,
+                mat.density(),
+                mat,
+                &self.controls,
+                div_v,
+            ));
         }
         dt
     }

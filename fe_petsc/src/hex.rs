@@ -474,8 +474,13 @@ pub fn update(
     // current rho c^2 (constant for a solid, the EOS's for a fluid).
     let modulus = mat.wave_modulus(rho, mat_state);
     let c = (modulus / rho).sqrt();
-    let (q, xi) = bulk_viscosity(ctl, bb, rho, c, d[0] + d[1] + d[2]);
+    let ev = d[0] + d[1] + d[2];
+    let (q, xi) = bulk_viscosity(ctl, bb, rho, c, ev);
     let dt_stable = critical_dt(bb, c, xi);
+    // Its work heats the material (q eps_v >= 0, J/m^3/s): a fluid's EOS keeps it.
+    if q != 0.0 {
+        mat.add_heat(mat_state, q * ev * dt / rho, rho);
+    }
 
     let st_tot = [
         stress[0] + q,

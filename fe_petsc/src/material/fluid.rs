@@ -9,10 +9,10 @@
 //!
 //! Every kind is affine in e at fixed rho (p(rho1, e) = p(rho1, e0) + g (e - e0), g = dp/de),
 //! so the implicit rule has the closed form de = -(p0 + p(rho1, e0)) dv / (2 + g dv): second
-//! order in the step, exact for Tait (which ignores e). The bulk viscosity's work (added by the
-//! element outside the material) is not put into e: it heats only the kinds whose p depends on
-//! e, and only inside shock fronts, which the run's energy balance (nodal force work) counts
-//! anyway. The wave modulus rho c^2 (the stable step, the bulk viscosity's c, the hourglass
+//! order in the step, exact for Tait (which ignores e). The bulk viscosity's work, q eps_v dt / rho
+//! per unit mass (computed by the element outside the material), is added to e after the update
+//! (`add_heat`): it is the shock's entropy rise, without which a shock in a cold ideal gas is
+//! never heated (planar Noh inverted its first element). The wave modulus rho c^2 (the stable step, the bulk viscosity's c, the hourglass
 //! stiffness) uses the adiabatic c^2 = dp/drho|_e + (p/rho^2) dp/de|_rho.
 //!
 //! State per element: [e (J/kg), v (m^3/kg) and p (Pa) at the last update].
@@ -94,6 +94,10 @@ impl Material for Fluid {
         state[V] = v1;
         state[P] = p;
         *stress = [-p, -p, -p, 0.0, 0.0, 0.0];
+    }
+    fn add_heat(&self, state: &mut [f64], de: f64, density: f64) {
+        state[E] += de;
+        state[P] = self.eos.eval(density, state[E]).p;
     }
     fn wave_modulus(&self, density: f64, state: &[f64]) -> f64 {
         density * wave_speed_sq(&*self.eos, density, state[E])

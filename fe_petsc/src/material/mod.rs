@@ -74,6 +74,11 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn yield_stress(&self, _state: &[f64]) -> Option<f64> {
         None
     }
+    /// Adds `de` J/kg of heat to the element's state: the work of the bulk viscosity, which the
+    /// element computes outside the material. Only the models with an energy state (a fluid's
+    /// EOS) keep it; the default ignores it (solids: the work is counted in the energy balance,
+    /// it changes no stress).
+    fn add_heat(&self, _state: &mut [f64], _de: f64, _density: f64) {}
     /// Equivalent plastic strain, for output (0 for elastic models).
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
