@@ -93,6 +93,26 @@ pub fn run_with_env(np: usize, scene: &Path, out: &Path, var: &str, value: &str,
     );
 }
 
+/// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success.
+pub fn run_ok_args(np: usize, scene: &Path, out: &Path, extra: &[&str]) {
+    let o = mpirun(np, 600)
+        .arg(tdyn())
+        .arg("run")
+        .arg(scene)
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .expect("mpirun");
+    assert!(
+        o.status.success(),
+        "tdyn at np {np} with {extra:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 /// Runs and insists on success.
 pub fn run_ok(np: usize, scene: &Path, out: &Path) {
     let o = run(np, scene, out);
