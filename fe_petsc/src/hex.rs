@@ -510,6 +510,7 @@ pub fn update(
         c,
         tangent_ratio: hourglass::tangent_ratio(&dsig, &deps, mu),
         yield_stress: mat.yield_stress(mat_state),
+        stress,
     };
     let step = HourglassStep {
         x,

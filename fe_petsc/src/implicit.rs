@@ -656,6 +656,7 @@ impl ImplicitFe {
             c: (mat.dilatational_modulus() / rho).sqrt(),
             tangent_ratio: 1.0,
             yield_stress: None,
+            stress: [0.0; 6],
         };
         let zero = [[0.0; 3]; 8];
         let step = HourglassStep {
