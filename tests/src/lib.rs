@@ -57,12 +57,23 @@ pub fn mpi_env(c: &mut Command) -> &mut Command {
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
 }
 
-/// Runs `mpirun -np N tdyn run scene --out out --quiet` (10 min limit) and returns its output.
-pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
-    mpirun(np, 600)
-        .arg(tdyn())
+/// `mpirun -np N [-x VAR] tdyn run scene EXTRA --out out --quiet` (10 min limit), with the
+/// environment variable `env` = (name, value) passed to every rank when given.
+fn launch(
+    np: usize,
+    scene: &Path,
+    out: &Path,
+    extra: &[&str],
+    env: Option<(&str, &str)>,
+) -> Output {
+    let mut c = mpirun(np, 600);
+    if let Some((var, value)) = env {
+        c.args(["-x", var]).env(var, value);
+    }
+    c.arg(tdyn())
         .arg("run")
         .arg(scene)
+        .args(extra)
         .arg("--out")
         .arg(out)
         .arg("--quiet")
@@ -70,58 +81,37 @@ pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
         .expect("mpirun")
 }
 
-/// `run` with the environment variable `var=value` passed to every rank and `extra` arguments
-/// after the scene (e.g. `--end-time`); insists on success.
-pub fn run_with_env(np: usize, scene: &Path, out: &Path, var: &str, value: &str, extra: &[&str]) {
-    let o = mpirun(np, 600)
-        .args(["-x", var])
-        .env(var, value)
-        .arg(tdyn())
-        .arg("run")
-        .arg(scene)
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .output()
-        .expect("mpirun");
+/// Insists that a run succeeded, printing its output otherwise.
+fn assert_ran(o: &Output, what: &str) {
     assert!(
         o.status.success(),
-        "tdyn at np {np} with {var}={value} failed:\n{}\n{}",
+        "tdyn {what} failed:\n{}\n{}",
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
+}
+
+/// Runs `mpirun -np N tdyn run scene --out out --quiet` (10 min limit) and returns its output.
+pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
+    launch(np, scene, out, &[], None)
+}
+
+/// `run` with the environment variable `var=value` passed to every rank and `extra` arguments
+/// after the scene (e.g. `--end-time`); insists on success.
+pub fn run_with_env(np: usize, scene: &Path, out: &Path, var: &str, value: &str, extra: &[&str]) {
+    let o = launch(np, scene, out, extra, Some((var, value)));
+    assert_ran(&o, &format!("at np {np} with {var}={value}"));
 }
 
 /// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success.
 pub fn run_ok_args(np: usize, scene: &Path, out: &Path, extra: &[&str]) {
-    let o = mpirun(np, 600)
-        .arg(tdyn())
-        .arg("run")
-        .arg(scene)
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .output()
-        .expect("mpirun");
-    assert!(
-        o.status.success(),
-        "tdyn at np {np} with {extra:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = launch(np, scene, out, extra, None);
+    assert_ran(&o, &format!("at np {np} with {extra:?}"));
 }
 
 /// Runs and insists on success.
 pub fn run_ok(np: usize, scene: &Path, out: &Path) {
-    let o = run(np, scene, out);
-    assert!(
-        o.status.success(),
-        "tdyn at np {np} failed:\n{}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_ran(&run(np, scene, out), &format!("at np {np}"));
 }
 
 /// A CSV file as (header, rows).
