@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Contact benchmark (issue 5): the dynamic RCB contact decomposition (Fig. 10 of the paper)
 # against the baseline the paper argues against (contact searched on the static FE
-# decomposition, each rank's box exchanged; selected by TDYN_CONTACT_BASELINE=1, for
+# decomposition, each rank's box exchanged; `tdyn run --contact-decomposition static`, for
 # benchmarks only). Scenes: scenes/bricks.toml (64 bricks flying apart),
 # scenes/bricks_table.toml (the bricks lifting off a finely meshed table),
 # scenes/bricks_pedestal.toml (the bricks on a tall column: the baseline leaves ranks idle) and
@@ -22,11 +22,12 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 for scene in $SCENES; do
   for np in $NPS; do
     for mode in 0 1; do
+      decomposition=rcb; [ "$mode" = 1 ] && decomposition=static
       extra=()
       if [ "$scene" = container_crush ]; then extra=(--end-time "$CONTAINER_END"); fi
       for r in $(seq "$REPEATS"); do
-        mpirun -np "$np" -x TDYN_CONTACT_BASELINE=$mode target/release/tdyn run \
-          "scenes/$scene.toml" --quiet "${extra[@]}" --out "out/bench_contact/${scene}_np${np}_b${mode}_r${r}"
+        mpirun -np "$np" target/release/tdyn run "scenes/$scene.toml" \
+          --contact-decomposition "$decomposition" --quiet "${extra[@]}" --out "out/bench_contact/${scene}_np${np}_b${mode}_r${r}"
       done
     done
   done

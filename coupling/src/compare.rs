@@ -178,6 +178,7 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
             ..Default::default()
         },
         setup_only: true,
+        algorithms: Default::default(),
     };
     let limit = driver::run(world, &probe_opts)
         .map_err(|e| e.message)?
@@ -215,6 +216,7 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
                         ..Default::default()
                     },
                     setup_only: false,
+                    algorithms: Default::default(),
                 };
                 driver::run(world, &o)
             };

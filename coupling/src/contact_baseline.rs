@@ -1,7 +1,7 @@
 //! The baseline the paper argues against (§5, "the commonly used approach"): contact searched on
-//! the static FE decomposition. For benchmarking only: a run uses it when the environment
-//! variable [`BASELINE_ENV`] is `1` (`scripts/bench_contact.sh`); the scene format has no key
-//! for it.
+//! the static FE decomposition. For benchmarking only: `tdyn run --contact-decomposition static`
+//! (`scripts/bench_contact.sh`); the scene format has no key for it (it changes how contact is
+//! computed, not the answer).
 //!
 //! Each step:
 //! 1. every rank bounds the region its FE-owned contact nodes can reach this step (the union of
@@ -30,16 +30,8 @@ use mpi::traits::*;
 use std::collections::HashMap;
 use std::time::Instant;
 
-/// The environment variable that selects the baseline in `tdyn run` (value `1`).
-pub const BASELINE_ENV: &str = "TDYN_CONTACT_BASELINE";
-
 /// Bytes of one rank's box in the all-gather (six f64).
 const BOX_BYTES: u64 = 48;
-
-/// Whether this process was asked for the baseline.
-pub fn requested() -> bool {
-    std::env::var(BASELINE_ENV).is_ok_and(|v| v == "1")
-}
 
 /// One baseline step's result: the dynamic stage's outcome (forces aligned with the nodes
 /// handed in) plus forces on the corners of the faces handed in, for corners that are not among

@@ -263,14 +263,8 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
         ));
     }
     // The kept decomposition must have served: rebuilt at steps 0 and 3 (the skin) and 7 (the
-    // balance, after the crowd gathered at step 6; not on one rank, always balanced) only,
-    // unless switched off with TDYN_CONTACT_STICKY=0, when every step rebuilds.
-    let sticky = std::env::var("TDYN_CONTACT_STICKY").map_or(true, |v| v != "0");
-    let want = match (sticky, p) {
-        (false, _) => steps as u64,
-        (true, 1) => 2,
-        (true, _) => 3,
-    };
+    // balance, after the crowd gathered at step 6; not on one rank, always balanced) only.
+    let want = if p == 1 { 2 } else { 3 };
     if stage.rebuilds.decomposition != want {
         return Err(format!(
             "the decomposition was rebuilt {} times over {steps} steps, expected {want}",

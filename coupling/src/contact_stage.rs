@@ -343,6 +343,17 @@ pub struct ContactStage {
 }
 
 impl ContactStage {
+    /// Chooses whether the decomposition and candidate lists are kept between steps (`kept`,
+    /// default true; false rebuilds every step) and the skins as multiples of the step's largest
+    /// motion (`skins`: ghosts, candidates; `None` keeps [`GHOST_SKIN_STEPS`],
+    /// [`CANDIDATE_SKIN_STEPS`]). Call before the first step, with the same values on every rank.
+    pub fn configure(&mut self, kept: bool, skins: Option<(f64, f64)>) {
+        self.sticky_enabled = kept;
+        if let Some(s) = skins {
+            self.skins = s;
+        }
+    }
+
     /// A stage over `comm` (collective).
     pub fn new(comm: &SimpleCommunicator, self_contact: bool) -> ContactStage {
         ContactStage {
@@ -355,19 +366,13 @@ impl ContactStage {
                 self_param_tol: MESH_PARAM_TOL,
                 ..SearchParams::default()
             },
-            sticky_enabled: std::env::var("TDYN_CONTACT_STICKY").map_or(true, |v| v != "0"),
+            sticky_enabled: true,
             step_count: 0,
             kept_steps: 0,
             backoff: 0,
             retry_at: 0,
             sticky: None,
-            skins: std::env::var("TDYN_CONTACT_SKINS")
-                .ok()
-                .and_then(|v| {
-                    let (a, b) = v.split_once(',')?;
-                    Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
-                })
-                .unwrap_or((GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS)),
+            skins: (GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS),
             rebuilds: RebuildStats::default(),
             last_imbalance: 1.0,
         }

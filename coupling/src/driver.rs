@@ -8,7 +8,7 @@
 //! both (nodes and, with `contact.particles`, particles), FE element forces, SPH passes, the
 //! closing kicks. A scene of particles only runs in `sph_run`.
 use crate::collective::{self, first_error};
-use crate::contact_baseline::{self, BaselineStage};
+use crate::contact_baseline::BaselineStage;
 use crate::contact_stage::ContactStage;
 use crate::fe_contact::FeContact;
 use crate::fe_setup::{self, Groups};
@@ -107,6 +107,40 @@ pub struct RunOptions {
     pub overrides: RunOverrides,
     /// Stop after set-up (mesh, FE stage, stable step): no time step, no output.
     pub setup_only: bool,
+    /// Algorithm choices for benchmarks and reference runs (`tdyn run` flags).
+    pub algorithms: Algorithms,
+}
+
+/// Algorithm choices that do not change the answer, only how it is computed: the defaults are
+/// what every run should use; the others are the references the tests and benchmarks compare
+/// against (`tdyn run --contact-decomposition static --contact-rebuild every-step
+/// --contact-skins G,C --sph-pairs fresh`). Every rank parses the same command line, so every
+/// rank makes the same choice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Algorithms {
+    /// Contact searched on the static FE decomposition (the paper's baseline, for benchmarks)
+    /// instead of its own RCB decomposition. Mesh nodes only: particles are not contact nodes.
+    pub contact_static: bool,
+    /// Keep the contact decomposition and candidate lists between steps within their skins
+    /// (default); false rebuilds them every step (Fig. 10 steps 1-6 each step).
+    pub contact_kept: bool,
+    /// The contact skins as multiples of the step's largest motion (ghost faces, candidate
+    /// lists); `None`: the stage's defaults.
+    pub contact_skins: Option<(f64, f64)>,
+    /// Keep the SPH pair candidates between steps on one rank (default); false searches
+    /// afresh every step.
+    pub sph_kept_pairs: bool,
+}
+
+impl Default for Algorithms {
+    fn default() -> Self {
+        Algorithms {
+            contact_static: false,
+            contact_kept: true,
+            contact_skins: None,
+            sph_kept_pairs: true,
+        }
+    }
 }
 
 /// Replacements for scene keys: `[run]` keys (`tdyn compare`), mesh parameters and particle
@@ -281,7 +315,7 @@ impl FeStage {
 }
 
 /// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
-/// ([`contact_baseline::BASELINE_ENV`]), the static FE decomposition.
+/// (`tdyn run --contact-decomposition static`), the static FE decomposition.
 enum ContactImpl {
     Dynamic(ContactStage),
     Baseline(BaselineStage),
@@ -757,7 +791,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut sph = if scene.particles.is_empty() {
         None
     } else {
-        Some(SphCtx::new(world, &scene)?)
+        Some(SphCtx::new(world, &scene, opts.algorithms.sph_kept_pairs)?)
     };
     let probes = Probes::locate(world, &file, &scene.probes, stage.fe(), sph.is_some())?;
     let mut contact = match &scene.contact {
@@ -786,15 +820,16 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             Some(ContactCtx {
                 fe_side,
                 stage: {
-                    let dynamic = ContactStage::new(world, c.self_contact);
-                    if contact_baseline::requested() {
+                    let mut dynamic = ContactStage::new(world, c.self_contact);
+                    dynamic.configure(opts.algorithms.contact_kept, opts.algorithms.contact_skins);
+                    if opts.algorithms.contact_static {
                         ContactImpl::Baseline(BaselineStage::new(world, dynamic.params))
                     } else {
                         ContactImpl::Dynamic(dynamic)
                     }
                 },
                 node_gid: dm.local.node_id.clone(),
-                particles: c.particles && sph.is_some() && !contact_baseline::requested(),
+                particles: c.particles && sph.is_some() && !opts.algorithms.contact_static,
                 particle_gid_offset: dm.local.global_nodes,
                 energy: 0.0,
                 contacts: 0,

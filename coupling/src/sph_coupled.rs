@@ -38,8 +38,13 @@ pub struct SphCtx {
 }
 
 impl SphCtx {
-    /// Particles of the scene on their decomposition, set up at t = 0 (collective).
-    pub fn new(world: &SimpleCommunicator, scene: &Scene) -> Result<SphCtx, String> {
+    /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
+    /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
+    pub fn new(
+        world: &SimpleCommunicator,
+        scene: &Scene,
+        kept_pairs: bool,
+    ) -> Result<SphCtx, String> {
         let (params, map) = params_from_scene(scene)?;
         let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
         crate::collective::first_error(world, seeds.as_ref().err().cloned())?;
@@ -47,6 +52,7 @@ impl SphCtx {
         let n_total = crate::collective::sum(world, seeds.len() as f64) as u64;
         let parts = particles_from_seeds(&seeds, &map)?;
         let mut stage = SphStage::new(world, parts, params);
+        stage.set_kept_pairs(kept_pairs);
         stage.setup()?;
         let g = globals(world, &stage);
         Ok(SphCtx {

@@ -216,6 +216,7 @@ pub fn run(
     scene: &Scene,
     out_dir: &Path,
     quiet: bool,
+    kept_pairs: bool,
 ) -> Result<(u64, f64), String> {
     let wall0 = Instant::now();
     let rank = world.rank();
@@ -231,6 +232,7 @@ pub fn run(
     let parts = particles_from_seeds(&seeds, &map)?;
     let liggghts = params.profile == Profile::Liggghts;
     let mut st = SphStage::new(world, parts, params);
+    st.set_kept_pairs(kept_pairs);
     st.setup()?;
     let stable0 = st.stable_dt();
     if let Some(dt) = scene.run.dt {
@@ -526,5 +528,11 @@ pub fn run_if_particles_only(
                 .unwrap_or_default(),
         )
     });
-    Some(run(world, &scene, &out_dir, opts.quiet))
+    Some(run(
+        world,
+        &scene,
+        &out_dir,
+        opts.quiet,
+        opts.algorithms.sph_kept_pairs,
+    ))
 }

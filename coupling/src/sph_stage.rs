@@ -129,9 +129,15 @@ impl SphStage {
             pair_count: Vec::new(),
             balanced_once: false,
             verlet: None,
-            verlet_enabled: std::env::var("TDYN_SPH_VERLET").map_or(true, |v| v != "0"),
+            verlet_enabled: true,
             pair_searches: 0,
         }
+    }
+
+    /// Whether pair candidates may be kept between steps (default true; false searches afresh
+    /// every step: the reference `tdyn run --sph-pairs fresh` compares against).
+    pub fn set_kept_pairs(&mut self, kept: bool) {
+        self.verlet_enabled = kept;
     }
 
     /// The decomposition's cut tree (after the first rebalance).

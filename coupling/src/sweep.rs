@@ -434,6 +434,7 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
         quiet: true,
         overrides: overrides[0].clone(),
         setup_only: false,
+        algorithms: Default::default(),
     };
     if crate::sph_run::run_if_particles_only(world, &warm).is_none() {
         let _ = driver::run(world, &warm);
@@ -464,6 +465,7 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
             quiet: true,
             overrides: ov,
             setup_only: false,
+            algorithms: Default::default(),
         };
         world.barrier();
         reset_peak_rss();

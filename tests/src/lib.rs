@@ -57,20 +57,10 @@ pub fn mpi_env(c: &mut Command) -> &mut Command {
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
 }
 
-/// `mpirun -np N [-x VAR] tdyn run scene EXTRA --out out --quiet` (10 min limit), with the
-/// environment variable `env` = (name, value) passed to every rank when given.
-fn launch(
-    np: usize,
-    scene: &Path,
-    out: &Path,
-    extra: &[&str],
-    env: Option<(&str, &str)>,
-) -> Output {
-    let mut c = mpirun(np, 600);
-    if let Some((var, value)) = env {
-        c.args(["-x", var]).env(var, value);
-    }
-    c.arg(tdyn())
+/// `mpirun -np N tdyn run scene EXTRA --out out --quiet` (10 min limit).
+fn launch(np: usize, scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    mpirun(np, 600)
+        .arg(tdyn())
         .arg("run")
         .arg(scene)
         .args(extra)
@@ -93,19 +83,12 @@ fn assert_ran(o: &Output, what: &str) {
 
 /// Runs `mpirun -np N tdyn run scene --out out --quiet` (10 min limit) and returns its output.
 pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
-    launch(np, scene, out, &[], None)
-}
-
-/// `run` with the environment variable `var=value` passed to every rank and `extra` arguments
-/// after the scene (e.g. `--end-time`); insists on success.
-pub fn run_with_env(np: usize, scene: &Path, out: &Path, var: &str, value: &str, extra: &[&str]) {
-    let o = launch(np, scene, out, extra, Some((var, value)));
-    assert_ran(&o, &format!("at np {np} with {var}={value}"));
+    launch(np, scene, out, &[])
 }
 
 /// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success.
 pub fn run_ok_args(np: usize, scene: &Path, out: &Path, extra: &[&str]) {
-    let o = launch(np, scene, out, extra, None);
+    let o = launch(np, scene, out, extra);
     assert_ran(&o, &format!("at np {np} with {extra:?}"));
 }
 

@@ -290,16 +290,17 @@ fn tilted_block_dropped_on_a_plate_never_enters_it() {
         histories.push(rows);
     }
     // The kept decomposition gives what a rebuild at every step gives: the same history, bit for
-    // bit (reference: TDYN_CONTACT_STICKY=0, steps 1-6 of Fig. 10 at every step), at np 3.
+    // bit (reference: `--contact-rebuild every-step`, steps 1-6 of Fig. 10 at every step), at
+    // np 3.
     let dir = workdir("block_drop_np3_rebuild_every_step");
     let out = dir.join("out");
     let scene = root().join("scenes/block_drop.toml");
-    run_with_env(3, &scene, &out, "TDYN_CONTACT_STICKY", "0", &[]);
+    run_ok_args(3, &scene, &out, &["--contact-rebuild", "every-step"]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(
         report["contact_rebuilds"], report["steps"],
-        "TDYN_CONTACT_STICKY=0 must rebuild at every step"
+        "--contact-rebuild every-step must rebuild at every step"
     );
     let (_, every) = read_csv(&out.join("history.csv"));
     let d = column_differences(&histories[2], &every);
@@ -425,7 +426,8 @@ fn crushed_tube_folds_without_its_walls_passing_through_each_other() {
 
 #[test]
 fn static_decomposition_baseline_finds_the_same_contacts() {
-    // The benchmark's baseline (contact searched on the FE decomposition, TDYN_CONTACT_BASELINE=1)
+    // The benchmark's baseline (contact searched on the FE decomposition,
+    // `--contact-decomposition static`)
     // must do the same physics as the dynamic stage for its figures to compare like with like.
     // Reference: the dynamic stage's run of scenes/block_drop.toml at the same rank count. The
     // contact count of every step is equal, momentum equal to 1e-12 of its scale, the energies
@@ -436,9 +438,9 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
     let dir = workdir("block_drop_baseline");
     let scene = root().join("scenes/block_drop.toml");
     let mut rows = Vec::new();
-    for (mode, name) in [("0", "dynamic_rcb"), ("1", "static_fe_baseline")] {
-        let out = dir.join(format!("out{mode}"));
-        run_with_env(np, &scene, &out, "TDYN_CONTACT_BASELINE", mode, &[]);
+    for (mode, name) in [("rcb", "dynamic_rcb"), ("static", "static_fe_baseline")] {
+        let out = dir.join(format!("out_{mode}"));
+        run_ok_args(np, &scene, &out, &["--contact-decomposition", mode]);
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
                 .unwrap();
@@ -471,7 +473,7 @@ fn rcb_balances_the_contact_work_where_the_static_decomposition_cannot() {
     // decomposition exceeds 2. scenes/bricks_pedestal.toml: 64 bricks lifting off a tall
     // column whose top only is a contact surface; METIS cuts the column across its height, so
     // ranks holding its lower part have no contact surface. Reference for "cannot": the
-    // baseline's own count at the same rank count (TDYN_CONTACT_BASELINE=1), which must exceed
+    // baseline's own count at the same rank count (`--contact-decomposition static`), which must exceed
     // 2 at np 4 for the scene to test anything and reach 2 at np 2, the most max/mean can be on
     // two ranks (one rank searches everything; measured 2.000 at np 2, 2.69 at np 4; RCB 1.000).
     // Counts, not times: they do not depend on the machine. A shortened run (30 us).
@@ -479,15 +481,13 @@ fn rcb_balances_the_contact_work_where_the_static_decomposition_cannot() {
     let scene = root().join("scenes/bricks_pedestal.toml");
     for np in [2, 4] {
         let mut imb = Vec::new();
-        for mode in ["0", "1"] {
-            let out = dir.join(format!("np{np}_b{mode}"));
-            run_with_env(
+        for mode in ["rcb", "static"] {
+            let out = dir.join(format!("np{np}_{mode}"));
+            run_ok_args(
                 np,
                 &scene,
                 &out,
-                "TDYN_CONTACT_BASELINE",
-                mode,
-                &["--end-time", "3e-5"],
+                &["--contact-decomposition", mode, "--end-time", "3e-5"],
             );
             let report: serde_json::Value =
                 serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())

@@ -210,7 +210,7 @@ fn liggghts_dam_break_2000_steps_kinetic_energy_and_front_within_1_percent() {
 fn kept_pair_candidates_give_the_pairs_of_a_fresh_search() {
     // On one rank without a periodic box the SPH stage keeps its pair candidates between steps
     // (a Verlet list, sph::KeptPairs) and filters them with the search's own overlap
-    // test. Reference: the same run searching afresh every step (TDYN_SPH_VERLET=0), itself
+    // test. Reference: the same run searching afresh every step (`--sph-pairs every-step`), itself
     // checked against LIGGGHTS above. scenes/liggghts_dambreak.toml for 600 steps (the fluid
     // falls far enough for several rebuilds): the pair count of the last step identical, and
     // every history column within 1e-10 of its largest value (the pairs come in another order,
@@ -220,23 +220,16 @@ fn kept_pair_candidates_give_the_pairs_of_a_fresh_search() {
     let dir = workdir("sph_verlet_against_fresh");
     let scene = root().join("scenes/liggghts_dambreak.toml");
     let mut runs = Vec::new();
-    for v in ["0", "1"] {
-        let out = dir.join(format!("verlet{v}"));
-        run_with_env(
-            1,
-            &scene,
-            &out,
-            "TDYN_SPH_VERLET",
-            v,
-            &["--end-time", "0.03"],
-        );
+    for v in ["every-step", "kept"] {
+        let out = dir.join(format!("pairs_{v}"));
+        run_ok_args(1, &scene, &out, &["--sph-pairs", v, "--end-time", "0.03"]);
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
                 .unwrap();
         let pairs = report["sph_pairs_last_step"].as_f64().unwrap();
         let searches = report["sph_pair_searches"].as_f64().unwrap();
         let steps = report["steps"].as_f64().unwrap();
-        if v == "0" {
+        if v == "every-step" {
             assert!(
                 searches > steps,
                 "a fresh search every evaluation: {searches} in {steps} steps"

@@ -20,6 +20,38 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// `--contact-decomposition`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum ContactDecomposition {
+    /// Contact's own RCB decomposition (Fig. 10).
+    Rcb,
+    /// The static FE decomposition (benchmark baseline).
+    Static,
+}
+
+/// `--contact-rebuild`, `--sph-pairs`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Rebuild {
+    /// Keep between steps within a skin.
+    Kept,
+    /// Rebuild every step.
+    EveryStep,
+}
+
+/// `GHOST,CANDIDATE`: two positive numbers.
+fn parse_skins(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("expected GHOST,CANDIDATE (two positive numbers, e.g. 200,30), got {s:?}");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if !(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite()) {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scene: `mpirun -np 4 tdyn run scenes/bar_impact.toml [--out DIR] [PETSc options]`
@@ -40,6 +72,22 @@ enum Cmd {
         /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
         #[arg(long = "end-time")]
         end_time: Option<f64>,
+        /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
+        /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
+        #[arg(long = "contact-decomposition", value_enum, default_value = "rcb")]
+        contact_decomposition: ContactDecomposition,
+        /// `kept` (default): keep the contact decomposition and candidate lists between steps
+        /// within their skins; `every-step`: rebuild them every step (the reference).
+        #[arg(long = "contact-rebuild", value_enum, default_value = "kept")]
+        contact_rebuild: Rebuild,
+        /// The contact skins GHOST,CANDIDATE as multiples of the step's largest motion
+        /// (default 200,30).
+        #[arg(long = "contact-skins", value_parser = parse_skins)]
+        contact_skins: Option<(f64, f64)>,
+        /// `kept` (default): keep SPH pair candidates between steps where possible;
+        /// `every-step`: search afresh every step (the reference).
+        #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
+        sph_pairs: Rebuild,
     },
     /// Chart accuracy against cost over a ladder of resolutions:
     /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
@@ -462,6 +510,10 @@ fn main() -> ExitCode {
             quiet,
             params,
             end_time,
+            contact_decomposition,
+            contact_rebuild,
+            contact_skins,
+            sph_pairs,
         } => {
             let mut overrides = driver::RunOverrides {
                 end_time,
@@ -485,6 +537,12 @@ fn main() -> ExitCode {
                 out,
                 quiet,
                 overrides,
+                algorithms: driver::Algorithms {
+                    contact_static: contact_decomposition == ContactDecomposition::Static,
+                    contact_kept: contact_rebuild == Rebuild::Kept,
+                    contact_skins,
+                    sph_kept_pairs: sph_pairs == Rebuild::Kept,
+                },
                 ..Default::default()
             };
             // A scene of particles only runs the SPH stage alone (it prints its own summary).
