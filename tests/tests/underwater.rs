@@ -93,7 +93,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
     }
     // Cole at the two farthest probes, R = 9A and 12A (7.3 and 9.7 equivalent-sphere charge
     // radii; R/W^(1/3) = 0.38 and 0.51 m/kg^(1/3)). Tolerance 20 %, from the resolution
-    // study (README): N = 2 (the CI default) -12.4 % at 12A and -4.3 % at 9A; N = 3 -1.8 %
+    // study (docs/accuracy.md): N = 2 (the CI default) -12.4 % at 12A and -4.3 % at 9A; N = 3 -1.8 %
     // and +5.7 %. The coarse mesh smears the shock over 2-3 elements and lowers its peak; the
     // kinematic particle-water coupling and the cube charge (not Cole's sphere) add the rest.
     let m = &all[0];
