@@ -28,5 +28,5 @@ lint:
 # The validation suite (docs/validation.md): every case of validation/ at its validation
 # resolution; out/validation/report.md. FAST=1 runs the coarse meshes the tests use.
 validate: setup
-	cargo build --release -p coupling --bin tdyn
+	cargo build --release -p tdyn --bins
 	target/release/tdyn validate --np $(NP) $(if $(FAST),--fast,)

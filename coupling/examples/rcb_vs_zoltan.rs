@@ -1,4 +1,4 @@
-//! Our parallel RCB ([`coupling::rcb::Rcb`]) against Zoltan's RCB on exactly the same points,
+//! Our parallel RCB ([`coupling::kernels::rcb::Rcb`]) against Zoltan's RCB on exactly the same points,
 //! in the same run (`scripts/bench_rcb.sh` runs it at np 1, 2, 4).
 //!
 //! For every point count and distribution, each repeat starts from scratch:
@@ -26,8 +26,8 @@
 //! Usage: `mpirun -np P rcb_vs_zoltan [--sizes 100000:15,1000000:7] [--dists uniform,clustered]
 //! [--tol 1.0] [--check-geom 0] [--csv FILE]` (rows are appended to FILE on rank 0).
 use bytemuck::{Pod, Zeroable};
-use coupling::comm::CommPlan;
-use coupling::rcb::{Rcb, RcbItem};
+use coupling::kernels::comm::CommPlan;
+use coupling::kernels::rcb::{Rcb, RcbItem};
 use mpi::collective::SystemOperation;
 use mpi::raw::AsRaw;
 use mpi::topology::SimpleCommunicator;

@@ -23,7 +23,7 @@ pub fn tdyn() -> PathBuf {
             .unwrap_or_else(|_| root().join("target"));
         let bin = target.join("release").join("tdyn");
         let st = Command::new(env!("CARGO"))
-            .args(["build", "--release", "-p", "coupling", "--bin", "tdyn"])
+            .args(["build", "--release", "-p", "tdyn", "--bins"])
             .current_dir(root())
             .status()
             .expect("cargo build");

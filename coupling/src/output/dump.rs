@@ -2,7 +2,7 @@
 //! (`[output] dump_every`, `tdyn crosscheck`): one file per dumped step, `dump.tdyn.<step>`,
 //! in LIGGGHTS's own layout (`ITEM: TIMESTEP`, `NUMBER OF ATOMS`, `BOX BOUNDS`, `ATOMS ...`),
 //! rows sorted by id, numbers in `%.16e` as the peer decks dump them.
-use crate::particles_setup::ParticleIds;
+use crate::input::particles::ParticleIds;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::Particles;
@@ -37,7 +37,7 @@ pub fn write_particle_dump(
         mine.extend_from_slice(&parts.f[i]);
         mine.extend_from_slice(&[parts.rho[i], parts.p[i], parts.m[i]]);
     }
-    let all = crate::collective::all_gather_varcount(comm, &mine);
+    let all = crate::kernels::collective::all_gather_varcount(comm, &mine);
     if comm.rank() != 0 {
         return Ok(());
     }

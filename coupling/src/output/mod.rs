@@ -4,7 +4,6 @@ mod dump;
 mod fields;
 mod history;
 mod report;
-mod selftest;
 
 pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{
@@ -12,7 +11,6 @@ pub use fields::{
 };
 pub use history::History;
 pub use report::{Report, StageStats};
-pub use selftest::roundtrip_check;
 
 /// Output errors.
 #[derive(Debug, thiserror::Error)]

@@ -1,0 +1,499 @@
+//! Meshing `.geo` files with the `gmsh` command (cached by content and parameters) and reading
+//! the physical group names of a `.msh` file.
+use crate::input::scene::MeshDef;
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Meshing or mesh-file errors.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// The file does not exist or cannot be read.
+    #[error("{path}: {why}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        why: String,
+    },
+    /// gmsh is missing or failed.
+    #[error("gmsh failed on {path}: {why}")]
+    Gmsh {
+        /// The .geo file.
+        path: PathBuf,
+        /// gmsh's message (tail of its output).
+        why: String,
+    },
+}
+
+/// A gmsh physical group.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PhysicalName {
+    /// Dimension (2 surface, 3 volume).
+    pub dim: i32,
+    /// Numeric tag.
+    pub tag: i32,
+    /// Name.
+    pub name: String,
+}
+
+/// Where meshes of `.geo` files in `dir` are cached.
+pub fn default_cache_dir(dir: &Path) -> PathBuf {
+    dir.join(".cache")
+}
+
+fn gmsh_version() -> Result<String, String> {
+    let out = Command::new("gmsh")
+        .arg("--version")
+        .output()
+        .map_err(|e| {
+            format!("cannot run gmsh ({e}): install it (apt-get install gmsh; `make setup` does)")
+        })?;
+    let mut v = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    v.push_str(String::from_utf8_lossy(&out.stderr).trim());
+    Ok(v)
+}
+
+/// Returns a `.msh` for the mesh: a `.msh` as given, a `.geo` meshed by gmsh into `cache_dir`
+/// (msh 2.2, 3D) unless a mesh with the same .geo content, parameters and gmsh version exists.
+pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> {
+    let path = &def.file;
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !path.exists() {
+        return Err(MeshError::File {
+            path: path.clone(),
+            why: "no such file".into(),
+        });
+    }
+    match ext {
+        "msh" => return Ok(path.clone()),
+        "geo" => {}
+        _ => {
+            return Err(MeshError::File {
+                path: path.clone(),
+                why: "expected a .geo or .msh file".into(),
+            })
+        }
+    }
+    let text = std::fs::read(path).map_err(|e| MeshError::File {
+        path: path.clone(),
+        why: e.to_string(),
+    })?;
+    let version = gmsh_version().map_err(|why| MeshError::Gmsh {
+        path: path.clone(),
+        why,
+    })?;
+    let mut h = Sha256::new();
+    h.update(&text);
+    for (k, v) in &def.params {
+        h.update(format!("\n{k}={v:e}").as_bytes());
+    }
+    h.update(version.as_bytes());
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh");
+    let out = cache_dir.join(format!("{stem}-{hash}.msh"));
+    if out.exists() {
+        return Ok(out);
+    }
+    std::fs::create_dir_all(cache_dir).map_err(|e| MeshError::File {
+        path: cache_dir.to_path_buf(),
+        why: e.to_string(),
+    })?;
+    let tmp = cache_dir.join(format!("{stem}-{hash}.{}.tmp.msh", std::process::id()));
+    let mut cmd = Command::new("gmsh");
+    cmd.arg(path).arg("-3").arg("-format").arg("msh22");
+    for (k, v) in &def.params {
+        cmd.arg("-setnumber").arg(k).arg(format!("{v}"));
+    }
+    cmd.arg("-o").arg(&tmp);
+    let res = cmd.output().map_err(|e| MeshError::Gmsh {
+        path: path.clone(),
+        why: format!("cannot run gmsh: {e}"),
+    })?;
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&res.stdout),
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let errors: Vec<&str> = log.lines().filter(|l| l.contains("Error")).collect();
+    if !res.status.success() || !errors.is_empty() || !tmp.exists() {
+        let _ = std::fs::remove_file(&tmp);
+        let tail: Vec<&str> = if errors.is_empty() {
+            log.lines()
+                .rev()
+                .take(5)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+                .collect()
+        } else {
+            errors
+        };
+        return Err(MeshError::Gmsh {
+            path: path.clone(),
+            why: tail.join(" | "),
+        });
+    }
+    std::fs::rename(&tmp, &out).map_err(|e| MeshError::File {
+        path: out.clone(),
+        why: e.to_string(),
+    })?;
+    Ok(out)
+}
+
+/// Reads the `$PhysicalNames` section of an ASCII msh 2.2 or 4.1 file.
+pub fn physical_names(msh: &Path) -> Result<Vec<PhysicalName>, MeshError> {
+    let text = std::fs::read_to_string(msh).map_err(|e| MeshError::File {
+        path: msh.to_path_buf(),
+        why: format!("cannot read ({e}); binary .msh files need $PhysicalNames in ASCII: save as ASCII msh 2.2 or 4.1"),
+    })?;
+    if !text.starts_with("$MeshFormat") {
+        return Err(MeshError::File {
+            path: msh.to_path_buf(),
+            why:
+                "not a gmsh mesh file (no $MeshFormat header); expected an ASCII .msh (2.2 or 4.1)"
+                    .into(),
+        });
+    }
+    let mut out = Vec::new();
+    let mut lines = text.lines();
+    while let Some(l) = lines.next() {
+        if l.trim() == "$PhysicalNames" {
+            let n: usize = lines
+                .next()
+                .and_then(|s| s.trim().parse().ok())
+                .unwrap_or(0);
+            for _ in 0..n {
+                let Some(row) = lines.next() else { break };
+                let mut it = row.splitn(3, char::is_whitespace);
+                let dim = it.next().and_then(|s| s.parse().ok());
+                let tag = it.next().and_then(|s| s.parse().ok());
+                let name = it.next().map(|s| s.trim().trim_matches('"').to_string());
+                if let (Some(dim), Some(tag), Some(name)) = (dim, tag, name) {
+                    out.push(PhysicalName { dim, tag, name });
+                } else {
+                    return Err(MeshError::File {
+                        path: msh.to_path_buf(),
+                        why: format!("bad $PhysicalNames row: {row}"),
+                    });
+                }
+            }
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// A msh 2.2 ASCII file in memory: what merging needs.
+struct Msh22 {
+    names: Vec<PhysicalName>,
+    /// (gmsh node id, coordinates)
+    nodes: Vec<(u64, [f64; 3])>,
+    /// (type, physical tag, elementary tag, node ids)
+    elements: Vec<(i32, i32, i32, Vec<u64>)>,
+}
+
+fn bad(path: &Path, why: &str) -> MeshError {
+    MeshError::File {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    }
+}
+
+fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, &e.to_string()))?;
+    let names = physical_names(path)?;
+    let mut nodes = Vec::new();
+    let mut elements = Vec::new();
+    let mut lines = text.lines();
+    while let Some(l) = lines.next() {
+        match l.trim() {
+            "$Nodes" => {
+                let n: usize = lines
+                    .next()
+                    .and_then(|s| s.trim().parse().ok())
+                    .ok_or_else(|| bad(path, "bad $Nodes count"))?;
+                for _ in 0..n {
+                    let row = lines.next().ok_or_else(|| bad(path, "truncated $Nodes"))?;
+                    let v: Vec<f64> = row
+                        .split_whitespace()
+                        .filter_map(|s| s.parse().ok())
+                        .collect();
+                    if v.len() < 4 {
+                        return Err(bad(path, &format!("bad node row: {row}")));
+                    }
+                    nodes.push((v[0] as u64, [v[1], v[2], v[3]]));
+                }
+            }
+            "$Elements" => {
+                let n: usize = lines
+                    .next()
+                    .and_then(|s| s.trim().parse().ok())
+                    .ok_or_else(|| bad(path, "bad $Elements count"))?;
+                for _ in 0..n {
+                    let row = lines
+                        .next()
+                        .ok_or_else(|| bad(path, "truncated $Elements"))?;
+                    let v: Vec<i64> = row
+                        .split_whitespace()
+                        .filter_map(|s| s.parse().ok())
+                        .collect();
+                    if v.len() < 3 || v.len() < 3 + v[2] as usize {
+                        return Err(bad(path, &format!("bad element row: {row}")));
+                    }
+                    let ntags = v[2] as usize;
+                    let phys = if ntags > 0 { v[3] as i32 } else { 0 };
+                    let geom = if ntags > 1 { v[4] as i32 } else { 0 };
+                    let conn = v[3 + ntags..].iter().map(|&x| x as u64).collect();
+                    elements.push((v[1] as i32, phys, geom, conn));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(Msh22 {
+        names,
+        nodes,
+        elements,
+    })
+}
+
+/// A `.msh` in the 2.2 ASCII format: the file itself, or a conversion by gmsh into `cache_dir`.
+fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
+    let head = std::fs::read_to_string(path).map_err(|e| {
+        bad(
+            path,
+            &format!("cannot read as text ({e}); save the mesh as ASCII"),
+        )
+    })?;
+    if head
+        .lines()
+        .nth(1)
+        .map(|l| l.starts_with("2.2 0"))
+        .unwrap_or(false)
+    {
+        return Ok(path.to_path_buf());
+    }
+    std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
+    let mut h = Sha256::new();
+    h.update(head.as_bytes());
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let out = cache_dir.join(format!("converted-{hash}.msh"));
+    if out.exists() {
+        return Ok(out);
+    }
+    let res = Command::new("gmsh")
+        .arg(path)
+        .args(["-save", "-format", "msh22", "-o"])
+        .arg(&out)
+        .output()
+        .map_err(|e| MeshError::Gmsh {
+            path: path.to_path_buf(),
+            why: format!("cannot run gmsh: {e}"),
+        })?;
+    if !res.status.success() || !out.exists() {
+        return Err(MeshError::Gmsh {
+            path: path.to_path_buf(),
+            why: String::from_utf8_lossy(&res.stderr)
+                .lines()
+                .last()
+                .unwrap_or("conversion to msh 2.2 failed")
+                .to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// Merges several meshes, each moved by its translation, into one msh 2.2 file in `cache_dir`
+/// (cached by content). Physical groups with the same dimension and name become one group;
+/// node, element and elementary-entity numbers are offset so they stay unique. The bodies stay
+/// separate (no nodes are shared between meshes).
+pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf, MeshError> {
+    let mut meshes = Vec::new();
+    let mut h = Sha256::new();
+    for (p, t) in parts {
+        let p22 = as_msh22(p, cache_dir)?;
+        h.update(std::fs::read(&p22).map_err(|e| bad(&p22, &e.to_string()))?);
+        h.update(format!("{t:?}").as_bytes());
+        meshes.push((read_msh22(&p22)?, *t));
+    }
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let out = cache_dir.join(format!("merged-{hash}.msh"));
+    if out.exists() {
+        return Ok(out);
+    }
+    // New physical tags per (dim, name), in order of first appearance.
+    let mut groups: Vec<PhysicalName> = Vec::new();
+    let mut text = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
+    let mut maps = Vec::new();
+    for (m, _) in &meshes {
+        let mut map = std::collections::BTreeMap::new();
+        for n in &m.names {
+            let tag = match groups.iter().find(|g| g.dim == n.dim && g.name == n.name) {
+                Some(g) => g.tag,
+                None => {
+                    let tag = groups.len() as i32 + 1;
+                    groups.push(PhysicalName {
+                        dim: n.dim,
+                        tag,
+                        name: n.name.clone(),
+                    });
+                    tag
+                }
+            };
+            map.insert((n.dim, n.tag), tag);
+        }
+        maps.push(map);
+    }
+    text.push_str(&format!("$PhysicalNames\n{}\n", groups.len()));
+    for g in &groups {
+        text.push_str(&format!("{} {} \"{}\"\n", g.dim, g.tag, g.name));
+    }
+    text.push_str("$EndPhysicalNames\n");
+    let total_nodes: usize = meshes.iter().map(|(m, _)| m.nodes.len()).sum();
+    text.push_str(&format!("$Nodes\n{total_nodes}\n"));
+    let mut offsets = Vec::new();
+    let mut base = 0u64;
+    for (m, t) in &meshes {
+        offsets.push(base);
+        let mut top = 0;
+        for (id, x) in &m.nodes {
+            text.push_str(&format!(
+                "{} {:?} {:?} {:?}\n",
+                id + base,
+                x[0] + t[0],
+                x[1] + t[1],
+                x[2] + t[2]
+            ));
+            top = top.max(*id);
+        }
+        base += top;
+    }
+    text.push_str("$EndNodes\n");
+    let total_elems: usize = meshes.iter().map(|(m, _)| m.elements.len()).sum();
+    text.push_str(&format!("$Elements\n{total_elems}\n"));
+    let mut eid = 0u64;
+    let mut geom_base = 0;
+    for (k, (m, _)) in meshes.iter().enumerate() {
+        let mut geom_top = 0;
+        for (ty, phys, geom, conn) in &m.elements {
+            eid += 1;
+            let dim = match ty {
+                15 => 0,
+                1 | 8 => 1,
+                2 | 3 | 9 | 10 => 2,
+                _ => 3,
+            };
+            let p = maps[k].get(&(dim, *phys)).copied().unwrap_or(0);
+            text.push_str(&format!("{eid} {ty} 2 {p} {}", geom + geom_base));
+            for c in conn {
+                text.push_str(&format!(" {}", c + offsets[k]));
+            }
+            text.push('\n');
+            geom_top = geom_top.max(*geom);
+        }
+        geom_base += geom_top;
+    }
+    text.push_str("$EndElements\n");
+    std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
+    let tmp = cache_dir.join(format!("merged-{hash}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, text).map_err(|e| bad(&tmp, &e.to_string()))?;
+    std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn meshes_caches_and_reads_names() {
+        if gmsh_version().is_err() {
+            panic!("gmsh is required (make setup installs it)");
+        }
+        let dir = std::env::temp_dir().join(format!("tdyn-gmsh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let geo = dir.join("cube.geo");
+        std::fs::write(
+            &geo,
+            "If(!Exists(N)) N = 2; EndIf\nSetFactory(\"OpenCASCADE\");\nBox(1) = {0,0,0,1,1,1};\n\
+             Transfinite Curve{:} = N + 1;\nTransfinite Surface{:};\nRecombine Surface{:};\n\
+             Transfinite Volume{:};\nPhysical Volume(\"block\") = {1};\nPhysical Surface(\"bottom\") = {5};\n",
+        )
+        .unwrap();
+        let cache = dir.join(".cache");
+        let mut def = MeshDef {
+            file: geo.clone(),
+            params: [("N".to_string(), 3.0)].into_iter().collect(),
+            translate: [0.0; 3],
+        };
+        let a = mesh_file(&def, &cache).unwrap();
+        let t1 = std::fs::metadata(&a).unwrap().modified().unwrap();
+        let b = mesh_file(&def, &cache).unwrap();
+        assert_eq!(a, b, "same inputs must hit the cache");
+        assert_eq!(
+            t1,
+            std::fs::metadata(&b).unwrap().modified().unwrap(),
+            "cache hit must not re-mesh"
+        );
+        // 3^3 = 27 hexahedra (gmsh element type 5) in the msh 2.2 file.
+        let text = std::fs::read_to_string(&a).unwrap();
+        let hexes = text
+            .lines()
+            .skip_while(|l| *l != "$Elements")
+            .skip(2)
+            .take_while(|l| *l != "$EndElements")
+            .filter(|l| l.split_whitespace().nth(1) == Some("5"))
+            .count();
+        assert_eq!(hexes, 27, "N = 3 gives 3^3 hexahedra");
+        def.params.insert("N".into(), 2.0);
+        let c = mesh_file(&def, &cache).unwrap();
+        assert_ne!(a, c, "other parameters, other mesh");
+        let names = physical_names(&a).unwrap();
+        assert!(names.contains(&PhysicalName {
+            dim: 3,
+            tag: 1,
+            name: "block".into()
+        }));
+        assert!(names.iter().any(|n| n.dim == 2 && n.name == "bottom"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn missing_file_and_bad_geo_are_clear() {
+        let dir = std::env::temp_dir().join(format!("tdyn-gmsh-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let def = MeshDef {
+            file: dir.join("nope.geo"),
+            params: Default::default(),
+            translate: [0.0; 3],
+        };
+        let e = mesh_file(&def, &dir).unwrap_err().to_string();
+        assert!(e.contains("no such file"), "{e}");
+        let geo = dir.join("bad.geo");
+        std::fs::write(&geo, "Box(1) = {0,0,0;\n").unwrap();
+        let def = MeshDef {
+            file: geo,
+            params: Default::default(),
+            translate: [0.0; 3],
+        };
+        let e = mesh_file(&def, &dir).unwrap_err().to_string();
+        assert!(e.contains("gmsh failed"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,226 @@
+//! The baseline the paper argues against (§5, "the commonly used approach"): contact searched on
+//! the static FE decomposition. For benchmarking only: `tdyn run --contact-decomposition static`
+//! (`scripts/bench_contact.sh`); the scene format has no key for it (it changes how contact is
+//! computed, not the answer).
+//!
+//! Each step:
+//! 1. every rank bounds the region its FE-owned contact nodes can reach this step (the union of
+//!    their search boxes: end position grown by the step's motion) and the P boxes are
+//!    all-gathered;
+//! 2. each face (on the FE rank of its element) goes to every other rank whose box its search
+//!    box overlaps (the same search box, grown by the zone of influence, as the dynamic stage);
+//! 3. each rank searches its FE-owned nodes against its own faces and the faces it received
+//!    (the `contact` crate) and computes the push-back;
+//! 4. forces on copies of face nodes go back, with the face, to the face's FE rank, which adds
+//!    them to its (owned or ghost) copy of the node; the FE ghost sum does the rest.
+//!
+//! The contacts found are the same as the dynamic stage's (a node is searched by its FE owner,
+//! once; a face reaches every rank that owns a node whose search box meets it). What differs is
+//! who does the work: as bodies move, a rank's nodes spread and its box (and the faces it must
+//! receive) grows, and the nodes + faces searched per rank follow the FE partition, not the
+//! contact surfaces.
+use crate::kernels::comm::CommPlan;
+use crate::stages::contact::stage::{ContactOutcome, FullFace};
+use contact::{
+    face_records_search_aabb, push_back, search, Aabb, NodeRecord, PushBackParams, SearchParams,
+};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Bytes of one rank's box in the all-gather (six f64).
+const BOX_BYTES: u64 = 48;
+
+/// One baseline step's result: the dynamic stage's outcome (forces aligned with the nodes
+/// handed in) plus forces on the corners of the faces handed in, for corners that are not among
+/// this rank's nodes (they go to this rank's copy of the node).
+#[derive(Clone, Debug, Default)]
+pub struct BaselineOutcome {
+    /// Forces on the nodes handed in, contacts, work, balance, bytes, time.
+    pub outcome: ContactOutcome,
+    /// Per face handed in, the forces on its four corners (zero where the corner is one of
+    /// this rank's nodes: that force is in `outcome.force`), N.
+    pub corner_force: Vec<[[f64; 3]; 4]>,
+}
+
+/// Where a copy of a face node came from: (face index in the sender's list or in the received
+/// list, corner).
+#[derive(Clone, Copy)]
+enum Origin {
+    Own(usize, usize),
+    Received(usize, usize),
+}
+
+/// The baseline contact stage of one run.
+pub struct BaselineStage {
+    comm: SimpleCommunicator,
+    /// Search parameters (the dynamic stage's).
+    pub params: SearchParams,
+}
+
+impl BaselineStage {
+    /// A stage over `comm` with the search parameters of the dynamic stage (collective).
+    pub fn new(comm: &SimpleCommunicator, params: SearchParams) -> BaselineStage {
+        BaselineStage {
+            comm: comm.duplicate(),
+            params,
+        }
+    }
+
+    /// One detection and push-back (collective). `nodes`: this rank's FE-owned contact nodes;
+    /// `faces`: the faces of this rank's elements with their nodes' records.
+    pub fn step(
+        &mut self,
+        nodes: &[NodeRecord],
+        faces: &[FullFace],
+        dt: f64,
+    ) -> Result<BaselineOutcome, String> {
+        let t0 = Instant::now();
+        let comm = &self.comm;
+        let me = comm.rank() as usize;
+        let p = comm.size() as usize;
+        // 1. The zone of influence and every rank's box.
+        let (mut motion, mut radius) = (0.0f64, 0.0f64);
+        let mut mine = Aabb::EMPTY;
+        for n in nodes {
+            let d: f64 = (0..3)
+                .map(|k| (n.x1[k] - n.x0[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            motion = motion.max(d);
+            radius = radius.max(n.radius);
+            let mut b = Aabb::EMPTY;
+            b.include(n.x1);
+            let b = b.grown(d);
+            mine.include(b.min);
+            mine.include(b.max);
+        }
+        let mut g = [0.0f64; 2];
+        comm.all_reduce_into(&[motion, radius][..], &mut g[..], SystemOperation::max());
+        let (motion, radius) = (g[0], g[1]);
+        let mine_flat = [
+            mine.min[0],
+            mine.min[1],
+            mine.min[2],
+            mine.max[0],
+            mine.max[1],
+            mine.max[2],
+        ];
+        let mut all = vec![0.0f64; 6 * p];
+        comm.all_gather_into(&mine_flat[..], &mut all[..]);
+        let boxes: Vec<Aabb> = all
+            .chunks(6)
+            .map(|c| Aabb {
+                min: [c[0], c[1], c[2]],
+                max: [c[3], c[4], c[5]],
+            })
+            .collect();
+        let mut bytes = BOX_BYTES * (p as u64 - 1);
+
+        // 2. Faces to every other rank whose box their search box overlaps.
+        let mut dest = Vec::new();
+        let mut ghost_of = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(motion);
+            for (r, rb) in boxes.iter().enumerate() {
+                if r != me && rb.overlaps(&bb) {
+                    dest.push(r as i32);
+                    ghost_of.push(i);
+                }
+            }
+        }
+        let mut plan = CommPlan::new(comm, &dest);
+        let ghosts: Vec<FullFace> = ghost_of.iter().map(|&i| faces[i]).collect();
+        let received = plan.exchange(&ghosts);
+
+        // 3. The local search: owned nodes first, then copies of face nodes.
+        let mut recs: Vec<NodeRecord> = nodes.to_vec();
+        let n_owned = recs.len();
+        let mut index: HashMap<u64, usize> =
+            recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
+        let mut origin: Vec<Origin> = Vec::new();
+        let mut face_recs = Vec::with_capacity(faces.len() + received.len());
+        let lists = [(faces, true), (&received[..], false)];
+        for (list, own) in lists {
+            for (i, f) in list.iter().enumerate() {
+                for (k, r) in f.nodes.iter().enumerate() {
+                    index.entry(r.gid).or_insert_with(|| {
+                        recs.push(*r);
+                        origin.push(if own {
+                            Origin::Own(i, k)
+                        } else {
+                            Origin::Received(i, k)
+                        });
+                        recs.len() - 1
+                    });
+                }
+                face_recs.push(f.face);
+            }
+        }
+        let work_items = (n_owned + face_recs.len()) as f64;
+        let b = crate::stages::contact::stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
+        let contacts = search(&b, &self.params);
+        let pb = push_back(&b, &contacts, &PushBackParams::new(dt));
+
+        // 4. Forces on copies back to the faces' FE ranks.
+        let mut corner_force = vec![[[0.0f64; 3]; 4]; faces.len()];
+        let mut back = vec![[[0.0f64; 3]; 4]; received.len()];
+        for (j, o) in origin.iter().enumerate() {
+            let f = pb.force[n_owned + j];
+            let slot = match *o {
+                Origin::Own(i, k) => &mut corner_force[i][k],
+                Origin::Received(i, k) => &mut back[i][k],
+            };
+            for c in 0..3 {
+                slot[c] += f[c];
+            }
+        }
+        let returned = plan.reverse(&back);
+        bytes += plan.bytes_sent;
+        for (g, fc) in ghost_of.iter().zip(&returned) {
+            for k in 0..4 {
+                for c in 0..3 {
+                    corner_force[*g][k][c] += fc[k][c];
+                }
+            }
+        }
+
+        // Statistics, as the dynamic stage reports them.
+        let mut sums = [0.0f64; 4];
+        comm.all_reduce_into(
+            &[contacts.len() as f64, pb.work, bytes as f64, work_items][..],
+            &mut sums[..],
+            SystemOperation::sum(),
+        );
+        let mut maxes = [0.0f64; 2];
+        comm.all_reduce_into(
+            &[work_items, t0.elapsed().as_secs_f64()][..],
+            &mut maxes[..],
+            SystemOperation::max(),
+        );
+        let mean = sums[3] / p as f64;
+        Ok(BaselineOutcome {
+            outcome: ContactOutcome {
+                force: pb.force[..n_owned].to_vec(),
+                contacts: sums[0] as u64,
+                found: contacts
+                    .iter()
+                    .map(|c| (c.node_gid, c.face_gid, c.depth))
+                    .collect(),
+                work: sums[1],
+                imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
+                work_items_max: maxes[0],
+                work_items_total: sums[3],
+                bytes_sent: sums[2] as u64,
+                rcb: Default::default(),
+                wall_s: maxes[1],
+                // the baseline searches where the nodes live: no transfer between
+                // decompositions
+                transfer: Default::default(),
+            },
+            corner_force,
+        })
+    }
+}

@@ -1,0 +1,2 @@
+//! The FE stage (Fig. 3, step 1): the mesh on PETSc's static distribution, explicit or implicit.
+pub mod setup;

@@ -1,0 +1,234 @@
+//! From a scene and a distributed mesh to the FE stage's set-up: materials per element, initial
+//! velocities, and nodal constraints (with the scene errors SCENE.md lists for shared nodes).
+use crate::input::scene::{BoundaryKind, Scene};
+use crate::kernels::collective::first_error;
+use fe_petsc::explicit::Constraint;
+use fe_petsc::material::{build_material, Material};
+use fe_petsc::mesh::{DistributedMesh, LocalMesh};
+use mpi::topology::SimpleCommunicator;
+use std::collections::BTreeMap;
+
+/// gmsh physical groups: name -> tag, per dimension.
+#[derive(Debug, Clone, Default)]
+pub struct Groups {
+    /// Physical volumes.
+    pub volumes: BTreeMap<String, i32>,
+    /// Physical surfaces.
+    pub surfaces: BTreeMap<String, i32>,
+}
+
+/// What the FE stage needs besides the mesh.
+pub struct FeInputs {
+    /// Material index of each local element.
+    pub elem_material: Vec<usize>,
+    /// Block of each local element: its index in the scene's `[[block]]` list.
+    pub elem_block: Vec<u32>,
+    /// Materials, in scene order.
+    pub materials: Vec<Box<dyn Material>>,
+    /// Initial velocity of each local node.
+    pub velocity: Vec<[f64; 3]>,
+    /// Constraints on local nodes.
+    pub constraints: Vec<(u32, Constraint)>,
+}
+
+/// Builds materials, per-element material indices, initial velocities and constraints.
+/// Collective: every rank returns the same error.
+pub fn prepare(
+    comm: &SimpleCommunicator,
+    scene: &Scene,
+    groups: &Groups,
+    dm: &mut DistributedMesh,
+) -> Result<FeInputs, String> {
+    let file = scene.file.display().to_string();
+    // The materials the blocks use, in scene order (a material only SPH particles use, such
+    // as a fluid with an EOS, is not an element material).
+    let mut materials = Vec::new();
+    let mut mat_index: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, spec) in scene.materials.iter().enumerate() {
+        if !scene.blocks.iter().any(|b| b.material == spec.name) {
+            continue;
+        }
+        match build_material(spec) {
+            Ok(m) => {
+                mat_index.insert(spec.name.as_str(), materials.len());
+                materials.push(m);
+            }
+            Err(e) => return Err(format!("{file}: material[{i}]: {e}")),
+        }
+    }
+    // block tag -> (material, velocity, block index)
+    let mut by_tag: BTreeMap<i32, (usize, [f64; 3], u32)> = BTreeMap::new();
+    for (i, b) in scene.blocks.iter().enumerate() {
+        let tag = groups.volumes[&b.group];
+        by_tag.insert(tag, (mat_index[b.material.as_str()], b.velocity, i as u32));
+    }
+    let m: &LocalMesh = &dm.local;
+    let mut err = None;
+    let mut elem_material = Vec::with_capacity(m.elems.len());
+    let mut elem_block = Vec::with_capacity(m.elems.len());
+    for (e, &tag) in m.elem_block.iter().enumerate() {
+        match by_tag.get(&tag) {
+            Some((mi, _, bi)) => {
+                elem_material.push(*mi);
+                elem_block.push(*bi);
+            }
+            None => {
+                elem_block.push(0);
+                let name = groups
+                    .volumes
+                    .iter()
+                    .find(|(_, &t)| t == tag)
+                    .map(|(n, _)| format!("physical volume \"{n}\""))
+                    .unwrap_or_else(|| "no physical volume".to_string());
+                err.get_or_insert(format!(
+                    "{file}: element {} is in {name}, which no [[block]] gives a material (add a [[block]] with group = ...)",
+                    m.elem_id[e]
+                ));
+                elem_material.push(0);
+            }
+        }
+    }
+    first_error(comm, err)?;
+
+    // Initial velocity: the mean over the blocks of the elements around the node (weighted by
+    // element count, summed over all ranks so every copy agrees).
+    let nn = m.coords.len();
+    let mut acc = vec![[0.0; 3]; nn];
+    let mut cnt = vec![[0.0; 3]; nn];
+    for (e, conn) in m.elems.iter().enumerate() {
+        let v = by_tag
+            .get(&m.elem_block[e])
+            .map(|x| x.1)
+            .unwrap_or([0.0; 3]);
+        for &n in conn {
+            for c in 0..3 {
+                acc[n as usize][c] += v[c];
+                cnt[n as usize][c] += 1.0;
+            }
+        }
+    }
+    dm.exchange
+        .sum_shared(acc.as_flattened_mut())
+        .map_err(|e| e.to_string())?;
+    dm.exchange
+        .sum_shared(cnt.as_flattened_mut())
+        .map_err(|e| e.to_string())?;
+    let velocity: Vec<[f64; 3]> = acc
+        .iter()
+        .zip(cnt.iter())
+        .map(|(a, c)| {
+            if c[0] > 0.0 {
+                [a[0] / c[0], a[1] / c[1], a[2] / c[2]]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+
+    let constraints = constraints(comm, scene, groups, &dm.local)?;
+    Ok(FeInputs {
+        elem_material,
+        elem_block,
+        materials,
+        velocity,
+        constraints,
+    })
+}
+
+fn constraints(
+    comm: &SimpleCommunicator,
+    scene: &Scene,
+    groups: &Groups,
+    m: &LocalMesh,
+) -> Result<Vec<(u32, Constraint)>, String> {
+    let file = scene.file.display().to_string();
+    let bit_of = |name: &str| -> u32 {
+        let tag = groups.surfaces[name];
+        m.surface_tags
+            .iter()
+            .position(|&t| t == tag)
+            .map(|b| 1u32 << b)
+            .unwrap_or(0)
+    };
+    let nn = m.coords.len();
+    let mut fixed = vec![false; nn];
+    let mut vel: Vec<Option<([f64; 3], usize)>> = vec![None; nn];
+    let mut planes: Vec<Vec<[f64; 3]>> = vec![Vec::new(); nn];
+    let mut err: Option<String> = None;
+    for (i, b) in scene.boundaries.iter().enumerate() {
+        let bit = bit_of(&b.group);
+        let nodes: Vec<usize> = (0..nn).filter(|&n| m.node_surfaces[n] & bit != 0).collect();
+        match &b.kind {
+            BoundaryKind::Fixed => nodes.iter().for_each(|&n| fixed[n] = true),
+            BoundaryKind::Velocity(v) => {
+                for &n in &nodes {
+                    if let Some((w, j)) = vel[n] {
+                        if w != *v && err.is_none() {
+                            err = Some(format!(
+                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities",
+                                m.node_id[n], scene.boundaries[j].group, b.group
+                            ));
+                        }
+                    }
+                    vel[n] = Some((*v, i));
+                }
+            }
+            BoundaryKind::Symmetry => {
+                let k = m
+                    .surface_tags
+                    .iter()
+                    .position(|&t| t == groups.surfaces[&b.group]);
+                let Some(normal) = k.and_then(|k| m.surface_normals[k]) else {
+                    return Err(format!(
+                        "{file}: boundary[{i}]: symmetry surface \"{}\" is not planar (its faces are not all parallel): a symmetry boundary must be a plane (or parallel planes)",
+                        b.group
+                    ));
+                };
+                nodes.iter().for_each(|&n| planes[n].push(normal));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for n in 0..nn {
+        if let Some((v, i)) = vel[n] {
+            if fixed[n] && err.is_none() {
+                err = Some(format!(
+                    "{file}: boundary[{i}]: node {} at ({:.6e}, {:.6e}, {:.6e}) is in a velocity group (\"{}\") and a fixed group",
+                    m.node_id[n], m.coords[n][0], m.coords[n][1], m.coords[n][2], scene.boundaries[i].group
+                ));
+            }
+            for p in &planes[n] {
+                let d = v[0] * p[0] + v[1] * p[1] + v[2] * p[2];
+                let vm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if d.abs() > 1e-12 * vm.max(1e-300) && err.is_none() {
+                    err = Some(format!(
+                        "{file}: boundary[{i}]: node {} has prescribed velocity ({}, {}, {}) with a component along the normal of a symmetry plane through it",
+                        m.node_id[n], v[0], v[1], v[2]
+                    ));
+                }
+            }
+            out.push((n as u32, Constraint::Velocity(v)));
+        } else if fixed[n] {
+            out.push((n as u32, Constraint::Fixed));
+        } else if !planes[n].is_empty() {
+            // Orthonormalise the plane normals (Gram-Schmidt); parallel planes add nothing.
+            let mut basis: Vec<[f64; 3]> = Vec::new();
+            for p in &planes[n] {
+                let mut q = *p;
+                for b in &basis {
+                    let d = q[0] * b[0] + q[1] * b[1] + q[2] * b[2];
+                    for c in 0..3 {
+                        q[c] -= d * b[c];
+                    }
+                }
+                let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                if l > 1e-8 {
+                    basis.push([q[0] / l, q[1] / l, q[2] / l]);
+                }
+            }
+            out.push((n as u32, Constraint::Planes(basis)));
+        }
+    }
+    first_error(comm, err)?;
+    Ok(out)
+}

@@ -1,0 +1,497 @@
+//! The SPH stage on its own dynamic RCB decomposition (the paper's §4, Fig. 8).
+//!
+//! Each step: the owned particles take the first half of the step (the `sph` crate), then
+//! 1. RCB rebalance of the particles, started from the previous cuts (every rank then holds the
+//!    cut tree: the shared cuts);
+//! 2. ghosts: each particle is copied to every other rank whose box its sphere (radius h)
+//!    overlaps, and with a periodic box each periodic image of it likewise (the rank's own
+//!    included). The centre of interaction of a pair lies within h_a of a and within h_b of b,
+//!    so the rank whose half-open box holds the COI holds both;
+//! 3. density pass over the pairs whose COI lies in my box, ghost sums sent back to the owners
+//!    (the plan's reverse) and added, EOS on the owners, new (rho, p, c) out to the ghosts;
+//! 4. force pass likewise, sums back to the owners, gravity;
+//!
+//! then the owners take the second half of the step. Every pair is computed exactly once over
+//! all ranks (the COI rule), so momentum is conserved to round-off whatever the rank count.
+use crate::kernels::comm::CommPlan;
+use crate::kernels::rcb::{Rcb, RcbItem, RcbStats};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use sph::{
+    add_gravity, continuity_and_force_pass, density_pass, first_half, force_pass, pairs_in_box,
+    periodic_images, reset_density_sums, reset_force_sums, second_half, setup_state, update_eos,
+    DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles,
+};
+use std::time::Instant;
+
+/// Margin on a sphere's radius when finding the ranks it reaches (round-off in the COI).
+const REACH_MARGIN: f64 = 1e-9;
+
+/// A particle as RCB sees it: its record (real position, id) and its weight, the work it
+/// brought to its rank in the last step: one for its own update plus the pairs it took part
+/// in. Balancing work rather than particles matters where the particles differ: a tank of
+/// fixed wall particles has few pairs per particle, the fluid many (dam break at np 3: pair
+/// imbalance 1.89 with unit weights).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Item {
+    rec: ParticleRecord,
+    weight: f64,
+}
+
+impl RcbItem for Item {
+    fn position(&self) -> [f64; 3] {
+        self.rec.x
+    }
+    fn id(&self) -> u64 {
+        self.rec.id
+    }
+    fn weight(&self) -> f64 {
+        self.weight
+    }
+}
+
+/// What the SPH stage did in the last step (global figures, the same on every rank).
+#[derive(Clone, Debug, Default)]
+pub struct SphStats {
+    /// The RCB call.
+    pub rcb: RcbStats,
+    /// Ghost copies made, over all ranks.
+    pub ghosts: u64,
+    /// Pairs computed, over all ranks.
+    pub pairs: u64,
+    /// Pairs computed on this rank (its share of the work).
+    pub pairs_local: u64,
+    /// Max over ranks of the pairs computed, over the mean.
+    pub pair_imbalance: f64,
+    /// Bytes sent point to point in the step (RCB, ghosts, sums, EOS states).
+    pub bytes_sent: u64,
+    /// Wall time of the stage's step, max over ranks, s.
+    pub wall_s: f64,
+}
+
+/// The SPH stage of one run.
+pub struct SphStage {
+    /// The stage's communicator, shared by its plans.
+    comm: std::rc::Rc<SimpleCommunicator>,
+    rcb: Rcb,
+    /// The particles this rank holds (owned first, then this step's ghosts).
+    pub parts: Particles,
+    /// The model.
+    pub params: Params,
+    /// Owned index of each ghost record sent (in the plan's order).
+    ghost_src: Vec<usize>,
+    plan: Option<CommPlan>,
+    bytes: u64,
+    /// This rank's box (half-open) from the last rebalance.
+    box_lo: [f64; 3],
+    box_hi: [f64; 3],
+    /// Statistics of the last step.
+    pub stats: SphStats,
+    /// Pair work rate of the last evaluation (local), W.
+    pub work: PairWork,
+    /// Start positions of the owned particles in the current step (for contact).
+    x_start: Vec<[f64; 3]>,
+    /// Wall time of the last drift, s.
+    drift_s: f64,
+    /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
+    /// weight is one more).
+    pair_count: Vec<u32>,
+    /// Whether the decomposition was balanced at least once.
+    balanced_once: bool,
+    /// The kept pair candidates of a run on one rank without a periodic box (see
+    /// `SphStage::pair_list`); `None` elsewhere, or until the first search.
+    verlet: Option<sph::KeptPairs>,
+    /// Whether such a list may be kept (`TDYN_SPH_VERLET=0` searches afresh every step).
+    verlet_enabled: bool,
+    /// Pair searches run so far (fresh lists and candidate builds).
+    pub pair_searches: u64,
+}
+
+impl SphStage {
+    /// A stage over `comm` (collective) with this rank's initial particles (owned).
+    pub fn new(comm: &SimpleCommunicator, parts: Particles, params: Params) -> SphStage {
+        SphStage {
+            comm: std::rc::Rc::new(comm.duplicate()),
+            rcb: Rcb::new(comm),
+            parts,
+            params,
+            ghost_src: Vec::new(),
+            plan: None,
+            bytes: 0,
+            box_lo: [f64::NEG_INFINITY; 3],
+            box_hi: [f64::INFINITY; 3],
+            stats: SphStats::default(),
+            work: PairWork::default(),
+            x_start: Vec::new(),
+            drift_s: 0.0,
+            pair_count: Vec::new(),
+            balanced_once: false,
+            verlet: None,
+            verlet_enabled: true,
+            pair_searches: 0,
+        }
+    }
+
+    /// Whether pair candidates may be kept between steps (default true; false searches afresh
+    /// every step: the reference `tdyn run --sph-pairs fresh` compares against).
+    pub fn set_kept_pairs(&mut self, kept: bool) {
+        self.verlet_enabled = kept;
+    }
+
+    /// The decomposition's cut tree (after the first rebalance).
+    pub fn tree(&self) -> &crate::kernels::rcb::CutTree {
+        self.rcb.tree()
+    }
+
+    /// The set-up evaluation before the first step (collective): state at t = 0 and the first
+    /// rates, on a fresh decomposition.
+    pub fn setup(&mut self) -> Result<(), String> {
+        let t0 = Instant::now();
+        self.bytes = 0;
+        setup_state(&mut self.parts, &self.params);
+        self.rebalance()?;
+        self.make_ghosts();
+        let full = self.params.profile.setup_evaluates_density_and_eos();
+        self.evaluate(full);
+        self.finish_stats(t0, 0.0);
+        Ok(())
+    }
+
+    /// One step of `dt` (collective): `drift` then `finish`.
+    pub fn step(&mut self, dt: f64) -> Result<(), String> {
+        self.drift(dt);
+        self.finish(dt)
+    }
+
+    /// The first half of a step on the owned particles (Fig. 3 step 3: kick and move; no
+    /// communication). Keeps the start positions for the contact stage (`contact_records`).
+    pub fn drift(&mut self, dt: f64) {
+        let t0 = Instant::now();
+        self.bytes = 0;
+        self.parts.truncate_ghosts();
+        self.x_start.clear();
+        self.x_start
+            .extend_from_slice(&self.parts.x_real[..self.parts.n_owned]);
+        first_half(&mut self.parts, dt, &self.params);
+        self.drift_s = t0.elapsed().as_secs_f64();
+    }
+
+    /// Contact-node records of the owned particles after `drift` (start and predicted end
+    /// position, half-step velocity), ids `gid_offset + id`. Fixed particles have infinite
+    /// mass (they take reactions but do not move). The contact radius is half the particle's
+    /// own size, (m/rho)^(1/3)/2: a particle touches a face when its volume does. An expanding
+    /// particle keeps the radius of its material's reference density (when the EOS has one):
+    /// the search counts a contact only for a sphere that was outside the face at the start of
+    /// the step, so a radius growing faster than the push-back follows (detonation products
+    /// expanding to several times their volume) would let the particle through the face.
+    pub fn contact_records(&self, gid_offset: u64) -> Vec<contact::NodeRecord> {
+        let p = &self.parts;
+        (0..p.n_owned)
+            .map(|i| contact::NodeRecord {
+                gid: gid_offset + p.id[i],
+                body: u32::MAX,
+                flags: contact::FLAG_PARTICLE,
+                mass: if p.fixed[i] { f64::INFINITY } else { p.m[i] },
+                radius: {
+                    let rho_ref = self.params.eos[p.mat[i] as usize]
+                        .reference_density()
+                        .unwrap_or(p.rho[i]);
+                    0.5 * (p.m[i] / p.rho[i].max(rho_ref)).cbrt()
+                },
+                x0: self.x_start[i],
+                x1: p.x_real[i],
+                v: p.v[i],
+            })
+            .collect()
+    }
+
+    /// Applies the contact stage's push-back forces (aligned with `contact_records`) over the
+    /// step: dv = f dt / m on the half-step (and predicted) velocity, dx = dv dt. Returns the
+    /// change of kinetic energy beyond what the pair and gravity work count (velocity Verlet
+    /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m),
+    /// summed over this rank's particles.
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> f64 {
+        let p = &mut self.parts;
+        let mut work = 0.0;
+        for (i, f) in force.iter().enumerate().take(p.n_owned) {
+            if *f == [0.0; 3] || p.fixed[i] {
+                continue;
+            }
+            // The predicted velocity vhat = v(n+1/2) + dt/2 a(n) (the rates' velocity) still
+            // carries the half kick into the face that the push-back stopped: a particle held
+            // on a face would expand (continuity density, p dV work) as if it moved into it.
+            // Its part along the push-back's direction n, when it points into the face, is
+            // removed, so the rates see the particle resting on the face.
+            let fn_ = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            let n = [f[0] / fn_, f[1] / fn_, f[2] / fn_];
+            let kick_n = (0..3)
+                .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
+                .sum::<f64>();
+            for c in 0..3 {
+                let dv = f[c] * dt / p.m[i];
+                work += p.m[i] * dv * (p.v[i][c] + 0.5 * dv - 0.5 * dt * p.f[i][c] / p.m[i]);
+                p.v[i][c] += dv;
+                p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
+                p.x[i][c] += dv * dt;
+            }
+            p.x_real[i] = p.x[i];
+        }
+        work
+    }
+
+    /// The rest of the step after `drift` (and any contact correction): rebalance, ghosts,
+    /// passes, second half (collective).
+    pub fn finish(&mut self, dt: f64) -> Result<(), String> {
+        let t0 = Instant::now();
+        self.rebalance()?;
+        if self.params.density == DensityMode::Continuity {
+            // The forces need (rho, p, c) at the new positions, which continuity density has
+            // already (rho was advanced in the first half): the EOS runs on the owners before
+            // the ghosts are made (they carry it), and one fused pass computes density rates
+            // and forces.
+            update_eos(&mut self.parts, &self.params);
+            self.make_ghosts();
+            self.evaluate_fused();
+        } else {
+            self.make_ghosts();
+            self.evaluate(true);
+        }
+        second_half(&mut self.parts, dt, &self.params);
+        self.finish_stats(t0, self.drift_s);
+        Ok(())
+    }
+
+    /// 1. RCB over the owned particles, from the previous cuts.
+    fn rebalance(&mut self) -> Result<(), String> {
+        self.parts.truncate_ghosts();
+        // One rank: its box is all of space and every particle stays; after the first call
+        // (which sets up the cut tree) there is nothing to rebalance.
+        if self.comm.size() == 1 && self.box_lo[0] == f64::NEG_INFINITY && self.balanced_once {
+            self.stats.rcb.migrated = 0;
+            self.stats.rcb.bytes_sent = 0;
+            self.stats.rcb.wall_s = 0.0;
+            return Ok(());
+        }
+        self.balanced_once = true;
+        let items: Vec<Item> = (0..self.parts.n_owned)
+            .map(|i| Item {
+                rec: self.parts.record(i),
+                weight: 1.0 + self.pair_count.get(i).copied().unwrap_or(0) as f64,
+            })
+            .collect();
+        let (mine, stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
+        // Nothing came or went (the common case once balanced: RCB keeps its items in order):
+        // the particles stay as they are, no rebuild.
+        let same = mine.len() == self.parts.n_owned
+            && mine
+                .iter()
+                .zip(&self.parts.id)
+                .all(|(it, &id)| it.rec.id == id);
+        if !same {
+            let mut parts = Particles::new();
+            for it in &mine {
+                parts.push_owned(&it.rec);
+            }
+            self.parts = parts;
+        }
+        self.bytes += stats.bytes_sent;
+        self.stats.rcb = stats;
+        let (lo, hi) = self.rcb.tree().rank_box(self.comm.rank());
+        self.box_lo = lo;
+        self.box_hi = hi;
+        Ok(())
+    }
+
+    /// 2. Ghost copies (and periodic images) to every rank their sphere reaches.
+    fn make_ghosts(&mut self) {
+        let me = self.comm.rank();
+        let tree = self.rcb.tree();
+        let per = self.params.periodic;
+        let mut dest = Vec::new();
+        let mut recs = Vec::new();
+        let mut src = Vec::new();
+        let mut ranks = Vec::new();
+        let mut shifts = Vec::new();
+        for i in 0..self.parts.n_owned {
+            let x = self.parts.x_real[i];
+            let r = self.parts.h[i] * (1.0 + REACH_MARGIN);
+            shifts.clear();
+            shifts.push([0.0; 3]);
+            if let Some(p) = &per {
+                shifts.extend(periodic_images(x, r, p));
+            }
+            for &s in &shifts {
+                let c: [f64; 3] = std::array::from_fn(|k| x[k] + s[k]);
+                let lo = [c[0] - r, c[1] - r, c[2] - r];
+                let hi = [c[0] + r, c[1] + r, c[2] + r];
+                ranks.clear();
+                tree.ranks_overlapping(&lo, &hi, &mut ranks);
+                for &q in &ranks {
+                    if q == me && s == [0.0; 3] {
+                        continue;
+                    }
+                    let mut rec = self.parts.record(i);
+                    rec.shift = s;
+                    dest.push(q);
+                    recs.push(rec);
+                    src.push(i);
+                }
+            }
+        }
+        let mut plan = CommPlan::new_shared(&self.comm, &dest);
+        let got = plan.exchange(&recs);
+        for g in &got {
+            self.parts.push_ghost(g);
+        }
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        self.ghost_src = src;
+        self.plan = Some(plan);
+    }
+
+    /// Sends the ghosts' sums back to their owners and adds them there.
+    fn fold_back(&mut self, with_rho: bool, with_drho: bool) {
+        let n0 = self.parts.n_owned;
+        let sums: Vec<PairSums> = (0..self.parts.n_ghosts())
+            .map(|g| {
+                let mut s = self.parts.pair_sums(n0 + g);
+                if !with_drho {
+                    s.drho = 0.0;
+                }
+                s
+            })
+            .collect();
+        let plan = self.plan.as_mut().expect("ghosts made");
+        let back = plan.reverse(&sums);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        for (k, s) in back.iter().enumerate() {
+            self.parts.add_pair_sums(self.ghost_src[k], s, with_rho);
+        }
+    }
+
+    /// 3-4 with continuity density: one fused pass (density rates and forces), its sums back
+    /// to the owners, gravity. The EOS was applied before the ghosts were made.
+    fn evaluate_fused(&mut self) {
+        let list = self.pair_list();
+        reset_density_sums(&mut self.parts, &self.params);
+        reset_force_sums(&mut self.parts);
+        self.work = continuity_and_force_pass(&list, &mut self.parts, &self.params);
+        self.fold_back(false, true);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
+    /// The pairs this box computes (COI in its box), counted per owned particle.
+    ///
+    /// On one rank without a periodic box (no ghosts, no migration, every pair interior) the
+    /// candidates are kept between steps ([`sph::KeptPairs`]) and filtered with the search's overlap
+    /// test: the same pairs as a fresh search (in another order, so sums differ at round-off).
+    fn pair_list(&mut self) -> Vec<(u32, u32)> {
+        let opts = self.params.search_options();
+        let p = &self.parts;
+        let keepable = self.verlet_enabled
+            && self.comm.size() == 1
+            && opts.periodic.is_none()
+            && p.len() == p.n_owned
+            && self.box_lo.iter().all(|c| *c == f64::NEG_INFINITY)
+            && self.box_hi.iter().all(|c| *c == f64::INFINITY);
+        if !keepable {
+            self.verlet = None;
+            self.pair_searches += 1;
+            let list = pairs_in_box(p, &opts, self.box_lo, self.box_hi);
+            self.count_pairs(&list);
+            return list;
+        }
+        if !self.verlet.as_ref().is_some_and(|v| v.still_valid(p)) {
+            self.pair_searches += 1;
+            self.verlet = Some(sph::KeptPairs::build(p, &opts, self.box_lo, self.box_hi));
+        }
+        let v = self.verlet.as_ref().expect("just built");
+        // every entry is owned here (no ghosts), so the counts are the owned particles'
+        v.filter(p, &mut self.pair_count)
+    }
+
+    /// Pairs per owned particle in this evaluation (the next rebalance's weights).
+    fn count_pairs(&mut self, list: &[(u32, u32)]) {
+        let n = self.parts.n_owned;
+        self.pair_count.clear();
+        self.pair_count.resize(n, 0);
+        for &(i, j) in list {
+            for e in [i as usize, j as usize] {
+                if e < n {
+                    self.pair_count[e] += 1;
+                }
+            }
+        }
+    }
+
+    /// 3-4. The passes with their communication.
+    fn evaluate(&mut self, density_and_eos: bool) {
+        let list = self.pair_list();
+        if density_and_eos {
+            reset_density_sums(&mut self.parts, &self.params);
+            density_pass(&list, &mut self.parts, &self.params);
+            let with_rho = self.params.density == DensityMode::Summation;
+            self.fold_back(with_rho, true);
+            update_eos(&mut self.parts, &self.params);
+            // New (rho, p, c) of the owners out to their ghosts.
+            let states: Vec<EosState> = self
+                .ghost_src
+                .iter()
+                .map(|&i| self.parts.eos_state(i))
+                .collect();
+            let plan = self.plan.as_mut().expect("ghosts made");
+            let got = plan.exchange(&states);
+            self.bytes += plan.bytes_sent;
+            plan.bytes_sent = 0;
+            let n0 = self.parts.n_owned;
+            for (g, s) in got.iter().enumerate() {
+                self.parts.set_eos_state(n0 + g, s);
+            }
+        }
+        reset_force_sums(&mut self.parts);
+        self.work = force_pass(&list, &mut self.parts, &self.params);
+        self.fold_back(false, false);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
+    /// Global statistics of the step; `extra_s`: time of this step spent before `t0` (the drift).
+    fn finish_stats(&mut self, t0: Instant, extra_s: f64) {
+        let comm = &self.comm;
+        let mut sums = [0.0f64; 3];
+        comm.all_reduce_into(
+            &[
+                self.stats.pairs as f64,
+                self.parts.n_ghosts() as f64,
+                self.bytes as f64,
+            ][..],
+            &mut sums[..],
+            SystemOperation::sum(),
+        );
+        let mut maxes = [0.0f64; 2];
+        comm.all_reduce_into(
+            &[
+                self.stats.pairs as f64,
+                t0.elapsed().as_secs_f64() + extra_s,
+            ][..],
+            &mut maxes[..],
+            SystemOperation::max(),
+        );
+        let mean = sums[0] / comm.size() as f64;
+        self.stats.pair_imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
+        self.stats.pairs_local = self.stats.pairs;
+        self.stats.pairs = sums[0] as u64;
+        self.stats.ghosts = sums[1] as u64;
+        self.stats.bytes_sent = sums[2] as u64;
+        self.stats.wall_s = maxes[1];
+    }
+
+    /// The stable step over all ranks (collective), 0.3 min h/(c + |v|).
+    pub fn stable_dt(&self) -> f64 {
+        crate::kernels::collective::min(&self.comm, sph::stable_dt(&self.parts))
+    }
+}

@@ -1,0 +1,305 @@
+//! The FE side of contact: which mesh faces and nodes take part, and each step's records.
+//!
+//! Set-up (once): every rank sends its elements (global ids of the element and its 8 nodes) and
+//! its owned nodes' surface bits to rank 0, which finds the boundary faces of the whole mesh and
+//! the bodies (the `contact` crate), keeps the faces of the scene's `[contact] surfaces` (a
+//! boundary face all four of whose nodes lie on one of the named physical surfaces; every
+//! boundary face for `"exterior"`), and sends each face to the rank of its element and each
+//! contact node's body to the node's owner. Each step the FE rank then hands the contact stage
+//! its owned contact nodes and its faces with their nodes' records.
+use crate::stages::contact::stage::FullFace;
+use contact::{FaceRecord, NodeRecord};
+use fe_petsc::explicit::ExplicitFe;
+use fe_petsc::mesh::LocalMesh;
+use mpi::datatype::PartitionMut;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::collections::HashMap;
+
+/// This rank's part of the contact surfaces.
+#[derive(Debug, Clone, Default)]
+pub struct FeContact {
+    /// Faces of this rank's elements: the record and the local indices of its nodes.
+    pub faces: Vec<(FaceRecord, [u32; 4])>,
+    /// Owned contact nodes: local index and body.
+    pub nodes: Vec<(u32, u32)>,
+    /// Body of every local node in a face (for face-node records), by local index.
+    body_of: HashMap<u32, u32>,
+    /// Faces over all ranks.
+    pub global_faces: u64,
+    /// Bodies in the mesh.
+    pub n_bodies: u32,
+}
+
+fn gatherv_u64(comm: &SimpleCommunicator, mine: &[u64]) -> (Vec<u64>, Vec<i32>, Vec<i32>) {
+    let root = comm.process_at_rank(0);
+    let n = mine.len() as i32;
+    if comm.rank() == 0 {
+        let mut counts = vec![0i32; comm.size() as usize];
+        root.gather_into_root(&n, &mut counts[..]);
+        let displs: Vec<i32> = counts
+            .iter()
+            .scan(0, |s, &c| {
+                let d = *s;
+                *s += c;
+                Some(d)
+            })
+            .collect();
+        let mut all = vec![0u64; counts.iter().sum::<i32>() as usize];
+        {
+            let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+            root.gather_varcount_into_root(mine, &mut part);
+        }
+        (all, counts, displs)
+    } else {
+        root.gather_into(&n);
+        root.gather_varcount_into(mine);
+        (Vec::new(), Vec::new(), Vec::new())
+    }
+}
+
+fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> {
+    let root = comm.process_at_rank(0);
+    let mut n = 0i32;
+    if comm.rank() == 0 {
+        let counts: Vec<i32> = per_rank.iter().map(|v| v.len() as i32).collect();
+        root.scatter_into_root(&counts[..], &mut n);
+        let displs: Vec<i32> = counts
+            .iter()
+            .scan(0, |s, &c| {
+                let d = *s;
+                *s += c;
+                Some(d)
+            })
+            .collect();
+        let flat: Vec<u64> = per_rank.into_iter().flatten().collect();
+        let mut out = vec![0u64; n as usize];
+        let part = mpi::datatype::Partition::new(&flat[..], &counts[..], &displs[..]);
+        root.scatter_varcount_into_root(&part, &mut out[..]);
+        out
+    } else {
+        root.scatter_into(&mut n);
+        let mut out = vec![0u64; n as usize];
+        root.scatter_varcount_into(&mut out[..]);
+        out
+    }
+}
+
+impl FeContact {
+    /// Finds the contact faces and nodes (collective). `surface_bits`: the bits (in
+    /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`.
+    pub fn build(
+        comm: &SimpleCommunicator,
+        mesh: &LocalMesh,
+        surface_bits: Option<u32>,
+    ) -> FeContact {
+        let me = comm.rank();
+        // Elements: (elem gid, 8 node gids); owned nodes: (gid, surface bits).
+        let elems: Vec<u64> = mesh
+            .elems
+            .iter()
+            .zip(&mesh.elem_id)
+            .flat_map(|(c, &id)| {
+                std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize]))
+            })
+            .collect();
+        let nodes: Vec<u64> = (0..mesh.node_id.len())
+            .filter(|&n| mesh.owned[n])
+            .flat_map(|n| [mesh.node_id[n], mesh.node_surfaces[n] as u64])
+            .collect();
+        let (all_e, counts_e, _) = gatherv_u64(comm, &elems);
+        let (all_n, counts_n, _) = gatherv_u64(comm, &nodes);
+        let mut per_rank: Vec<Vec<u64>> = Vec::new();
+        let mut n_bodies = 0u32;
+        let mut global_faces = 0u64;
+        if me == 0 {
+            let p = comm.size() as usize;
+            // Element k of the gathered list came from rank elem_rank[k].
+            let mut elem_rank = Vec::new();
+            for (r, &c) in counts_e.iter().enumerate() {
+                elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
+            }
+            // In element gid order, so that bodies (numbered by their first element) and with
+            // them the one-pass search direction do not depend on the rank count.
+            let mut order: Vec<usize> = (0..elem_rank.len()).collect();
+            order.sort_unstable_by_key(|&k| all_e[9 * k]);
+            let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
+            let hexes: Vec<[u64; 8]> = order
+                .iter()
+                .map(|&k| std::array::from_fn(|j| all_e[9 * k + 1 + j]))
+                .collect();
+            let elem_gid: Vec<u64> = order.iter().map(|&k| all_e[9 * k]).collect();
+            let mut bits: HashMap<u64, u32> = HashMap::new();
+            let mut node_rank: HashMap<u64, usize> = HashMap::new();
+            let mut off = 0;
+            for (r, &c) in counts_n.iter().enumerate() {
+                for pair in all_n[off..off + c as usize].chunks(2) {
+                    bits.insert(pair[0], pair[1] as u32);
+                    node_rank.insert(pair[0], r);
+                }
+                off += c as usize;
+            }
+            let surf = contact::surfaces(&hexes, |_| true);
+            n_bodies = surf.n_bodies;
+            // Keep a face when all four nodes share a named surface bit.
+            let mut kept = Vec::new();
+            for f in &surf.faces {
+                let keep = match surface_bits {
+                    None => true,
+                    Some(b) => {
+                        let common = f
+                            .nodes
+                            .iter()
+                            .fold(u32::MAX, |a, n| a & bits.get(n).copied().unwrap_or(0));
+                        common & b != 0
+                    }
+                };
+                if keep {
+                    kept.push(*f);
+                }
+            }
+            // Deterministic face gids: by (element gid, side), independent of the rank count.
+            kept.sort_by_key(|f| (elem_gid[f.element], f.side));
+            global_faces = kept.len() as u64;
+            // Per rank: faces (gid, elem gid, side, 4 node gids, body) then contact nodes of
+            // that rank (gid, body), after a marker.
+            per_rank = vec![Vec::new(); p];
+            let mut node_body: HashMap<u64, u32> = HashMap::new();
+            for (k, f) in kept.iter().enumerate() {
+                let r = elem_rank[f.element];
+                per_rank[r].extend([k as u64, elem_gid[f.element], f.side as u64]);
+                per_rank[r].extend(f.nodes);
+                per_rank[r].push(f.body as u64);
+                for n in f.nodes {
+                    node_body.insert(n, f.body);
+                }
+            }
+            let mut cn: Vec<(u64, u32)> = node_body.into_iter().collect();
+            cn.sort_unstable();
+            for r in per_rank.iter_mut() {
+                r.push(u64::MAX);
+            }
+            for (gid, body) in cn {
+                let r = node_rank[&gid];
+                per_rank[r].extend([gid, body as u64]);
+            }
+        }
+        let mine = scatterv_u64(comm, per_rank);
+        let mut gf = [global_faces, n_bodies as u64];
+        comm.process_at_rank(0).broadcast_into(&mut gf[..]);
+        let local: HashMap<u64, u32> = mesh
+            .node_id
+            .iter()
+            .enumerate()
+            .map(|(i, &g)| (g, i as u32))
+            .collect();
+        let split = mine
+            .iter()
+            .position(|&v| v == u64::MAX)
+            .unwrap_or(mine.len());
+        let mut out = FeContact {
+            global_faces: gf[0],
+            n_bodies: gf[1] as u32,
+            ..Default::default()
+        };
+        for c in mine[..split].chunks(8) {
+            let node_gids = [c[3], c[4], c[5], c[6]];
+            let loc = node_gids.map(|g| local[&g]);
+            let body = c[7] as u32;
+            for &l in &loc {
+                out.body_of.insert(l, body);
+            }
+            out.faces.push((
+                FaceRecord {
+                    gid: c[0],
+                    nodes: node_gids,
+                    body,
+                    reserved: 0,
+                },
+                loc,
+            ));
+        }
+        for c in mine[split.saturating_add(1).min(mine.len())..].chunks(2) {
+            let l = local[&c[0]];
+            out.nodes.push((l, c[1] as u32));
+            out.body_of.insert(l, c[1] as u32);
+        }
+        out
+    }
+
+    fn record(&self, fe: &ExplicitFe, n: u32, body: u32, infinite: &[bool]) -> NodeRecord {
+        let i = n as usize;
+        NodeRecord {
+            gid: 0,
+            body,
+            flags: 0,
+            mass: if infinite[i] {
+                f64::INFINITY
+            } else {
+                fe.mass[i]
+            },
+            radius: 0.0,
+            x0: fe.x_start()[i],
+            x1: fe.x[i],
+            v: fe.v[i],
+        }
+    }
+
+    /// This step's records of the owned contact nodes, after `kick_drift`. `node_gid`: global
+    /// id of each local node.
+    pub fn node_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<NodeRecord> {
+        let infinite = fe.fully_constrained();
+        self.nodes
+            .iter()
+            .map(|&(n, body)| NodeRecord {
+                gid: node_gid[n as usize],
+                ..self.record(fe, n, body, &infinite)
+            })
+            .collect()
+    }
+
+    /// This step's faces with their nodes' records, after `kick_drift`.
+    pub fn face_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<FullFace> {
+        let infinite = fe.fully_constrained();
+        self.faces
+            .iter()
+            .map(|(f, loc)| FullFace {
+                face: *f,
+                nodes: std::array::from_fn(|k| NodeRecord {
+                    gid: node_gid[loc[k] as usize],
+                    ..self.record(fe, loc[k], f.body, &infinite)
+                }),
+            })
+            .collect()
+    }
+
+    /// [`FeContact::node_records`] and [`FeContact::face_records`].
+    pub fn records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> (Vec<NodeRecord>, Vec<FullFace>) {
+        (
+            self.node_records(fe, node_gid),
+            self.face_records(fe, node_gid),
+        )
+    }
+
+    /// Adds forces on the corners of this rank's faces (aligned with `records`' faces) to the
+    /// per-local-node array (a corner may be a ghost: the FE ghost sum takes it to the owner).
+    pub fn add_corner_forces(&self, out: &mut [[f64; 3]], corner: &[[[f64; 3]; 4]]) {
+        for ((_, loc), fc) in self.faces.iter().zip(corner) {
+            for k in 0..4 {
+                for c in 0..3 {
+                    out[loc[k] as usize][c] += fc[k][c];
+                }
+            }
+        }
+    }
+
+    /// Spreads the forces the contact stage returned (aligned with `records`' nodes) onto a
+    /// per-local-node array.
+    pub fn forces_on_nodes(&self, n_local: usize, force: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let mut out = vec![[0.0; 3]; n_local];
+        for (k, &(n, _)) in self.nodes.iter().enumerate() {
+            out[n as usize] = force[k];
+        }
+        out
+    }
+}

@@ -1,0 +1,589 @@
+//! `tdyn`: run a scene, compare explicit and implicit integration on it, sweep its resolution,
+//! run the validation suite, chart a scaling study, mesh a .geo. PETSc
+//! options (`-log_view`, `-ksp_type cg`, `-pc_type gamg`, `-ksp_monitor`,
+//! `-petscpartitioner_type simple`, ...) may follow the other arguments and go to PETSc unchanged.
+// Index loops over points and components read like the formulas; `!(x > 0.0)` deliberately also
+// rejects NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+mod chart;
+mod compare;
+mod crosscheck;
+mod launch;
+mod scaling;
+mod sweep;
+mod validate;
+
+use clap::{Parser, Subcommand};
+use coupling::driver::{self, RunOptions};
+use fe_petsc::petsc::Petsc;
+use mpi::traits::*;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "tdyn",
+    version,
+    about = "Parallel transient dynamics: FE, SPH and contact (PRONTO-3D's algorithms)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+/// `--contact-decomposition`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum ContactDecomposition {
+    /// Contact's own RCB decomposition (Fig. 10).
+    Rcb,
+    /// The static FE decomposition (benchmark baseline).
+    Static,
+}
+
+/// `--contact-rebuild`, `--sph-pairs`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Rebuild {
+    /// Keep between steps within a skin.
+    Kept,
+    /// Rebuild every step.
+    EveryStep,
+}
+
+/// `GHOST,CANDIDATE`: two positive numbers.
+fn parse_skins(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("expected GHOST,CANDIDATE (two positive numbers, e.g. 200,30), got {s:?}");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if !(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite()) {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scene: `mpirun -np 4 tdyn run scenes/bar_impact.toml [--out DIR] [PETSc options]`
+    Run {
+        /// The scene file (TOML, see SCENE.md).
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
+        /// defaults to 0; the scene's params table must have it), `particles.spacing=VALUE`
+        /// (or `particles[i].spacing`) a particle spacing; repeatable.
+        #[arg(long = "param", short = 'p')]
+        params: Vec<String>,
+        /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
+        #[arg(long = "end-time")]
+        end_time: Option<f64>,
+        /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
+        /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
+        #[arg(long = "contact-decomposition", value_enum, default_value = "rcb")]
+        contact_decomposition: ContactDecomposition,
+        /// `kept` (default): keep the contact decomposition and candidate lists between steps
+        /// within their skins; `every-step`: rebuild them every step (the reference).
+        #[arg(long = "contact-rebuild", value_enum, default_value = "kept")]
+        contact_rebuild: Rebuild,
+        /// The contact skins GHOST,CANDIDATE as multiples of the step's largest motion
+        /// (default 200,30).
+        #[arg(long = "contact-skins", value_parser = parse_skins)]
+        contact_skins: Option<(f64, f64)>,
+        /// `kept` (default): keep SPH pair candidates between steps where possible;
+        /// `every-step`: search afresh every step (the reference).
+        #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
+        sph_pairs: Rebuild,
+    },
+    /// Chart accuracy against cost over a ladder of resolutions:
+    /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
+    /// [--measure mid.stress_xx:final=-4.599e7] [--out DIR] [PETSc options]`. Each run is made
+    /// in this process, on the same ranks; writes accuracy_cost.csv, accuracy_cost.png and
+    /// accuracy_cost.svg in DIR (error against loop wall time, model memory and peak RSS). Runs
+    /// that stop or fail are reported: the command still exits 0.
+    Sweep {
+        /// The scene file (TOML; an optional [sweep] table gives the default ladder and measures).
+        scene: PathBuf,
+        /// The swept parameter: `[K:]NAME=v1,v2,...` (a gmsh parameter of [[mesh]] K) or
+        /// `particles.spacing=v1,v2,...`; repeat it to sweep several together (value k of each
+        /// in run k).
+        #[arg(long = "param", short = 'p')]
+        params: Vec<String>,
+        /// The [[mesh]] a parameter without `K:` belongs to.
+        #[arg(long, default_value_t = 0)]
+        mesh: usize,
+        /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
+        /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
+        /// the finest run. Repeatable (default: [sweep] measure, else the first probe column's
+        /// peak).
+        #[arg(long = "measure")]
+        measures: Vec<String>,
+        /// Output directory (default: out/<scene name>/sweep).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Chart a scaling study (scripts/scaling.sh): reads DIR/<series>_np<P>/report.json
+    /// (series `strong`, `weak`), writes DIR/scaling.csv, scaling.png and scaling.svg: time per
+    /// step by stage, imbalance per stage, bytes per rank per step. No MPI.
+    ChartScaling {
+        /// The study's directory.
+        dir: PathBuf,
+        /// Chart title.
+        #[arg(long, default_value = "scaling")]
+        title: String,
+    },
+    /// Chart accuracy against cost of explicit and implicit integration on a scene:
+    /// `mpirun -np 2 tdyn compare scenes/bar_vibration.toml [--modes explicit,implicit]
+    /// [--dt-factors 0.5,1,2,10,100] [--out DIR] [PETSc options]`. Each run is made in this
+    /// process, on the same ranks, with dt = factor x the explicit stable limit; writes
+    /// compare.csv, compare.png and compare.svg in DIR. Refused or unstable runs are results:
+    /// the command still exits 0.
+    Compare {
+        /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
+        scene: PathBuf,
+        /// Modes to run, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "explicit,implicit")]
+        modes: Vec<String>,
+        /// Steps as multiples of the explicit stable limit, comma-separated (default: both
+        /// sides of the limit, 0.25 to 100).
+        #[arg(long = "dt-factors", value_delimiter = ',')]
+        dt_factors: Option<Vec<f64>>,
+        /// Output directory (default: out/<scene name>/compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Cross-check our SPH against LIGGGHTS on the same particles: runs the deck (`liggghts -in`,
+    /// or under `mpirun -np M` with `--liggghts-np M`) and the scene (`mpirun -np N tdyn run`),
+    /// then compares the two codes' dumps step by step (x, v, f, rho, p; kinetic energy and
+    /// front of the moving particles) and their cost. Writes crosscheck.csv in the work
+    /// directory. Run it without mpirun:
+    /// `tdyn crosscheck scenes/liggghts_random.toml --deck scenes/liggghts/in.random1step --np 2 --tol 1e-12`
+    Crosscheck {
+        /// Our scene (its particles from the deck's data file, `[output] dump_every` set).
+        scene: PathBuf,
+        /// The LIGGGHTS deck (its directory's files are copied beside it).
+        #[arg(long)]
+        deck: PathBuf,
+        /// Ranks for our run.
+        #[arg(long, default_value_t = 1)]
+        np: usize,
+        /// Ranks for LIGGGHTS.
+        #[arg(long = "liggghts-np", default_value_t = 1)]
+        liggghts_np: usize,
+        /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
+        #[arg(long = "var", value_parser = parse_var)]
+        vars: Vec<(String, String)>,
+        /// Work directory (default out/<scene name>/crosscheck).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Exit non-zero when a per-field difference exceeds this fraction of the field's
+        /// largest LIGGGHTS value.
+        #[arg(long)]
+        tol: Option<f64>,
+        /// Compare against the LIGGGHTS dumps already in the work directory.
+        #[arg(long)]
+        reuse_liggghts: bool,
+    },
+    /// Run the validation suite: each case of `validation/<case>/reference.toml` against its
+    /// analytic or published reference. Writes DIR/report.md (ours, reference, error, allowed,
+    /// pass/fail) and a chart per case (DIR/<case>.png, .svg); exits non-zero when a judged
+    /// measure fails or a run fails. Run it without mpirun (it launches `mpirun -np N tdyn
+    /// run` itself): `tdyn validate [--cases a,b] [--np N] [--fast] [--out DIR]`
+    Validate {
+        /// Cases to run, comma-separated (default: every folder of --dir).
+        #[arg(long, value_delimiter = ',')]
+        cases: Vec<String>,
+        /// Ranks per run.
+        #[arg(long, default_value_t = 1)]
+        np: usize,
+        /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
+        #[arg(long)]
+        fast: bool,
+        /// Output directory.
+        #[arg(long, default_value = "out/validation")]
+        out: PathBuf,
+        /// The cases' folder.
+        #[arg(long, default_value = "validation")]
+        dir: PathBuf,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
+    Selftest {
+        /// Which kernel: `comm`.
+        kernel: String,
+        /// Seed of the random patterns.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Mesh a gmsh .geo file (cached): `tdyn mesh meshes/bar.geo -p N=80`
+    Mesh {
+        /// The .geo file.
+        geo: PathBuf,
+        /// Parameters passed to gmsh as -setnumber NAME VALUE.
+        #[arg(long = "param", short = 'p', value_parser = parse_param)]
+        params: Vec<(String, f64)>,
+    },
+}
+
+/// Runs `work` on MPI's world with PETSc initialised (and finalised before MPI is): on success
+/// rank 0 calls `ok` with the result; on failure rank 0 prints `<what>: error: <message>`. The
+/// exit status is the same on every rank (`work` returns the same outcome on all).
+fn on_mpi_with_petsc<T>(
+    petsc_args: &[String],
+    what: &str,
+    work: impl FnOnce(&mpi::topology::SimpleCommunicator) -> Result<T, String>,
+    ok: impl FnOnce(T),
+) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("tdyn: MPI could not be initialised");
+        return ExitCode::FAILURE;
+    };
+    let world = universe.world();
+    let rank = world.rank();
+    let petsc = match Petsc::init(world.as_raw(), petsc_args) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("tdyn: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let res = work(&world);
+    drop(petsc);
+    match res {
+        Ok(v) => {
+            if rank == 0 {
+                ok(v);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            if rank == 0 {
+                eprintln!("{what}: error: {e}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn parse_var(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
+    Ok((k.to_string(), v.to_string()))
+}
+
+fn parse_param(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
+    let v: f64 = v.parse().map_err(|_| format!("{v}: not a number"))?;
+    Ok((k.to_string(), v))
+}
+
+/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own.
+fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
+    let is_petsc = |a: &str| {
+        a.len() > 2
+            && a.starts_with('-')
+            && !a.starts_with("--")
+            && a[1..2].chars().all(|c| c.is_ascii_lowercase())
+    };
+    let mut ours = Vec::new();
+    let mut petsc = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        if i > 0 && is_petsc(&args[i]) {
+            petsc.push(args[i].clone());
+            if let Some(next) = args.get(i + 1) {
+                let looks_like_file = [".toml", ".geo", ".msh"].iter().any(|e| next.ends_with(e));
+                if !next.starts_with('-') && !looks_like_file {
+                    petsc.push(next.clone());
+                    i += 1;
+                }
+            }
+        } else {
+            ours.push(args[i].clone());
+        }
+        i += 1;
+    }
+    (ours, petsc)
+}
+
+fn main() -> ExitCode {
+    let (ours, petsc_args) = split_petsc(std::env::args().collect());
+    let cli = Cli::parse_from(ours);
+    match cli.cmd {
+        Cmd::Mesh { geo, params } => {
+            let def = coupling::input::scene::MeshDef {
+                file: geo.clone(),
+                params: params.into_iter().collect(),
+                translate: [0.0; 3],
+            };
+            let cache = coupling::input::gmsh::default_cache_dir(
+                geo.parent().unwrap_or(std::path::Path::new(".")),
+            );
+            match coupling::input::gmsh::mesh_file(&def, &cache) {
+                Ok(p) => {
+                    println!("{}", p.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tdyn: {}: {e}", geo.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Crosscheck {
+            scene,
+            deck,
+            np,
+            liggghts_np,
+            vars,
+            out,
+            tol,
+            reuse_liggghts,
+        } => {
+            let opts = crate::crosscheck::CrosscheckOptions {
+                scene,
+                deck,
+                np,
+                liggghts_np,
+                vars,
+                out,
+                tol,
+                reuse_liggghts,
+            };
+            match crate::crosscheck::crosscheck(&opts) {
+                Ok(s) => {
+                    print!("{}", crate::crosscheck::table(&s));
+                    println!("tdyn crosscheck: {}/crosscheck.csv", s.dir.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tdyn crosscheck: error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Validate {
+            cases,
+            np,
+            fast,
+            out,
+            dir,
+            quiet,
+        } => {
+            let opts = crate::validate::ValidateOptions {
+                dir,
+                cases,
+                np,
+                fast,
+                out,
+                quiet,
+            };
+            match crate::validate::validate(&opts) {
+                Ok(o) => {
+                    let failed: Vec<String> = o
+                        .rows
+                        .iter()
+                        .filter(|r| r.failed())
+                        .map(|r| format!("{} {} {}", r.case, r.rung, r.measure))
+                        .collect();
+                    println!("tdyn validate: {}", o.report.display());
+                    if !o.skipped.is_empty() {
+                        println!("tdyn validate: skipped (--fast): {}", o.skipped.join(", "));
+                    }
+                    if o.passed() {
+                        ExitCode::SUCCESS
+                    } else {
+                        eprintln!("tdyn validate: failed: {}", failed.join("; "));
+                        ExitCode::FAILURE
+                    }
+                }
+                Err(e) => {
+                    eprintln!("tdyn validate: error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Selftest { kernel, seed } => {
+            let Some(universe) = mpi::initialize() else {
+                eprintln!("tdyn: MPI could not be initialised");
+                return ExitCode::FAILURE;
+            };
+            let world = universe.world();
+            let res = match kernel.as_str() {
+                "comm" => coupling::selftest::comm::selftest(&world, seed),
+                "rcb" => coupling::selftest::rcb::selftest(&world, seed),
+                "contact" => coupling::selftest::contact::selftest(&world, seed),
+                "sph" => coupling::selftest::sph::selftest(&world, seed),
+                k => Err(format!(
+                    "unknown kernel {k:?} (expected comm, rcb, contact or sph)"
+                )),
+            };
+            // Every rank must agree on the outcome.
+            let failed =
+                coupling::kernels::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
+            match res {
+                Ok(msg) if !failed => {
+                    if world.rank() == 0 {
+                        println!("{msg}");
+                    }
+                    ExitCode::SUCCESS
+                }
+                Ok(_) => ExitCode::FAILURE,
+                Err(e) => {
+                    eprintln!("tdyn selftest: rank {}: {e}", world.rank());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Cmd::Compare {
+            scene,
+            modes,
+            dt_factors,
+            out,
+            quiet,
+        } => {
+            let opts = crate::compare::CompareOptions {
+                scene,
+                modes,
+                dt_factors,
+                out,
+                quiet,
+            };
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn compare",
+                |world| crate::compare::compare(world, &opts),
+                |dir| {
+                    if !quiet {
+                        println!(
+                            "tdyn compare: compare.csv, compare.png and compare.svg in {}/",
+                            dir.display()
+                        );
+                    }
+                },
+            )
+        }
+        Cmd::ChartScaling { dir, title } => match crate::scaling::chart_scaling(&dir, &title) {
+            Ok(rows) => {
+                print!("{}", crate::scaling::table(&rows));
+                println!(
+                    "tdyn chart-scaling: scaling.csv, scaling.png and scaling.svg in {}/",
+                    dir.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("tdyn chart-scaling: error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Cmd::Sweep {
+            scene,
+            params,
+            mesh,
+            measures,
+            out,
+            quiet,
+        } => {
+            let opts = crate::sweep::SweepOptions {
+                scene,
+                params,
+                mesh,
+                measures,
+                out,
+                quiet,
+            };
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn sweep",
+                |world| crate::sweep::sweep(world, &opts),
+                |dir| {
+                    if !quiet {
+                        println!(
+                            "tdyn sweep: accuracy_cost.csv, accuracy_cost.png and accuracy_cost.svg in {}/",
+                            dir.display()
+                        );
+                    }
+                },
+            )
+        }
+        Cmd::Run {
+            scene,
+            out,
+            quiet,
+            params,
+            end_time,
+            contact_decomposition,
+            contact_rebuild,
+            contact_skins,
+            sph_pairs,
+        } => {
+            let mut overrides = driver::RunOverrides {
+                end_time,
+                ..Default::default()
+            };
+            for p in &params {
+                match crate::sweep::parse_param(p, 0) {
+                    Ok((t, v)) if v.len() == 1 => t.set(&mut overrides, v[0]),
+                    Ok(_) => {
+                        eprintln!("tdyn: error: --param {p}: expected one value (tdyn sweep runs several)");
+                        return ExitCode::FAILURE;
+                    }
+                    Err(e) => {
+                        eprintln!("tdyn: error: --param {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
+            let opts = RunOptions {
+                scene,
+                out,
+                quiet,
+                overrides,
+                algorithms: driver::Algorithms {
+                    contact_static: contact_decomposition == ContactDecomposition::Static,
+                    contact_kept: contact_rebuild == Rebuild::Kept,
+                    contact_skins,
+                    sph_kept_pairs: sph_pairs == Rebuild::Kept,
+                },
+                ..Default::default()
+            };
+            // A scene of particles only runs the SPH stage alone (it prints its own summary).
+            on_mpi_with_petsc(
+                &petsc_args,
+                "tdyn",
+                |world| match coupling::stages::sph::setup::run_if_particles_only(world, &opts) {
+                    Some(r) => r.map(|_| None),
+                    None => driver::run(world, &opts)
+                        .map(Some)
+                        .map_err(|e| e.to_string()),
+                },
+                |s| {
+                    if let (Some(s), false) = (s, quiet) {
+                        println!(
+                            "tdyn: {} steps, energy error max {:.2e}, {:.1} ns per element-cycle",
+                            s.steps, s.energy_error_max, s.ns_per_element_cycle
+                        );
+                        println!(
+                            "tdyn: output in {}/ (open fields.xmf in ParaView; history.csv, probes.csv, report.json)",
+                            s.out.display()
+                        );
+                    }
+                },
+            )
+        }
+    }
+}

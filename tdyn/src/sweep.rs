@@ -1,0 +1,974 @@
+//! `tdyn sweep`: accuracy against cost over a ladder of resolutions of one scene.
+//!
+//! The scene runs once per value of the swept parameter(s), in this process and on the same
+//! ranks (each run is a full [`driver::run`], or the particles-only run, with the parameter
+//! replaced through [`RunOverrides`]). A parameter is a mesh parameter (`N`, `1:N` for
+//! `[[mesh]]` number 1; the scene's `params` table must have it) or a particle spacing
+//! (`particles.spacing` for every `[[particles]]`, `particles[i].spacing` for one); several
+//! parameters are swept together, value k of each in run k. For each run it records:
+//!
+//! - cost: the time-step loop's wall time and the whole run's (report.json, max over ranks);
+//! - memory: the model's arrays (report.json's `bytes_per_element` x `elements`, the FE stage's
+//!   nodal and element arrays) and the process's peak resident set (`VmHWM` of
+//!   /proc/self/status, reset through /proc/self/clear_refs before each run, max over ranks;
+//!   it includes MPI, PETSc and HDF5, tens of MB however small the model);
+//! - accuracy, for each measure `COLUMN[:peak|final][=REFERENCE]`: COLUMN is a probes.csv column
+//!   (`probe.field`) or a history.csv column; `peak` is the value of largest magnitude over the
+//!   run, `final` the last row's. The error is |q - REFERENCE| / |REFERENCE| with a reference
+//!   given, else |q - q_finest| / max |COLUMN of the finest run| where the finest run is the
+//!   finished one with the most elements + particles (its own error, 0, is not drawn).
+//!
+//! The first value runs once more before the ladder, unrecorded (warm-up). A run that is
+//! refused, stops (energy check, inverted element) or fails (a mesh that gmsh
+//! cannot make at that value) is a row with its status and message, not an error. Rank 0 writes
+//! `accuracy_cost.csv` and draws `accuracy_cost.png` / `.svg`: error against loop wall time,
+//! against model memory and against peak RSS, log-log, one point per run labelled with its
+//! parameter value, one curve per measure.
+use crate::chart::{self, Figure};
+use crate::compare::read_column;
+use coupling::driver::{self, FailureKind, RunOptions, RunOverrides, HISTORY_COLUMNS};
+use coupling::input::scene::{self, Scene};
+use coupling::kernels::collective::{self, first_error};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::path::{Path, PathBuf};
+
+/// What `tdyn sweep` was asked.
+#[derive(Debug, Clone, Default)]
+pub struct SweepOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// `--param` specs, `[K:]NAME=v1,v2,...` (empty: the scene's `[sweep] param`).
+    pub params: Vec<String>,
+    /// The `[[mesh]]` a parameter without `K:` belongs to.
+    pub mesh: usize,
+    /// `--measure` specs, `COLUMN[:peak|final][=REFERENCE]` (empty: the scene's `[sweep]
+    /// measure`, else the peak of the first probe column).
+    pub measures: Vec<String>,
+    /// Output directory (default `out/<scene stem>/sweep`).
+    pub out: Option<PathBuf>,
+    /// No progress lines.
+    pub quiet: bool,
+}
+
+/// What a swept parameter replaces.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// `mesh[mesh].params.name`.
+    Mesh {
+        /// Index of the `[[mesh]]`.
+        mesh: usize,
+        /// The gmsh parameter.
+        name: String,
+    },
+    /// `particles[i].spacing` (None: every `[[particles]]`).
+    Spacing(Option<usize>),
+}
+
+impl Target {
+    /// The name as the user writes it (mesh 0's parameters without the `0:`).
+    pub fn name(&self) -> String {
+        match self {
+            Target::Mesh { mesh: 0, name } => name.clone(),
+            Target::Mesh { mesh, name } => format!("{mesh}:{name}"),
+            Target::Spacing(None) => "particles.spacing".into(),
+            Target::Spacing(Some(i)) => format!("particles[{i}].spacing"),
+        }
+    }
+
+    /// Adds "this target = v" to `ov`.
+    pub fn set(&self, ov: &mut RunOverrides, v: f64) {
+        match self {
+            Target::Mesh { mesh, name } => ov.mesh_params.push((*mesh, name.clone(), v)),
+            Target::Spacing(i) => ov.particle_spacing.push((*i, v)),
+        }
+    }
+}
+
+/// Parses `[K:]NAME=v1,v2,...`, `particles.spacing=...` or `particles[i].spacing=...`.
+pub fn parse_param(spec: &str, default_mesh: usize) -> Result<(Target, Vec<f64>), String> {
+    let (name, values) = spec
+        .split_once('=')
+        .ok_or_else(|| format!("\"{spec}\": expected NAME=v1,v2,..."))?;
+    let name = name.trim();
+    let target = if name == "particles.spacing" {
+        Target::Spacing(None)
+    } else if let Some(i) = name
+        .strip_prefix("particles[")
+        .and_then(|r| r.strip_suffix("].spacing"))
+    {
+        Target::Spacing(Some(i.parse().map_err(|_| {
+            format!("\"{spec}\": expected particles[i].spacing with i an index")
+        })?))
+    } else {
+        let (mesh, n) = match name.split_once(':') {
+            Some((k, n)) => (
+                k.trim()
+                    .parse()
+                    .map_err(|_| format!("\"{spec}\": expected K:NAME with K a mesh index"))?,
+                n.trim(),
+            ),
+            None => (default_mesh, name),
+        };
+        if n.is_empty() || !n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(format!(
+                "\"{spec}\": \"{n}\" is not a gmsh parameter name (letters, digits, _)"
+            ));
+        }
+        Target::Mesh {
+            mesh,
+            name: n.to_string(),
+        }
+    };
+    let values = values
+        .split(',')
+        .map(|v| {
+            let v = v.trim();
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("\"{spec}\": \"{v}\" is not a number"))
+        })
+        .collect::<Result<Vec<f64>, String>>()?;
+    Ok((target, values))
+}
+
+/// How a column becomes one number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// The value of largest magnitude over the run.
+    Peak,
+    /// The last row's value.
+    Final,
+}
+
+/// One accuracy measure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measure {
+    /// The column.
+    pub column: String,
+    /// `probes.csv` or `history.csv`.
+    pub file: &'static str,
+    /// Peak or final.
+    pub kind: Kind,
+    /// An analytic or published value (None: the finest run).
+    pub reference: Option<f64>,
+}
+
+impl Measure {
+    /// `column:kind`.
+    pub fn name(&self) -> String {
+        format!(
+            "{}:{}",
+            self.column,
+            match self.kind {
+                Kind::Peak => "peak",
+                Kind::Final => "final",
+            }
+        )
+    }
+
+    /// The measured number from one run's output.
+    fn value(&self, dir: &Path) -> Result<(f64, f64), String> {
+        let q = read_column(&dir.join(self.file), &self.column)?;
+        let scale = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let v = match self.kind {
+            Kind::Final => q.last().copied(),
+            Kind::Peak => q.iter().copied().max_by(|a, b| a.abs().total_cmp(&b.abs())),
+        };
+        v.map(|v| (v, scale))
+            .ok_or_else(|| format!("{}: no rows", dir.join(self.file).display()))
+    }
+}
+
+/// Parses `COLUMN[:peak|final][=REFERENCE]` against the scene's probe columns and
+/// history.csv's columns.
+pub fn parse_measure(spec: &str, probe_columns: &[String]) -> Result<Measure, String> {
+    let (head, reference) = match spec.split_once('=') {
+        Some((h, r)) => (
+            h.trim(),
+            Some(
+                r.trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && *x != 0.0)
+                    .ok_or_else(|| {
+                        format!("\"{spec}\": the reference \"{r}\" is not a non-zero number")
+                    })?,
+            ),
+        ),
+        None => (spec.trim(), None),
+    };
+    let (column, kind) = match head.rsplit_once(':') {
+        Some((c, "peak")) => (c, Kind::Peak),
+        Some((c, "final")) => (c, Kind::Final),
+        Some((_, k)) => {
+            return Err(format!(
+                "\"{spec}\": unknown measure \"{k}\" (expected peak or final)"
+            ))
+        }
+        None => (head, Kind::Peak),
+    };
+    let file = if probe_columns.iter().any(|c| c == column) {
+        "probes.csv"
+    } else if HISTORY_COLUMNS.contains(&column)
+        || column.starts_with("hourglass_energy.")
+        || column.starts_with("internal_energy.")
+    {
+        // the SCENE.md columns, and the per-block energies (`hourglass_energy.<group>`)
+        "history.csv"
+    } else {
+        return Err(format!(
+            "\"{spec}\": \"{column}\" is neither a probe column ({}) nor a history column ({})",
+            if probe_columns.is_empty() {
+                "the scene has no [[probe]]".to_string()
+            } else {
+                probe_columns.join(", ")
+            },
+            HISTORY_COLUMNS.join(", ")
+        ));
+    };
+    Ok(Measure {
+        column: column.to_string(),
+        file,
+        kind,
+        reference,
+    })
+}
+
+/// One row of accuracy_cost.csv.
+#[derive(Debug, Clone)]
+pub struct SweepRow {
+    /// The parameters' values in this run.
+    pub values: Vec<f64>,
+    /// "N=20" (the first parameter; all of them when several).
+    pub label: String,
+    /// "ok", "refused", "unstable" or "failed".
+    pub status: &'static str,
+    /// The driver's message for a run that did not finish.
+    pub message: String,
+    /// Mesh elements.
+    pub elements: u64,
+    /// SPH particles.
+    pub particles: u64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Whole run, s.
+    pub wall_s: f64,
+    /// Time-step loop without output, s.
+    pub loop_s: f64,
+    /// bytes_per_element x elements (NaN without a mesh).
+    pub model_bytes: f64,
+    /// Peak resident set of the process during the run, max over ranks, bytes.
+    pub rss_peak_bytes: f64,
+    /// Largest energy error of the run.
+    pub energy_error_max: f64,
+    /// Per measure: the measured number and the column's largest magnitude.
+    pub measured: Vec<(f64, f64)>,
+    /// Per measure: the relative error (NaN when not measured).
+    pub errors: Vec<f64>,
+    /// This run is the reference of the measures that have no given reference.
+    pub reference: bool,
+    /// Its output directory.
+    pub out: PathBuf,
+}
+
+/// The peak resident set of this process (VmHWM), bytes; NaN where /proc is not there.
+fn peak_rss() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<f64>().ok())
+        })
+        .map(|kb| kb * 1024.0)
+        .unwrap_or(f64::NAN)
+}
+
+/// Resets the peak resident set to the current one (Linux: "5" to clear_refs).
+fn reset_peak_rss() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// A value as a short label: 20, 0.002, 1.5.
+fn value_label(v: f64) -> String {
+    if v == v.round() && v.abs() < 1e9 {
+        format!("{v:.0}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// One swept parameter and its values.
+type Ladder = (Target, Vec<f64>);
+
+/// The ladder and the measures: from the command line, else the scene's `[sweep]`.
+fn plan(opts: &SweepOptions, scene: &Scene) -> Result<(Vec<Ladder>, Vec<Measure>), String> {
+    let file = scene.file.display().to_string();
+    let def = scene.sweep.clone().unwrap_or_default();
+    let (specs, from) = if opts.params.is_empty() {
+        (def.param.clone(), "[sweep] param")
+    } else {
+        (opts.params.clone(), "--param")
+    };
+    if specs.is_empty() {
+        return Err(format!(
+            "{file}: nothing to sweep: give --param NAME=v1,v2,... (a mesh parameter, or particles.spacing), or a [sweep] param list in the scene"
+        ));
+    }
+    let params = specs
+        .iter()
+        .map(|s| parse_param(s, opts.mesh).map_err(|e| format!("{file}: {from}: {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = params[0].1.len();
+    if let Some((t, v)) = params.iter().find(|(_, v)| v.len() != n) {
+        return Err(format!(
+            "{file}: {from}: {} has {} values and {} has {n}: parameters swept together need as many values each",
+            t.name(),
+            v.len(),
+            params[0].0.name()
+        ));
+    }
+    let columns: Vec<String> = scene
+        .probes
+        .iter()
+        .flat_map(|p| {
+            p.fields
+                .iter()
+                .map(move |f| format!("{}.{}", p.name, f.name()))
+        })
+        .collect();
+    let (specs, from) = if !opts.measures.is_empty() {
+        (opts.measures.clone(), "--measure")
+    } else if !def.measure.is_empty() {
+        (def.measure.clone(), "[sweep] measure")
+    } else {
+        match columns.first() {
+            Some(c) => (vec![format!("{c}:peak")], "the first probe column"),
+            None => {
+                return Err(format!(
+                    "{file}: nothing to measure: give --measure COLUMN[:peak|final] (a probe or history.csv column) or add a [[probe]]"
+                ))
+            }
+        }
+    };
+    let measures = specs
+        .iter()
+        .map(|s| parse_measure(s, &columns).map_err(|e| format!("{file}: {from}: {e}")))
+        .collect::<Result<Vec<Measure>, _>>()?;
+    for (i, m) in measures.iter().enumerate() {
+        if measures[..i].iter().any(|p| p.name() == m.name()) {
+            return Err(format!(
+                "{file}: {from}: {} is given twice (one reference per measure)",
+                m.name()
+            ));
+        }
+    }
+    Ok((params, measures))
+}
+
+/// Runs the sweep; returns the output directory. Collective; every rank returns the same
+/// error. Runs that stop or fail are rows, not errors.
+pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf, String> {
+    let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
+    let file = scene.file.display().to_string();
+    let (params, measures) = plan(opts, &scene)?;
+    let n_runs = params[0].1.len();
+    let overrides: Vec<RunOverrides> = (0..n_runs)
+        .map(|k| {
+            let mut ov = RunOverrides::default();
+            for (t, v) in &params {
+                t.set(&mut ov, v[k]);
+            }
+            ov
+        })
+        .collect();
+    // A parameter the scene does not have fails every run: say so once, before running.
+    for ov in &overrides {
+        ov.apply(&mut scene.clone())?;
+    }
+    let out_dir = opts.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out")
+            .join(scene.file.file_stem().unwrap_or_default())
+            .join("sweep")
+    });
+    let say = |s: String| {
+        if world.rank() == 0 && !opts.quiet {
+            println!("{s}");
+        }
+    };
+    let names: Vec<String> = params.iter().map(|(t, _)| t.name()).collect();
+    say(format!(
+        "tdyn sweep: {file}: {}; measures {}; {} ranks",
+        params
+            .iter()
+            .map(|(t, v)| format!(
+                "{} = {}",
+                t.name(),
+                v.iter()
+                    .map(|x| value_label(*x))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .collect::<Vec<_>>()
+            .join("; "),
+        measures
+            .iter()
+            .map(|m| match m.reference {
+                Some(r) => format!("{} (against {r:e})", m.name()),
+                None => format!("{} (against the finest run)", m.name()),
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+        world.size()
+    ));
+
+    // The first run of a process pays MPI's connection set-up and the first touches of memory
+    // (measured: 10 ms of loop for 25 steps of 10 elements, then 0.5 ms): the first value runs
+    // once unrecorded.
+    let warm = RunOptions {
+        scene: opts.scene.clone(),
+        out: Some(out_dir.join("runs").join("warm-up")),
+        quiet: true,
+        overrides: overrides[0].clone(),
+        setup_only: false,
+        algorithms: Default::default(),
+    };
+    if coupling::stages::sph::setup::run_if_particles_only(world, &warm).is_none() {
+        let _ = driver::run(world, &warm);
+    }
+    let mut rows = Vec::with_capacity(n_runs);
+    for (k, ov) in overrides.into_iter().enumerate() {
+        let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
+        let label = names
+            .iter()
+            .zip(&values)
+            .map(|(n, v)| format!("{n}={}", value_label(*v)))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let dir_name: String = label
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let dir = out_dir.join("runs").join(dir_name);
+        let o = RunOptions {
+            scene: opts.scene.clone(),
+            out: Some(dir.clone()),
+            quiet: true,
+            overrides: ov,
+            setup_only: false,
+            algorithms: Default::default(),
+        };
+        world.barrier();
+        reset_peak_rss();
+        let res = match coupling::stages::sph::setup::run_if_particles_only(world, &o) {
+            Some(r) => r.map(|_| ()).map_err(|m| (FailureKind::Failed, m)),
+            None => driver::run(world, &o)
+                .map(|_| ())
+                .map_err(|e| (e.kind, e.message)),
+        };
+        let rss = collective::max(world, peak_rss());
+        let mut row = SweepRow {
+            values,
+            label,
+            status: "ok",
+            message: String::new(),
+            elements: 0,
+            particles: 0,
+            steps: 0,
+            wall_s: f64::NAN,
+            loop_s: f64::NAN,
+            model_bytes: f64::NAN,
+            rss_peak_bytes: rss,
+            energy_error_max: f64::NAN,
+            measured: Vec::new(),
+            errors: vec![f64::NAN; measures.len()],
+            reference: false,
+            out: dir.clone(),
+        };
+        match res {
+            Ok(()) => {
+                if world.rank() == 0 {
+                    if let Err(e) = read_report(&mut row, &measures) {
+                        row.status = "failed";
+                        row.message = e;
+                    }
+                }
+            }
+            Err((kind, message)) => {
+                row.status = match kind {
+                    FailureKind::Refused => "refused",
+                    FailureKind::Unstable => "unstable",
+                    FailureKind::Failed | FailureKind::Input => "failed",
+                };
+                row.message = message;
+            }
+        }
+        say(format!(
+            "  {:>16}: {}",
+            row.label,
+            if row.status == "ok" {
+                format!(
+                    "ok, {} elements, {} particles, {} steps, loop {:.3e} s, wall {:.3e} s, model {:.3} MB, peak RSS {:.0} MB",
+                    row.elements,
+                    row.particles,
+                    row.steps,
+                    row.loop_s,
+                    row.wall_s,
+                    row.model_bytes / 1e6,
+                    row.rss_peak_bytes / 1e6
+                )
+            } else {
+                format!("{}: {}", row.status, row.message)
+            }
+        ));
+        rows.push(row);
+    }
+
+    let mut result = Ok(());
+    if world.rank() == 0 {
+        let notes = errors(&mut rows, &measures);
+        result = write_csv(&out_dir.join("accuracy_cost.csv"), &names, &measures, &rows).and_then(
+            |()| {
+                let fig = SweepChart {
+                    title: format!(
+                        "{}: accuracy against cost, {} ranks",
+                        if scene.title.is_empty() {
+                            file.clone()
+                        } else {
+                            scene.title.clone()
+                        },
+                        world.size()
+                    ),
+                    measures: &measures,
+                    rows: &rows,
+                    notes,
+                };
+                chart::save(&fig, &out_dir.join("accuracy_cost"))
+            },
+        );
+        if !opts.quiet {
+            for r in rows.iter().filter(|r| r.status == "ok") {
+                let e: Vec<String> = measures
+                    .iter()
+                    .zip(&r.errors)
+                    .map(|(m, e)| format!("{} {}", m.name(), fmt_error(*e, r.reference)))
+                    .collect();
+                println!("  {:>16}: error {}", r.label, e.join(", "));
+            }
+        }
+        if let Err(e) = &result {
+            result = Err(format!("{file}: {e}"));
+        }
+    }
+    first_error(world, result.err())?;
+    Ok(out_dir)
+}
+
+fn fmt_error(e: f64, reference: bool) -> String {
+    if reference && e == 0.0 {
+        "(reference)".into()
+    } else if e.is_finite() {
+        format!("{e:.3e}")
+    } else {
+        "-".into()
+    }
+}
+
+/// Fills a finished row from its report.json and outputs (rank 0).
+fn read_report(row: &mut SweepRow, measures: &[Measure]) -> Result<(), String> {
+    let path = row.out.join("report.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let r: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let f = |k: &str| r.get(k).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
+    let u = |k: &str| r.get(k).and_then(|v| v.as_u64()).unwrap_or(0);
+    row.elements = u("elements");
+    row.particles = u("particles");
+    row.steps = u("steps");
+    row.wall_s = f("wall_s");
+    row.loop_s = f("loop_s");
+    row.energy_error_max = f("energy_error_max");
+    row.model_bytes = if row.elements > 0 {
+        f("bytes_per_element") * row.elements as f64
+    } else {
+        f64::NAN
+    };
+    row.measured = measures
+        .iter()
+        .map(|m| m.value(&row.out))
+        .collect::<Result<_, _>>()?;
+    Ok(())
+}
+
+/// Fills the errors; returns one note per measure saying what it is compared with.
+fn errors(rows: &mut [SweepRow], measures: &[Measure]) -> Vec<String> {
+    let finest = rows
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.status == "ok")
+        .max_by_key(|(_, r)| r.elements + r.particles)
+        .map(|(i, _)| i);
+    let mut notes = Vec::new();
+    let mut against_finest = Vec::new();
+    for (j, m) in measures.iter().enumerate() {
+        let (reference, scale) = match (m.reference, finest) {
+            (Some(r), _) => {
+                notes.push(format!("{}: against {r:e}", m.name()));
+                (r, r.abs())
+            }
+            (None, Some(i)) => {
+                rows[i].reference = true;
+                against_finest.push(m.name());
+                let (q, s) = rows[i].measured[j];
+                (q, s.max(1e-300))
+            }
+            (None, None) => {
+                notes.push(format!("{}: no run finished", m.name()));
+                continue;
+            }
+        };
+        for r in rows.iter_mut().filter(|r| r.status == "ok") {
+            r.errors[j] = (r.measured[j].0 - reference).abs() / scale;
+        }
+    }
+    if let (Some(i), false) = (finest, against_finest.is_empty()) {
+        notes.push(format!(
+            "{} against the finest run, {} (dashed)",
+            if against_finest.len() == measures.len() {
+                "all".to_string()
+            } else {
+                against_finest.join(", ")
+            },
+            rows[i].label
+        ));
+    }
+    notes
+}
+
+fn write_csv(
+    path: &Path,
+    names: &[String],
+    measures: &[Measure],
+    rows: &[SweepRow],
+) -> Result<(), String> {
+    use std::fmt::Write as _;
+    if let Some(d) = path.parent() {
+        std::fs::create_dir_all(d).map_err(|e| format!("{}: {e}", d.display()))?;
+    }
+    let mut s = String::from("label");
+    for n in names {
+        let _ = write!(s, ",{n}");
+    }
+    s.push_str(",status,elements,particles,steps,wall_s,loop_s,model_bytes,rss_peak_bytes,energy_error_max");
+    for m in measures {
+        let _ = write!(s, ",{0}_value,{0}_error", m.name());
+    }
+    s.push_str(",reference,dir,message\n");
+    let num = |v: f64| {
+        if v.is_finite() {
+            format!("{v:e}")
+        } else {
+            String::new()
+        }
+    };
+    for r in rows {
+        let _ = write!(s, "\"{}\"", r.label);
+        for v in &r.values {
+            let _ = write!(s, ",{v}");
+        }
+        let _ = write!(
+            s,
+            ",{},{},{},{},{},{},{},{},{}",
+            r.status,
+            r.elements,
+            r.particles,
+            r.steps,
+            num(r.wall_s),
+            num(r.loop_s),
+            num(r.model_bytes),
+            num(r.rss_peak_bytes),
+            num(r.energy_error_max)
+        );
+        for (j, _) in measures.iter().enumerate() {
+            let v = r.measured.get(j).map(|m| m.0).unwrap_or(f64::NAN);
+            let _ = write!(s, ",{},{}", num(v), num(r.errors[j]));
+        }
+        let _ = writeln!(
+            s,
+            ",{},\"{}\",\"{}\"",
+            r.reference,
+            r.out.display(),
+            r.message.replace('"', "'")
+        );
+    }
+    std::fs::write(path, s).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The chart: error against loop time, model memory and peak RSS.
+struct SweepChart<'a> {
+    title: String,
+    measures: &'a [Measure],
+    rows: &'a [SweepRow],
+    notes: Vec<String>,
+}
+
+/// Chart size, pixels.
+const SWEEP_CHART_SIZE: (u32, u32) = (1800, 620);
+
+/// Every log axis spans at least this ratio (one decade), so that it has labelled ticks.
+const MIN_AXIS_RATIO: f64 = 10.0;
+
+/// Labelled ticks asked of each axis (plotters picks round values near this many).
+const AXIS_LABELS: usize = 8;
+
+/// Colours of the measures' curves, in order.
+const PALETTE: [plotters::style::RGBColor; 6] = [
+    plotters::style::RGBColor(31, 119, 180),
+    plotters::style::RGBColor(214, 39, 40),
+    plotters::style::RGBColor(44, 160, 44),
+    plotters::style::RGBColor(148, 103, 189),
+    plotters::style::RGBColor(255, 127, 14),
+    plotters::style::RGBColor(23, 190, 207),
+];
+
+impl Figure for SweepChart<'_> {
+    fn size(&self) -> (u32, u32) {
+        SWEEP_CHART_SIZE
+    }
+
+    fn draw<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), String> {
+        use plotters::prelude::*;
+        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+        let (root, text) = chart::canvas(root, &self.title)?;
+        let panels = root.split_evenly((1, 3));
+        let ok: Vec<&SweepRow> = self.rows.iter().filter(|r| r.status == "ok").collect();
+        let (y0, y1) = chart::log_span(
+            ok.iter().flat_map(|r| r.errors.iter().copied()),
+            3.0,
+            (1e-4, 1.0),
+        );
+        let (y0, y1) = chart::at_least((y0, y1), MIN_AXIS_RATIO);
+        // Room above the data for the notes.
+        let y1 = y1 * 30.0;
+        type Cost = fn(&SweepRow) -> f64;
+        let costs: [(&str, Cost); 3] = [
+            ("time-step loop wall time (s)", |r| r.loop_s),
+            ("model memory: bytes per element x elements (MB)", |r| {
+                r.model_bytes / 1e6
+            }),
+            ("peak resident set, max over ranks (MB)", |r| {
+                r.rss_peak_bytes / 1e6
+            }),
+        ];
+        for (p, (area, (x_desc, cost))) in panels.iter().zip(costs).enumerate() {
+            let (x0, x1) = chart::at_least(
+                chart::log_span(ok.iter().map(|r| cost(r)), 1.6, (1e-3, 1.0)),
+                MIN_AXIS_RATIO,
+            );
+            let mut builder = ChartBuilder::on(area);
+            builder.margin(15);
+            if text {
+                builder.x_label_area_size(45).y_label_area_size(70);
+            }
+            let mut ch = builder
+                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+                .map_err(e)?;
+            let mut mesh = ch.configure_mesh();
+            if text {
+                mesh.x_desc(x_desc)
+                    .y_desc("relative error")
+                    .x_labels(AXIS_LABELS)
+                    .y_labels(AXIS_LABELS)
+                    .x_label_formatter(&chart::plain)
+                    .y_label_formatter(&chart::sci);
+            } else {
+                mesh.x_labels(0).y_labels(0);
+            }
+            mesh.draw().map_err(e)?;
+            // The finest run, when it is the reference, has no error to draw: its cost is a
+            // dashed line.
+            if let Some(r) = ok.iter().find(|r| r.reference) {
+                let x = cost(r);
+                if x > 0.0 && x.is_finite() {
+                    ch.draw_series(DashedLineSeries::new(
+                        vec![(x, y0), (x, y1)],
+                        8,
+                        6,
+                        BLACK.mix(0.5).stroke_width(2),
+                    ))
+                    .map_err(e)?;
+                    if text {
+                        use plotters::style::text_anchor::{HPos, Pos, VPos};
+                        let left_of = TextStyle::from(("sans-serif", 13).into_font())
+                            .pos(Pos::new(HPos::Right, VPos::Bottom));
+                        ch.draw_series(std::iter::once(Text::new(
+                            format!("{} (reference)", r.label),
+                            (x / 1.05, y0 * 2.0),
+                            left_of,
+                        )))
+                        .map_err(e)?;
+                    }
+                }
+            }
+            let drawn = |r: &SweepRow, j: usize| {
+                let (x, y) = (cost(r), r.errors[j]);
+                x > 0.0 && x.is_finite() && y > 0.0 && y.is_finite()
+            };
+            for (j, m) in self.measures.iter().enumerate() {
+                let c = PALETTE[j % PALETTE.len()];
+                // In ladder order (the line follows the refinement, whatever the timings do);
+                // a run's label once, at its first drawn measure.
+                let pts: Vec<(f64, f64, &str)> = ok
+                    .iter()
+                    .filter(|r| drawn(r, j))
+                    .map(|r| {
+                        let first = (0..j).all(|i| !drawn(r, i));
+                        (
+                            cost(r),
+                            r.errors[j],
+                            if first { r.label.as_str() } else { "" },
+                        )
+                    })
+                    .collect();
+                let s = ch
+                    .draw_series(LineSeries::new(
+                        pts.iter().map(|p| (p.0, p.1)),
+                        c.stroke_width(2),
+                    ))
+                    .map_err(e)?;
+                if text {
+                    s.label(m.name()).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+                }
+                ch.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
+                    .map_err(e)?;
+                if text {
+                    ch.draw_series(pts.iter().filter(|p| !p.2.is_empty()).map(|p| {
+                        Text::new(
+                            p.2.to_string(),
+                            (p.0 * 1.04, p.1 * 1.15),
+                            ("sans-serif", 13),
+                        )
+                    }))
+                    .map_err(e)?;
+                }
+            }
+            if text {
+                let mut notes: Vec<String> = if p == 0 {
+                    self.notes.clone()
+                } else {
+                    Vec::new()
+                };
+                if p == 1 {
+                    notes.extend(
+                        self.rows
+                            .iter()
+                            .filter(|r| r.status != "ok")
+                            .map(|r| format!("{}: {} (not drawn)", r.label, r.status)),
+                    );
+                }
+                for (i, n) in notes.iter().enumerate() {
+                    ch.draw_series(std::iter::once(Text::new(
+                        n.clone(),
+                        (x0 * 1.05, y1 / 1.4 / 1.7f64.powi(i as i32)),
+                        ("sans-serif", 13),
+                    )))
+                    .map_err(e)?;
+                }
+                // Cheap and accurate is the corner that runs seldom reach.
+                ch.configure_series_labels()
+                    .position(SeriesLabelPosition::LowerLeft)
+                    .border_style(BLACK)
+                    .background_style(WHITE.mix(0.8))
+                    .label_font(("sans-serif", 14))
+                    .draw()
+                    .map_err(e)?;
+            }
+        }
+        root.present().map_err(e)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameter_specs() {
+        let (t, v) = parse_param("N=10, 20,40", 0).unwrap();
+        assert_eq!(
+            t,
+            Target::Mesh {
+                mesh: 0,
+                name: "N".into()
+            }
+        );
+        assert_eq!(v, vec![10.0, 20.0, 40.0]);
+        let (t, _) = parse_param("1:M=2", 0).unwrap();
+        assert_eq!(t.name(), "1:M");
+        let (t, _) = parse_param("M=2", 2).unwrap();
+        assert_eq!(t.name(), "2:M");
+        let (t, v) = parse_param("particles[1].spacing=0.002,0.001", 0).unwrap();
+        assert_eq!((t, v), (Target::Spacing(Some(1)), vec![0.002, 0.001]));
+        assert_eq!(
+            parse_param("particles.spacing=1e-3", 0).unwrap().0,
+            Target::Spacing(None)
+        );
+        for bad in [
+            "N",
+            "N=",
+            "N=1,x",
+            "a-b=1",
+            "x:N=1",
+            "particles[x].spacing=1",
+        ] {
+            assert!(parse_param(bad, 0).is_err(), "{bad} should be refused");
+        }
+    }
+
+    #[test]
+    fn measure_specs() {
+        let cols = vec!["mid.stress_xx".to_string()];
+        let m = parse_measure("mid.stress_xx:final=-4.599e7", &cols).unwrap();
+        assert_eq!(
+            (m.file, m.kind, m.reference),
+            ("probes.csv", Kind::Final, Some(-4.599e7))
+        );
+        let m = parse_measure("kinetic_energy", &cols).unwrap();
+        assert_eq!(
+            (m.file, m.kind, m.reference),
+            ("history.csv", Kind::Peak, None)
+        );
+        let m = parse_measure("hourglass_energy.wall:final", &cols).unwrap();
+        assert_eq!(
+            (m.file, m.kind),
+            ("history.csv", Kind::Final),
+            "a per-block history column"
+        );
+        for bad in [
+            "mid.stress_yy",
+            "mid.stress_xx:max",
+            "mid.stress_xx=0",
+            "kinetic_energy=x",
+        ] {
+            assert!(
+                parse_measure(bad, &cols).is_err(),
+                "{bad} should be refused"
+            );
+        }
+    }
+}
