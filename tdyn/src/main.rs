@@ -561,15 +561,13 @@ fn main() -> ExitCode {
                 },
                 ..Default::default()
             };
-            // A scene of particles only runs the SPH stage alone (it prints its own summary).
             on_mpi_with_petsc(
                 &petsc_args,
                 "tdyn",
-                |world| match coupling::stages::sph::setup::run_if_particles_only(world, &opts) {
-                    Some(r) => r.map(|_| None),
-                    None => driver::run(world, &opts)
+                |world| {
+                    driver::run(world, &opts)
                         .map(Some)
-                        .map_err(|e| e.to_string()),
+                        .map_err(|e| e.to_string())
                 },
                 |s| {
                     if let (Some(s), false) = (s, quiet) {

@@ -436,9 +436,7 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
         setup_only: false,
         algorithms: Default::default(),
     };
-    if coupling::stages::sph::setup::run_if_particles_only(world, &warm).is_none() {
-        let _ = driver::run(world, &warm);
-    }
+    let _ = driver::run(world, &warm);
     let mut rows = Vec::with_capacity(n_runs);
     for (k, ov) in overrides.into_iter().enumerate() {
         let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
@@ -469,12 +467,9 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
         };
         world.barrier();
         reset_peak_rss();
-        let res = match coupling::stages::sph::setup::run_if_particles_only(world, &o) {
-            Some(r) => r.map(|_| ()).map_err(|m| (FailureKind::Failed, m)),
-            None => driver::run(world, &o)
-                .map(|_| ())
-                .map_err(|e| (e.kind, e.message)),
-        };
+        let res = driver::run(world, &o)
+            .map(|_| ())
+            .map_err(|e| (e.kind, e.message));
         let rss = collective::max(world, peak_rss());
         let mut row = SweepRow {
             values,

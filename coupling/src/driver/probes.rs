@@ -41,7 +41,7 @@ impl Probes {
         comm: &SimpleCommunicator,
         file: &str,
         probes: &[Probe],
-        fe: &ExplicitFe,
+        fe: Option<&ExplicitFe>,
         particles: bool,
     ) -> Result<Probes, String> {
         let mut located = Vec::new();
@@ -49,7 +49,8 @@ impl Probes {
         let mut err = None;
         for (i, p) in probes.iter().enumerate() {
             let mut best: Option<(u64, usize, [f64; 3])> = None;
-            for (e, conn) in fe.elems.iter().enumerate() {
+            for (e, conn) in fe.iter().flat_map(|fe| fe.elems.iter().enumerate()) {
+                let fe = fe.expect("elements come from the FE stage");
                 let x: [[f64; 3]; 8] = std::array::from_fn(|k| fe.x0[conn[k] as usize]);
                 // Bounding-box reject first, grown by the tolerance.
                 let inside_box = (0..3).all(|c| {
@@ -96,15 +97,15 @@ impl Probes {
     pub fn sample(
         &self,
         comm: &SimpleCommunicator,
-        fe: &ExplicitFe,
+        fe: Option<&ExplicitFe>,
         sph: Option<&SphStage>,
     ) -> Vec<f64> {
         let mut vals = Vec::with_capacity(self.columns.len());
         for l in &self.located {
             for f in &l.fields {
-                vals.push(match l.here {
-                    Some((e, xi)) => value(fe, e, xi, f),
-                    None => 0.0,
+                vals.push(match (l.here, fe) {
+                    (Some((e, xi)), Some(fe)) => value(fe, e, xi, f),
+                    _ => 0.0,
                 });
             }
         }

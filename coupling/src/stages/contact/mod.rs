@@ -1,4 +1,313 @@
-//! The contact stage (Fig. 3, steps 4-5; Fig. 10): contact nodes and particles on their own RCB
-//! decomposition, the search and the push-back.
+//! The contact stage (Fig. 3, steps 4-5; Fig. 10): the FE surfaces' nodes and faces and the SPH
+//! particles as contact nodes on their own RCB decomposition (`stage`), the search and the
+//! push-back, and the corrections sent back to the FE and SPH owners. `baseline` searches on
+//! the static FE decomposition instead (the paper's comparison, for benchmarks only).
+use super::fe::{setup::Groups, Fe};
+use super::sph::Sph;
+use crate::input::scene::ContactDef;
+use crate::kernels::collective;
+use crate::output::{Report, StageStats};
+use crate::transfer::fe_contact::FeContact;
+use baseline::BaselineStage;
+use mpi::topology::SimpleCommunicator;
+use stage::{ContactOutcome, ContactStage};
+use std::time::Instant;
+
 pub mod baseline;
 pub mod stage;
+
+/// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
+/// (`tdyn run --contact-decomposition static`), the static FE decomposition.
+enum Search {
+    Dynamic(ContactStage),
+    Baseline(BaselineStage),
+}
+
+/// How the stage searches (`tdyn run --contact-decomposition`, `--contact-rebuild`,
+/// `--contact-skins`): choices that change the cost, not the answer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchChoice {
+    /// Search on the static FE decomposition (the paper's baseline; mesh nodes only).
+    pub static_decomposition: bool,
+    /// Keep the decomposition and candidate lists between steps within their skins.
+    pub kept: bool,
+    /// The skins as multiples of the step's largest motion (ghost faces, candidates); `None`:
+    /// the stage's defaults.
+    pub skins: Option<(f64, f64)>,
+}
+
+/// What the stage found and cost, summed over the steps.
+#[derive(Debug, Clone, Default)]
+pub struct ContactStats {
+    /// Steps taken.
+    pub steps: u64,
+    /// Contacts found in the last step.
+    pub contacts: u64,
+    /// Contacts summed over steps, and the most in one step.
+    pub contacts_total: u64,
+    /// See `contacts_total`.
+    pub contacts_max: u64,
+    /// Wall time of the stage on this rank, s.
+    pub wall_s: f64,
+    /// Bytes sent point to point (all ranks, RCB included), summed over steps.
+    pub bytes: f64,
+    /// Search imbalance (max/mean over ranks of nodes + faces held): summed over steps (for
+    /// the mean), the largest, and the last step's.
+    pub imbalance_sum: f64,
+    /// See `imbalance_sum`.
+    pub imbalance_max: f64,
+    /// See `imbalance_sum`.
+    pub last_imbalance: f64,
+    /// The last step's bytes (history.csv).
+    pub last_bytes: f64,
+    /// Nodes + faces searched summed over steps: on the busiest rank, and over all ranks.
+    pub work_max_sum: f64,
+    /// See `work_max_sum`.
+    pub work_total_sum: f64,
+    /// The contact decomposition's RCB: nodes moved between contact owners, bytes sent, wall
+    /// time (each call's max over ranks) and imbalance, summed over steps.
+    pub rcb_migrated: u64,
+    /// See `rcb_migrated`.
+    pub rcb_bytes: f64,
+    /// See `rcb_migrated`.
+    pub rcb_wall_s: f64,
+    /// See `rcb_migrated`.
+    pub rcb_imbalance_sum: f64,
+    /// Transfers between decompositions (FE/SPH owners <-> contact owners): bytes, time (each
+    /// step's max over ranks) and byte imbalance, summed over steps.
+    pub transfer_bytes: f64,
+    /// See `transfer_bytes`.
+    pub transfer_s: f64,
+    /// See `transfer_bytes`.
+    pub transfer_imbalance_sum: f64,
+}
+
+impl ContactStats {
+    fn add(&mut self, out: &ContactOutcome) {
+        self.contacts = out.contacts;
+        self.bytes += out.bytes_sent as f64;
+        self.imbalance_sum += out.imbalance;
+        self.imbalance_max = self.imbalance_max.max(out.imbalance);
+        self.work_max_sum += out.work_items_max;
+        self.work_total_sum += out.work_items_total;
+        self.last_imbalance = out.imbalance;
+        self.last_bytes = out.bytes_sent as f64;
+        self.contacts_total += out.contacts;
+        self.contacts_max = self.contacts_max.max(out.contacts);
+        self.rcb_migrated += out.rcb.migrated;
+        self.rcb_bytes += out.rcb.bytes_sent as f64;
+        self.rcb_wall_s += out.rcb.wall_s;
+        self.rcb_imbalance_sum += out.rcb.imbalance;
+        self.transfer_bytes += out.transfer.bytes_sent as f64;
+        self.transfer_s += out.transfer.wall_s;
+        self.transfer_imbalance_sum += out.transfer.imbalance;
+        self.steps += 1;
+    }
+}
+
+/// The contact stage of a run with `[contact]`.
+pub struct Contact {
+    /// The FE side's surfaces (which nodes and faces take part).
+    pub fe_side: FeContact,
+    search: Search,
+    node_gid: Vec<u64>,
+    /// SPH particles are contact nodes too (`contact.particles`), with ids from this offset
+    /// (the mesh's node count, so no particle id meets a node id).
+    particles: bool,
+    particle_gid_offset: u64,
+    /// Energy taken by the push-back (minus the work of the contact forces), J.
+    pub energy: f64,
+    /// What it found and cost.
+    pub stats: ContactStats,
+}
+
+impl Contact {
+    /// The stage for the scene's `[contact]` table over the FE stage's surfaces (collective).
+    pub fn new(
+        world: &SimpleCommunicator,
+        file: &str,
+        def: &ContactDef,
+        groups: &Groups,
+        fe: &Fe,
+        with_particles: bool,
+        choice: SearchChoice,
+    ) -> Result<Contact, String> {
+        let local = &fe.mesh.local;
+        // The named physical surfaces as node bits ("exterior": every boundary face).
+        let bits = if def.surfaces.iter().any(|s| s == "exterior") {
+            None
+        } else {
+            let mut b = 0u32;
+            for name in &def.surfaces {
+                let tag = groups.surfaces.get(name).copied();
+                if let Some(k) = local.surface_tags.iter().position(|&t| Some(t) == tag) {
+                    b |= 1 << k;
+                }
+            }
+            Some(b)
+        };
+        let fe_side = FeContact::build(world, local, bits);
+        if fe_side.global_faces == 0 {
+            return Err(format!(
+                "{file}: contact.surfaces: no boundary face lies on {:?}",
+                def.surfaces
+            ));
+        }
+        let mut dynamic = ContactStage::new(world, def.self_contact);
+        dynamic.configure(choice.kept, choice.skins);
+        let search = if choice.static_decomposition {
+            Search::Baseline(BaselineStage::new(world, dynamic.params))
+        } else {
+            Search::Dynamic(dynamic)
+        };
+        Ok(Contact {
+            fe_side,
+            search,
+            node_gid: local.node_id.clone(),
+            particles: def.particles && with_particles && !choice.static_decomposition,
+            particle_gid_offset: local.global_nodes,
+            energy: 0.0,
+            stats: ContactStats {
+                last_imbalance: 1.0,
+                ..ContactStats::default()
+            },
+        })
+    }
+
+    /// Steps 4-5 of Fig. 3 after the drift: detection on the contact decomposition, push-back
+    /// forces back on the FE nodes (all copies) and particles, positions and half-step
+    /// velocities corrected (collective).
+    pub fn step(
+        &mut self,
+        world: &SimpleCommunicator,
+        fe: &mut Fe,
+        sph: Option<&mut Sph>,
+        dt: f64,
+    ) -> Result<(), String> {
+        let t0 = Instant::now();
+        let mut nodes = self.fe_side.node_records(fe.state(), &self.node_gid);
+        let n_fe = nodes.len();
+        let sph = sph.filter(|_| self.particles);
+        if let Some(s) = &sph {
+            nodes.extend(s.stage.contact_records(self.particle_gid_offset));
+        }
+        let (out, mut f) = match &mut self.search {
+            Search::Dynamic(stage) => {
+                let (fe_side, gids) = (&self.fe_side, &self.node_gid);
+                let fe_ref = fe.state();
+                let out = stage.step(&nodes, || fe_side.face_records(fe_ref, gids), dt)?;
+                let f = self
+                    .fe_side
+                    .forces_on_nodes(fe_ref.n_nodes(), &out.force[..n_fe]);
+                (out, f)
+            }
+            Search::Baseline(stage) => {
+                // the benchmark baseline searches mesh nodes only (`particles` is off)
+                let faces = self.fe_side.face_records(fe.state(), &self.node_gid);
+                let b = stage.step(&nodes[..n_fe], &faces, dt)?;
+                let mut f = self
+                    .fe_side
+                    .forces_on_nodes(fe.state().n_nodes(), &b.outcome.force);
+                self.fe_side.add_corner_forces(&mut f, &b.corner_force);
+                (b.outcome, f)
+            }
+        };
+        let Fe {
+            integrator, mesh, ..
+        } = fe;
+        let state = match integrator {
+            super::fe::Integrator::Explicit(e) => e,
+            super::fe::Integrator::Implicit(i) => &mut i.fe,
+        };
+        let mut w = state
+            .apply_contact(&mut f, dt, &mut mesh.exchange)
+            .map_err(|e| e.to_string())?;
+        if let Some(s) = sph {
+            w += s.stage.apply_contact(&out.force[n_fe..], dt);
+        }
+        self.energy -= collective::sum(world, w);
+        self.stats.add(&out);
+        self.stats.wall_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// history.csv's contact columns: the last step's search imbalance and bytes.
+    pub fn history_columns(&self) -> [f64; 2] {
+        [self.stats.last_imbalance, self.stats.last_bytes]
+    }
+
+    /// The stage's section and figures in the report (collective).
+    pub fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {
+        let c = &self.stats;
+        let wall = collective::max(world, c.wall_s);
+        let n_steps = c.steps.max(1) as f64;
+        report.contact = Some(StageStats {
+            wall_s: wall,
+            imbalance: c.imbalance_sum / n_steps,
+            bytes_sent: c.bytes,
+        });
+        // `rcb`: both dynamic decompositions' rebalances (SPH and contact) together.
+        if matches!(self.search, Search::Dynamic(_)) {
+            let mine = StageStats {
+                wall_s: c.rcb_wall_s,
+                imbalance: c.rcb_imbalance_sum / n_steps,
+                bytes_sent: c.rcb_bytes,
+            };
+            report.rcb = Some(match report.rcb.take() {
+                Some(r) => StageStats {
+                    wall_s: r.wall_s + mine.wall_s,
+                    imbalance: r.imbalance.max(mine.imbalance),
+                    bytes_sent: r.bytes_sent + mine.bytes_sent,
+                },
+                None => mine,
+            });
+            report.transfer = Some(StageStats {
+                wall_s: c.transfer_s,
+                imbalance: c.transfer_imbalance_sum / n_steps,
+                bytes_sent: c.transfer_bytes,
+            });
+            report.stages_run.push("transfer".into());
+        }
+        let contact_nodes = collective::sum(world, self.fe_side.nodes.len() as f64) as u64;
+        let ex = &mut report.extra;
+        ex.insert(
+            "contact_share_of_step".into(),
+            (wall / loop_s.max(1e-30)).into(),
+        );
+        ex.insert("contact_nodes".into(), contact_nodes.into());
+        ex.insert("contacts_found_total".into(), c.contacts_total.into());
+        ex.insert("contacts_found_max_step".into(), c.contacts_max.into());
+        ex.insert("contact_imbalance_max".into(), c.imbalance_max.into());
+        ex.insert("contact_bytes_per_step".into(), (c.bytes / n_steps).into());
+        ex.insert("contact_s_per_step".into(), (wall / n_steps).into());
+        ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
+        if let Search::Dynamic(stage) = &self.search {
+            // Steps that rebuilt the decomposition, and candidate-list rebuilds summed over
+            // ranks (the other steps kept them: the skins in `stage`).
+            ex.insert(
+                "contact_rebuilds".into(),
+                stage.rebuilds.decomposition.into(),
+            );
+            let candidates = collective::sum(world, stage.rebuilds.candidates as f64) as u64;
+            ex.insert("contact_candidate_rebuilds".into(), candidates.into());
+        }
+        ex.insert(
+            "contact_work_max_per_step".into(),
+            (c.work_max_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_work_total_per_step".into(),
+            (c.work_total_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_decomposition".into(),
+            match self.search {
+                Search::Dynamic(_) => "dynamic_rcb",
+                Search::Baseline(_) => "static_fe_baseline",
+            }
+            .into(),
+        );
+        ex.insert("contact_faces".into(), self.fe_side.global_faces.into());
+        ex.insert("contact_bodies".into(), self.fe_side.n_bodies.into());
+    }
+}

@@ -1,2 +1,285 @@
-//! The FE stage (Fig. 3, step 1): the mesh on PETSc's static distribution, explicit or implicit.
+//! The FE stage (Fig. 3, step 1): the mesh on PETSc's static distribution (METIS), integrated
+//! explicitly (central differences) or implicitly (Newmark average acceleration, Newton and
+//! PETSc KSP: `run.mode = "implicit"`). The element kernels, materials and integrators are in
+//! `fe_petsc`; this stage builds them from the scene (`setup`) and runs them under the driver.
+use super::{Stage, StageEnergies, StageError};
+use crate::input::scene::Scene;
+use crate::kernels::collective::{self, first_error};
+use crate::output::{Report, StageStats};
+use fe_petsc::explicit::{ExplicitFe, ExplicitSetup, StepError};
+use fe_petsc::hex::HexControls;
+use fe_petsc::implicit::{ImplicitError, ImplicitFe};
+use fe_petsc::mesh::DistributedMesh;
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::time::Instant;
+
 pub mod setup;
+
+/// The integrator of the scene's mode. Both keep their state in an [`ExplicitFe`], which
+/// contact, probes and output read.
+pub enum Integrator {
+    /// Central differences (the paper's).
+    Explicit(Box<ExplicitFe>),
+    /// Newmark average acceleration with Newton iterations and KSP.
+    Implicit(Box<ImplicitFe>),
+}
+
+/// The FE stage of a run.
+pub struct Fe {
+    /// The integrator and its state.
+    pub integrator: Integrator,
+    /// This rank's part of the distributed mesh and its ghost exchange.
+    pub mesh: DistributedMesh,
+    /// The scene file, for messages.
+    file: String,
+    /// The stage's own wall time in the time loop (drift, element forces, exchange, nodal
+    /// updates, its reduction), s.
+    wall_s: f64,
+}
+
+impl Fe {
+    /// The FE stage of `scene` on the distributed mesh `mesh` (collective): explicit, or with
+    /// `implicit_dt` implicit with that fixed step. Initial energies summed.
+    pub fn new(
+        world: &SimpleCommunicator,
+        scene: &Scene,
+        groups: &setup::Groups,
+        mut mesh: DistributedMesh,
+        implicit_dt: Option<f64>,
+    ) -> Result<Fe, String> {
+        let file = scene.file.display().to_string();
+        let inputs = setup::prepare(world, scene, groups, &mut mesh)?;
+        let controls = HexControls {
+            hourglass: scene.run.hourglass.control(),
+            bv_linear: scene.run.bulk_viscosity.linear,
+            bv_quadratic: scene.run.bulk_viscosity.quadratic,
+        };
+        let setup = ExplicitSetup {
+            mesh: &mesh.local,
+            elem_material: inputs.elem_material,
+            elem_block: inputs.elem_block,
+            n_blocks: scene.blocks.len(),
+            materials: inputs.materials,
+            velocity: inputs.velocity,
+            constraints: inputs.constraints,
+            controls,
+            gravity: scene.gravity,
+        };
+        let mut integrator = match implicit_dt {
+            None => {
+                let res = ExplicitFe::new(setup, &mut mesh.exchange);
+                first_error(world, res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+                Integrator::Explicit(Box::new(res.map_err(|e| e.to_string())?))
+            }
+            Some(dt) => {
+                let res = ImplicitFe::new(world, setup, dt, &mut mesh.exchange);
+                first_error(world, res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+                Integrator::Implicit(Box::new(res.map_err(|e| e.to_string())?))
+            }
+        };
+        match &mut integrator {
+            Integrator::Explicit(fe) => fe.initial_energies(world),
+            Integrator::Implicit(imp) => imp.fe.initial_energies(world),
+        }
+        Ok(Fe {
+            integrator,
+            mesh,
+            file,
+            wall_s: 0.0,
+        })
+    }
+
+    /// The state (nodes, elements, energies).
+    pub fn state(&self) -> &ExplicitFe {
+        match &self.integrator {
+            Integrator::Explicit(fe) => fe,
+            Integrator::Implicit(imp) => &imp.fe,
+        }
+    }
+
+    /// The state, mutable (the contact push-back).
+    pub fn state_mut(&mut self) -> &mut ExplicitFe {
+        match &mut self.integrator {
+            Integrator::Explicit(fe) => fe,
+            Integrator::Implicit(imp) => &mut imp.fe,
+        }
+    }
+
+    /// Sets the clock (with a fixed step the driver keeps t = step dt exactly).
+    pub fn set_time(&mut self, t: f64) {
+        self.state_mut().time = t;
+    }
+
+    /// One explicit step after the drift and the contact correction (Fig. 3 step 1 and the
+    /// closing kick): element forces with the ghost exchange, then the energy sums in one
+    /// reduction. Agrees on failure (an inverted element) with the same reduction as the next
+    /// step size: a failing rank proposes a negative step.
+    fn explicit_forces(
+        world: &SimpleCommunicator,
+        file: &str,
+        fe: &mut ExplicitFe,
+        mesh: &mut DistributedMesh,
+        dt: f64,
+    ) -> Result<f64, StageError> {
+        let hg = fe.element_forces(dt, &mut mesh.exchange);
+        let (local_dt, local_err, hg_work) = match hg {
+            Ok(w) => (fe.dt_stable_local, None, w),
+            Err(e) => (-1.0 - world.rank() as f64, Some(e), 0.0),
+        };
+        let next = collective::min(world, local_dt);
+        if next < 0.0 {
+            let msg = local_err.map(|e: StepError| format!("{file}: {e}"));
+            first_error(world, msg).map_err(|message| StageError {
+                unstable: true,
+                message,
+            })?;
+        }
+        let sums = fe.finish_step(dt);
+        // The totals and the per-block sums in one reduction.
+        let local = fe.step_sums(&sums, hg_work);
+        let mut global = vec![0.0; local.len()];
+        world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
+        fe.accumulate(&global, dt);
+        Ok(next)
+    }
+
+    /// One implicit step (Newton on the whole step); every rank returns the failing rank's
+    /// message, and whether it was a blow-up.
+    fn implicit_step(
+        world: &SimpleCommunicator,
+        file: &str,
+        imp: &mut ImplicitFe,
+        mesh: &mut DistributedMesh,
+    ) -> Result<(), StageError> {
+        let res = imp.step(world, &mut mesh.exchange);
+        let unstable = matches!(&res, Err(ImplicitError::Step(StepError::NonFinite { .. })));
+        let any_unstable = collective::max(world, if unstable { 1.0 } else { 0.0 }) > 0.0;
+        let msg = match res {
+            Ok(()) | Err(ImplicitError::OtherRank) => None,
+            Err(e) => Some(format!("{file}: {e}")),
+        };
+        first_error(world, msg).map_err(|message| StageError {
+            unstable: any_unstable,
+            message,
+        })
+    }
+}
+
+impl Stage for Fe {
+    fn name(&self) -> &'static str {
+        "fe"
+    }
+
+    fn drift(&mut self, dt: f64) {
+        let t0 = Instant::now();
+        if let Integrator::Explicit(fe) = &mut self.integrator {
+            fe.kick_drift(dt);
+        }
+        self.wall_s += t0.elapsed().as_secs_f64();
+    }
+
+    fn forces(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<f64, StageError> {
+        let t0 = Instant::now();
+        let next = match &mut self.integrator {
+            Integrator::Explicit(fe) => {
+                Self::explicit_forces(world, &self.file, fe, &mut self.mesh, dt)?
+            }
+            Integrator::Implicit(imp) => {
+                Self::implicit_step(world, &self.file, imp, &mut self.mesh)?;
+                collective::min(world, imp.fe.dt_stable_local)
+            }
+        };
+        self.wall_s += t0.elapsed().as_secs_f64();
+        Ok(next)
+    }
+
+    fn stable_dt(&self, world: &SimpleCommunicator) -> f64 {
+        collective::min(world, self.state().dt_stable_local)
+    }
+
+    fn energies(&self) -> StageEnergies {
+        let e = &self.state().energies;
+        StageEnergies {
+            kinetic: e.kinetic,
+            internal: e.internal,
+            hourglass: e.hourglass,
+            external_work: e.external_work,
+            momentum: e.momentum,
+        }
+    }
+
+    fn wall_s(&self) -> f64 {
+        self.wall_s
+    }
+
+    fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {
+        let fe = self.state();
+        let size = world.size() as f64;
+        let elements = self.mesh.local.global_elems;
+        let steps = report.steps;
+        report.fe = Some(StageStats::reduce(
+            world,
+            self.wall_s,
+            fe.elems.len() as f64,
+            self.mesh.exchange.bytes_sent as f64,
+        ));
+        report.ns_per_element_cycle = Some(if elements > 0 && steps > 0 {
+            loop_s * 1e9 * size / (elements as f64 * steps as f64)
+        } else {
+            0.0
+        });
+        let mem_bytes = collective::sum(world, fe.bytes() as f64);
+        let ex = &mut report.extra;
+        ex.insert(
+            "bytes_per_element".into(),
+            (mem_bytes / elements.max(1) as f64).into(),
+        );
+        let t = fe.timers;
+        ex.insert(
+            "fe_element_kernel_s".into(),
+            collective::max(world, t.elements).into(),
+        );
+        ex.insert(
+            "fe_ghost_exchange_s".into(),
+            collective::max(world, t.exchange).into(),
+        );
+        ex.insert("fe_nodal_s".into(), collective::max(world, t.nodal).into());
+        if let Integrator::Implicit(imp) = &self.integrator {
+            implicit_report(world, imp, report, steps);
+        }
+    }
+}
+
+/// The implicit integrator's counters (the same on every rank: collective solves) and timers
+/// (maxima) in the report.
+fn implicit_report(world: &SimpleCommunicator, imp: &ImplicitFe, report: &mut Report, steps: u64) {
+    let s = imp.stats;
+    let ex = &mut report.extra;
+    ex.insert("newton_iterations".into(), s.newton_iterations.into());
+    ex.insert(
+        "newton_iterations_per_step".into(),
+        (s.newton_iterations as f64 / steps.max(1) as f64).into(),
+    );
+    ex.insert(
+        "newton_iterations_max_step".into(),
+        s.max_step_iterations.into(),
+    );
+    ex.insert("ksp_iterations".into(), s.ksp_iterations.into());
+    ex.insert(
+        "ksp_iterations_per_solve".into(),
+        (s.ksp_iterations as f64 / s.newton_iterations.max(1) as f64).into(),
+    );
+    ex.insert("tangent_assemblies".into(), s.assemblies.into());
+    ex.insert("residual_evaluations".into(), s.residuals.into());
+    ex.insert(
+        "implicit_assembly_s".into(),
+        collective::max(world, s.assembly_s).into(),
+    );
+    ex.insert(
+        "implicit_ksp_s".into(),
+        collective::max(world, s.solve_s).into(),
+    );
+    ex.insert("newton_rtol".into(), imp.options.rtol.into());
+}

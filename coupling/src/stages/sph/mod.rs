@@ -1,19 +1,21 @@
-//! The SPH stage inside a run that also has a mesh (Fig. 3 with both FE and SPH): the stage on
-//! its own RCB decomposition, its global energies and momentum, the work of gravity on the
-//! particles, and what it cost. The driver calls `drift` and `finish` around the contact stage.
+//! The SPH stage (Fig. 3, step 2; Fig. 8): the particles on their own RCB decomposition
+//! (`stage`: rebalance, ghosts, the pairwise passes under the centre-of-interaction rule), built
+//! from the scene (`setup`), with its global energies and momentum, the work of gravity on the
+//! particles, and what it cost. A particle-only run is the same driver with no FE stage.
 pub mod setup;
 pub mod stage;
 
+use super::{Stage, StageEnergies, StageError};
 use crate::input::particles::{self as particles_setup, ParticleIds};
 use crate::input::scene::Scene;
-use crate::output::ParticleFrame;
-use crate::stages::sph::setup::{globals, params_from_scene, particles_from_seeds};
-use crate::stages::sph::stage::SphStage;
+use crate::output::{ParticleFrame, Report, StageStats};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use setup::{globals, params_from_scene, particles_from_seeds};
+use stage::SphStage;
 
-/// The SPH side of a coupled run.
-pub struct SphCtx {
+/// The SPH stage of a run.
+pub struct Sph {
     /// The stage.
     pub stage: SphStage,
     /// Particles over all ranks.
@@ -34,20 +36,20 @@ pub struct SphCtx {
     /// The SPH decomposition's RCB: wall time (max over ranks per call), bytes (all ranks) and
     /// imbalance, summed over steps.
     pub rcb_s: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// The scene file, for messages.
+    file: String,
     /// See `rcb_s`.
     pub rcb_bytes: f64,
     /// See `rcb_s`.
     pub rcb_imbalance_sum: f64,
 }
 
-impl SphCtx {
+impl Sph {
     /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
     /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
-    pub fn new(
-        world: &SimpleCommunicator,
-        scene: &Scene,
-        kept_pairs: bool,
-    ) -> Result<SphCtx, String> {
+    pub fn new(world: &SimpleCommunicator, scene: &Scene, kept_pairs: bool) -> Result<Sph, String> {
         let (params, map) = params_from_scene(scene)?;
         let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
         crate::kernels::collective::first_error(world, seeds.as_ref().err().cloned())?;
@@ -58,7 +60,7 @@ impl SphCtx {
         stage.set_kept_pairs(kept_pairs);
         stage.setup()?;
         let g = globals(world, &stage);
-        Ok(SphCtx {
+        Ok(Sph {
             stage,
             n_total,
             ids,
@@ -70,17 +72,14 @@ impl SphCtx {
             rcb_s: 0.0,
             rcb_bytes: 0.0,
             rcb_imbalance_sum: 0.0,
+            steps: 0,
+            file: scene.file.display().to_string(),
         })
-    }
-
-    /// Kinetic + internal energy of the particles, J.
-    pub fn energy(&self) -> f64 {
-        self.globals[0] + self.globals[1]
     }
 
     /// The rest of the step after the drift and the contact correction (collective): the
     /// stage's passes, then the global sums and the gravity work over the step.
-    pub fn finish(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<(), String> {
+    fn finish(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<(), String> {
         self.stage.finish(dt)?;
         self.wall_s += self.stage.stats.wall_s;
         self.bytes += self.stage.stats.bytes_sent as f64;
@@ -92,6 +91,7 @@ impl SphCtx {
         let g = globals(world, &self.stage);
         self.external_work += 0.5 * (self.globals[5] + g[5]) * dt;
         self.globals = g;
+        self.steps += 1;
         Ok(())
     }
 
@@ -104,6 +104,86 @@ impl SphCtx {
         rank: i32,
     ) -> ParticleFrame<'a> {
         particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank)
+    }
+}
+
+impl Stage for Sph {
+    fn name(&self) -> &'static str {
+        "sph"
+    }
+
+    fn drift(&mut self, dt: f64) {
+        self.stage.drift(dt);
+    }
+
+    fn forces(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<f64, StageError> {
+        self.finish(world, dt)?;
+        if !self.globals.iter().all(|v| v.is_finite()) {
+            return Err(StageError {
+                unstable: true,
+                message: format!(
+                    "{}: the SPH state became non-finite at step {}; reduce run.dt_safety or check the EOS",
+                    self.file, self.steps
+                ),
+            });
+        }
+        Ok(self.stage.stable_dt())
+    }
+
+    fn stable_dt(&self, _world: &SimpleCommunicator) -> f64 {
+        self.stage.stable_dt()
+    }
+
+    fn energies(&self) -> StageEnergies {
+        let g = &self.globals;
+        StageEnergies {
+            kinetic: g[0],
+            internal: g[1],
+            hourglass: 0.0,
+            external_work: self.external_work,
+            momentum: [g[2], g[3], g[4]],
+        }
+    }
+
+    fn wall_s(&self) -> f64 {
+        self.wall_s
+    }
+
+    fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {
+        let size = world.size() as f64;
+        let steps = report.steps.max(1) as f64;
+        let st = StageStats::reduce(world, self.wall_s, self.pairs_local, self.bytes / size);
+        report.sph = Some(StageStats {
+            wall_s: self.wall_s,
+            bytes_sent: self.bytes,
+            ..st
+        });
+        report.rcb = Some(StageStats {
+            wall_s: self.rcb_s,
+            imbalance: self.rcb_imbalance_sum / steps,
+            bytes_sent: self.rcb_bytes,
+        });
+        report.us_per_particle_step =
+            Some(loop_s * size / (self.n_total.max(1) as f64 * steps) * 1e6);
+        let s = &self.stage;
+        let ex = &mut report.extra;
+        ex.insert(
+            "sph_share_of_step".into(),
+            (self.wall_s / loop_s.max(1e-30)).into(),
+        );
+        ex.insert("sph_pairs_last_step".into(), s.stats.pairs.into());
+        // Pair searches run (between them the candidates are kept: sph::KeptPairs), summed
+        // over ranks.
+        ex.insert(
+            "sph_pair_searches".into(),
+            (crate::kernels::collective::sum(world, s.pair_searches as f64) as u64).into(),
+        );
+        ex.insert("sph_ghosts_last_step".into(), s.stats.ghosts.into());
+        ex.insert(
+            "sph_pair_imbalance_last_step".into(),
+            s.stats.pair_imbalance.into(),
+        );
+        ex.insert("rcb_migrated_last_step".into(), s.stats.rcb.migrated.into());
     }
 }
 

@@ -1,0 +1,203 @@
+//! The energy balance: the check that stops a run whose energy error passes
+//! `run.max_energy_error` (SCENE.md), and the watch on each block's hourglass energy.
+use crate::input::scene::Scene;
+use fe_petsc::explicit::ExplicitFe;
+
+/// `run.max_energy_error` is checked from this step on (SCENE.md). The measure is relative to
+/// E(0) + |W_external|: a body starting from rest (E0 = 0) under gravity has, in its first
+/// steps, velocity Verlet's O(dt^2) energy error against energies of round-off size (a steel
+/// block resting on a plate: 9.6e-2 at step 1), while by step 100 the external work dominates
+/// and the ratio is small. Before this step only a blow-up stops the run
+/// ([`EARLY_BLOW_UP_ERROR`]); the non-finite check applies from step 1.
+pub const ENERGY_CHECK_FROM_STEP: u64 = 100;
+
+/// Before [`ENERGY_CHECK_FROM_STEP`], an energy error above this (or above
+/// `run.max_energy_error`, whichever is larger) still stops the run: the energy off by ten
+/// times the run's energy scale E(0) + |W_external| is no start-up transient (measured from
+/// rest: 0.02-0.1 at step 1) but a run blowing up, whose error grows geometrically (a
+/// vibrating bar forced to 3 times its stable step: 0.1, 2.0, 80, 4e3 over steps 1-4, an
+/// element inverted at step 6), and it is better stopped with its cause than by what follows.
+pub const EARLY_BLOW_UP_ERROR: f64 = 10.0;
+
+/// The energy error that stops a run at `step` (see [`ENERGY_CHECK_FROM_STEP`]).
+pub fn energy_error_limit(step: u64, max_energy_error: f64) -> f64 {
+    if step >= ENERGY_CHECK_FROM_STEP {
+        max_energy_error
+    } else {
+        max_energy_error.max(EARLY_BLOW_UP_ERROR)
+    }
+}
+
+/// The hourglass share of a block's internal energy above which the run warns (the field's
+/// guideline: hourglass energy under 10 % of the internal energy).
+const HOURGLASS_WARN_RATIO: f64 = 0.10;
+
+/// A block's internal energy below this fraction of the run's energy scale, E(0) +
+/// |W_external| (the energy error's denominator), is negligible: no hourglass ratio is taken
+/// from it. A block's own initial kinetic energy is no floor (a target plate starts at rest,
+/// with zero), and early on the internal energy of a block the loading has barely reached is
+/// round-off, where hourglass/internal is noise; 1e-30 J keeps the floor positive when the run
+/// starts from rest.
+const HOURGLASS_NEGLIGIBLE: f64 = 1e-6;
+
+/// Each block's hourglass share of its internal energy, watched every step: one warning line
+/// per block the first time it passes [`HOURGLASS_WARN_RATIO`], and the largest ratio for the
+/// report. Every rank holds the same global energies, so every rank agrees; rank 0 prints.
+pub struct HourglassWatch {
+    names: Vec<String>,
+    warned: Vec<bool>,
+    /// Largest ratio, with its time and step (None: never measurable).
+    max: Vec<Option<(f64, f64, u64)>>,
+}
+
+impl HourglassWatch {
+    /// One watch per `[[block]]` of the scene.
+    pub fn new(scene: &Scene) -> Self {
+        Self::with_names(scene.blocks.iter().map(|b| b.group.clone()).collect())
+    }
+
+    fn with_names(names: Vec<String>) -> Self {
+        let n = names.len();
+        HourglassWatch {
+            names,
+            warned: vec![false; n],
+            max: vec![None; n],
+        }
+    }
+
+    /// After a step at `time`, `step`: `scale` is the run's energy scale, E(0) +
+    /// |W_external|. Returns the warning lines to print (each block's first passing).
+    pub fn check(
+        &mut self,
+        time: f64,
+        step: u64,
+        blocks: &[fe_petsc::explicit::BlockEnergy],
+        scale: f64,
+    ) -> Vec<String> {
+        let mut lines = Vec::new();
+        for (b, be) in blocks.iter().enumerate().take(self.names.len()) {
+            if !(be.internal > HOURGLASS_NEGLIGIBLE * scale + 1e-30) {
+                continue;
+            }
+            let ratio = be.hourglass / be.internal;
+            if self.max[b].is_none_or(|(r, _, _)| ratio > r) {
+                self.max[b] = Some((ratio, time, step));
+            }
+            if ratio > HOURGLASS_WARN_RATIO && !self.warned[b] {
+                self.warned[b] = true;
+                lines.push(format!(
+                    "tdyn: warning: block \"{}\": hourglass energy {:.1} % of internal energy at t = {:.3e} s (guideline: under {:.0} %)",
+                    self.names[b],
+                    100.0 * ratio,
+                    time,
+                    100.0 * HOURGLASS_WARN_RATIO
+                ));
+            }
+        }
+        lines
+    }
+
+    /// report.json's `blocks`: per group, the final energies and the largest ratio.
+    pub fn report(&self, fe: &ExplicitFe) -> serde_json::Value {
+        let mut m = serde_json::Map::new();
+        for (b, name) in self.names.iter().enumerate() {
+            let be = fe.block_energies.get(b).copied().unwrap_or_default();
+            let (r, t, step) = match self.max[b] {
+                Some((r, t, s)) => (r.into(), t.into(), s.into()),
+                None => (
+                    serde_json::Value::Null,
+                    serde_json::Value::Null,
+                    serde_json::Value::Null,
+                ),
+            };
+            m.insert(
+                name.clone(),
+                serde_json::json!({
+                    "hourglass_energy": be.hourglass,
+                    "internal_energy": be.internal,
+                    "hourglass_ratio_max": r,
+                    "hourglass_ratio_max_time": t,
+                    "hourglass_ratio_max_step": step,
+                    "hourglass_warning": self.warned[b],
+                }),
+            );
+        }
+        serde_json::Value::Object(m)
+    }
+}
+
+/// What the stop message adds before step 100 (checked from there; earlier only a blow-up).
+pub fn early_note(step: u64) -> String {
+    if step < ENERGY_CHECK_FROM_STEP {
+        format!(
+            " (checked from step {ENERGY_CHECK_FROM_STEP}; before it only an error over {EARLY_BLOW_UP_ERROR} stops a run)"
+        )
+    } else {
+        String::new()
+    }
+}
+
+/// Relative energy error (SCENE.md): |E - E0 - W| / (|E0| + |W|), with E the total energy
+/// (kinetic, internal, hourglass, contact), E0 its value at t = 0 and W the external work.
+pub fn energy_error(e: f64, e0: f64, w: f64) -> f64 {
+    (e - e0 - w).abs() / (e0.abs() + w.abs()).max(1e-30)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fe_petsc::explicit::BlockEnergy;
+
+    #[allow(clippy::field_reassign_with_default)]
+    fn be(internal: f64, hourglass: f64) -> BlockEnergy {
+        let mut b = BlockEnergy::default();
+        b.internal = internal;
+        b.hourglass = hourglass;
+        b
+    }
+
+    /// SCENE.md: max_energy_error from step 100; before it only a blow-up (an error over 10,
+    /// or over max_energy_error when that is larger).
+    #[test]
+    fn energy_error_limit_from_step_100() {
+        assert_eq!(energy_error_limit(0, 0.05), EARLY_BLOW_UP_ERROR);
+        assert_eq!(energy_error_limit(99, 0.05), EARLY_BLOW_UP_ERROR);
+        assert_eq!(energy_error_limit(100, 0.05), 0.05);
+        assert_eq!(energy_error_limit(5, 20.0), 20.0);
+    }
+
+    /// The warning rule by hand: block "wall" passes 10 % (12.3 %) at step 3 and is warned
+    /// once; block "ball" stays at 5 %; a ratio of 50 % on a negligible internal energy (1e-9 J
+    /// against an energy scale of 100 J: below 1e-6 of it) is neither warned nor reported.
+    #[test]
+    fn hourglass_warning_once_per_block_and_not_on_negligible_energy() {
+        let mut w = HourglassWatch::with_names(vec!["wall".into(), "ball".into()]);
+        let scale = 100.0;
+        let steps = [
+            [be(1e-9, 5e-10), be(1.0, 0.05)],
+            [be(2.0, 0.1), be(2.0, 0.1)],
+            [be(10.0, 1.23), be(3.0, 0.15)],
+            [be(10.0, 2.0), be(3.0, 0.15)],
+            [be(20.0, 1.0), be(3.0, 0.15)],
+        ];
+        let mut lines = Vec::new();
+        for (k, b) in steps.iter().enumerate() {
+            lines.extend(w.check(1.0e-5 * k as f64, k as u64, b, scale));
+        }
+        assert_eq!(lines.len(), 1, "one warning (wall), said once: {lines:?}");
+        assert_eq!(
+            lines[0],
+            "tdyn: warning: block \"wall\": hourglass energy 12.3 % of internal energy at t = 2.000e-5 s (guideline: under 10 %)"
+        );
+        let (r, t, step) = w.max[0].unwrap();
+        assert!(
+            (r - 0.2).abs() < 1e-15 && step == 3 && (t - 3e-5).abs() < 1e-20,
+            "wall's largest ratio 2/10 at step 3"
+        );
+        assert!(
+            (w.max[1].unwrap().0 - 0.05).abs() < 1e-15,
+            "ball's largest ratio 5 %"
+        );
+        assert!(!w.warned[1]);
+    }
+}

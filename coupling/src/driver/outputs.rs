@@ -1,0 +1,299 @@
+//! The run's files while it runs (SCENE.md "Output"): `fields.h5` + `fields.xmf` frames of
+//! every stage, `history.csv` rows summed over the stages, `probes.csv`, particle dumps.
+use super::setup::Model;
+use crate::input::scene::Scene;
+use crate::output::{
+    write_particle_dump, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
+};
+use crate::stages::StageEnergies;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The columns history.csv writes as integers (SCENE.md).
+pub const HISTORY_INTEGER_COLUMNS: [&str; 2] = ["step", "contacts"];
+
+/// Columns of history.csv, in order (SCENE.md).
+pub const HISTORY_COLUMNS: [&str; 13] = [
+    "step",
+    "time",
+    "dt",
+    "kinetic_energy",
+    "internal_energy",
+    "hourglass_energy",
+    "external_work",
+    "contact_energy",
+    "energy_error",
+    "momentum_x",
+    "momentum_y",
+    "momentum_z",
+    "contacts",
+];
+
+/// Columns history.csv adds after [`HISTORY_COLUMNS`] in a run with contact: the search's
+/// balance (max/mean over ranks of owned nodes + faces held) and the bytes the stage sent point
+/// to point (all ranks, RCB included), both of the step.
+pub const CONTACT_HISTORY_COLUMNS: [&str; 2] = ["contact_imbalance", "contact_bytes"];
+
+/// history.csv's per-block columns, after the SCENE.md ones: `hourglass_energy.<group>` and
+/// `internal_energy.<group>` for each `[[block]]` in scene order.
+pub fn block_history_columns(scene: &Scene) -> Vec<String> {
+    scene
+        .blocks
+        .iter()
+        .flat_map(|b| {
+            [
+                format!("hourglass_energy.{}", b.group),
+                format!("internal_energy.{}", b.group),
+            ]
+        })
+        .collect()
+}
+
+/// The mesh's output layout on this rank: owned nodes and their ids, element connectivity by
+/// node id (fixed for the run).
+struct MeshLayout {
+    owned_nodes: Vec<usize>,
+    node_ids: Vec<u64>,
+    conn_ids: Vec<[u64; 8]>,
+    rank_field: Vec<i32>,
+}
+
+/// The open output files of a run.
+pub struct Outputs {
+    writer: FieldWriter,
+    history: History,
+    probes: History,
+    mesh: Option<MeshLayout>,
+    particle_ranks: Vec<i32>,
+    particle_labels: Vec<u64>,
+    dump_dir: PathBuf,
+    dump_every: u64,
+    rank: i32,
+    /// Time spent writing (this rank), s.
+    pub wall_s: f64,
+}
+
+impl Outputs {
+    /// Creates the output folder and files (collective).
+    pub fn create(
+        world: &SimpleCommunicator,
+        out_dir: &Path,
+        scene: &Scene,
+        model: &Model,
+    ) -> Result<Outputs, String> {
+        let rank = world.rank();
+        let mut err = None;
+        if rank == 0 {
+            if let Err(e) = std::fs::create_dir_all(out_dir) {
+                err = Some(format!(
+                    "cannot create output directory {}: {e}",
+                    out_dir.display()
+                ));
+            }
+        }
+        crate::kernels::collective::first_error(world, err)?;
+        let mesh = model.fe.as_ref().map(|fe| {
+            let (l, st) = (&fe.mesh.local, fe.state());
+            let owned_nodes: Vec<usize> = (0..st.n_nodes()).filter(|&n| st.owned[n]).collect();
+            MeshLayout {
+                node_ids: owned_nodes.iter().map(|&n| l.node_id[n]).collect(),
+                owned_nodes,
+                conn_ids: st
+                    .elems
+                    .iter()
+                    .map(|c| std::array::from_fn(|k| l.node_id[c[k] as usize]))
+                    .collect(),
+                rank_field: vec![rank; st.elems.len()],
+            }
+        });
+        let counts = GlobalCounts {
+            nodes: model.fe.as_ref().map_or(0, |f| f.mesh.local.global_nodes),
+            elements: model.fe.as_ref().map_or(0, |f| f.mesh.local.global_elems),
+            particles: model.sph.as_ref().map_or(0, |s| s.n_total),
+        };
+        let writer = FieldWriter::create(world, out_dir, counts, &scene.output.fields)
+            .map_err(|e| format!("{}: {e}", out_dir.display()))?;
+        let mut cols: Vec<String> = HISTORY_COLUMNS.iter().map(|c| c.to_string()).collect();
+        if model.contact.is_some() {
+            cols.extend(CONTACT_HISTORY_COLUMNS.iter().map(|c| c.to_string()));
+        }
+        if model.fe.is_some() {
+            cols.extend(block_history_columns(scene));
+        }
+        let cols: Vec<&str> = cols.iter().map(|c| c.as_str()).collect();
+        let history = History::create(world, &out_dir.join("history.csv"), &cols)
+            .map_err(|e| e.to_string())?
+            .integer_columns(&HISTORY_INTEGER_COLUMNS);
+        let mut probe_cols = vec!["time".to_string()];
+        probe_cols.extend(model.probes.columns.iter().cloned());
+        let probe_cols: Vec<&str> = probe_cols.iter().map(|s| s.as_str()).collect();
+        let probes = History::create(world, &out_dir.join("probes.csv"), &probe_cols)
+            .map_err(|e| e.to_string())?;
+        Ok(Outputs {
+            writer,
+            history,
+            probes,
+            mesh,
+            particle_ranks: Vec::new(),
+            particle_labels: Vec::new(),
+            dump_dir: out_dir.join("dumps"),
+            dump_every: if model.sph.is_some() {
+                scene.output.dump_every
+            } else {
+                0
+            },
+            rank,
+            wall_s: 0.0,
+        })
+    }
+
+    /// Writes a frame of every stage at `time` (collective).
+    pub fn frame(&mut self, time: f64, model: &Model) -> Result<(), String> {
+        let t0 = Instant::now();
+        let mesh_data = match (&self.mesh, &model.fe) {
+            (Some(m), Some(fe)) => {
+                let st = fe.state();
+                let pos: Vec<[f64; 3]> = m.owned_nodes.iter().map(|&n| st.x[n]).collect();
+                let disp: Vec<[f64; 3]> = m
+                    .owned_nodes
+                    .iter()
+                    .map(|&n| std::array::from_fn(|c| st.x[n][c] - st.x0[n][c]))
+                    .collect();
+                let vel: Vec<[f64; 3]> = m.owned_nodes.iter().map(|&n| st.v[n]).collect();
+                let stress: Vec<[f64; 6]> = st.state.iter().map(|s| s.stress).collect();
+                let eps: Vec<f64> = (0..st.elems.len()).map(|e| st.plastic_strain(e)).collect();
+                Some((m, st, pos, disp, vel, stress, eps))
+            }
+            _ => None,
+        };
+        let nodes = mesh_data
+            .as_ref()
+            .map(|(m, _, pos, disp, vel, _, _)| NodeFrame {
+                ids: &m.node_ids,
+                position: pos,
+                displacement: Some(disp),
+                velocity: Some(vel),
+            });
+        let elems = mesh_data
+            .as_ref()
+            .map(|(m, st, _, _, _, stress, eps)| ElementFrame {
+                ids: &st.elem_id,
+                connectivity: &m.conn_ids,
+                stress: Some(stress),
+                plastic_strain: Some(eps),
+                pressure: Some(&st.pressure),
+                rank: Some(&m.rank_field),
+            });
+        let rank = self.rank;
+        let parts = model
+            .sph
+            .as_ref()
+            .map(|s| s.frame(&mut self.particle_ranks, &mut self.particle_labels, rank));
+        self.writer
+            .write_frame(time, nodes.as_ref(), elems.as_ref(), parts.as_ref())
+            .map_err(|e| format!("writing fields.h5: {e}"))?;
+        self.wall_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Writes a particle dump of step `step` when one is due (`output.dump_every`; always at
+    /// the end); collective.
+    pub fn dump(
+        &mut self,
+        world: &SimpleCommunicator,
+        step: u64,
+        last: bool,
+        model: &Model,
+    ) -> Result<(), String> {
+        let Some(s) = &model.sph else { return Ok(()) };
+        if self.dump_every == 0 || !(step.is_multiple_of(self.dump_every) || last) {
+            return Ok(());
+        }
+        let t0 = Instant::now();
+        write_particle_dump(world, &self.dump_dir, step, &s.stage.parts, &s.ids)
+            .map_err(|e| format!("{}: {e}", self.dump_dir.display()))?;
+        self.wall_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// A history.csv row and a probes.csv row (collective: the probes are sampled on every
+    /// rank).
+    pub fn rows(
+        &mut self,
+        world: &SimpleCommunicator,
+        model: &Model,
+        row: &HistoryRow,
+    ) -> Result<(), String> {
+        self.history_row(model, row)?;
+        let mut pr = vec![row.time];
+        pr.extend(model.probes.sample(
+            world,
+            model.fe.as_ref().map(|f| f.state()),
+            model.sph.as_ref().map(|s| &s.stage),
+        ));
+        self.probes.row(&pr).map_err(|e| e.to_string())
+    }
+
+    /// Only the history.csv row (the row before a run stops), flushed.
+    pub fn history_row(&mut self, model: &Model, row: &HistoryRow) -> Result<(), String> {
+        let e = &row.energies;
+        let mut r = vec![
+            row.step as f64,
+            row.time,
+            row.dt,
+            e.kinetic,
+            e.internal,
+            e.hourglass,
+            e.external_work,
+            model.contact.as_ref().map_or(0.0, |c| c.energy),
+            row.energy_error,
+            e.momentum[0],
+            e.momentum[1],
+            e.momentum[2],
+            model
+                .contact
+                .as_ref()
+                .map_or(0.0, |c| c.stats.contacts as f64),
+        ];
+        if let Some(c) = &model.contact {
+            r.extend(c.history_columns());
+        }
+        if let Some(fe) = &model.fe {
+            for b in &fe.state().block_energies {
+                r.extend([b.hourglass, b.internal]);
+            }
+        }
+        self.history.row(&r).map_err(|e| e.to_string())
+    }
+
+    /// Flushes history.csv (before a run stops with an error).
+    pub fn flush(&mut self) {
+        let _ = self.history.flush();
+        let _ = self.probes.flush();
+    }
+
+    /// Closes the files; returns the bytes of fields.h5 this rank wrote.
+    pub fn finish(mut self) -> Result<u64, String> {
+        let written = self.writer.bytes_written();
+        self.writer.finish().map_err(|e| e.to_string())?;
+        self.history.flush().map_err(|e| e.to_string())?;
+        self.probes.flush().map_err(|e| e.to_string())?;
+        Ok(written)
+    }
+}
+
+/// What one history.csv row says besides the stages' own columns.
+pub struct HistoryRow {
+    /// Step number.
+    pub step: u64,
+    /// Time, s.
+    pub time: f64,
+    /// The step just taken (at step 0 the first one), s.
+    pub dt: f64,
+    /// Energies and momentum summed over the stages.
+    pub energies: StageEnergies,
+    /// The relative energy error.
+    pub energy_error: f64,
+}

@@ -1,0 +1,140 @@
+//! What rank 0 says while a run runs (stderr): a start line (what runs, the step, the steps
+//! expected), then progress: on a terminal one line redrawn in place, otherwise (under `mpirun`
+//! with output to a file or a pipe, a batch job) a line every [`LOG_EVERY_S`] seconds.
+//!
+//! Written here rather than with `indicatif`: the solver library prints two kinds of plain
+//! lines and should not pull a terminal crate into every program that links it.
+use std::io::{IsTerminal, Write};
+use std::time::Instant;
+
+/// Seconds between progress lines when stderr is not a terminal.
+pub const LOG_EVERY_S: f64 = 10.0;
+
+/// Seconds between redraws on a terminal.
+const REDRAW_EVERY_S: f64 = 0.2;
+
+/// More steps than this expected at the start is almost always a unit slip (a density in
+/// t/mm^3 read as kg/m^3 gives a step a million times too small): the start line warns.
+pub const STEPS_WARNING: f64 = 1e7;
+
+/// What the start line says.
+pub struct StartInfo<'a> {
+    /// The scene file.
+    pub scene: &'a str,
+    /// Elements, nodes and particles over all ranks.
+    pub elements: u64,
+    /// See `elements`.
+    pub nodes: u64,
+    /// See `elements`.
+    pub particles: u64,
+    /// The stages that run, in order.
+    pub stages: &'a [&'a str],
+    /// Ranks.
+    pub ranks: i32,
+    /// The explicit stable step at t = 0 and the first step taken, s.
+    pub dt_stable: f64,
+    /// See `dt_stable`.
+    pub dt: f64,
+    /// The end time, s.
+    pub end_time: f64,
+}
+
+/// The progress reporter of rank 0 (inactive elsewhere and with `--quiet`).
+pub struct Progress {
+    active: bool,
+    terminal: bool,
+    t0: Instant,
+    last: f64,
+    drawn: bool,
+}
+
+impl Progress {
+    /// Prints the start line (and the units warning) when `active`.
+    pub fn start(active: bool, info: &StartInfo) -> Progress {
+        let p = Progress {
+            active,
+            terminal: std::io::stderr().is_terminal(),
+            t0: Instant::now(),
+            last: 0.0,
+            drawn: false,
+        };
+        if active {
+            let steps = info.end_time / info.dt;
+            eprintln!(
+                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s, about {} steps to {:.3e} s",
+                info.scene,
+                info.elements,
+                info.nodes,
+                info.particles,
+                info.ranks,
+                if info.ranks == 1 { "" } else { "s" },
+                info.stages.join(", "),
+                info.dt_stable,
+                info.dt,
+                steps_text(steps),
+                info.end_time
+            );
+            if steps > STEPS_WARNING {
+                eprintln!(
+                    "tdyn: warning: about {} steps expected (dt = {:.3e} s): check the scene's units (SI: m, kg, s, Pa, kg/m^3; a density of 7.85e-9 is steel in t/mm^3)",
+                    steps_text(steps),
+                    info.dt
+                );
+            }
+        }
+        p
+    }
+
+    /// After a step: redraws or logs when due.
+    pub fn update(&mut self, step: u64, time: f64, fraction: f64, dt: f64, energy_error: f64) {
+        if !self.active {
+            return;
+        }
+        let el = self.t0.elapsed().as_secs_f64();
+        let every = if self.terminal {
+            REDRAW_EVERY_S
+        } else {
+            LOG_EVERY_S
+        };
+        if el - self.last < every {
+            return;
+        }
+        self.last = el;
+        let eta = if fraction > 0.0 {
+            format!("{:.0} s", el * (1.0 - fraction) / fraction)
+        } else {
+            "?".into()
+        };
+        let line = format!(
+            "tdyn: step {step}, t = {time:.4e} s ({:.1} %), dt = {dt:.3e} s, energy error {energy_error:.2e}, elapsed {el:.0} s, ETA {eta}",
+            100.0 * fraction
+        );
+        let mut e = std::io::stderr().lock();
+        if self.terminal {
+            let _ = write!(e, "\r{line}\x1b[K");
+            self.drawn = true;
+        } else {
+            let _ = writeln!(e, "{line}");
+        }
+        let _ = e.flush();
+    }
+
+    /// Ends the redrawn line (a terminal) so that what follows starts on its own line.
+    pub fn finish(&mut self) {
+        if self.active && self.drawn {
+            eprint!("\r\x1b[K");
+            self.drawn = false;
+        }
+    }
+}
+
+/// A step count for people: "1200", "3.4e7".
+fn steps_text(steps: f64) -> String {
+    if !steps.is_finite() {
+        "infinitely many".into()
+    } else if steps < 1e6 {
+        format!("{:.0}", steps.ceil())
+    } else {
+        format!("{steps:.2e}")
+    }
+}

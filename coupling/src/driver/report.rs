@@ -1,0 +1,111 @@
+//! report.json at the end of a run (SCENE.md): the counts, each stage's section (written by the
+//! stage), the output's cost, the energy balance, and the run's timing.
+use super::energy::HourglassWatch;
+use super::setup::Model;
+use crate::input::scene::{Mode, Scene};
+use crate::kernels::collective;
+use crate::output::{Report, StageStats};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::path::Path;
+
+/// The run-wide figures the report needs besides the stages'.
+pub struct RunFigures<'a> {
+    /// Steps taken.
+    pub steps: u64,
+    /// Whole run, time loop without output, set-up (max over ranks), s.
+    pub wall_s: f64,
+    /// See `wall_s`.
+    pub loop_s: f64,
+    /// See `wall_s`.
+    pub setup_s: f64,
+    /// Output time and bytes of fields.h5 on this rank.
+    pub output_s: f64,
+    /// See `output_s`.
+    pub output_bytes: u64,
+    /// The largest energy error, and the largest from step 100 on (the checked one).
+    pub energy_error_max: f64,
+    /// See `energy_error_max`.
+    pub energy_error_max_checked: f64,
+    /// The explicit stable step at t = 0 and the smallest step taken, s.
+    pub dt_stable_initial: f64,
+    /// See `dt_stable_initial`.
+    pub dt_min: f64,
+    /// The blocks' hourglass watch.
+    pub hourglass: &'a HourglassWatch,
+}
+
+/// Writes `<out_dir>/report.json` (collective; rank 0 writes).
+pub fn write(
+    world: &SimpleCommunicator,
+    out_dir: &Path,
+    scene: &Scene,
+    model: &Model,
+    f: &RunFigures,
+) -> Result<(), String> {
+    let size = world.size();
+    let fe_mesh = model.fe.as_ref().map(|fe| &fe.mesh.local);
+    let mut report = Report::new(
+        size as usize,
+        fe_mesh.map_or(0, |l| l.global_elems),
+        fe_mesh.map_or(0, |l| l.global_nodes),
+        model.sph.as_ref().map_or(0, |s| s.n_total),
+        f.steps,
+        f.wall_s,
+    );
+    let mut skipped = serde_json::Map::new();
+    for stage in model.stages() {
+        report.stages_run.push(stage.name().into());
+        stage.report(world, &mut report, f.loop_s);
+    }
+    if model.fe.is_none() {
+        skipped.insert("fe".into(), "no [[mesh]]".into());
+    }
+    if model.sph.is_none() {
+        skipped.insert("sph".into(), "no [[particles]]".into());
+    }
+    match &model.contact {
+        Some(c) => {
+            report.stages_run.push("contact".into());
+            c.report(world, &mut report, f.loop_s);
+        }
+        None => {
+            skipped.insert("contact".into(), "no [contact]".into());
+        }
+    }
+    report.output = Some(StageStats::reduce(
+        world,
+        f.output_s,
+        f.output_bytes as f64,
+        f.output_bytes as f64,
+    ));
+    report.energy_error_max = f.energy_error_max;
+    let ex = &mut report.extra;
+    ex.insert("stages_skipped".into(), serde_json::Value::Object(skipped));
+    ex.insert(
+        "energy_error_max_checked".into(),
+        f.energy_error_max_checked.into(),
+    );
+    if let Some(fe) = &model.fe {
+        ex.insert("blocks".into(), f.hourglass.report(fe.state()));
+    }
+    ex.insert("title".into(), scene.title.clone().into());
+    ex.insert(
+        "mode".into(),
+        match scene.run.mode {
+            Mode::Explicit => "explicit",
+            Mode::Implicit => "implicit",
+        }
+        .into(),
+    );
+    ex.insert("dt_stable_initial".into(), f.dt_stable_initial.into());
+    ex.insert("dt_min".into(), f.dt_min.into());
+    ex.insert("setup_s".into(), collective::max(world, f.setup_s).into());
+    ex.insert("loop_s".into(), f.loop_s.into());
+    if world.rank() == 0 {
+        report
+            .write(&out_dir.join("report.json"))
+            .map_err(|e| format!("report.json: {e}"))?;
+    }
+    Ok(())
+}

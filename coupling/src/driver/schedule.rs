@@ -1,0 +1,129 @@
+//! The run's clock: when the run ends, the size of the next step, and when a history row or a
+//! field frame is due (SCENE.md: at t >= k * every - 1e-6 dt, and at the end).
+use crate::input::scene::Scene;
+
+/// Tolerance on frame and row times, in steps (SCENE.md: t >= k * every - 1e-6 dt).
+pub const TIME_EPS_STEPS: f64 = 1e-6;
+
+/// The clock of a run.
+pub struct Clock {
+    /// Steps taken.
+    pub step: u64,
+    /// Time, s. With a fixed step t = step * dt exactly.
+    pub time: f64,
+    /// The next step's size, s.
+    pub dt: f64,
+    /// The smallest step taken, s.
+    pub dt_min: f64,
+    end: f64,
+    fixed_dt: Option<f64>,
+    dt_safety: f64,
+    output_every: f64,
+    history_every: f64,
+    next_frame: u64,
+    next_row: u64,
+}
+
+impl Clock {
+    /// At t = 0, with the first step from the scene's fixed `run.dt` or the safety factor times
+    /// the stable step `stable0`.
+    pub fn new(scene: &Scene, stable0: f64) -> Clock {
+        let end = scene.run.end_time;
+        Clock {
+            step: 0,
+            time: 0.0,
+            dt: scene.run.dt.unwrap_or(scene.run.dt_safety * stable0),
+            dt_min: f64::INFINITY,
+            end,
+            fixed_dt: scene.run.dt,
+            dt_safety: scene.run.dt_safety,
+            output_every: scene.run.output_every.unwrap_or(end),
+            history_every: scene.run.history_every,
+            next_frame: 1,
+            next_row: 1,
+        }
+    }
+
+    /// The size of the next step, clipped onto the end time, or `None` when the run is over.
+    pub fn next_step(&mut self) -> Option<f64> {
+        match self.fixed_dt {
+            Some(d) => {
+                if (self.step as f64) * d >= self.end - TIME_EPS_STEPS * d {
+                    return None;
+                }
+                self.dt = d;
+            }
+            None => {
+                let remaining = self.end - self.time;
+                if remaining <= TIME_EPS_STEPS * self.dt {
+                    return None;
+                }
+                self.dt = self.dt.min(remaining);
+            }
+        }
+        self.dt_min = self.dt_min.min(self.dt);
+        Some(self.dt)
+    }
+
+    /// After a step of `self.dt`: the step count and the time.
+    pub fn advance(&mut self) {
+        self.step += 1;
+        self.time = match self.fixed_dt {
+            Some(d) => self.step as f64 * d,
+            None => self.time + self.dt,
+        };
+    }
+
+    /// Whether the fixed step keeps the time (t = step * dt).
+    pub fn fixed(&self) -> bool {
+        self.fixed_dt.is_some()
+    }
+
+    /// The next step from the stable step `stable` the stages proposed (unless fixed).
+    pub fn propose(&mut self, stable: f64) {
+        if self.fixed_dt.is_none() {
+            self.dt = self.dt_safety * stable;
+        }
+    }
+
+    /// The end time is reached.
+    pub fn at_end(&self) -> bool {
+        self.time >= self.end - TIME_EPS_STEPS * self.dt
+    }
+
+    /// The fraction of the end time reached.
+    pub fn fraction(&self) -> f64 {
+        (self.time / self.end).clamp(0.0, 1.0)
+    }
+
+    /// The end time, s.
+    pub fn end(&self) -> f64 {
+        self.end
+    }
+
+    /// Whether a history row is due now (then the next one is scheduled).
+    pub fn row_due(&mut self) -> bool {
+        let every = self.history_every;
+        let eps = TIME_EPS_STEPS * self.dt;
+        let due = every <= 0.0 || self.time >= every * self.next_row as f64 - eps || self.at_end();
+        if due && every > 0.0 {
+            while every * self.next_row as f64 <= self.time + eps {
+                self.next_row += 1;
+            }
+        }
+        due
+    }
+
+    /// Whether a field frame is due now (then the next one is scheduled).
+    pub fn frame_due(&mut self) -> bool {
+        let every = self.output_every;
+        let eps = TIME_EPS_STEPS * self.dt;
+        let due = self.time >= every * self.next_frame as f64 - eps || self.at_end();
+        if due {
+            while every * self.next_frame as f64 <= self.time + eps {
+                self.next_frame += 1;
+            }
+        }
+        due
+    }
+}

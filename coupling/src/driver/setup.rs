@@ -1,0 +1,224 @@
+//! From a scene to the stages it needs (DESIGN.md "Model no more than a scene needs"): the
+//! mesh (gmsh on rank 0, METIS distribution) and the FE stage when the scene has meshes, the SPH
+//! stage when it has particles, the contact stage when it has `[contact]`, and the probes.
+use super::{Algorithms, RunFailure};
+use crate::driver::probes::Probes;
+use crate::input::gmsh;
+use crate::input::scene::{self, Mode, Scene};
+use crate::kernels::collective::first_error;
+use crate::stages::contact::{Contact, SearchChoice};
+use crate::stages::fe::{setup::Groups, Fe};
+use crate::stages::sph::Sph;
+use crate::stages::Stage;
+use fe_petsc::mesh::DistributedMesh;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::path::{Path, PathBuf};
+
+/// The stages of a run, and its probes.
+pub struct Model {
+    /// The FE stage (a scene with meshes).
+    pub fe: Option<Fe>,
+    /// The SPH stage (a scene with `[[particles]]`).
+    pub sph: Option<Sph>,
+    /// The contact stage (a scene with `[contact]`).
+    pub contact: Option<Contact>,
+    /// The probes, located.
+    pub probes: Probes,
+}
+
+impl Model {
+    /// The stages that move material, in the order of Fig. 3 (FE, then SPH).
+    pub fn stages(&self) -> Vec<&dyn Stage> {
+        let mut v: Vec<&dyn Stage> = Vec::new();
+        if let Some(fe) = &self.fe {
+            v.push(fe);
+        }
+        if let Some(s) = &self.sph {
+            v.push(s);
+        }
+        v
+    }
+
+    /// See [`Model::stages`].
+    pub fn stages_mut(&mut self) -> Vec<&mut dyn Stage> {
+        let mut v: Vec<&mut dyn Stage> = Vec::new();
+        if let Some(fe) = &mut self.fe {
+            v.push(fe);
+        }
+        if let Some(s) = &mut self.sph {
+            v.push(s);
+        }
+        v
+    }
+
+    /// The explicit stable step of the present state over all stages (collective).
+    pub fn stable_dt(&self, world: &SimpleCommunicator) -> f64 {
+        self.stages()
+            .iter()
+            .map(|s| s.stable_dt(world))
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Refuses the combinations of stages and modes that do not exist, naming the key.
+pub fn check_scene(scene: &Scene) -> Result<(), String> {
+    let file = scene.file.display();
+    let implicit = scene.run.mode == Mode::Implicit;
+    if implicit && !scene.particles.is_empty() {
+        return Err(format!(
+            "{file}: run.mode: the SPH stage is explicit only; use mode = \"explicit\" or remove the [[particles]] tables"
+        ));
+    }
+    if implicit {
+        if let Some(b) = scene.blocks.iter().find(|b| {
+            scene
+                .materials
+                .iter()
+                .any(|m| m.name == b.material && m.model == "fluid")
+        }) {
+            return Err(format!(
+                "{file}: run.mode: block \"{}\" is meshed with the fluid material \"{}\", which is explicit only (its stress is a function of the density, with no strain tangent); use mode = \"explicit\"",
+                b.group, b.material
+            ));
+        }
+    }
+    if scene.contact.is_some() && implicit {
+        return Err(format!(
+            "{file}: contact: the contact stage runs in explicit mode only; use mode = \"explicit\" or remove the [contact] table"
+        ));
+    }
+    if scene.contact.is_some() && scene.meshes.is_empty() {
+        return Err(format!(
+            "{file}: mesh: the contact stage needs mesh faces: a scene of particles only cannot have a [contact] table"
+        ));
+    }
+    if implicit && scene.run.dt.is_none() {
+        return Err(format!(
+            "{file}: run.dt: mode = \"implicit\" needs a fixed step run.dt (seconds)"
+        ));
+    }
+    Ok(())
+}
+
+/// Builds the stages the scene needs (collective; every rank returns the same error).
+pub fn build(
+    world: &SimpleCommunicator,
+    scene: &Scene,
+    algorithms: &Algorithms,
+) -> Result<Model, RunFailure> {
+    let file = scene.file.display().to_string();
+    let (fe, groups) = if scene.meshes.is_empty() {
+        (None, Groups::default())
+    } else {
+        let (mesh, groups) = load_mesh(world, scene)?;
+        let implicit_dt = (scene.run.mode == Mode::Implicit)
+            .then_some(scene.run.dt)
+            .flatten();
+        (
+            Some(Fe::new(world, scene, &groups, mesh, implicit_dt)?),
+            groups,
+        )
+    };
+    let sph = if scene.particles.is_empty() {
+        None
+    } else {
+        Some(Sph::new(world, scene, algorithms.sph_kept_pairs)?)
+    };
+    let probes = Probes::locate(
+        world,
+        &file,
+        &scene.probes,
+        fe.as_ref().map(|f| f.state()),
+        sph.is_some(),
+    )?;
+    let contact = match (&scene.contact, &fe) {
+        (Some(def), Some(fe)) => Some(Contact::new(
+            world,
+            &file,
+            def,
+            &groups,
+            fe,
+            sph.is_some(),
+            SearchChoice {
+                static_decomposition: algorithms.contact_static,
+                kept: algorithms.contact_kept,
+                skins: algorithms.contact_skins,
+            },
+        )?),
+        _ => None,
+    };
+    Ok(Model {
+        fe,
+        sph,
+        contact,
+        probes,
+    })
+}
+
+/// Meshes the scene's `.geo` files on rank 0 (gmsh, cached; several meshes merged, each moved
+/// by its translation), checks the physical groups the scene names, and distributes the mesh
+/// (collective).
+fn load_mesh(
+    world: &SimpleCommunicator,
+    scene: &Scene,
+) -> Result<(DistributedMesh, Groups), RunFailure> {
+    let file = scene.file.display().to_string();
+    let mut mesh_path = PathBuf::new();
+    let mut err = None;
+    if world.rank() == 0 {
+        match mesh_on_root(scene) {
+            Ok(p) => mesh_path = p,
+            Err(e) => err = Some(format!("{file}: {e}")),
+        }
+    }
+    first_error(world, err)?;
+    let mut buf = mesh_path.to_string_lossy().into_owned().into_bytes();
+    let mut len = buf.len() as u64;
+    world.process_at_rank(0).broadcast_into(&mut len);
+    buf.resize(len as usize, 0);
+    world.process_at_rank(0).broadcast_into(&mut buf[..]);
+    let mesh_path = PathBuf::from(String::from_utf8_lossy(&buf).into_owned());
+    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
+    let mut groups = Groups::default();
+    for n in &names {
+        match n.dim {
+            3 => {
+                groups.volumes.insert(n.name.clone(), n.tag);
+            }
+            2 => {
+                groups.surfaces.insert(n.name.clone(), n.tag);
+            }
+            _ => {}
+        }
+    }
+    let vols: Vec<String> = groups.volumes.keys().cloned().collect();
+    let surfs: Vec<String> = groups.surfaces.keys().cloned().collect();
+    scene::validate_groups(scene, &vols, &surfs).map_err(|e| e.to_string())?;
+    let mut dm =
+        DistributedMesh::load(world, &mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
+    // One mesh is moved here; several were moved when merged.
+    let tr = scene.meshes[0].translate;
+    if scene.meshes.len() == 1 && tr != [0.0; 3] {
+        for x in dm.local.coords.iter_mut() {
+            for c in 0..3 {
+                x[c] += tr[c];
+            }
+        }
+    }
+    Ok((dm, groups))
+}
+
+/// The `.msh` of the scene's meshes, meshed and merged on rank 0.
+fn mesh_on_root(scene: &Scene) -> Result<PathBuf, String> {
+    let mut parts = Vec::new();
+    for (i, m) in scene.meshes.iter().enumerate() {
+        let cache = gmsh::default_cache_dir(m.file.parent().unwrap_or(Path::new(".")));
+        let p = gmsh::mesh_file(m, &cache).map_err(|e| format!("mesh[{i}]: {e}"))?;
+        parts.push((p, m.translate));
+    }
+    if parts.len() == 1 {
+        return Ok(parts.remove(0).0);
+    }
+    gmsh::merge(&parts, &gmsh::default_cache_dir(&scene.dir)).map_err(|e| format!("mesh: {e}"))
+}
