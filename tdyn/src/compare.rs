@@ -127,7 +127,20 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
         });
     }
     if modes.is_empty() {
-        return Err("--modes: expected at least one of explicit, implicit".into());
+        // Both modes where the scene can run implicitly; explicit alone otherwise (particles,
+        // contact, a meshed fluid: explicit only), said once.
+        modes.push(Mode::Explicit);
+        let mut implicit = scene.clone();
+        implicit.run.mode = Mode::Implicit;
+        implicit.run.dt = Some(implicit.run.end_time);
+        match driver::setup::check_scene(&implicit) {
+            Ok(()) => modes.push(Mode::Implicit),
+            Err(why) => {
+                if world.rank() == 0 && !opts.quiet {
+                    println!("tdyn compare: explicit only: {why}");
+                }
+            }
+        }
     }
     let factors = opts
         .dt_factors

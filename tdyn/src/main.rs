@@ -150,8 +150,9 @@ enum Cmd {
     Compare {
         /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
         scene: PathBuf,
-        /// Modes to run, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "explicit,implicit")]
+        /// Modes to run, comma-separated (default: explicit,implicit; explicit alone for a
+        /// scene only the explicit integrator runs: particles, contact, meshed fluid).
+        #[arg(long, value_delimiter = ',')]
         modes: Vec<String>,
         /// Steps as multiples of the explicit stable limit, comma-separated (default: both
         /// sides of the limit, 0.25 to 100).

@@ -154,7 +154,7 @@ fn tilted_block_dropped_on_a_plate_never_enters_it() {
     // - rank independence at np 1-4: the contact count of every step is the same, momentum the
     //   same to 1e-12 of its scale and every other column to 1e-9 of its largest value
     //   (round-off of the sums). The push-back of all contacts is solved together
-    //   (contact_stage.rs, step 7b); solved box by box, np 3 and 4 differed from np 1 by
+    //   (coupling/src/stages/contact/stage.rs, step 7b); solved box by box, np 3 and 4 differed from np 1 by
     //   1.9e-3 of the contact energy, from the step where four nodes of an edge land at once
     //   in different boxes.
     let mut histories = Vec::new();

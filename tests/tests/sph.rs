@@ -278,3 +278,54 @@ fn kept_pair_candidates_give_the_pairs_of_a_fresh_search() {
         );
     }
 }
+
+#[test]
+fn compare_on_a_particle_only_scene_runs_explicit_and_meets_the_riemann_solution() {
+    // `tdyn compare` on Sod's tube (particles only: explicit only, said once), at 0.5 and 1 x
+    // the stable step on 2 ranks: both runs finish, and each run's star-state probe at t = 0.2
+    // is within 3 % of the exact p*, u* (Toro 1999, table 4.3; validation/sod/reference.toml),
+    // as in the plain run above.
+    let p_star = reference_value("sod", "p* (left of the contact)");
+    let u_star = reference_value("sod", "u* (left of the contact)");
+    let dir = workdir("sod_compare");
+    let out = dir.join("cmp");
+    let o = mpirun(2, 600)
+        .arg(tdyn())
+        .arg("compare")
+        .arg(root().join("scenes/sod_tube.toml"))
+        .args(["--dt-factors", "0.5,1", "--out"])
+        .arg(&out)
+        .output()
+        .expect("mpirun");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "tdyn compare failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains("explicit only"),
+        "says why implicit is not run:\n{stdout}"
+    );
+    let text = std::fs::read_to_string(out.join("compare.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // Columns: mode,dt,dt_factor,steps,wall_s,loop_s,error,refused,unstable,status,...
+    assert_eq!(rows.len(), 2, "explicit at 2 steps:\n{text}");
+    assert!(
+        rows.iter().all(|r| r[0] == "explicit" && r[9] == "ok"),
+        "{text}"
+    );
+    for f in ["explicit_x0.5", "explicit_x1"] {
+        let (h, rows) = read_csv(&out.join("runs").join(f).join("probes.csv"));
+        let p = *column(&h, &rows, "star.pressure").last().unwrap();
+        let u = *column(&h, &rows, "star.velocity_x").last().unwrap();
+        assert!(
+            (p - p_star).abs() < 0.03 * p_star && (u - u_star).abs() < 0.03 * u_star,
+            "{f}: p = {p}, u = {u}; exact p* = {p_star}, u* = {u_star} (3 %)"
+        );
+    }
+}

@@ -11,7 +11,7 @@ use crate::input::scene::Scene;
 use crate::output::{ParticleFrame, Report, StageStats};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use setup::{globals, params_from_scene, particles_from_seeds};
+use setup::{globals, params_from_scene, particles_from_seeds, SphGlobals};
 use stage::SphStage;
 
 /// The SPH stage of a run.
@@ -22,9 +22,8 @@ pub struct Sph {
     pub n_total: u64,
     /// The user-facing particle ids (the particle file's).
     pub ids: ParticleIds,
-    /// Global energies and momentum after the last step: [kinetic, internal, px, py, pz,
-    /// gravity power].
-    pub globals: [f64; 6],
+    /// Global energies, momentum and gravity power after the last step.
+    pub globals: SphGlobals,
     /// Work of gravity on the particles so far (trapezoid of its power), J.
     pub external_work: f64,
     /// Wall time of the stage (max over ranks per step, summed), s.
@@ -89,7 +88,7 @@ impl Sph {
         self.rcb_bytes += r.bytes_sent as f64;
         self.rcb_imbalance_sum += r.imbalance;
         let g = globals(world, &self.stage);
-        self.external_work += 0.5 * (self.globals[5] + g[5]) * dt;
+        self.external_work += 0.5 * (self.globals.gravity_power + g.gravity_power) * dt;
         self.globals = g;
         self.steps += 1;
         Ok(())
@@ -118,7 +117,7 @@ impl Stage for Sph {
 
     fn forces(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<f64, StageError> {
         self.finish(world, dt)?;
-        if !self.globals.iter().all(|v| v.is_finite()) {
+        if !self.globals.is_finite() {
             return Err(StageError {
                 unstable: true,
                 message: format!(
@@ -137,11 +136,11 @@ impl Stage for Sph {
     fn energies(&self) -> StageEnergies {
         let g = &self.globals;
         StageEnergies {
-            kinetic: g[0],
-            internal: g[1],
+            kinetic: g.kinetic,
+            internal: g.internal,
             hourglass: 0.0,
             external_work: self.external_work,
-            momentum: [g[2], g[3], g[4]],
+            momentum: g.momentum,
         }
     }
 

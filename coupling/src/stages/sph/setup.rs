@@ -186,8 +186,31 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
     out
 }
 
-/// Global energies and momentum: [kinetic, internal, px, py, pz, gravity power].
-pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> [f64; 6] {
+/// The particles' global sums (collective).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SphGlobals {
+    /// Kinetic energy, J.
+    pub kinetic: f64,
+    /// Internal energy, J.
+    pub internal: f64,
+    /// Momentum, kg m/s.
+    pub momentum: [f64; 3],
+    /// Power of gravity on the particles, W.
+    pub gravity_power: f64,
+}
+
+impl SphGlobals {
+    /// All finite.
+    pub fn is_finite(&self) -> bool {
+        self.kinetic.is_finite()
+            && self.internal.is_finite()
+            && self.momentum.iter().all(|m| m.is_finite())
+            && self.gravity_power.is_finite()
+    }
+}
+
+/// Global energies, momentum and gravity power, in one reduction (collective).
+pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
     let e = sph::energies(&st.parts);
     let gp = sph::gravity_power(&st.parts, st.params.gravity);
     let loc = [
@@ -200,5 +223,10 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> [f64; 6] {
     ];
     let mut g = [0.0; 6];
     comm.all_reduce_into(&loc[..], &mut g[..], SystemOperation::sum());
-    g
+    SphGlobals {
+        kinetic: g[0],
+        internal: g[1],
+        momentum: [g[2], g[3], g[4]],
+        gravity_power: g[5],
+    }
 }
