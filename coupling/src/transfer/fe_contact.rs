@@ -7,7 +7,7 @@
 //! boundary face for `"exterior"`), and sends each face to the rank of its element and each
 //! contact node's body to the node's owner. Each step the FE rank then hands the contact stage
 //! its owned contact nodes and its faces with their nodes' records.
-use crate::stages::contact::stage::FullFace;
+use bytemuck::{Pod, Zeroable};
 use contact::{FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
 use fe_petsc::mesh::LocalMesh;
@@ -15,6 +15,16 @@ use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::collections::HashMap;
+
+/// A face with the records of its four nodes: what the FE owners send the contact stage.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FullFace {
+    /// The face.
+    pub face: FaceRecord,
+    /// Its corner nodes, in the face's order.
+    pub nodes: [NodeRecord; 4],
+}
 
 /// This rank's part of the contact surfaces.
 #[derive(Debug, Clone, Default)]

@@ -72,15 +72,7 @@ impl RcbItem for CNode {
     }
 }
 
-/// A face with the records of its four nodes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct FullFace {
-    /// The face.
-    pub face: FaceRecord,
-    /// Its corner nodes, in the face's order.
-    pub nodes: [NodeRecord; 4],
-}
+pub use crate::transfer::fe_contact::FullFace;
 
 /// A force for one node, keyed by an index or a gid.
 #[repr(C)]
