@@ -11,6 +11,9 @@
 //! `Eos::min_sound_speed_sq`, and one entry of `KINDS` (name, keys, constructor); the scene
 //! check, the SPH parameters and the meshed fluid all read the table. Then document the kind
 //! (docs/running.md).
+// `!(x > 0.0)` on purpose: NaN fails the range checks too
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![warn(missing_docs)]
 
 /// Smallest c^2 returned, as a fraction of a kind's reference c^2 (or in m^2/s^2 for an ideal
 /// gas): keeps the stable step finite where an EOS loses convexity (JWL at large expansion,
@@ -284,8 +287,12 @@ pub struct Kind {
     pub positive: &'static [&'static str],
     /// The EOS and its initial specific internal energy (J/kg) from the values of `keys`
     /// (finite, and > 0 for `positive`) and the material's density (> 0, kg/m^3).
-    make: fn(&[f64], f64) -> Result<(Eos, f64), ParamError>,
+    make: Make,
 }
+
+/// A kind's constructor: the values of its keys (in order) and the material's density to the
+/// EOS and the initial specific internal energy.
+type Make = fn(&[f64], f64) -> Result<(Eos, f64), ParamError>;
 
 impl Kind {
     /// Builds the kind from its parameters, `get(key)` for each of `keys`, and the material's
@@ -616,12 +623,14 @@ mod tests {
                 &[("rho0", 1000.0), ("sound_speed", 20.0), ("gamma", 7.0)],
                 998.0
             ),
-            (WATER, 0.0)
+            (WATER, 0.0),
+            "tait: its own rho0 (not the material's density), e = 0 (exact)"
         );
         // ideal gas: e0 is specific (J/kg), taken as is
         assert_eq!(
             build("ideal_gas", &[("gamma", 1.4), ("e0", 2.5)], 1.0),
-            (AIR, 2.5)
+            (AIR, 2.5),
+            "ideal_gas: e0 taken as J/kg (exact)"
         );
         // JWL: e0 is J/m^3 of initial volume, rho0 the material's density: e = e0 / rho0
         let tnt = [
@@ -632,18 +641,27 @@ mod tests {
             ("omega", 0.30),
             ("e0", 7.0e9),
         ];
-        assert_eq!(build("jwl", &tnt, 1630.0), (TNT, 7.0e9 / 1630.0));
+        assert_eq!(
+            build("jwl", &tnt, 1630.0),
+            (TNT, 7.0e9 / 1630.0),
+            "jwl: rho0 = density, e = e0 / rho0 (exact)"
+        );
         assert_eq!(
             build(
                 "mie_gruneisen",
                 &[("c0", 3940.0), ("s", 1.49), ("gamma0", 2.02)],
                 8930.0
             ),
-            (CU, 0.0)
+            (CU, 0.0),
+            "mie_gruneisen: rho0 = density, e = 0 (exact)"
         );
         // every kind of the table is reachable by name, once
         for k in KINDS {
-            assert!(std::ptr::eq(kind(k.name).unwrap(), k), "{}", k.name);
+            assert!(
+                std::ptr::eq(kind(k.name).unwrap(), k),
+                "{}: found by name, and only once",
+                k.name
+            );
         }
         assert_eq!(kind_names(), "tait, ideal_gas, jwl, mie_gruneisen");
         assert!(kind("water").is_none());
