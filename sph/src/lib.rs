@@ -32,7 +32,8 @@
 #![warn(missing_docs)]
 
 pub mod diagnostics;
-pub mod eos;
+/// The equations of state: the `eos` crate, shared with the meshed fluid (`fe_petsc`).
+pub use ::eos;
 pub mod integrate;
 pub mod kernel;
 pub mod neighbour;

@@ -14,6 +14,7 @@
 //!
 //! Notation: r_ab = x_a - x_b, r = |r_ab|, h = (h_a + h_b)/2, v^_ab = v^_a - v^_b,
 //! grad_a W_ab = dW/dr r_ab/r. Passes skip coincident pairs (r = 0: no direction).
+use crate::eos::Eos;
 use crate::kernel::ScaledKernel;
 use crate::params::{DensityMode, Params, Profile};
 use crate::particles::Particles;
@@ -115,10 +116,20 @@ pub fn update_eos(p: &mut Particles, params: &Params) {
         let eos = &params.eos[p.mat[i] as usize];
         let (pr, c) = eos.pressure_and_sound_speed(p.rho[i], p.e[i]);
         p.p[i] = pr;
-        p.c[i] = match (params.profile, eos.liggghts_sound_speed()) {
+        p.c[i] = match (params.profile, liggghts_sound_speed(eos)) {
             (Profile::Liggghts, Some(c0)) => c0,
             _ => c,
         };
+    }
+}
+
+/// The sound speed LIGGGHTS's artificial viscosity uses: the per-type constant `speedOfSound`,
+/// which for a Tait fluid is c0; `None` for the other materials (their EOS sound speed is used).
+#[inline]
+fn liggghts_sound_speed(eos: &Eos) -> Option<f64> {
+    match *eos {
+        Eos::Tait { c0, .. } => Some(c0),
+        _ => None,
     }
 }
 

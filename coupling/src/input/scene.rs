@@ -582,14 +582,6 @@ const MODEL_KEYS: &[(&str, &[&str])] = &[
     ("fluid", &[]),
 ];
 
-/// Equation-of-state keys by kind.
-const EOS_KEYS: &[(&str, &[&str])] = &[
-    ("tait", &["rho0", "sound_speed", "gamma"]),
-    ("ideal_gas", &["gamma", "e0"]),
-    ("jwl", &["a", "b", "r1", "r2", "omega", "e0"]),
-    ("mie_gruneisen", &["c0", "s", "gamma0"]),
-];
-
 /// Parses scene text; `file` names it in errors and anchors relative paths.
 pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let fname = file.display().to_string();
@@ -771,8 +763,15 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
                         .and_then(|k| k.as_str())
                         .unwrap_or("")
                         .to_string();
-                    let Some((_, ek)) = EOS_KEYS.iter().find(|(n, _)| *n == kind) else {
-                        return Err(err(&key("eos.kind"), format!("unknown or missing eos kind \"{kind}\" (expected one of tait, ideal_gas, jwl, mie_gruneisen)")));
+                    // the equation-of-state keys by kind: the eos crate's table
+                    let Some(ek) = ::eos::kind(&kind).map(|k| k.keys) else {
+                        return Err(err(
+                            &key("eos.kind"),
+                            format!(
+                                "unknown or missing eos kind \"{kind}\" (expected one of {})",
+                                ::eos::kind_names()
+                            ),
+                        ));
                     };
                     let mut ep = BTreeMap::new();
                     for (ekk, ev) in et {

@@ -30,7 +30,9 @@ const P: usize = 2;
 #[derive(Debug)]
 pub struct Fluid {
     rho: f64,
-    eos: Box<dyn Eos>,
+    eos: Eos,
+    /// Specific internal energy at t = 0 (the scene's, per the EOS table), J/kg.
+    e0: f64,
     /// rho c^2 at the initial state (density, e0), Pa.
     modulus0: f64,
 }
@@ -39,23 +41,22 @@ impl Fluid {
     /// From `density` and `eos = { kind = ..., ... }`.
     pub fn build(spec: &MaterialSpec) -> Result<Box<dyn Material>, MaterialError> {
         take(spec, &[])?;
-        let eos = build_eos(spec)?;
+        let (eos, e0) = build_eos(spec)?;
         let rho = spec.density;
-        let modulus0 = rho * wave_speed_sq(&*eos, rho, eos.initial_energy());
-        Ok(Box::new(Fluid { rho, eos, modulus0 }))
+        // the adiabatic c^2, floored by the EOS's minimum
+        let modulus0 = rho * eos.sound_speed_sq(rho, e0);
+        Ok(Box::new(Fluid {
+            rho,
+            eos,
+            e0,
+            modulus0,
+        }))
     }
 
     /// The equation of state.
-    pub fn eos(&self) -> &dyn Eos {
-        &*self.eos
+    pub fn eos(&self) -> &Eos {
+        &self.eos
     }
-}
-
-/// The adiabatic c^2 at (rho, e), floored by the EOS's minimum.
-fn wave_speed_sq(eos: &dyn Eos, rho: f64, e: f64) -> f64 {
-    eos.eval(rho, e)
-        .sound_speed_sq(rho)
-        .max(eos.min_sound_speed_sq())
 }
 
 impl Material for Fluid {
@@ -72,7 +73,7 @@ impl Material for Fluid {
         3
     }
     fn init_state(&self, state: &mut [f64]) {
-        let e0 = self.eos.initial_energy();
+        let e0 = self.e0;
         state[E] = e0;
         state[V] = 1.0 / self.rho;
         state[P] = self.eos.eval(self.rho, e0).p;
@@ -100,6 +101,6 @@ impl Material for Fluid {
         state[P] = self.eos.eval(density, state[E]).p;
     }
     fn wave_modulus(&self, density: f64, state: &[f64]) -> f64 {
-        density * wave_speed_sq(&*self.eos, density, state[E])
+        density * self.eos.sound_speed_sq(density, state[E])
     }
 }

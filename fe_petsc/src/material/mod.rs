@@ -19,7 +19,7 @@ pub struct MaterialSpec {
 /// An equation of state as the scene declares it (`eos = { kind = "tait", ... }`).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct EosSpec {
-    /// "tait" | "ideal_gas" | "jwl" | "mie_gruneisen".
+    /// One of the `eos` crate's kinds (`eos::KINDS`: "tait", "ideal_gas", "jwl", "mie_gruneisen").
     pub kind: String,
     /// Its numeric parameters by name.
     pub params: BTreeMap<String, f64>,

@@ -8,8 +8,8 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::{
-    ArtificialViscosity, DensityMode, Eos, Kernel, NewParticle, Params, Particles, Periodic,
-    Profile, TensileCorrection,
+    ArtificialViscosity, DensityMode, Kernel, NewParticle, Params, Particles, Periodic, Profile,
+    TensileCorrection,
 };
 
 /// Per scene material: its index in the EOS table and its initial specific internal energy
@@ -28,47 +28,20 @@ pub fn params_from_scene(scene: &Scene) -> Result<(Params, MaterialMap), String>
             map.push(None);
             continue;
         };
-        let g = |k: &str| -> Result<f64, String> {
-            spec.params.get(k).copied().ok_or_else(|| {
-                format!(
-                    "{file}: material[{i}].eos: kind \"{}\" needs \"{k}\"",
+        // the kind, its keys and its initial specific energy: the eos crate's table
+        let kind = ::eos::kind(&spec.kind)
+            .ok_or_else(|| format!("{file}: material[{i}].eos.kind: unknown \"{}\"", spec.kind))?;
+        let (e, e0) = kind
+            .build(|k| spec.params.get(k).copied(), m.density)
+            .map_err(|err| match err {
+                ::eos::ParamError::Missing { key } => format!(
+                    "{file}: material[{i}].eos: kind \"{}\" needs \"{key}\"",
                     spec.kind
-                )
-            })
-        };
-        let (e, e0) = match spec.kind.as_str() {
-            "tait" => (
-                Eos::Tait {
-                    rho0: g("rho0")?,
-                    c0: g("sound_speed")?,
-                    gamma: g("gamma")?,
-                },
-                0.0,
-            ),
-            "ideal_gas" => (Eos::IdealGas { gamma: g("gamma")? }, g("e0")?),
-            // e0 is energy per unit initial volume (SCENE.md): specific e = e0 / rho0.
-            "jwl" => (
-                Eos::Jwl {
-                    a: g("a")?,
-                    b: g("b")?,
-                    r1: g("r1")?,
-                    r2: g("r2")?,
-                    omega: g("omega")?,
-                    rho0: m.density,
-                },
-                g("e0")? / m.density,
-            ),
-            "mie_gruneisen" => (
-                Eos::MieGruneisen {
-                    rho0: m.density,
-                    c0: g("c0")?,
-                    s: g("s")?,
-                    gamma0: g("gamma0")?,
-                },
-                0.0,
-            ),
-            k => return Err(format!("{file}: material[{i}].eos.kind: unknown \"{k}\"")),
-        };
+                ),
+                ::eos::ParamError::Bad { key, value, why } => {
+                    format!("{file}: material[{i}].eos.{key} = {value}: {why}")
+                }
+            })?;
         map.push(Some((eos.len() as u16, e0)));
         eos.push(e);
     }
