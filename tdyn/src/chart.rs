@@ -1,7 +1,12 @@
-//! What the charts of `tdyn compare`, `tdyn sweep` and `tdyn chart-scaling` share: the font,
-//! one drawing written both as PNG and as SVG, log-axis ranges, and the labels of powers of ten.
-use plotters::coord::Shift;
-use plotters::prelude::{BitMapBackend, DrawingArea, DrawingBackend, IntoDrawingArea, SVGBackend};
+//! What the charts of `tdyn compare`, `tdyn sweep`, `tdyn validate` and `tdyn chart-scaling`
+//! share: the font, one drawing written both as PNG and as SVG, the colours, the legend box,
+//! log-axis ranges and the tick labels.
+use plotters::coord::{CoordTranslate, Shift};
+use plotters::prelude::{
+    BitMapBackend, ChartContext, DrawingArea, DrawingAreaErrorKind, DrawingBackend,
+    IntoDrawingArea, PathElement, SVGBackend, SeriesLabelPosition,
+};
+use plotters::style::{Color, RGBColor, BLACK, WHITE};
 use std::path::Path;
 
 /// TrueType fonts tried for the charts' text (the first found is used).
@@ -65,6 +70,49 @@ pub fn save(fig: &impl Figure, stem: &Path) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", png.display()))?;
     fig.draw(SVGBackend::new(&svg, fig.size()).into_drawing_area())
         .map_err(|e| format!("{}: {e}", svg.display()))
+}
+
+/// The curves' colours, in order (matplotlib's "tab10" less its pink and olive).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+];
+
+/// Colour `k` of [`PALETTE`], round again past its end.
+pub fn colour(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// A plotters drawing error as the message the charts return.
+pub fn err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    e.to_string()
+}
+
+/// The legend's key for a line series of colour `c`: a short stroke of the same width.
+pub fn line_key(c: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+}
+
+/// Draws the legend of `ch`'s labelled series at `position`: a framed, nearly opaque box with
+/// text of `font_px` pixels.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    ch: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_px: u32,
+) -> Result<(), String> {
+    ch.configure_series_labels()
+        .position(position)
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .label_font(("sans-serif", font_px))
+        .draw()
+        .map_err(err)
 }
 
 /// A log axis range around the positive finite values: a factor `pad` beyond the smallest and
