@@ -23,7 +23,9 @@ bench: setup
 	./scripts/bench_fe.sh
 	./scripts/bench_sph.sh
 
+# The lint gate (CI runs it after setup, before the tests).
 lint:
+	@cargo fmt --version >/dev/null 2>&1 && cargo clippy --version >/dev/null 2>&1 || rustup component add rustfmt clippy
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 
