@@ -270,7 +270,7 @@ impl Figure for EnergyChart {
                     ))
                     .map_err(chart::err)?;
                 if text {
-                    s.label(format!("internal, of it block \"{name}\""))
+                    s.label(format!("internal of block \"{name}\""))
                         .legend(chart::dashed_key(c, BLOCK_DASH.0, BLOCK_DASH.1));
                 }
             }
