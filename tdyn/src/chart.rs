@@ -1,7 +1,13 @@
-//! What the charts of `tdyn compare`, `tdyn sweep` and `tdyn chart-scaling` share: the font,
-//! one drawing written both as PNG and as SVG, log-axis ranges, and the labels of powers of ten.
-use plotters::coord::Shift;
-use plotters::prelude::{BitMapBackend, DrawingArea, DrawingBackend, IntoDrawingArea, SVGBackend};
+//! What the charts of `tdyn run` (energies), `tdyn compare`, `tdyn sweep`, `tdyn validate` and
+//! `tdyn chart-scaling` share: the font, one drawing written both as PNG and as SVG, the colours,
+//! the legend box, log-axis ranges, SI prefixes and the tick labels.
+use plotters::coord::{CoordTranslate, Shift};
+use plotters::element::DashedPathElement;
+use plotters::prelude::{
+    BitMapBackend, ChartContext, DrawingArea, DrawingAreaErrorKind, DrawingBackend,
+    IntoDrawingArea, PathElement, SVGBackend, SeriesLabelPosition,
+};
+use plotters::style::{Color, RGBColor, BLACK, WHITE};
 use std::path::Path;
 
 /// TrueType fonts tried for the charts' text (the first found is used).
@@ -67,6 +73,81 @@ pub fn save(fig: &impl Figure, stem: &Path) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", svg.display()))
 }
 
+/// The curves' colours, in order (matplotlib's "tab10" less its pink and olive).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+];
+
+/// Colour `k` of [`PALETTE`], round again past its end.
+pub fn colour(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// A plotters drawing error as the message the charts return.
+pub fn err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    e.to_string()
+}
+
+/// The legend's key for a line series of colour `c`: a short stroke of the same width.
+pub fn line_key(c: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+}
+
+/// The legend's key for a dashed line series of colour `c` (`dash` and `gap` pixels).
+pub fn dashed_key(
+    c: RGBColor,
+    dash: u32,
+    gap: u32,
+) -> impl Fn((i32, i32)) -> DashedPathElement<std::vec::IntoIter<(i32, i32)>, u32> {
+    move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 20, y)], dash, gap, c.stroke_width(2))
+}
+
+/// Draws the legend of `ch`'s labelled series at `position`: a framed, nearly opaque box with
+/// text of `font_px` pixels.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    ch: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_px: u32,
+) -> Result<(), String> {
+    ch.configure_series_labels()
+        .position(position)
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .label_font(("sans-serif", font_px))
+        .draw()
+        .map_err(err)
+}
+
+/// An SI prefix for values up to `largest` in magnitude: (factor to divide by, prefix), from
+/// nano to giga, so that axis labels read "250" rather than "2.5e-4".
+pub fn si_prefix(largest: f64) -> (f64, &'static str) {
+    const PREFIXES: [(f64, &str); 7] = [
+        (1e9, "G"),
+        (1e6, "M"),
+        (1e3, "k"),
+        (1.0, ""),
+        (1e-3, "m"),
+        (1e-6, "\u{b5}"),
+        (1e-9, "n"),
+    ];
+    let a = largest.abs();
+    if !(a > 0.0 && a.is_finite()) {
+        return (1.0, "");
+    }
+    PREFIXES
+        .iter()
+        .find(|(f, _)| a >= *f)
+        .copied()
+        .unwrap_or(PREFIXES[PREFIXES.len() - 1])
+}
+
 /// A log axis range around the positive finite values: a factor `pad` beyond the smallest and
 /// the largest; `empty` when there is none.
 pub fn log_span(values: impl Iterator<Item = f64>, pad: f64, empty: (f64, f64)) -> (f64, f64) {
@@ -96,10 +177,13 @@ pub fn sci(v: &f64) -> String {
     format!("{v:.0e}")
 }
 
-/// A tick label for sizes and times: plain from 0.01 to 10^5 ("0.05", "2", "300"), else "1e-3".
+/// A tick label for sizes and times: plain from 0.01 to 10^5 ("0.05", "2", "300") and at 0,
+/// else "1e-3".
 pub fn plain(v: &f64) -> String {
     let a = v.abs();
-    if (1e-2..1e5).contains(&a) {
+    if a == 0.0 {
+        "0".to_string()
+    } else if (1e-2..1e5).contains(&a) {
         let s = format!("{v:.2}");
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {

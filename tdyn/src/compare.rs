@@ -639,7 +639,6 @@ impl crate::chart::Figure for Chart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         let (root, text) = crate::chart::canvas(root, &self.title)?;
         let (left, right) = root.split_horizontally(CHART_SIZE.0 / 2);
         let finished: Vec<&CompareRow> = self
@@ -676,7 +675,7 @@ impl crate::chart::Figure for Chart<'_> {
             }
             let mut chart = builder
                 .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(e)?;
+                .map_err(crate::chart::err)?;
             let mut mesh = chart.configure_mesh();
             if text {
                 mesh.x_desc(x_desc)
@@ -686,7 +685,7 @@ impl crate::chart::Figure for Chart<'_> {
             } else {
                 mesh.x_labels(0).y_labels(0);
             }
-            mesh.draw().map_err(e)?;
+            mesh.draw().map_err(crate::chart::err)?;
             let x_of = |r: &CompareRow| if panel == 0 { r.loop_s } else { r.dt };
             if panel == 1 {
                 chart
@@ -696,7 +695,7 @@ impl crate::chart::Figure for Chart<'_> {
                         6,
                         BLACK.stroke_width(2),
                     ))
-                    .map_err(e)?;
+                    .map_err(crate::chart::err)?;
                 if text {
                     chart
                         .draw_series(std::iter::once(Text::new(
@@ -704,7 +703,7 @@ impl crate::chart::Figure for Chart<'_> {
                             (self.limit * 1.1, y0 * 1.5),
                             ("sans-serif", 15),
                         )))
-                        .map_err(e)?;
+                        .map_err(crate::chart::err)?;
                 }
             }
             for mode in [Mode::Explicit, Mode::Implicit] {
@@ -719,16 +718,14 @@ impl crate::chart::Figure for Chart<'_> {
                 if !line.is_empty() {
                     let s = chart
                         .draw_series(LineSeries::new(line, c.stroke_width(2)))
-                        .map_err(e)?;
+                        .map_err(crate::chart::err)?;
                     if text {
-                        s.label(mode_name(mode)).legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                        });
+                        s.label(mode_name(mode)).legend(crate::chart::line_key(c));
                     }
                 }
                 chart
                     .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
-                    .map_err(e)?;
+                    .map_err(crate::chart::err)?;
                 let stopped: Vec<&CompareRow> = self
                     .rows
                     .iter()
@@ -747,13 +744,13 @@ impl crate::chart::Figure for Chart<'_> {
                             .iter()
                             .map(|(x, _)| Cross::new((*x, y_stop), 7, c.stroke_width(3))),
                     )
-                    .map_err(e)?;
+                    .map_err(crate::chart::err)?;
                 if text {
                     chart
                         .draw_series(pts.iter().map(|p| {
                             Text::new(factor_label(p.2), (p.0, p.1 * 1.25), ("sans-serif", 13))
                         }))
-                        .map_err(e)?;
+                        .map_err(crate::chart::err)?;
                     chart
                         .draw_series(marks.iter().map(|(x, r)| {
                             Text::new(
@@ -762,7 +759,7 @@ impl crate::chart::Figure for Chart<'_> {
                                 ("sans-serif", 13),
                             )
                         }))
-                        .map_err(e)?;
+                        .map_err(crate::chart::err)?;
                 }
             }
             if text {
@@ -782,18 +779,11 @@ impl crate::chart::Figure for Chart<'_> {
                         (x0 * 1.05, y1 / 1.3),
                         ("sans-serif", 13),
                     )))
-                    .map_err(e)?;
-                chart
-                    .configure_series_labels()
-                    .position(SeriesLabelPosition::LowerRight)
-                    .border_style(BLACK)
-                    .background_style(WHITE.mix(0.8))
-                    .label_font(("sans-serif", 15))
-                    .draw()
-                    .map_err(e)?;
+                    .map_err(crate::chart::err)?;
+                crate::chart::legend(&mut chart, SeriesLabelPosition::LowerRight, 15)?;
             }
         }
-        root.present().map_err(e)?;
+        root.present().map_err(crate::chart::err)?;
         Ok(())
     }
 }

@@ -1,5 +1,5 @@
-//! `tdyn`: run a scene, compare explicit and implicit integration on it, sweep its resolution,
-//! run the validation suite, chart a scaling study, mesh a .geo. PETSc
+//! `tdyn`: run a scene (and chart its energies), compare explicit and implicit integration on
+//! it, sweep its resolution, run the validation suite, chart a scaling study, mesh a .geo. PETSc
 //! options (`-log_view`, `-ksp_type cg`, `-pc_type gamg`, `-ksp_monitor`,
 //! `-petscpartitioner_type simple`, ...) may follow the other arguments and go to PETSc unchanged.
 // Index loops over points and components read like the formulas; `!(x > 0.0)` deliberately also
@@ -9,6 +9,7 @@
 mod chart;
 mod compare;
 mod crosscheck;
+mod energies;
 mod launch;
 mod scaling;
 mod sweep;
@@ -66,14 +67,16 @@ fn parse_skins(s: &str) -> Result<(f64, f64), String> {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Run a scene: `mpirun -np 4 tdyn run scenes/bar_impact.toml [--out DIR] [PETSc options]`
+    /// Run a scene: `mpirun -np 2 tdyn run scenes/slug_on_plate.toml [--out DIR] [PETSc
+    /// options]`. Unless --quiet, ends by drawing the energies over time (energies.png and
+    /// energies.svg in DIR) and naming the output files.
     Run {
         /// The scene file (TOML, see SCENE.md).
         scene: PathBuf,
         /// Output directory (default: out/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// No progress bar and no summary.
+        /// No progress bar, no summary and no chart.
         #[arg(long, short)]
         quiet: bool,
         /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
@@ -130,6 +133,13 @@ enum Cmd {
         /// No progress lines.
         #[arg(long, short)]
         quiet: bool,
+    },
+    /// Draw a run's energies over time from its output folder: `tdyn plot out/slug_on_plate`
+    /// writes energies.png and energies.svg there from history.csv (what `tdyn run` draws at
+    /// the end of a run). No MPI.
+    Plot {
+        /// The run's output folder (holding history.csv).
+        dir: PathBuf,
     },
     /// Chart a scaling study (scripts/scaling.sh): reads DIR/<series>_np<P>/report.json
     /// (series `strong`, `weak`), writes DIR/scaling.csv, scaling.png and scaling.svg: time per
@@ -477,6 +487,20 @@ fn main() -> ExitCode {
                 },
             )
         }
+        Cmd::Plot { dir } => match crate::energies::plot(&dir) {
+            Ok(png) => {
+                println!(
+                    "tdyn plot: {} and {}",
+                    png.display(),
+                    png.with_extension("svg").display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("tdyn plot: error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Cmd::ChartScaling { dir, title } => match crate::scaling::chart_scaling(&dir, &title) {
             Ok(rows) => {
                 print!("{}", crate::scaling::table(&rows));
@@ -567,22 +591,101 @@ fn main() -> ExitCode {
                 "tdyn",
                 |world| {
                     driver::run(world, &opts)
-                        .map(Some)
+                        .map(|s| energies::Finished {
+                            out: s.out,
+                            steps: s.steps,
+                            wall_s: Some(s.wall_s),
+                            energy_error_max: s.energy_error_max,
+                        })
                         .map_err(|e| e.to_string())
                 },
-                |s| {
-                    if let (Some(s), false) = (s, quiet) {
-                        println!(
-                            "tdyn: {} steps, energy error max {:.2e}, {:.1} ns per element-cycle",
-                            s.steps, s.energy_error_max, s.ns_per_element_cycle
-                        );
-                        println!(
-                            "tdyn: output in {}/ (open fields.xmf in ParaView; history.csv, probes.csv, report.json)",
-                            s.out.display()
-                        );
+                |mut done| {
+                    if !quiet {
+                        done.wall_s = done.wall_s.or_else(|| energies::report_wall_s(&done.out));
+                        let chart = energies::plot(&done.out);
+                        print!("{}", energies::closing(&done, &chart));
                     }
                 },
             )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+    use std::path::Path;
+
+    /// Folders of the repository whose files the help texts and the manual name as examples.
+    const EXAMPLE_ROOTS: [&str; 5] = ["scenes/", "meshes/", "scripts/", "validation/", "docs/"];
+
+    /// The repository paths named in `text`: words under [`EXAMPLE_ROOTS`] (not under `out/`,
+    /// which runs write, nor hidden caches), up to a `<placeholder>`, trailing punctuation off.
+    fn named_paths(text: &str) -> Vec<String> {
+        let in_path = |c: char| c.is_ascii_alphanumeric() || "_./-".contains(c);
+        text.split(|c: char| !in_path(c))
+            .map(|w| w.trim_end_matches(['.', ',', ':']))
+            .filter(|w| EXAMPLE_ROOTS.iter().any(|r| w.starts_with(r)) && !w.contains("/."))
+            .map(str::to_string)
+            .collect()
+    }
+
+    #[test]
+    fn every_example_in_the_help_and_the_manual_exists() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let mut texts: Vec<(String, String)> = Vec::new();
+        let cmd = Cli::command();
+        for sub in cmd.get_subcommands() {
+            let mut help: Vec<String> = [sub.get_about(), sub.get_long_about()]
+                .into_iter()
+                .flatten()
+                .map(|s| s.to_string())
+                .collect();
+            for arg in sub.get_arguments() {
+                help.extend(
+                    [arg.get_help(), arg.get_long_help()]
+                        .into_iter()
+                        .flatten()
+                        .map(|s| s.to_string()),
+                );
+            }
+            texts.push((format!("tdyn {} --help", sub.get_name()), help.join("\n")));
+        }
+        let mut pages = vec![root.join("README.md")];
+        let mut docs: Vec<_> = std::fs::read_dir(root.join("docs"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "md"))
+            .collect();
+        docs.sort();
+        pages.extend(docs);
+        for p in pages {
+            texts.push((
+                p.display().to_string(),
+                std::fs::read_to_string(&p).unwrap(),
+            ));
+        }
+        let mut missing = Vec::new();
+        let mut named = 0;
+        for (what, text) in &texts {
+            for path in named_paths(text) {
+                named += 1;
+                if !root.join(&path).exists() {
+                    missing.push(format!("{what}: {path}"));
+                }
+            }
+        }
+        assert!(named > 20, "only {named} paths found: the scan is broken");
+        assert!(
+            missing.is_empty(),
+            "examples that do not exist:\n{}",
+            missing.join("\n")
+        );
+        // The scan itself: a word under out/ or a placeholder is not a repository path.
+        assert_eq!(
+            named_paths("see out/validation/report.md and validation/<case>/reference.toml, or scenes/a.toml."),
+            vec!["validation/".to_string(), "scenes/a.toml".to_string()]
+        );
     }
 }

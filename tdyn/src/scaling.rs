@@ -206,20 +206,6 @@ pub fn table(rows: &[ScalingRow]) -> String {
     s
 }
 
-/// Colour of a stage (and of "other").
-fn stage_colour(k: usize) -> plotters::style::RGBColor {
-    const C: [plotters::style::RGBColor; 7] = [
-        plotters::style::RGBColor(31, 119, 180),
-        plotters::style::RGBColor(44, 160, 44),
-        plotters::style::RGBColor(214, 39, 40),
-        plotters::style::RGBColor(148, 103, 189),
-        plotters::style::RGBColor(140, 86, 75),
-        plotters::style::RGBColor(255, 127, 14),
-        plotters::style::RGBColor(160, 160, 160),
-    ];
-    C[k % C.len()]
-}
-
 /// Chart size, pixels.
 const SCALING_CHART_SIZE: (u32, u32) = (1400, 1000);
 
@@ -255,7 +241,6 @@ impl Figure for ScalingChart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         let (root, text) = chart::canvas(root, &self.title)?;
         let panels = root.split_evenly((2, 2));
         let max_np = self.rows.iter().map(|r| r.np).max().unwrap_or(1);
@@ -306,7 +291,7 @@ impl Figure for ScalingChart<'_> {
             if text {
                 b.x_label_area_size(40).y_label_area_size(70);
             }
-            let mut ch = b.build_cartesian_2d(xa..xb, 0.0..top).map_err(e)?;
+            let mut ch = b.build_cartesian_2d(xa..xb, 0.0..top).map_err(chart::err)?;
             let mut mesh = ch.configure_mesh();
             mesh.disable_x_mesh();
             if text {
@@ -317,13 +302,13 @@ impl Figure for ScalingChart<'_> {
             } else {
                 mesh.x_labels(0).y_labels(0);
             }
-            mesh.draw().map_err(e)?;
+            mesh.draw().map_err(chart::err)?;
             let mut labelled = [false; STAGES.len() + 1];
             for r in &rows {
                 let x = xpos(r.np);
                 let mut y = 0.0;
                 for (k, v) in bar_parts(r) {
-                    let c = stage_colour(k);
+                    let c = chart::colour(k);
                     let s = ch
                         .draw_series(std::iter::once(Rectangle::new(
                             [
@@ -332,7 +317,7 @@ impl Figure for ScalingChart<'_> {
                             ],
                             c.filled(),
                         )))
-                        .map_err(e)?;
+                        .map_err(chart::err)?;
                     if text && !labelled[k] {
                         labelled[k] = true;
                         let label = if k < STAGES.len() {
@@ -352,17 +337,11 @@ impl Figure for ScalingChart<'_> {
                         (x - BAR_WIDTH / 2.0, y * 1e3 + top * 0.02),
                         ("sans-serif", 12),
                     )))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 }
             }
             if text && !rows.is_empty() {
-                ch.configure_series_labels()
-                    .position(SeriesLabelPosition::UpperRight)
-                    .border_style(BLACK)
-                    .background_style(WHITE.mix(0.8))
-                    .label_font(("sans-serif", 13))
-                    .draw()
-                    .map_err(e)?;
+                chart::legend(&mut ch, SeriesLabelPosition::UpperRight, 13)?;
             }
         }
         // (c) imbalance, (d) bytes per rank per step: one curve per (series, stage).
@@ -396,7 +375,7 @@ impl Figure for ScalingChart<'_> {
                 let hi = vals.iter().copied().fold(1.0f64, f64::max);
                 let mut ch = b
                     .build_cartesian_2d(xa..xb, 0.95..(1.0 + (hi - 1.0) * 1.3).max(1.1))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 let mut mesh = ch.configure_mesh();
                 if text {
                     mesh.x_desc("MPI ranks (solid: strong, dashed: weak)")
@@ -406,13 +385,13 @@ impl Figure for ScalingChart<'_> {
                 } else {
                     mesh.x_labels(0).y_labels(0);
                 }
-                mesh.draw().map_err(e)?;
+                mesh.draw().map_err(chart::err)?;
                 self.curves(&mut ch, &value, text)?;
             } else {
                 let (lo, hi) = chart::log_span(vals.iter().copied(), 2.0, (1.0, 1e6));
                 let mut ch = b
                     .build_cartesian_2d(xa..xb, (lo..hi).log_scale())
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 let mut mesh = ch.configure_mesh();
                 if text {
                     mesh.x_desc("MPI ranks (solid: strong, dashed: weak)")
@@ -423,11 +402,11 @@ impl Figure for ScalingChart<'_> {
                 } else {
                     mesh.x_labels(0).y_labels(0);
                 }
-                mesh.draw().map_err(e)?;
+                mesh.draw().map_err(chart::err)?;
                 self.curves(&mut ch, &value, text)?;
             }
         }
-        root.present().map_err(e)?;
+        root.present().map_err(chart::err)?;
         Ok(())
     }
 }
@@ -471,7 +450,6 @@ impl ScalingChart<'_> {
         Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
     {
         use plotters::prelude::*;
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         let mut labelled = [false; STAGES.len()];
         for name in ["strong", "weak"] {
             let rows = self.series(name);
@@ -484,35 +462,27 @@ impl ScalingChart<'_> {
                 if pts.is_empty() {
                     continue;
                 }
-                let c = stage_colour(k);
+                let c = chart::colour(k);
                 let style = c.stroke_width(2);
                 let s = if name == "weak" {
                     ch.draw_series(DashedLineSeries::new(pts.clone(), 8, 5, style))
-                        .map_err(e)?;
+                        .map_err(chart::err)?;
                     ch.draw_series(pts.iter().map(|p| TriangleMarker::new(*p, 6, c.filled())))
-                        .map_err(e)?
+                        .map_err(chart::err)?
                 } else {
                     ch.draw_series(LineSeries::new(pts.clone(), style))
-                        .map_err(e)?;
+                        .map_err(chart::err)?;
                     ch.draw_series(pts.iter().map(|p| Circle::new(*p, 4, c.filled())))
-                        .map_err(e)?
+                        .map_err(chart::err)?
                 };
                 if text && !labelled[k] {
                     labelled[k] = true;
-                    s.label(*stage).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+                    s.label(*stage).legend(chart::line_key(c));
                 }
             }
         }
         if text && labelled.iter().any(|l| *l) {
-            ch.configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.8))
-                .label_font(("sans-serif", 13))
-                .draw()
-                .map_err(e)?;
+            chart::legend(ch, SeriesLabelPosition::UpperLeft, 13)?;
         }
         Ok(())
     }

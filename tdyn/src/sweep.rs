@@ -725,16 +725,6 @@ const MIN_AXIS_RATIO: f64 = 10.0;
 /// Labelled ticks asked of each axis (plotters picks round values near this many).
 const AXIS_LABELS: usize = 8;
 
-/// Colours of the measures' curves, in order.
-const PALETTE: [plotters::style::RGBColor; 6] = [
-    plotters::style::RGBColor(31, 119, 180),
-    plotters::style::RGBColor(214, 39, 40),
-    plotters::style::RGBColor(44, 160, 44),
-    plotters::style::RGBColor(148, 103, 189),
-    plotters::style::RGBColor(255, 127, 14),
-    plotters::style::RGBColor(23, 190, 207),
-];
-
 impl Figure for SweepChart<'_> {
     fn size(&self) -> (u32, u32) {
         SWEEP_CHART_SIZE
@@ -745,7 +735,6 @@ impl Figure for SweepChart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         let (root, text) = chart::canvas(root, &self.title)?;
         let panels = root.split_evenly((1, 3));
         let ok: Vec<&SweepRow> = self.rows.iter().filter(|r| r.status == "ok").collect();
@@ -779,7 +768,7 @@ impl Figure for SweepChart<'_> {
             }
             let mut ch = builder
                 .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(e)?;
+                .map_err(chart::err)?;
             let mut mesh = ch.configure_mesh();
             if text {
                 mesh.x_desc(x_desc)
@@ -791,7 +780,7 @@ impl Figure for SweepChart<'_> {
             } else {
                 mesh.x_labels(0).y_labels(0);
             }
-            mesh.draw().map_err(e)?;
+            mesh.draw().map_err(chart::err)?;
             // The finest run, when it is the reference, has no error to draw: its cost is a
             // dashed line.
             if let Some(r) = ok.iter().find(|r| r.reference) {
@@ -803,7 +792,7 @@ impl Figure for SweepChart<'_> {
                         6,
                         BLACK.mix(0.5).stroke_width(2),
                     ))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                     if text {
                         use plotters::style::text_anchor::{HPos, Pos, VPos};
                         let left_of = TextStyle::from(("sans-serif", 13).into_font())
@@ -813,7 +802,7 @@ impl Figure for SweepChart<'_> {
                             (x / 1.05, y0 * 2.0),
                             left_of,
                         )))
-                        .map_err(e)?;
+                        .map_err(chart::err)?;
                     }
                 }
             }
@@ -822,7 +811,7 @@ impl Figure for SweepChart<'_> {
                 x > 0.0 && x.is_finite() && y > 0.0 && y.is_finite()
             };
             for (j, m) in self.measures.iter().enumerate() {
-                let c = PALETTE[j % PALETTE.len()];
+                let c = chart::colour(j);
                 // In ladder order (the line follows the refinement, whatever the timings do);
                 // a run's label once, at its first drawn measure.
                 let pts: Vec<(f64, f64, &str)> = ok
@@ -842,14 +831,12 @@ impl Figure for SweepChart<'_> {
                         pts.iter().map(|p| (p.0, p.1)),
                         c.stroke_width(2),
                     ))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 if text {
-                    s.label(m.name()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+                    s.label(m.name()).legend(chart::line_key(c));
                 }
                 ch.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 if text {
                     ch.draw_series(pts.iter().filter(|p| !p.2.is_empty()).map(|p| {
                         Text::new(
@@ -858,7 +845,7 @@ impl Figure for SweepChart<'_> {
                             ("sans-serif", 13),
                         )
                     }))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 }
             }
             if text {
@@ -881,19 +868,13 @@ impl Figure for SweepChart<'_> {
                         (x0 * 1.05, y1 / 1.4 / 1.7f64.powi(i as i32)),
                         ("sans-serif", 13),
                     )))
-                    .map_err(e)?;
+                    .map_err(chart::err)?;
                 }
                 // Cheap and accurate is the corner that runs seldom reach.
-                ch.configure_series_labels()
-                    .position(SeriesLabelPosition::LowerLeft)
-                    .border_style(BLACK)
-                    .background_style(WHITE.mix(0.8))
-                    .label_font(("sans-serif", 14))
-                    .draw()
-                    .map_err(e)?;
+                chart::legend(&mut ch, SeriesLabelPosition::LowerLeft, 14)?;
             }
         }
-        root.present().map_err(e)?;
+        root.present().map_err(chart::err)?;
         Ok(())
     }
 }

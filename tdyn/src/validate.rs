@@ -811,7 +811,6 @@ impl Figure for CaseChart<'_> {
         root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), String> {
         use plotters::prelude::*;
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
         let (root, text) = chart::canvas(root, &self.title)?;
         let n = self.measures.len().max(1);
         let panels = root.split_evenly((n.div_ceil(PANELS_PER_ROW), n.min(PANELS_PER_ROW)));
@@ -841,7 +840,9 @@ impl Figure for CaseChart<'_> {
             if text {
                 builder.x_label_area_size(35).y_label_area_size(75);
             }
-            let mut ch = builder.build_cartesian_2d(-0.5..x1, lo..hi).map_err(e)?;
+            let mut ch = builder
+                .build_cartesian_2d(-0.5..x1, lo..hi)
+                .map_err(chart::err)?;
             let labels: Vec<String> = rows.iter().map(|r| r.rung.clone()).collect();
             let fmt_x = |x: &f64| {
                 let k = x.round();
@@ -866,26 +867,26 @@ impl Figure for CaseChart<'_> {
             } else {
                 mesh.x_labels(0).y_labels(0);
             }
-            mesh.draw().map_err(e)?;
+            mesh.draw().map_err(chart::err)?;
             if let Some(t) = tol {
                 ch.draw_series(std::iter::once(Rectangle::new(
                     [(-0.5, reference - t), (x1, reference + t)],
                     band_colour.mix(0.15).filled(),
                 )))
-                .map_err(e)?;
+                .map_err(chart::err)?;
             }
             if band[0] != band[1] {
                 ch.draw_series(std::iter::once(Rectangle::new(
                     [(-0.5, band[0]), (x1, band[1])],
                     band_colour.mix(0.35).filled(),
                 )))
-                .map_err(e)?;
+                .map_err(chart::err)?;
             }
             ch.draw_series(LineSeries::new(
                 [(-0.5, reference), (x1, reference)],
                 band_colour.stroke_width(2),
             ))
-            .map_err(e)?;
+            .map_err(chart::err)?;
             let pts: Vec<(f64, f64, bool)> = rows
                 .iter()
                 .enumerate()
@@ -896,12 +897,12 @@ impl Figure for CaseChart<'_> {
                 pts.iter().map(|p| (p.0, p.1)),
                 ours_colour.stroke_width(2),
             ))
-            .map_err(e)?;
+            .map_err(chart::err)?;
             ch.draw_series(pts.iter().map(|p| {
                 let c = if p.2 { RED } else { ours_colour };
                 Circle::new((p.0, p.1), 5, c.filled())
             }))
-            .map_err(e)?;
+            .map_err(chart::err)?;
             if text {
                 let note = match tol {
                     Some(_) => "green: reference, light band: allowed; red point: fails",
@@ -912,10 +913,10 @@ impl Figure for CaseChart<'_> {
                     (-0.45, hi - 0.04 * (hi - lo)),
                     ("sans-serif", 12),
                 )))
-                .map_err(e)?;
+                .map_err(chart::err)?;
             }
         }
-        root.present().map_err(e)?;
+        root.present().map_err(chart::err)?;
         Ok(())
     }
 }
