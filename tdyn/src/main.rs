@@ -76,7 +76,7 @@ enum Cmd {
         /// Output directory (default: out/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// No progress bar, no summary and no chart.
+        /// No start line, progress lines, summary or chart (warnings are still printed).
         #[arg(long, short)]
         quiet: bool,
         /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
@@ -234,7 +234,7 @@ enum Cmd {
     },
     /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
     Selftest {
-        /// Which kernel: `comm`.
+        /// Which kernel: `comm`, `rcb`, `contact` or `sph`.
         kernel: String,
         /// Seed of the random patterns.
         #[arg(long, default_value_t = 1)]

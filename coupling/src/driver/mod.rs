@@ -269,6 +269,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     outputs.rows(world, &model, &check.row(&clock, &model, 0.0))?;
     let mut progress = progress::Progress::start(
         world.rank() == 0 && !opts.quiet,
+        world.rank() == 0,
         &start_info(world, &scene, &model, stable0, clock.dt),
     );
 

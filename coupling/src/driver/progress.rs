@@ -49,8 +49,9 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// Prints the start line (and the units warning) when `active`.
-    pub fn start(active: bool, info: &StartInfo) -> Progress {
+    /// Prints the start line when `active`, and the units warning when `warn` (rank 0, even
+    /// when quiet: a warning is not progress).
+    pub fn start(active: bool, warn: bool, info: &StartInfo) -> Progress {
         let p = Progress {
             active,
             terminal: std::io::stderr().is_terminal(),
@@ -58,8 +59,8 @@ impl Progress {
             last: 0.0,
             drawn: false,
         };
+        let steps = info.end_time / info.dt;
         if active {
-            let steps = info.end_time / info.dt;
             eprintln!(
                 "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s, about {} steps to {:.3e} s",
                 info.scene,
@@ -74,13 +75,13 @@ impl Progress {
                 steps_text(steps),
                 info.end_time
             );
-            if steps > STEPS_WARNING {
-                eprintln!(
-                    "tdyn: warning: about {} steps expected (dt = {:.3e} s): check the scene's units (SI: m, kg, s, Pa, kg/m^3; a density of 7.85e-9 is steel in t/mm^3)",
-                    steps_text(steps),
-                    info.dt
-                );
-            }
+        }
+        if warn && steps > STEPS_WARNING {
+            eprintln!(
+                "tdyn: warning: about {} steps expected (dt = {:.3e} s): check the scene's units (SI: m, kg, s, Pa, kg/m^3; a density of 7.85e-9 is steel in t/mm^3)",
+                steps_text(steps),
+                info.dt
+            );
         }
         p
     }
