@@ -582,466 +582,48 @@ const MODEL_KEYS: &[(&str, &[&str])] = &[
     ("fluid", &[]),
 ];
 
-/// Parses scene text; `file` names it in errors and anchors relative paths.
+/// Names the scene file in every error.
+struct Ctx {
+    file: String,
+}
+
+impl Ctx {
+    /// An error at `key`.
+    fn err(&self, key: &str, message: String) -> SceneError {
+        SceneError {
+            file: self.file.clone(),
+            key: key.to_string(),
+            message,
+        }
+    }
+}
+
+/// A positive finite number.
+fn pos(v: f64) -> bool {
+    v > 0.0 && v.is_finite()
+}
+
+/// Parses scene text; `file` names it in errors and anchors relative paths. The tables are
+/// checked in the order they are documented (SCENE.md); the first mistake is reported.
 pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
-    let fname = file.display().to_string();
-    let err = |key: &str, message: String| SceneError {
-        file: fname.clone(),
-        key: key.to_string(),
-        message,
+    let cx = Ctx {
+        file: file.display().to_string(),
     };
-    let de = toml::Deserializer::new(text);
-    let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
-        let inner = e.into_inner();
-        let msg = inner.message().trim().to_string();
-        let key = if path.is_empty() || path == "." {
-            "(scene)".to_string()
-        } else {
-            path
-        };
-        err(&key, msg)
-    })?;
+    let raw = deserialize(&cx, text)?;
     let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
-
-    let r = &raw.run;
-    let pos = |v: f64| v > 0.0 && v.is_finite();
-    if !pos(r.end_time) {
-        return Err(err(
-            "run.end_time",
-            format!("expected a positive number of seconds, got {}", r.end_time),
-        ));
-    }
-    if !(r.dt_safety > 0.0 && r.dt_safety <= 1.0) {
-        return Err(err(
-            "run.dt_safety",
-            format!("expected a fraction in (0, 1], got {}", r.dt_safety),
-        ));
-    }
-    if let Some(dt) = r.dt {
-        if !pos(dt) {
-            return Err(err(
-                "run.dt",
-                format!("expected a positive step in seconds, got {dt}"),
-            ));
-        }
-    } else if r.mode == Mode::Implicit {
-        return Err(err(
-            "run.dt",
-            "mode = \"implicit\" needs a fixed step run.dt (seconds)".into(),
-        ));
-    }
-    if let Some(o) = r.output_every {
-        if !pos(o) {
-            return Err(err(
-                "run.output_every",
-                format!("expected a positive interval in seconds, got {o}"),
-            ));
-        }
-    }
-    if !(r.history_every >= 0.0 && r.history_every.is_finite()) {
-        return Err(err(
-            "run.history_every",
-            format!("expected seconds >= 0, got {}", r.history_every),
-        ));
-    }
-    if !pos(r.max_energy_error) {
-        return Err(err(
-            "run.max_energy_error",
-            format!("expected a positive fraction, got {}", r.max_energy_error),
-        ));
-    }
-    for (k, v) in [
-        ("run.bulk_viscosity.linear", r.bulk_viscosity.linear),
-        ("run.bulk_viscosity.quadratic", r.bulk_viscosity.quadratic),
-        (
-            "run.hourglass.coefficient",
-            r.hourglass.coefficient.unwrap_or(0.0),
-        ),
-    ] {
-        if !(v >= 0.0 && v.is_finite()) {
-            return Err(err(k, format!("expected a coefficient >= 0, got {v}")));
-        }
-    }
-
-    if !HOURGLASS_KINDS.contains(&r.hourglass.kind.as_str()) {
-        return Err(err(
-            "run.hourglass.kind",
-            format!(
-                "expected one of {}, got \"{}\"",
-                HOURGLASS_KINDS.join(", "),
-                r.hourglass.kind
-            ),
-        ));
-    }
-
-    let mut meshes = Vec::new();
-    for (i, m) in raw.mesh.iter().enumerate() {
-        let f = dir.join(&m.file);
-        let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
-        if ext != "geo" && ext != "msh" {
-            return Err(err(
-                &format!("mesh[{i}].file"),
-                format!("expected a .geo or .msh file, got {}", m.file.display()),
-            ));
-        }
-        if !f.exists() {
-            return Err(err(
-                &format!("mesh[{i}].file"),
-                format!("no such file: {}", f.display()),
-            ));
-        }
-        meshes.push(MeshDef {
-            file: f,
-            params: m.params.clone(),
-            translate: m.translate,
-        });
-    }
-    if meshes.is_empty() && raw.particles.is_empty() {
-        return Err(err(
-            "mesh",
-            "a scene needs at least one [[mesh]] or [[particles]]".into(),
-        ));
-    }
-
-    let mut materials: Vec<MaterialSpec> = Vec::new();
-    for (i, t) in raw.material.iter().enumerate() {
-        let key = |k: &str| format!("material[{i}].{k}");
-        let name = match t.get("name") {
-            Some(toml::Value::String(s)) => s.clone(),
-            Some(_) => return Err(err(&key("name"), "expected a string".into())),
-            None => {
-                return Err(err(
-                    &key("name"),
-                    "missing (every material needs a name)".into(),
-                ))
-            }
-        };
-        if materials.iter().any(|m| m.name == name) {
-            return Err(err(
-                &key("name"),
-                format!("material \"{name}\" is defined twice"),
-            ));
-        }
-        let model = match t.get("model") {
-            Some(toml::Value::String(s)) => s.clone(),
-            Some(_) => return Err(err(&key("model"), "expected a string".into())),
-            None => {
-                return Err(err(
-                    &key("model"),
-                    "missing (elastic, j2_plastic, johnson_cook or fluid)".into(),
-                ))
-            }
-        };
-        let Some((_, keys)) = MODEL_KEYS.iter().find(|(m, _)| *m == model) else {
-            return Err(err(&key("model"), format!("unknown model \"{model}\" (expected one of elastic, j2_plastic, johnson_cook, fluid)")));
-        };
-        let density = match t.get("density").and_then(num) {
-            Some(d) if pos(d) => d,
-            Some(d) => {
-                return Err(err(
-                    &key("density"),
-                    format!("expected a positive density in kg/m^3, got {d}"),
-                ))
-            }
-            None => return Err(err(&key("density"), "missing (kg/m^3)".into())),
-        };
-        let mut params = BTreeMap::new();
-        let mut eos = None;
-        for (k, v) in t {
-            match k.as_str() {
-                "name" | "model" | "density" => {}
-                "eos" if model == "fluid" => {
-                    let Some(et) = v.as_table() else {
-                        return Err(err(
-                            &key("eos"),
-                            "expected a table { kind = ..., ... }".into(),
-                        ));
-                    };
-                    let kind = et
-                        .get("kind")
-                        .and_then(|k| k.as_str())
-                        .unwrap_or("")
-                        .to_string();
-                    // the equation-of-state keys by kind: the eos crate's table
-                    let Some(ek) = ::eos::kind(&kind).map(|k| k.keys) else {
-                        return Err(err(
-                            &key("eos.kind"),
-                            format!(
-                                "unknown or missing eos kind \"{kind}\" (expected one of {})",
-                                ::eos::kind_names()
-                            ),
-                        ));
-                    };
-                    let mut ep = BTreeMap::new();
-                    for (ekk, ev) in et {
-                        if ekk == "kind" {
-                            continue;
-                        }
-                        if !ek.contains(&ekk.as_str()) {
-                            return Err(err(
-                                &key(&format!("eos.{ekk}")),
-                                format!("unknown key for eos {kind} (expected {})", ek.join(", ")),
-                            ));
-                        }
-                        let Some(x) = num(ev) else {
-                            return Err(err(
-                                &key(&format!("eos.{ekk}")),
-                                "expected a number".into(),
-                            ));
-                        };
-                        ep.insert(ekk.clone(), x);
-                    }
-                    for need in ek.iter() {
-                        if !ep.contains_key(*need) {
-                            return Err(err(
-                                &key(&format!("eos.{need}")),
-                                format!("missing (eos {kind} needs {})", ek.join(", ")),
-                            ));
-                        }
-                    }
-                    eos = Some(EosSpec { kind, params: ep });
-                }
-                _ => {
-                    if !keys.contains(&k.as_str()) {
-                        let mut all: Vec<&str> = vec!["name", "model", "density"];
-                        all.extend(keys.iter());
-                        if model == "fluid" {
-                            all.push("eos");
-                        }
-                        return Err(err(
-                            &key(k),
-                            format!(
-                                "unknown key for model {model} (expected one of {})",
-                                all.join(", ")
-                            ),
-                        ));
-                    }
-                    let Some(x) = num(v) else {
-                        return Err(err(&key(k), "expected a number".into()));
-                    };
-                    params.insert(k.clone(), x);
-                }
-            }
-        }
-        for need in keys.iter() {
-            if !params.contains_key(*need) {
-                return Err(err(
-                    &key(need),
-                    format!("missing (model {model} needs {})", keys.join(", ")),
-                ));
-            }
-        }
-        if model == "fluid" && eos.is_none() {
-            return Err(err(
-                &key("eos"),
-                "missing: a fluid needs eos = { kind = ..., ... }".into(),
-            ));
-        }
-        let spec = MaterialSpec {
-            name: name.clone(),
-            model: model.clone(),
-            density,
-            params,
-            eos,
-        };
-        if model != "fluid" {
-            if let Err(e) = fe_petsc::material::build_material(&spec) {
-                return Err(err(&format!("material[{i}]"), e.to_string()));
-            }
-        }
-        materials.push(spec);
-    }
-    let mat_names = || {
-        materials
-            .iter()
-            .map(|m| m.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    for (i, b) in raw.block.iter().enumerate() {
-        if !materials.iter().any(|m| m.name == b.material) {
-            return Err(err(
-                &format!("block[{i}].material"),
-                format!(
-                    "no material named \"{}\" (materials: {})",
-                    b.material,
-                    mat_names()
-                ),
-            ));
-        }
-    }
-    // A fluid is built (EOS keys and values checked) when a block meshes it; particles take
-    // their EOS from the SPH side.
-    for (i, m) in materials.iter().enumerate() {
-        if m.model == "fluid" && raw.block.iter().any(|b| b.material == m.name) {
-            if let Err(e) = fe_petsc::material::build_material(m) {
-                return Err(err(&format!("material[{i}]"), e.to_string()));
-            }
-        }
-    }
-    let mut boundaries = Vec::new();
-    for (i, b) in raw.boundary.iter().enumerate() {
-        let kind = match (b.kind.as_str(), b.velocity) {
-            ("fixed", None) => BoundaryKind::Fixed,
-            ("symmetry", None) => BoundaryKind::Symmetry,
-            ("velocity", Some(v)) => BoundaryKind::Velocity(v),
-            ("velocity", None) => {
-                return Err(err(
-                    &format!("boundary[{i}].velocity"),
-                    "missing: kind = \"velocity\" needs velocity = [vx, vy, vz]".into(),
-                ))
-            }
-            ("fixed" | "symmetry", Some(_)) => {
-                return Err(err(
-                    &format!("boundary[{i}].velocity"),
-                    format!(
-                        "only kind = \"velocity\" takes a velocity (this boundary is \"{}\")",
-                        b.kind
-                    ),
-                ))
-            }
-            (k, _) => {
-                return Err(err(
-                    &format!("boundary[{i}].kind"),
-                    format!("unknown kind \"{k}\" (expected fixed, velocity or symmetry)"),
-                ))
-            }
-        };
-        boundaries.push(Boundary {
-            group: b.group.clone(),
-            kind,
-        });
-    }
-    for (i, p) in raw.particles.iter().enumerate() {
-        match materials.iter().find(|m| m.name == p.material) {
-            None => {
-                return Err(err(
-                    &format!("particles[{i}].material"),
-                    format!(
-                        "no material named \"{}\" (materials: {})",
-                        p.material,
-                        mat_names()
-                    ),
-                ))
-            }
-            Some(m) if m.eos.is_none() => {
-                return Err(err(
-                    &format!("particles[{i}].material"),
-                    format!(
-                        "material \"{}\" has no eos: particles need a fluid material with an eos",
-                        p.material
-                    ),
-                ))
-            }
-            _ => {}
-        }
-        if !pos(p.spacing) {
-            return Err(err(
-                &format!("particles[{i}].spacing"),
-                format!("expected a positive spacing in m, got {}", p.spacing),
-            ));
-        }
-        if !pos(p.h_factor) {
-            return Err(err(
-                &format!("particles[{i}].h_factor"),
-                format!("expected a positive factor, got {}", p.h_factor),
-            ));
-        }
-        if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
-            return Err(err(
-                &format!("particles[{i}].liggghts_type"),
-                "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
-            ));
-        }
-    }
+    check_run(&cx, &raw.run)?;
+    let meshes = check_meshes(&cx, &dir, &raw.mesh, raw.particles.is_empty())?;
+    let materials = check_materials(&cx, &raw.material)?;
+    check_blocks(&cx, &raw.block, &materials)?;
+    let boundaries = check_boundaries(&cx, &raw.boundary)?;
+    check_particles(&cx, &raw.particles, &materials)?;
     if let Some(s) = &raw.sph {
-        for (k, v) in [
-            ("sph.adaptive_h", s.adaptive_h),
-            ("sph.conductivity", s.conductivity),
-        ] {
-            if let Some(v) = v {
-                if !(v > 0.0 && v.is_finite()) {
-                    return Err(err(k, format!("expected a positive number, got {v}")));
-                }
-            }
-        }
-        for (k, v, ok) in [
-            ("sph.kernel", &s.kernel, &["cubic_spline", "wendland"][..]),
-            ("sph.density", &s.density, &["continuity", "summation"][..]),
-            ("sph.profile", &s.profile, &["standard", "liggghts"][..]),
-        ] {
-            if !ok.contains(&v.as_str()) {
-                return Err(err(
-                    k,
-                    format!("unknown value \"{v}\" (expected one of {})", ok.join(", ")),
-                ));
-            }
-        }
+        check_sph(&cx, s)?;
     }
-    let mut names: Vec<&str> = Vec::new();
-    for (i, p) in raw.probe.iter().enumerate() {
-        if names.contains(&p.name.as_str()) {
-            return Err(err(
-                &format!("probe[{i}].name"),
-                format!("probe \"{}\" is defined twice", p.name),
-            ));
-        }
-        names.push(&p.name);
-        if p.fields.is_empty() {
-            return Err(err(
-                &format!("probe[{i}].fields"),
-                "expected at least one field".into(),
-            ));
-        }
-    }
-    for (i, f) in raw.output.fields.iter().enumerate() {
-        if !OUTPUT_FIELDS.contains(&f.as_str()) {
-            return Err(err(
-                &format!("output.fields[{i}]"),
-                format!(
-                    "unknown field \"{f}\" (expected one of {})",
-                    OUTPUT_FIELDS.join(", ")
-                ),
-            ));
-        }
-    }
+    check_probes(&cx, &raw.probe)?;
+    check_output(&cx, &raw.output)?;
     if let Some(c) = &raw.compare {
-        if !COMPARE_MEASURES.contains(&c.measure.as_str()) {
-            return Err(err(
-                "compare.measure",
-                format!(
-                    "unknown value \"{}\" (expected one of {})",
-                    c.measure,
-                    COMPARE_MEASURES.join(", ")
-                ),
-            ));
-        }
-        if let Some(q) = &c.quantity {
-            let known = raw
-                .probe
-                .iter()
-                .flat_map(|p| {
-                    p.fields
-                        .iter()
-                        .map(move |f| format!("{}.{}", p.name, f.name()))
-                })
-                .any(|col| &col == q);
-            if !known {
-                return Err(err(
-                    "compare.quantity",
-                    format!("\"{q}\" is not a probe column (expected probe.field of a [[probe]])"),
-                ));
-            }
-        }
-        if let Some(t) = c.reference_period {
-            if !pos(t) {
-                return Err(err(
-                    "compare.reference_period",
-                    format!("expected a positive period in seconds, got {t}"),
-                ));
-            }
-        }
+        check_compare(&cx, c, &raw.probe)?;
     }
     Ok(Scene {
         file: file.to_path_buf(),
@@ -1061,6 +643,520 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         compare: raw.compare,
         sweep: raw.sweep,
     })
+}
+
+/// The TOML text into the raw tables (serde: unknown keys and wrong types refused, with their
+/// path).
+fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
+    let de = toml::Deserializer::new(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let msg = inner.message().trim().to_string();
+        let key = if path.is_empty() || path == "." {
+            "(scene)".to_string()
+        } else {
+            path
+        };
+        cx.err(&key, msg)
+    })
+}
+
+/// `[run]`: times, step, intervals, energy limit, bulk viscosity and hourglass control.
+fn check_run(cx: &Ctx, r: &Run) -> Result<(), SceneError> {
+    if !pos(r.end_time) {
+        return Err(cx.err(
+            "run.end_time",
+            format!("expected a positive number of seconds, got {}", r.end_time),
+        ));
+    }
+    if !(r.dt_safety > 0.0 && r.dt_safety <= 1.0) {
+        return Err(cx.err(
+            "run.dt_safety",
+            format!("expected a fraction in (0, 1], got {}", r.dt_safety),
+        ));
+    }
+    if let Some(dt) = r.dt {
+        if !pos(dt) {
+            return Err(cx.err(
+                "run.dt",
+                format!("expected a positive step in seconds, got {dt}"),
+            ));
+        }
+    } else if r.mode == Mode::Implicit {
+        return Err(cx.err(
+            "run.dt",
+            "mode = \"implicit\" needs a fixed step run.dt (seconds)".into(),
+        ));
+    }
+    if let Some(o) = r.output_every {
+        if !pos(o) {
+            return Err(cx.err(
+                "run.output_every",
+                format!("expected a positive interval in seconds, got {o}"),
+            ));
+        }
+    }
+    if !(r.history_every >= 0.0 && r.history_every.is_finite()) {
+        return Err(cx.err(
+            "run.history_every",
+            format!("expected seconds >= 0, got {}", r.history_every),
+        ));
+    }
+    if !pos(r.max_energy_error) {
+        return Err(cx.err(
+            "run.max_energy_error",
+            format!("expected a positive fraction, got {}", r.max_energy_error),
+        ));
+    }
+    for (k, v) in [
+        ("run.bulk_viscosity.linear", r.bulk_viscosity.linear),
+        ("run.bulk_viscosity.quadratic", r.bulk_viscosity.quadratic),
+        (
+            "run.hourglass.coefficient",
+            r.hourglass.coefficient.unwrap_or(0.0),
+        ),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(cx.err(k, format!("expected a coefficient >= 0, got {v}")));
+        }
+    }
+    if !HOURGLASS_KINDS.contains(&r.hourglass.kind.as_str()) {
+        return Err(cx.err(
+            "run.hourglass.kind",
+            format!(
+                "expected one of {}, got \"{}\"",
+                HOURGLASS_KINDS.join(", "),
+                r.hourglass.kind
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `[[mesh]]`: each file a .geo or .msh that exists (relative to the scene's directory); a
+/// scene needs a mesh unless it has particles.
+fn check_meshes(
+    cx: &Ctx,
+    dir: &Path,
+    raw: &[RawMesh],
+    no_particles: bool,
+) -> Result<Vec<MeshDef>, SceneError> {
+    let mut meshes = Vec::new();
+    for (i, m) in raw.iter().enumerate() {
+        let f = dir.join(&m.file);
+        let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if ext != "geo" && ext != "msh" {
+            return Err(cx.err(
+                &format!("mesh[{i}].file"),
+                format!("expected a .geo or .msh file, got {}", m.file.display()),
+            ));
+        }
+        if !f.exists() {
+            return Err(cx.err(
+                &format!("mesh[{i}].file"),
+                format!("no such file: {}", f.display()),
+            ));
+        }
+        meshes.push(MeshDef {
+            file: f,
+            params: m.params.clone(),
+            translate: m.translate,
+        });
+    }
+    if meshes.is_empty() && no_particles {
+        return Err(cx.err(
+            "mesh",
+            "a scene needs at least one [[mesh]] or [[particles]]".into(),
+        ));
+    }
+    Ok(meshes)
+}
+
+/// `[[material]]`: each table checked against its model's keys and built once (a fluid is
+/// built when a block meshes it: [`check_blocks`]).
+fn check_materials(cx: &Ctx, raw: &[toml::Table]) -> Result<Vec<MaterialSpec>, SceneError> {
+    let mut materials: Vec<MaterialSpec> = Vec::new();
+    for (i, t) in raw.iter().enumerate() {
+        let spec = check_material(cx, i, t, &materials)?;
+        if spec.model != "fluid" {
+            if let Err(e) = fe_petsc::material::build_material(&spec) {
+                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+            }
+        }
+        materials.push(spec);
+    }
+    Ok(materials)
+}
+
+/// One `[[material]]` table (the `i`-th): name (unique among `earlier`), model, density, the
+/// model's keys, and a fluid's `eos`.
+fn check_material(
+    cx: &Ctx,
+    i: usize,
+    t: &toml::Table,
+    earlier: &[MaterialSpec],
+) -> Result<MaterialSpec, SceneError> {
+    let key = |k: &str| format!("material[{i}].{k}");
+    let name = match t.get("name") {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(_) => return Err(cx.err(&key("name"), "expected a string".into())),
+        None => return Err(cx.err(&key("name"), "missing (every material needs a name)".into())),
+    };
+    if earlier.iter().any(|m| m.name == name) {
+        return Err(cx.err(
+            &key("name"),
+            format!("material \"{name}\" is defined twice"),
+        ));
+    }
+    let model = match t.get("model") {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(_) => return Err(cx.err(&key("model"), "expected a string".into())),
+        None => {
+            return Err(cx.err(
+                &key("model"),
+                "missing (elastic, j2_plastic, johnson_cook or fluid)".into(),
+            ))
+        }
+    };
+    let Some((_, keys)) = MODEL_KEYS.iter().find(|(m, _)| *m == model) else {
+        return Err(cx.err(&key("model"), format!("unknown model \"{model}\" (expected one of elastic, j2_plastic, johnson_cook, fluid)")));
+    };
+    let density = match t.get("density").and_then(num) {
+        Some(d) if pos(d) => d,
+        Some(d) => {
+            return Err(cx.err(
+                &key("density"),
+                format!("expected a positive density in kg/m^3, got {d}"),
+            ))
+        }
+        None => return Err(cx.err(&key("density"), "missing (kg/m^3)".into())),
+    };
+    let mut params = BTreeMap::new();
+    let mut eos = None;
+    for (k, v) in t {
+        match k.as_str() {
+            "name" | "model" | "density" => {}
+            "eos" if model == "fluid" => eos = Some(check_eos(cx, i, v)?),
+            _ => {
+                if !keys.contains(&k.as_str()) {
+                    let mut all: Vec<&str> = vec!["name", "model", "density"];
+                    all.extend(keys.iter());
+                    if model == "fluid" {
+                        all.push("eos");
+                    }
+                    return Err(cx.err(
+                        &key(k),
+                        format!(
+                            "unknown key for model {model} (expected one of {})",
+                            all.join(", ")
+                        ),
+                    ));
+                }
+                let Some(x) = num(v) else {
+                    return Err(cx.err(&key(k), "expected a number".into()));
+                };
+                params.insert(k.clone(), x);
+            }
+        }
+    }
+    for need in keys.iter() {
+        if !params.contains_key(*need) {
+            return Err(cx.err(
+                &key(need),
+                format!("missing (model {model} needs {})", keys.join(", ")),
+            ));
+        }
+    }
+    if model == "fluid" && eos.is_none() {
+        return Err(cx.err(
+            &key("eos"),
+            "missing: a fluid needs eos = { kind = ..., ... }".into(),
+        ));
+    }
+    Ok(MaterialSpec {
+        name,
+        model,
+        density,
+        params,
+        eos,
+    })
+}
+
+/// The `eos` table of fluid material `i`: a kind from the eos crate's name table and exactly
+/// that kind's keys, each a number.
+fn check_eos(cx: &Ctx, i: usize, v: &toml::Value) -> Result<EosSpec, SceneError> {
+    let key = |k: &str| format!("material[{i}].{k}");
+    let Some(et) = v.as_table() else {
+        return Err(cx.err(&key("eos"), "expected a table { kind = ..., ... }".into()));
+    };
+    let kind = et
+        .get("kind")
+        .and_then(|k| k.as_str())
+        .unwrap_or("")
+        .to_string();
+    // the equation-of-state keys by kind: the eos crate's table
+    let Some(ek) = ::eos::kind(&kind).map(|k| k.keys) else {
+        return Err(cx.err(
+            &key("eos.kind"),
+            format!(
+                "unknown or missing eos kind \"{kind}\" (expected one of {})",
+                ::eos::kind_names()
+            ),
+        ));
+    };
+    let mut ep = BTreeMap::new();
+    for (ekk, ev) in et {
+        if ekk == "kind" {
+            continue;
+        }
+        if !ek.contains(&ekk.as_str()) {
+            return Err(cx.err(
+                &key(&format!("eos.{ekk}")),
+                format!("unknown key for eos {kind} (expected {})", ek.join(", ")),
+            ));
+        }
+        let Some(x) = num(ev) else {
+            return Err(cx.err(&key(&format!("eos.{ekk}")), "expected a number".into()));
+        };
+        ep.insert(ekk.clone(), x);
+    }
+    for need in ek.iter() {
+        if !ep.contains_key(*need) {
+            return Err(cx.err(
+                &key(&format!("eos.{need}")),
+                format!("missing (eos {kind} needs {})", ek.join(", ")),
+            ));
+        }
+    }
+    Ok(EosSpec { kind, params: ep })
+}
+
+/// The material names, for messages.
+fn material_names(materials: &[MaterialSpec]) -> String {
+    materials
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `[[block]]`: each names a defined material; a fluid meshed by a block is built here (its
+/// EOS keys and values checked); particles take their EOS from the SPH side.
+fn check_blocks(cx: &Ctx, blocks: &[Block], materials: &[MaterialSpec]) -> Result<(), SceneError> {
+    for (i, b) in blocks.iter().enumerate() {
+        if !materials.iter().any(|m| m.name == b.material) {
+            return Err(cx.err(
+                &format!("block[{i}].material"),
+                format!(
+                    "no material named \"{}\" (materials: {})",
+                    b.material,
+                    material_names(materials)
+                ),
+            ));
+        }
+    }
+    for (i, m) in materials.iter().enumerate() {
+        if m.model == "fluid" && blocks.iter().any(|b| b.material == m.name) {
+            if let Err(e) = fe_petsc::material::build_material(m) {
+                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `[[boundary]]`: the kind, and a velocity exactly when the kind is `velocity`.
+fn check_boundaries(cx: &Ctx, raw: &[RawBoundary]) -> Result<Vec<Boundary>, SceneError> {
+    let mut boundaries = Vec::new();
+    for (i, b) in raw.iter().enumerate() {
+        let kind = match (b.kind.as_str(), b.velocity) {
+            ("fixed", None) => BoundaryKind::Fixed,
+            ("symmetry", None) => BoundaryKind::Symmetry,
+            ("velocity", Some(v)) => BoundaryKind::Velocity(v),
+            ("velocity", None) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].velocity"),
+                    "missing: kind = \"velocity\" needs velocity = [vx, vy, vz]".into(),
+                ))
+            }
+            ("fixed" | "symmetry", Some(_)) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].velocity"),
+                    format!(
+                        "only kind = \"velocity\" takes a velocity (this boundary is \"{}\")",
+                        b.kind
+                    ),
+                ))
+            }
+            (k, _) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].kind"),
+                    format!("unknown kind \"{k}\" (expected fixed, velocity or symmetry)"),
+                ))
+            }
+        };
+        boundaries.push(Boundary {
+            group: b.group.clone(),
+            kind,
+        });
+    }
+    Ok(boundaries)
+}
+
+/// `[[particles]]`: a material with an eos, a positive spacing and h factor, `liggghts_type`
+/// only with a data file.
+fn check_particles(
+    cx: &Ctx,
+    particles: &[ParticlesDef],
+    materials: &[MaterialSpec],
+) -> Result<(), SceneError> {
+    for (i, p) in particles.iter().enumerate() {
+        match materials.iter().find(|m| m.name == p.material) {
+            None => {
+                return Err(cx.err(
+                    &format!("particles[{i}].material"),
+                    format!(
+                        "no material named \"{}\" (materials: {})",
+                        p.material,
+                        material_names(materials)
+                    ),
+                ))
+            }
+            Some(m) if m.eos.is_none() => {
+                return Err(cx.err(
+                    &format!("particles[{i}].material"),
+                    format!(
+                        "material \"{}\" has no eos: particles need a fluid material with an eos",
+                        p.material
+                    ),
+                ))
+            }
+            _ => {}
+        }
+        if !pos(p.spacing) {
+            return Err(cx.err(
+                &format!("particles[{i}].spacing"),
+                format!("expected a positive spacing in m, got {}", p.spacing),
+            ));
+        }
+        if !pos(p.h_factor) {
+            return Err(cx.err(
+                &format!("particles[{i}].h_factor"),
+                format!("expected a positive factor, got {}", p.h_factor),
+            ));
+        }
+        if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
+            return Err(cx.err(
+                &format!("particles[{i}].liggghts_type"),
+                "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[sph]`: positive optional coefficients and known names.
+fn check_sph(cx: &Ctx, s: &SphDef) -> Result<(), SceneError> {
+    for (k, v) in [
+        ("sph.adaptive_h", s.adaptive_h),
+        ("sph.conductivity", s.conductivity),
+    ] {
+        if let Some(v) = v {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(cx.err(k, format!("expected a positive number, got {v}")));
+            }
+        }
+    }
+    for (k, v, ok) in [
+        ("sph.kernel", &s.kernel, &["cubic_spline", "wendland"][..]),
+        ("sph.density", &s.density, &["continuity", "summation"][..]),
+        ("sph.profile", &s.profile, &["standard", "liggghts"][..]),
+    ] {
+        if !ok.contains(&v.as_str()) {
+            return Err(cx.err(
+                k,
+                format!("unknown value \"{v}\" (expected one of {})", ok.join(", ")),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[[probe]]`: unique names, at least one field each.
+fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError> {
+    let mut names: Vec<&str> = Vec::new();
+    for (i, p) in probes.iter().enumerate() {
+        if names.contains(&p.name.as_str()) {
+            return Err(cx.err(
+                &format!("probe[{i}].name"),
+                format!("probe \"{}\" is defined twice", p.name),
+            ));
+        }
+        names.push(&p.name);
+        if p.fields.is_empty() {
+            return Err(cx.err(
+                &format!("probe[{i}].fields"),
+                "expected at least one field".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[output]`: known field names.
+fn check_output(cx: &Ctx, output: &OutputDef) -> Result<(), SceneError> {
+    for (i, f) in output.fields.iter().enumerate() {
+        if !OUTPUT_FIELDS.contains(&f.as_str()) {
+            return Err(cx.err(
+                &format!("output.fields[{i}]"),
+                format!(
+                    "unknown field \"{f}\" (expected one of {})",
+                    OUTPUT_FIELDS.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[compare]`: a known measure, a quantity that is a probe column, a positive period.
+fn check_compare(cx: &Ctx, c: &CompareDef, probes: &[Probe]) -> Result<(), SceneError> {
+    if !COMPARE_MEASURES.contains(&c.measure.as_str()) {
+        return Err(cx.err(
+            "compare.measure",
+            format!(
+                "unknown value \"{}\" (expected one of {})",
+                c.measure,
+                COMPARE_MEASURES.join(", ")
+            ),
+        ));
+    }
+    if let Some(q) = &c.quantity {
+        let known = probes
+            .iter()
+            .flat_map(|p| {
+                p.fields
+                    .iter()
+                    .map(move |f| format!("{}.{}", p.name, f.name()))
+            })
+            .any(|col| &col == q);
+        if !known {
+            return Err(cx.err(
+                "compare.quantity",
+                format!("\"{q}\" is not a probe column (expected probe.field of a [[probe]])"),
+            ));
+        }
+    }
+    if let Some(t) = c.reference_period {
+        if !pos(t) {
+            return Err(cx.err(
+                "compare.reference_period",
+                format!("expected a positive period in seconds, got {t}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn num(v: &toml::Value) -> Option<f64> {
