@@ -8,6 +8,7 @@
 // `petsc_call!` wraps one FFI call whose arguments are raw PETSc handles: the call is the unsafe part.
 #![allow(clippy::macro_metavars_in_unsafe)]
 
+pub mod agree;
 pub mod blocks;
 pub mod explicit;
 pub mod hex;

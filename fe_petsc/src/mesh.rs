@@ -114,342 +114,434 @@ fn cstr(s: &str) -> CString {
     CString::new(s).unwrap()
 }
 
-/// Broadcasts rank 0's error (if any) so that every rank returns the same error together.
-fn agree_on_error(comm: &SimpleCommunicator, err: Option<String>) -> Result<(), MeshError> {
-    let mut len = err.as_ref().map(|e| e.len() as u64).unwrap_or(0);
-    let root = comm.process_at_rank(0);
-    root.broadcast_into(&mut len);
-    if len == 0 {
-        return Ok(());
-    }
-    let mut buf = err
-        .map(|e| e.into_bytes())
-        .unwrap_or_else(|| vec![0u8; len as usize]);
-    root.broadcast_into(&mut buf[..]);
-    Err(MeshError::Invalid(
-        String::from_utf8_lossy(&buf).into_owned(),
-    ))
+/// The agreement step on a mesh error: every rank returns the lowest failing rank's message.
+fn agree(comm: &SimpleCommunicator, err: Option<String>) -> Result<(), MeshError> {
+    crate::agree::first_error(comm, err).map_err(MeshError::Invalid)
+}
+
+/// What rank 0 learns from the whole mesh before it is distributed; the other ranks hold the
+/// defaults until [`share_root_facts`].
+#[derive(Default)]
+struct RootFacts {
+    /// gmsh tags of the physical surfaces, sorted (bit order of the surface masks).
+    surface_tags: Vec<i32>,
+    /// The unit normal of each surface when it is planar.
+    surface_normals: Vec<Option<[f64; 3]>>,
+    /// The original (file) number of each point of rank 0's DM: cells and vertices.
+    orig: Vec<i32>,
+    /// The surface bit mask of each point.
+    mask: Vec<i32>,
+    /// METIS's part of each cell (none: one rank, or the user chose a PETSc partitioner).
+    partition: Option<Vec<i32>>,
+    /// Cells and vertices in the whole mesh.
+    totals: [u64; 2],
 }
 
 impl DistributedMesh {
     /// Reads `path` (gmsh .msh) on rank 0, partitions it with METIS (unless the user chose a
     /// PETSc partitioner with `-petscpartitioner_type`), distributes it and extracts the flat
-    /// arrays. Collective.
+    /// arrays. Collective; every rank returns the same error. The caller checks the file first
+    /// (PETSc's reader fails on rank 0 alone, inside a collective call).
     pub fn load(comm: &SimpleCommunicator, path: &Path) -> Result<Self, MeshError> {
-        let rank = comm.rank();
-        let size = comm.size();
-        let cpath = cstr(&path.to_string_lossy());
-        let mut dm = Dm(std::ptr::null_mut());
-        // SAFETY: FFI; PETSc reads the file on rank 0 of the communicator.
-        let code = unsafe {
-            sys::DMPlexCreateGmshFromFile(comm.as_raw(), cpath.as_ptr(), sys::PETSC_TRUE, &mut dm.0)
-        };
-        crate::petsc::check(code, "DMPlexCreateGmshFromFile").map_err(|e| {
-            MeshError::Invalid(format!(
-                "cannot read mesh {}: {}",
-                path.display(),
-                e.message
-            ))
-        })?;
-        let cell_sets = cstr("Cell Sets");
-        let face_sets = cstr("Face Sets");
-
-        // --- rank 0: checks, surface masks, original numbers, METIS partition -------------
-        let (p0, p1) = dm.chart()?;
-        let (c0, c1) = dm.height_stratum(0)?;
-        let (v0, v1) = dm.depth_stratum(0)?;
-        let mut err = None;
-        let mut surface_tags: Vec<i32> = Vec::new();
-        let mut surface_normals: Vec<Option<[f64; 3]>> = Vec::new();
-        let npts = (p1 - p0) as usize;
-        let mut orig = vec![-1i32; npts];
-        let mut mask = vec![0i32; npts];
-        let mut partition: Option<Vec<i32>> = None;
-        if rank == 0 {
-            let mut dim = 0;
-            petsc_call!(DMGetDimension(dm.0, &mut dim))?;
-            if c1 == c0 {
-                err = Some(format!("mesh {} has no cells", path.display()));
-            } else if dim != 3 {
-                err = Some(format!(
-                    "mesh {} is {}-dimensional: a 3D hexahedral mesh is needed",
-                    path.display(),
-                    dim
-                ));
-            }
-            if err.is_none() {
-                let (mut nhex, mut other) = (0usize, 0usize);
-                let mut first_other = None;
-                for c in c0..c1 {
-                    let mut t: sys::DMPolytopeType = 0;
-                    petsc_call!(DMPlexGetCellType(dm.0, c, &mut t))?;
-                    if t == sys::DM_POLYTOPE_HEXAHEDRON {
-                        nhex += 1;
-                    } else {
-                        other += 1;
-                        first_other.get_or_insert((c - c0, t));
-                    }
-                }
-                if other > 0 {
-                    let (c, t) = first_other.unwrap();
-                    let kind = match t {
-                        sys::DM_POLYTOPE_TETRAHEDRON => "tetrahedron",
-                        _ => "non-hexahedral cell",
-                    };
-                    err = Some(format!(
-                        "mesh {}: element {} is a {} ({} hexahedra, {} other cells): only 8-node hexahedral meshes are supported for now (mesh with Transfinite + Recombine in gmsh)",
-                        path.display(), c, kind, nhex, other
-                    ));
-                }
-            }
-            if err.is_none() {
-                surface_tags = dm.label_values(&face_sets)?;
-                surface_tags.sort_unstable();
-                if surface_tags.len() > MAX_SURFACES {
-                    err = Some(format!(
-                        "mesh {} has {} physical surfaces; at most {} are supported",
-                        path.display(),
-                        surface_tags.len(),
-                        MAX_SURFACES
-                    ));
-                }
-            }
-            if err.is_none() {
-                let mut cl = Vec::new();
-                let coords = vertex_coords(&dm, v0, v1)?;
-                for (bit, &tag) in surface_tags.iter().enumerate() {
-                    let mut normal: Option<[f64; 3]> = None;
-                    let mut planar = true;
-                    for f in dm.label_stratum(&face_sets, tag)? {
-                        dm.closure(f, &mut cl)?;
-                        let mut fv = Vec::with_capacity(4);
-                        for &q in &cl {
-                            if q >= v0 && q < v1 {
-                                mask[(q - p0) as usize] |= 1 << bit;
-                                fv.push(coords[(q - v0) as usize]);
-                            }
-                        }
-                        if let Some(n) = face_normal(&fv) {
-                            if n[0].is_nan() {
-                                planar = false;
-                                continue;
-                            }
-                            match normal {
-                                None => normal = Some(n),
-                                Some(m) => {
-                                    let d = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
-                                    if d.abs() < 1.0 - PARALLEL_TOL {
-                                        planar = false;
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    surface_normals.push(if planar { normal } else { None });
-                }
-                for c in c0..c1 {
-                    orig[(c - p0) as usize] = c - c0;
-                }
-                for v in v0..v1 {
-                    orig[(v - p0) as usize] = v - v0;
-                }
-                if size > 1 && !Petsc::has_option("-petscpartitioner_type") {
-                    partition =
-                        Some(metis_partition(&dm, c0, c1, size).map_err(MeshError::Invalid)?);
-                }
-            }
-        }
-        agree_on_error(comm, err)?;
-        // Every rank learns the surface tags (bit order).
-        let mut ntags = surface_tags.len() as u64;
-        comm.process_at_rank(0).broadcast_into(&mut ntags);
-        surface_tags.resize(ntags as usize, 0);
-        if ntags > 0 {
-            comm.process_at_rank(0)
-                .broadcast_into(&mut surface_tags[..]);
-        }
-        // ... and the surface normals: [flag, nx, ny, nz] per surface.
-        let mut nbuf: Vec<f64> = (0..ntags as usize)
-            .map(|k| match surface_normals.get(k).copied().flatten() {
-                Some(n) => [1.0, n[0], n[1], n[2]],
-                None => [0.0; 4],
-            })
-            .flat_map(|a| a.into_iter())
-            .collect();
-        if ntags > 0 {
-            comm.process_at_rank(0).broadcast_into(&mut nbuf[..]);
-        }
-        let surface_normals: Vec<Option<[f64; 3]>> = nbuf
-            .chunks(4)
-            .map(|c| (c[0] > 0.5).then_some([c[1], c[2], c[3]]))
-            .collect();
-        let mut totals = [(c1 - c0) as u64, (v1 - v0) as u64];
-        comm.process_at_rank(0).broadcast_into(&mut totals[..]);
-
-        // --- distribution ----------------------------------------------------------------
-        let mut part = std::ptr::null_mut();
-        petsc_call!(DMPlexGetPartitioner(dm.0, &mut part))?;
-        if let Some(p) = &partition {
-            let nparts = size as usize;
-            let mut sizes = vec![0i32; nparts];
-            for &r in p {
-                sizes[r as usize] += 1;
-            }
-            let mut points: Vec<i32> = Vec::with_capacity(p.len());
-            for r in 0..nparts as i32 {
-                points.extend(
-                    p.iter()
-                        .enumerate()
-                        .filter(|(_, &q)| q == r)
-                        .map(|(c, _)| c0 + c as i32),
-                );
-            }
-            let shell = cstr("shell");
-            petsc_call!(PetscPartitionerSetType(part, shell.as_ptr()))?;
-            petsc_call!(PetscPartitionerShellSetPartition(
-                part,
-                size,
-                sizes.as_ptr(),
-                points.as_ptr()
-            ))?;
-        } else if rank != 0 && size > 1 && !Petsc::has_option("-petscpartitioner_type") {
-            // Other ranks hold no cells; the shell partitioner must be set everywhere.
-            let shell = cstr("shell");
-            petsc_call!(PetscPartitionerSetType(part, shell.as_ptr()))?;
-            let sizes = vec![0i32; size as usize];
-            petsc_call!(PetscPartitionerShellSetPartition(
-                part,
-                size,
-                sizes.as_ptr(),
-                std::ptr::null()
-            ))?;
+        let dm = read_gmsh(comm, path)?;
+        let facts = if comm.rank() == 0 {
+            inspect_on_root(&dm, path, comm.size())
         } else {
-            petsc_call!(PetscPartitionerSetFromOptions(part))?;
-        }
-        let mut sf = StarForest(std::ptr::null_mut());
-        let mut dist = Dm(std::ptr::null_mut());
-        if size > 1 {
-            petsc_call!(DMPlexDistribute(dm.0, 0, &mut sf.0, &mut dist.0))?;
-        }
-        let (dm, orig, mask) = if dist.0.is_null() {
-            (dm, orig, mask)
-        } else {
-            // Carry the original numbers and surface masks from rank 0's points to the new ones.
-            let (q0, q1) = dist.chart()?;
-            let n = (q1 - q0) as usize;
-            let mut o = vec![0i32; n];
-            let mut m = vec![0i32; n];
-            // Leaves start at zero and receive root + 0 (each leaf has exactly one root): a
-            // broadcast without MPI_REPLACE, which mpi-sys does not export.
-            for (root, leaf) in [(&orig, &mut o), (&mask, &mut m)] {
-                unsafe {
-                    crate::petsc::check(
-                        sys::PetscSFBcastBegin(
-                            sf.0,
-                            mpi_sys::RSMPI_INT32_T,
-                            root.as_ptr() as *const _,
-                            leaf.as_mut_ptr() as *mut _,
-                            mpi_sys::RSMPI_SUM,
-                        ),
-                        "PetscSFBcastBegin",
-                    )?;
-                    crate::petsc::check(
-                        sys::PetscSFBcastEnd(
-                            sf.0,
-                            mpi_sys::RSMPI_INT32_T,
-                            root.as_ptr() as *const _,
-                            leaf.as_mut_ptr() as *mut _,
-                            mpi_sys::RSMPI_SUM,
-                        ),
-                        "PetscSFBcastEnd",
-                    )?;
-                }
-            }
-            drop(dm);
-            (dist, o, m)
+            Ok(RootFacts::default())
         };
-        drop(sf);
-
-        // --- flat arrays -------------------------------------------------------------------
-        let (p0, _) = dm.chart()?;
-        let (c0, c1) = dm.height_stratum(0)?;
-        let (v0, v1) = dm.depth_stratum(0)?;
-        let nv = (v1 - v0) as usize;
+        let (mut facts, err) = match facts {
+            Ok(f) => (f, None),
+            Err(e) => (RootFacts::default(), Some(e)),
+        };
+        agree(comm, err)?;
+        share_root_facts(comm, &mut facts);
+        set_partition(comm, &dm, facts.partition.as_deref())?;
+        let (dm, orig, mask) = distribute(comm, dm, facts.orig, facts.mask)?;
         let mut local = LocalMesh {
-            surface_tags,
-            surface_normals,
-            global_elems: totals[0],
-            global_nodes: totals[1],
+            surface_tags: facts.surface_tags,
+            surface_normals: facts.surface_normals,
+            global_elems: facts.totals[0],
+            global_nodes: facts.totals[1],
             ..Default::default()
         };
-        let mut cl = Vec::new();
-        for c in c0..c1 {
-            dm.closure(c, &mut cl)?;
-            let verts: Vec<i32> = cl.iter().copied().filter(|&q| q >= v0 && q < v1).collect();
-            if verts.len() != 8 {
-                return Err(MeshError::Invalid(format!(
-                    "element {} has {} vertices, expected 8",
-                    orig[(c - p0) as usize],
-                    verts.len()
-                )));
-            }
-            let mut conn = [0u32; 8];
-            for (k, &j) in PETSC_TO_VTK_HEX.iter().enumerate() {
-                conn[k] = (verts[j] - v0) as u32;
-            }
-            local.elems.push(conn);
-            local.elem_id.push(orig[(c - p0) as usize] as u64);
-            local.elem_block.push(dm.label_value(&cell_sets, c)?);
-        }
-        local.node_id = (v0..v1).map(|v| orig[(v - p0) as usize] as u64).collect();
-        local.node_surfaces = (v0..v1).map(|v| mask[(v - p0) as usize] as u32).collect();
-
-        // Coordinates of every local vertex.
-        local.coords = vertex_coords(&dm, v0, v1)?;
-
-        // Section with 3 dofs per vertex: the layout of nodal vectors.
-        let mut sec = Section(std::ptr::null_mut());
-        petsc_call!(PetscSectionCreate(comm.as_raw(), &mut sec.0))?;
-        let (q0, q1) = dm.chart()?;
-        petsc_call!(PetscSectionSetChart(sec.0, q0, q1))?;
-        for v in v0..v1 {
-            petsc_call!(PetscSectionSetDof(sec.0, v, 3))?;
-        }
-        petsc_call!(PetscSectionSetUp(sec.0))?;
-        petsc_call!(DMSetLocalSection(dm.0, sec.0))?;
-        for v in v0..v1 {
-            let mut off = 0;
-            petsc_call!(PetscSectionGetOffset(sec.0, v, &mut off))?;
-            if off != 3 * (v - v0) {
-                return Err(MeshError::Invalid(
-                    "unexpected local section layout (vertex offsets not contiguous)".into(),
-                ));
-            }
-        }
-        let mut gsec: sys::PetscSection = std::ptr::null_mut();
-        petsc_call!(DMGetGlobalSection(dm.0, &mut gsec))?;
-        local.owned = Vec::with_capacity(nv);
-        for v in v0..v1 {
-            let mut off = 0;
-            petsc_call!(PetscSectionGetOffset(gsec, v, &mut off))?;
-            local.owned.push(off >= 0);
-        }
-        let mut lvec = Vector(std::ptr::null_mut());
-        let mut gvec = Vector(std::ptr::null_mut());
-        petsc_call!(DMCreateLocalVector(dm.0, &mut lvec.0))?;
-        petsc_call!(DMCreateGlobalVector(dm.0, &mut gvec.0))?;
-        let ghosts = local.owned.iter().filter(|o| !**o).count();
-        let exchange = NodeExchange {
-            local: lvec,
-            global: gvec,
-            _section: sec,
-            dm,
-            n_local_nodes: nv,
-            bytes_sent: 0,
-            ghosts,
-        };
+        let extracted = extract_local(&dm, &orig, &mask, &mut local);
+        agree(comm, extracted.err())?;
+        let exchange = node_exchange(comm, dm, &mut local)?;
         Ok(DistributedMesh { local, exchange })
     }
+}
+
+/// PETSc's gmsh reader: the whole mesh into rank 0's DM (collective).
+fn read_gmsh(comm: &SimpleCommunicator, path: &Path) -> Result<Dm, MeshError> {
+    let cpath = cstr(&path.to_string_lossy());
+    let mut dm = Dm(std::ptr::null_mut());
+    // SAFETY: FFI; PETSc reads the file on rank 0 of the communicator.
+    let code = unsafe {
+        sys::DMPlexCreateGmshFromFile(comm.as_raw(), cpath.as_ptr(), sys::PETSC_TRUE, &mut dm.0)
+    };
+    crate::petsc::check(code, "DMPlexCreateGmshFromFile").map_err(|e| {
+        MeshError::Invalid(format!(
+            "cannot read mesh {}: {}",
+            path.display(),
+            e.message
+        ))
+    })?;
+    Ok(dm)
+}
+
+/// Rank 0, on the whole mesh: it is 3D and all hexahedra, its physical surfaces (tags,
+/// planar normals, vertex masks), the original numbers, and the METIS partition. Any failure
+/// (PETSc's included) is a message for the agreement step.
+fn inspect_on_root(dm: &Dm, path: &Path, size: i32) -> Result<RootFacts, String> {
+    let s = |e: PetscError| e.to_string();
+    let (p0, p1) = dm.chart().map_err(s)?;
+    let (c0, c1) = dm.height_stratum(0).map_err(s)?;
+    let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
+    check_cells(dm, path, c0, c1)?;
+    let npts = (p1 - p0) as usize;
+    let mut facts = RootFacts {
+        orig: vec![-1i32; npts],
+        mask: vec![0i32; npts],
+        totals: [(c1 - c0) as u64, (v1 - v0) as u64],
+        ..Default::default()
+    };
+    let face_sets = cstr("Face Sets");
+    facts.surface_tags = dm.label_values(&face_sets).map_err(s)?;
+    facts.surface_tags.sort_unstable();
+    if facts.surface_tags.len() > MAX_SURFACES {
+        return Err(format!(
+            "mesh {} has {} physical surfaces; at most {} are supported",
+            path.display(),
+            facts.surface_tags.len(),
+            MAX_SURFACES
+        ));
+    }
+    let verts = Vertices {
+        p0,
+        v0,
+        v1,
+        coords: vertex_coords(dm, v0, v1).map_err(s)?,
+    };
+    for (bit, &tag) in facts.surface_tags.iter().enumerate() {
+        let normal =
+            mark_surface(dm, &face_sets, (tag, bit), &verts, &mut facts.mask).map_err(s)?;
+        facts.surface_normals.push(normal);
+    }
+    for c in c0..c1 {
+        facts.orig[(c - p0) as usize] = c - c0;
+    }
+    for v in v0..v1 {
+        facts.orig[(v - p0) as usize] = v - v0;
+    }
+    if size > 1 && !Petsc::has_option("-petscpartitioner_type") {
+        facts.partition = Some(metis_partition(dm, c0, c1, size)?);
+    }
+    Ok(facts)
+}
+
+/// The mesh has cells, is 3D, and every cell is a hexahedron.
+fn check_cells(dm: &Dm, path: &Path, c0: i32, c1: i32) -> Result<(), String> {
+    let mut dim = 0;
+    petsc_call!(DMGetDimension(dm.0, &mut dim)).map_err(|e| e.to_string())?;
+    if c1 == c0 {
+        return Err(format!("mesh {} has no cells", path.display()));
+    }
+    if dim != 3 {
+        return Err(format!(
+            "mesh {} is {}-dimensional: a 3D hexahedral mesh is needed",
+            path.display(),
+            dim
+        ));
+    }
+    let (mut nhex, mut other) = (0usize, 0usize);
+    let mut first_other = None;
+    for c in c0..c1 {
+        let mut t: sys::DMPolytopeType = 0;
+        petsc_call!(DMPlexGetCellType(dm.0, c, &mut t)).map_err(|e| e.to_string())?;
+        if t == sys::DM_POLYTOPE_HEXAHEDRON {
+            nhex += 1;
+        } else {
+            other += 1;
+            first_other.get_or_insert((c - c0, t));
+        }
+    }
+    if let Some((c, t)) = first_other {
+        let kind = match t {
+            sys::DM_POLYTOPE_TETRAHEDRON => "tetrahedron",
+            _ => "non-hexahedral cell",
+        };
+        return Err(format!(
+            "mesh {}: element {} is a {} ({} hexahedra, {} other cells): only 8-node hexahedral meshes are supported for now (mesh with Transfinite + Recombine in gmsh)",
+            path.display(), c, kind, nhex, other
+        ));
+    }
+    Ok(())
+}
+
+/// Rank 0's vertices: the chart's first point, the vertex range, their coordinates.
+struct Vertices {
+    p0: i32,
+    v0: i32,
+    v1: i32,
+    coords: Vec<[f64; 3]>,
+}
+
+/// Sets bit `bit` in the mask of every vertex of the physical surface `tag`; returns the
+/// surface's unit normal when all its faces are parallel.
+fn mark_surface(
+    dm: &Dm,
+    face_sets: &std::ffi::CStr,
+    (tag, bit): (i32, usize),
+    verts: &Vertices,
+    mask: &mut [i32],
+) -> Result<Option<[f64; 3]>, PetscError> {
+    let Vertices { p0, v0, v1, .. } = *verts;
+    let mut cl = Vec::new();
+    let mut normal: Option<[f64; 3]> = None;
+    let mut planar = true;
+    for f in dm.label_stratum(face_sets, tag)? {
+        dm.closure(f, &mut cl)?;
+        let mut fv = Vec::with_capacity(4);
+        for &q in &cl {
+            if q >= v0 && q < v1 {
+                mask[(q - p0) as usize] |= 1 << bit;
+                fv.push(verts.coords[(q - v0) as usize]);
+            }
+        }
+        if let Some(n) = face_normal(&fv) {
+            if n[0].is_nan() {
+                planar = false;
+                continue;
+            }
+            match normal {
+                None => normal = Some(n),
+                Some(m) => {
+                    let d = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+                    if d.abs() < 1.0 - PARALLEL_TOL {
+                        planar = false;
+                    }
+                }
+            }
+        }
+    }
+    Ok(if planar { normal } else { None })
+}
+
+/// Every rank learns rank 0's surface tags (bit order), surface normals ([flag, nx, ny, nz]
+/// per surface) and totals.
+fn share_root_facts(comm: &SimpleCommunicator, facts: &mut RootFacts) {
+    let root = comm.process_at_rank(0);
+    let mut ntags = facts.surface_tags.len() as u64;
+    root.broadcast_into(&mut ntags);
+    facts.surface_tags.resize(ntags as usize, 0);
+    if ntags > 0 {
+        root.broadcast_into(&mut facts.surface_tags[..]);
+    }
+    let mut nbuf: Vec<f64> = (0..ntags as usize)
+        .map(|k| match facts.surface_normals.get(k).copied().flatten() {
+            Some(n) => [1.0, n[0], n[1], n[2]],
+            None => [0.0; 4],
+        })
+        .flat_map(|a| a.into_iter())
+        .collect();
+    if ntags > 0 {
+        root.broadcast_into(&mut nbuf[..]);
+    }
+    facts.surface_normals = nbuf
+        .chunks(4)
+        .map(|c| (c[0] > 0.5).then_some([c[1], c[2], c[3]]))
+        .collect();
+    root.broadcast_into(&mut facts.totals[..]);
+}
+
+/// The partitioner: METIS's parts through PETSc's shell partitioner (every rank sets it; only
+/// rank 0 holds cells), or PETSc's own from the options.
+fn set_partition(
+    comm: &SimpleCommunicator,
+    dm: &Dm,
+    partition: Option<&[i32]>,
+) -> Result<(), MeshError> {
+    let (rank, size) = (comm.rank(), comm.size());
+    let mut part = std::ptr::null_mut();
+    petsc_call!(DMPlexGetPartitioner(dm.0, &mut part))?;
+    let shell = cstr("shell");
+    if let Some(p) = partition {
+        let (c0, _) = dm.height_stratum(0)?;
+        let nparts = size as usize;
+        let mut sizes = vec![0i32; nparts];
+        for &r in p {
+            sizes[r as usize] += 1;
+        }
+        let mut points: Vec<i32> = Vec::with_capacity(p.len());
+        for r in 0..nparts as i32 {
+            points.extend(
+                p.iter()
+                    .enumerate()
+                    .filter(|(_, &q)| q == r)
+                    .map(|(c, _)| c0 + c as i32),
+            );
+        }
+        petsc_call!(PetscPartitionerSetType(part, shell.as_ptr()))?;
+        petsc_call!(PetscPartitionerShellSetPartition(
+            part,
+            size,
+            sizes.as_ptr(),
+            points.as_ptr()
+        ))?;
+    } else if rank != 0 && size > 1 && !Petsc::has_option("-petscpartitioner_type") {
+        // Other ranks hold no cells; the shell partitioner must be set everywhere.
+        petsc_call!(PetscPartitionerSetType(part, shell.as_ptr()))?;
+        let sizes = vec![0i32; size as usize];
+        petsc_call!(PetscPartitionerShellSetPartition(
+            part,
+            size,
+            sizes.as_ptr(),
+            std::ptr::null()
+        ))?;
+    } else {
+        petsc_call!(PetscPartitionerSetFromOptions(part))?;
+    }
+    Ok(())
+}
+
+/// `DMPlexDistribute` (no overlap) on more than one rank, carrying the original numbers and
+/// surface masks from rank 0's points to the distributed ones.
+fn distribute(
+    comm: &SimpleCommunicator,
+    dm: Dm,
+    orig: Vec<i32>,
+    mask: Vec<i32>,
+) -> Result<(Dm, Vec<i32>, Vec<i32>), MeshError> {
+    let mut sf = StarForest(std::ptr::null_mut());
+    let mut dist = Dm(std::ptr::null_mut());
+    if comm.size() > 1 {
+        petsc_call!(DMPlexDistribute(dm.0, 0, &mut sf.0, &mut dist.0))?;
+    }
+    if dist.0.is_null() {
+        return Ok((dm, orig, mask));
+    }
+    let (q0, q1) = dist.chart()?;
+    let n = (q1 - q0) as usize;
+    let mut o = vec![0i32; n];
+    let mut m = vec![0i32; n];
+    // Leaves start at zero and receive root + 0 (each leaf has exactly one root): a broadcast
+    // without MPI_REPLACE, which mpi-sys does not export.
+    for (root, leaf) in [(&orig, &mut o), (&mask, &mut m)] {
+        // SAFETY: FFI on the distribution's star forest; `root` covers rank 0's chart and
+        // `leaf` the distributed chart, as the SF's roots and leaves.
+        unsafe {
+            crate::petsc::check(
+                sys::PetscSFBcastBegin(
+                    sf.0,
+                    mpi_sys::RSMPI_INT32_T,
+                    root.as_ptr() as *const _,
+                    leaf.as_mut_ptr() as *mut _,
+                    mpi_sys::RSMPI_SUM,
+                ),
+                "PetscSFBcastBegin",
+            )?;
+            crate::petsc::check(
+                sys::PetscSFBcastEnd(
+                    sf.0,
+                    mpi_sys::RSMPI_INT32_T,
+                    root.as_ptr() as *const _,
+                    leaf.as_mut_ptr() as *mut _,
+                    mpi_sys::RSMPI_SUM,
+                ),
+                "PetscSFBcastEnd",
+            )?;
+        }
+    }
+    drop(dm);
+    Ok((dist, o, m))
+}
+
+/// This rank's elements (gmsh/VTK hex order, local node indices, original ids, blocks), node
+/// ids, surface masks and coordinates into `local`. Local: the caller agrees on its error.
+fn extract_local(dm: &Dm, orig: &[i32], mask: &[i32], local: &mut LocalMesh) -> Result<(), String> {
+    let s = |e: PetscError| e.to_string();
+    let cell_sets = cstr("Cell Sets");
+    let (p0, _) = dm.chart().map_err(s)?;
+    let (c0, c1) = dm.height_stratum(0).map_err(s)?;
+    let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
+    let mut cl = Vec::new();
+    for c in c0..c1 {
+        dm.closure(c, &mut cl).map_err(s)?;
+        let verts: Vec<i32> = cl.iter().copied().filter(|&q| q >= v0 && q < v1).collect();
+        if verts.len() != 8 {
+            return Err(format!(
+                "element {} has {} vertices, expected 8",
+                orig[(c - p0) as usize],
+                verts.len()
+            ));
+        }
+        let mut conn = [0u32; 8];
+        for (k, &j) in PETSC_TO_VTK_HEX.iter().enumerate() {
+            conn[k] = (verts[j] - v0) as u32;
+        }
+        local.elems.push(conn);
+        local.elem_id.push(orig[(c - p0) as usize] as u64);
+        local
+            .elem_block
+            .push(dm.label_value(&cell_sets, c).map_err(s)?);
+    }
+    local.node_id = (v0..v1).map(|v| orig[(v - p0) as usize] as u64).collect();
+    local.node_surfaces = (v0..v1).map(|v| mask[(v - p0) as usize] as u32).collect();
+    local.coords = vertex_coords(dm, v0, v1).map_err(s)?;
+    Ok(())
+}
+
+/// The nodal layout (3 dofs per vertex, offsets contiguous), which nodes this rank owns, and
+/// the ghost exchange over it (collective).
+fn node_exchange(
+    comm: &SimpleCommunicator,
+    dm: Dm,
+    local: &mut LocalMesh,
+) -> Result<NodeExchange, MeshError> {
+    let (v0, v1) = dm.depth_stratum(0)?;
+    let nv = (v1 - v0) as usize;
+    let mut sec = Section(std::ptr::null_mut());
+    petsc_call!(PetscSectionCreate(comm.as_raw(), &mut sec.0))?;
+    let (q0, q1) = dm.chart()?;
+    petsc_call!(PetscSectionSetChart(sec.0, q0, q1))?;
+    for v in v0..v1 {
+        petsc_call!(PetscSectionSetDof(sec.0, v, 3))?;
+    }
+    petsc_call!(PetscSectionSetUp(sec.0))?;
+    petsc_call!(DMSetLocalSection(dm.0, sec.0))?;
+    let mut contiguous = true;
+    for v in v0..v1 {
+        let mut off = 0;
+        petsc_call!(PetscSectionGetOffset(sec.0, v, &mut off))?;
+        contiguous &= off == 3 * (v - v0);
+    }
+    agree(
+        comm,
+        (!contiguous)
+            .then(|| "unexpected local section layout (vertex offsets not contiguous)".into()),
+    )?;
+    let mut gsec: sys::PetscSection = std::ptr::null_mut();
+    petsc_call!(DMGetGlobalSection(dm.0, &mut gsec))?;
+    local.owned = Vec::with_capacity(nv);
+    for v in v0..v1 {
+        let mut off = 0;
+        petsc_call!(PetscSectionGetOffset(gsec, v, &mut off))?;
+        local.owned.push(off >= 0);
+    }
+    let mut lvec = Vector(std::ptr::null_mut());
+    let mut gvec = Vector(std::ptr::null_mut());
+    petsc_call!(DMCreateLocalVector(dm.0, &mut lvec.0))?;
+    petsc_call!(DMCreateGlobalVector(dm.0, &mut gvec.0))?;
+    let ghosts = local.owned.iter().filter(|o| !**o).count();
+    Ok(NodeExchange {
+        local: lvec,
+        global: gvec,
+        _section: sec,
+        dm,
+        n_local_nodes: nv,
+        bytes_sent: 0,
+        ghosts,
+    })
 }
 
 /// Two face normals closer than this (1 - |cos|) count as parallel.
