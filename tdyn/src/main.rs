@@ -17,6 +17,7 @@ mod validate;
 
 use clap::{Parser, Subcommand};
 use coupling::driver::{self, RunOptions};
+use coupling::kernels::collective::{first_error, ExitGate, EXIT_GRACE};
 use fe_petsc::petsc::Petsc;
 use mpi::traits::*;
 use std::path::PathBuf;
@@ -265,6 +266,7 @@ fn on_mpi_with_petsc<T>(
     };
     let world = universe.world();
     let rank = world.rank();
+    let gate = ExitGate::new(&world);
     let petsc = match Petsc::init(world.as_raw(), petsc_args) {
         Ok(p) => p,
         Err(e) => {
@@ -273,15 +275,19 @@ fn on_mpi_with_petsc<T>(
         }
     };
     let res = work(&world);
+    let line = res.as_ref().err().map(|e| format!("{what}: error: {e}"));
+    gate.pass(line.as_deref(), EXIT_GRACE);
+    // Every rank is here: the outcome is the lowest failing rank's, on every rank.
+    let agreed = first_error(&world, res.as_ref().err().cloned());
     drop(petsc);
-    match res {
-        Ok(v) => {
+    match (res, agreed) {
+        (Ok(v), Ok(())) => {
             if rank == 0 {
                 ok(v);
             }
             ExitCode::SUCCESS
         }
-        Err(e) => {
+        (_, Err(e)) | (Err(e), _) => {
             if rank == 0 {
                 eprintln!("{what}: error: {e}");
             }
