@@ -216,18 +216,22 @@ impl ExplicitFe {
         let mut mass3 = vec![[0.0; 3]; nn];
         let mut vol0 = Vec::with_capacity(ne);
         let mut mat_state = vec![0.0; ne * mat_stride];
+        let mut inverted = None;
         for (e, conn) in m.elems.iter().enumerate() {
             let xe = gather(&m.coords, conn);
             let vol = hex::volume(&xe);
             if vol <= 0.0 || !vol.is_finite() {
-                let c = centroid(&xe);
-                return Err(StepError::Inverted {
+                // Keep the first, finish the loop: the mass exchange below is collective, and
+                // a rank that left before it would hang the others in it.
+                inverted.get_or_insert(StepError::Inverted {
                     elem: m.elem_id[e],
                     volume: vol,
-                    at: c,
+                    at: centroid(&xe),
                     time: 0.0,
                     step: 0,
                 });
+                vol0.push(0.0);
+                continue;
             }
             vol0.push(vol);
             let mat = &setup.materials[setup.elem_material[e]];
@@ -242,6 +246,9 @@ impl ExplicitFe {
             }
         }
         exchange.sum_shared(flat(&mut mass3))?;
+        if let Some(e) = inverted {
+            return Err(e);
+        }
         let mass: Vec<f64> = mass3.iter().map(|m| m[0]).collect();
         let blocks = BlockWork::new(&m.elems, setup.elem_block, setup.n_blocks);
         let mut fe = ExplicitFe {

@@ -280,7 +280,14 @@ impl ImplicitFe {
         for (n, c) in &setup.constraints {
             dofs[*n as usize] = NodeDof::from_constraint(c);
         }
-        let fe = ExplicitFe::new(setup, exchange)?;
+        let fe = ExplicitFe::new(setup, exchange);
+        // The agreement step before the collective numbering: a rank whose set-up failed
+        // returns its error, the others [`ImplicitError::OtherRank`].
+        let failed = crate::agree::first_error(comm, fe.as_ref().err().map(|e| e.to_string()));
+        let fe = match (fe, failed) {
+            (Ok(_), Err(_)) => return Err(ImplicitError::OtherRank),
+            (fe, _) => fe?,
+        };
         let mat_stride = fe.materials.iter().map(|m| m.n_state()).max().unwrap_or(0);
         assert!(
             mat_stride <= MAX_MAT_STATE,

@@ -75,7 +75,11 @@ impl Fe {
             }
             Some(dt) => {
                 let res = ImplicitFe::new(world, setup, dt, &mut mesh.exchange);
-                first_error(world, res.as_ref().err().map(|e| format!("{file}: {e}")))?;
+                let mine = match &res {
+                    Ok(_) | Err(ImplicitError::OtherRank) => None,
+                    Err(e) => Some(format!("{file}: {e}")),
+                };
+                first_error(world, mine)?;
                 Integrator::Implicit(Box::new(res.map_err(|e| e.to_string())?))
             }
         };
