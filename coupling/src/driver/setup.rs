@@ -3,8 +3,8 @@
 //! stage when it has particles, the contact stage when it has `[contact]`, and the probes.
 use super::{Algorithms, RunFailure};
 use crate::driver::probes::Probes;
-use crate::input::gmsh;
 use crate::input::scene::{self, Mode, Scene};
+use crate::input::{gmsh, msh_check};
 use crate::kernels::collective::first_error;
 use crate::stages::contact::{Contact, SearchChoice};
 use crate::stages::fe::{setup::Groups, Fe};
@@ -167,11 +167,12 @@ fn load_mesh(
     let mut mesh_path = PathBuf::new();
     let mut err = None;
     if world.rank() == 0 {
-        match mesh_on_root(scene) {
+        match mesh_on_root(scene).and_then(|p| check_on_root(scene, &p).map(|()| p)) {
             Ok(p) => mesh_path = p,
             Err(e) => err = Some(format!("{file}: {e}")),
         }
     }
+    // The agreement step before PETSc reads the mesh collectively.
     first_error(world, err)?;
     let mut buf = mesh_path.to_string_lossy().into_owned().into_bytes();
     let mut len = buf.len() as u64;
@@ -207,6 +208,16 @@ fn load_mesh(
         }
     }
     Ok((dm, groups))
+}
+
+/// Rank 0 checks the mesh file before PETSc reads it (`msh_check`: a whole file, sound nodes
+/// and elements, no inverted or flat element); a mesh in another format than ASCII msh 2.2 is
+/// checked through its conversion by gmsh.
+fn check_on_root(scene: &Scene, msh: &Path) -> Result<(), String> {
+    let cache = gmsh::default_cache_dir(&scene.dir);
+    let m22 = gmsh::as_msh22(msh, &cache).map_err(|e| format!("mesh: {e}"))?;
+    msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
+    Ok(())
 }
 
 /// The `.msh` of the scene's meshes, meshed and merged on rank 0.

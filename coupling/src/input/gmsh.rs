@@ -264,7 +264,7 @@ fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
 }
 
 /// A `.msh` in the 2.2 ASCII format: the file itself, or a conversion by gmsh into `cache_dir`.
-fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
+pub fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
     let head = std::fs::read_to_string(path).map_err(|e| {
         bad(
             path,
