@@ -16,6 +16,14 @@ pub enum MeshError {
         /// What went wrong.
         why: String,
     },
+    /// A parameter the .geo cannot take.
+    #[error("params.{name}: {why}")]
+    Param {
+        /// The parameter.
+        name: String,
+        /// What was expected.
+        why: String,
+    },
     /// gmsh is missing or failed.
     #[error("gmsh failed on {path}: {why}")]
     Gmsh {
@@ -79,6 +87,7 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         path: path.clone(),
         why: e.to_string(),
     })?;
+    check_params(def).map_err(|(name, why)| MeshError::Param { name, why })?;
     let version = gmsh_version().map_err(|why| MeshError::Gmsh {
         path: path.clone(),
         why,
@@ -144,6 +153,198 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         why: e.to_string(),
     })?;
     Ok(out)
+}
+
+/// Most elements one `Transfinite` or `Layers` count may ask for along a curve.
+pub const MAX_COUNT: f64 = 1e6;
+
+/// The gmsh parameters of `def` are finite, and those its .geo uses as element counts
+/// ([`count_parameters`]) are whole numbers from 1 to [`MAX_COUNT`] (gmsh would round 10.5 down
+/// and turn 0, -5 or 1e12 into a mesh of one element without a word). A .msh takes no
+/// parameters. Returns the parameter and what was expected.
+pub fn check_params(def: &MeshDef) -> Result<(), (String, String)> {
+    for (name, v) in &def.params {
+        if !v.is_finite() {
+            return Err((name.clone(), format!("expected a finite number, got {v}")));
+        }
+    }
+    if def.params.is_empty() || def.file.extension().is_none_or(|e| e != "geo") {
+        return Ok(());
+    }
+    let Ok(text) = std::fs::read_to_string(&def.file) else {
+        return Ok(()); // reported where the file is read
+    };
+    let counts = count_parameters(&text);
+    for (name, v) in &def.params {
+        if counts.contains(name) && !(*v >= 1.0 && v.fract() == 0.0 && *v <= MAX_COUNT) {
+            return Err((
+                name.clone(),
+                format!(
+                    "expected a whole number of elements from 1 to {MAX_COUNT:e} ({} uses {name} in an element count: Transfinite or Layers), got {}",
+                    def.file.file_name().unwrap_or_default().to_string_lossy(),
+                    crate::input::scene::num_text(*v)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The identifiers a .geo uses as element counts: those at the top level of the expression of
+/// `Transfinite Curve|Line {...} = EXPR` (before any `Using`) and of `Layers{EXPR}`, that is,
+/// outside any function call (`Round(L / H)` makes no count of `H`) and not after a `/`; then,
+/// through assignments `X = EXPR;` to a count `X`, the identifiers of `EXPR` the same way.
+pub fn count_parameters(geo: &str) -> std::collections::BTreeSet<String> {
+    let code = strip_comments(geo);
+    let mut counts = std::collections::BTreeSet::new();
+    let mut assignments: Vec<(String, String)> = Vec::new();
+    for stmt in code.split(';') {
+        if let Some(expr) = transfinite_count(stmt) {
+            counts.extend(top_level_identifiers(expr));
+        }
+        let mut rest = stmt;
+        while let Some(at) = rest.find("Layers") {
+            rest = &rest[at + "Layers".len()..];
+            if let Some(inner) = braced(rest) {
+                // Layers{ {n1, n2}, {h1, h2} }: the first group holds the counts.
+                let counts_part = braced(inner.trim_start()).unwrap_or(inner);
+                counts.extend(top_level_identifiers(counts_part));
+            }
+        }
+        let last = stmt.lines().last().unwrap_or("").trim();
+        if let Some((lhs, rhs)) = last.split_once('=') {
+            let lhs = lhs.trim();
+            let is_ident = lhs
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_alphabetic() || c == '_')
+                && lhs.chars().all(|c| c.is_alphanumeric() || c == '_');
+            if is_ident && !rhs.starts_with('=') {
+                assignments.push((lhs.to_string(), rhs.to_string()));
+            }
+        }
+    }
+    loop {
+        let before = counts.len();
+        for (lhs, rhs) in &assignments {
+            if counts.contains(lhs) {
+                counts.extend(top_level_identifiers(rhs));
+            }
+        }
+        if counts.len() == before {
+            return counts;
+        }
+    }
+}
+
+/// The .geo without `//` and `/* */` comments.
+fn strip_comments(geo: &str) -> String {
+    let mut out = String::with_capacity(geo.len());
+    let mut rest = geo;
+    while !rest.is_empty() {
+        if let Some(r) = rest.strip_prefix("//") {
+            rest = r.find('\n').map_or("", |i| &r[i..]);
+        } else if let Some(r) = rest.strip_prefix("/*") {
+            rest = r.find("*/").map_or("", |i| &r[i + 2..]);
+        } else {
+            let c = rest.chars().next().unwrap();
+            out.push(c);
+            rest = &rest[c.len_utf8()..];
+        }
+    }
+    out
+}
+
+/// The count expression of a `Transfinite Curve|Line {...} = EXPR [Using ...]` statement.
+fn transfinite_count(stmt: &str) -> Option<&str> {
+    let at = stmt.find("Transfinite")?;
+    let rest = stmt[at + "Transfinite".len()..].trim_start();
+    let rest = rest
+        .strip_prefix("Curve")
+        .or_else(|| rest.strip_prefix("Line"))?;
+    let inner = braced(rest.trim_start())?;
+    let after = &rest.trim_start()[inner.len() + 2..];
+    let expr = after.trim_start().strip_prefix('=')?;
+    Some(expr.split("Using").next().unwrap_or(expr))
+}
+
+/// The text inside the braces that `s` starts with (matching nested braces).
+fn braced(s: &str) -> Option<&str> {
+    let s = s.strip_prefix('{')?;
+    let mut depth = 1;
+    for (i, c) in s.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(&s[..i]);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Identifiers of `expr` outside any function call or array index and not right after a `/`.
+fn top_level_identifiers(expr: &str) -> Vec<String> {
+    let chars: Vec<char> = expr.chars().collect();
+    let mut out = Vec::new();
+    // Open brackets: true for a call or an index (whose insides are not counts).
+    let mut open: Vec<bool> = Vec::new();
+    let mut after_slash = false;
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit()))
+        {
+            // A number, with its exponent.
+            while i < chars.len()
+                && (chars[i].is_ascii_alphanumeric()
+                    || chars[i] == '.'
+                    || ((chars[i] == '+' || chars[i] == '-') && matches!(chars[i - 1], 'e' | 'E')))
+            {
+                i += 1;
+            }
+            after_slash = false;
+            continue;
+        }
+        if c.is_alphabetic() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            let word: String = chars[start..i].iter().collect();
+            let next = chars[i..].iter().find(|c| !c.is_whitespace());
+            let applied = matches!(next, Some('(') | Some('['));
+            if applied {
+                // Skip to the bracket and mark it a call.
+                while chars[i] != '(' && chars[i] != '[' {
+                    i += 1;
+                }
+                open.push(true);
+                i += 1;
+            } else if !open.iter().any(|&call| call) && !after_slash {
+                out.push(word);
+            }
+            after_slash = false;
+            continue;
+        }
+        match c {
+            // A group after `/` is a divisor: its insides are not counts either.
+            '(' | '[' | '{' => open.push(after_slash),
+            ')' | ']' | '}' => {
+                open.pop();
+            }
+            _ => {}
+        }
+        if !c.is_whitespace() {
+            after_slash = c == '/';
+        }
+        i += 1;
+    }
+    out
 }
 
 /// Reads the `$PhysicalNames` section of an ASCII msh 2.2 or 4.1 file.
@@ -472,6 +673,30 @@ mod tests {
         }));
         assert!(names.iter().any(|n| n.dim == 2 && n.name == "bottom"));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn count_parameters_are_those_in_element_counts() {
+        let geo = |name: &str| {
+            let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../meshes")
+                .join(name);
+            count_parameters(&std::fs::read_to_string(p).unwrap())
+        };
+        let set = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+        assert_eq!(geo("bar.geo"), set(&["M", "N"]));
+        assert_eq!(geo("block_plate.geo"), set(&["NB", "NH", "NP"]));
+        // `Round(len / H)`: H is a length, not a count.
+        assert_eq!(geo("container.geo"), set(&["NT"]));
+        assert_eq!(geo("rod_wall.geo"), set(&[]));
+        let text = "// Transfinite Curve{1} = X + 1;\n/* Layers{Y} */\nNN = 2 * N;\n\
+                    Transfinite Curve{1, 2} = NN + 1;\nTransfinite Line{3} = K Using Progression 1.1;\n\
+                    Extrude {0, 0, 1} { Surface{1}; Layers{ {L1, L2}, {0.5, 1} }; Recombine; }\n\
+                    Transfinite Curve{4} = Round(A / h) + 1e3 + (P + 1) / (Q + 1);";
+        assert_eq!(
+            count_parameters(text),
+            set(&["K", "L1", "L2", "N", "NN", "P"])
+        );
     }
 
     #[test]

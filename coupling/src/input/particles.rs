@@ -58,58 +58,91 @@ pub struct ParticleSeed {
     pub entry: usize,
 }
 
+/// The box a region's lattice fills (a sphere's or a cylinder's bounding box); none for a file.
+fn lattice_box(region: &Region) -> Option<([f64; 3], [f64; 3])> {
+    match region {
+        Region::Box { min, max } => Some((*min, *max)),
+        Region::Sphere {
+            center: c,
+            radius: r,
+        } => Some((
+            std::array::from_fn(|d| c[d] - r),
+            std::array::from_fn(|d| c[d] + r),
+        )),
+        Region::Cylinder {
+            base: b,
+            axis: a,
+            radius: r,
+        } => {
+            let top: [f64; 3] = std::array::from_fn(|d| b[d] + a[d]);
+            Some((
+                std::array::from_fn(|d| b[d].min(top[d]) - r),
+                std::array::from_fn(|d| b[d].max(top[d]) + r),
+            ))
+        }
+        Region::File(_) => None,
+    }
+}
+
+/// Lattice points along each axis of the box `min`..`max` at spacing `s`: as many as fit, with
+/// a tolerance for the round-off in extent / spacing (as reals: a count past any integer type
+/// stays a count, for [`lattice_points_bound`]).
+fn lattice_dims(min: [f64; 3], max: [f64; 3], s: f64) -> [f64; 3] {
+    std::array::from_fn(|d| (((max[d] - min[d]) / s) + 1e-9).floor().max(0.0))
+}
+
+/// The lattice points a region's filling visits (its box's; a sphere or a cylinder keeps
+/// fewer), before anything is allocated: what the scene check bounds. Zero for a file.
+pub fn lattice_points_bound(region: &Region, spacing: f64) -> f64 {
+    match lattice_box(region) {
+        Some((min, max)) => lattice_dims(min, max, spacing).iter().product(),
+        None => 0.0,
+    }
+}
+
 /// Lattice points of a region, cell-centred on a simple cubic lattice of `spacing`.
 fn lattice(region: &Region, s: f64) -> Vec<[f64; 3]> {
-    // Points min + (i + 1/2) s along each axis, as many as fit (with a tolerance for the
-    // round-off in extent / spacing).
-    let fill = |min: [f64; 3], max: [f64; 3], keep: &dyn Fn(&[f64; 3]) -> bool| {
-        let n: [usize; 3] =
-            std::array::from_fn(|d| (((max[d] - min[d]) / s) + 1e-9).floor().max(0.0) as usize);
-        let mut out = Vec::new();
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let x = [
-                        min[0] + (i as f64 + 0.5) * s,
-                        min[1] + (j as f64 + 0.5) * s,
-                        min[2] + (k as f64 + 0.5) * s,
-                    ];
-                    if keep(&x) {
-                        out.push(x);
-                    }
-                }
-            }
-        }
-        out
+    let Some((min, max)) = lattice_box(region) else {
+        return Vec::new();
     };
-    match region {
-        Region::Box { min, max } => fill(*min, *max, &|_| true),
+    let keep: Box<dyn Fn(&[f64; 3]) -> bool> = match region {
         Region::Sphere { center, radius } => {
             let (c, r) = (*center, *radius);
-            fill(
-                [c[0] - r, c[1] - r, c[2] - r],
-                [c[0] + r, c[1] + r, c[2] + r],
-                &|x| {
-                    let d2: f64 = (0..3).map(|d| (x[d] - c[d]).powi(2)).sum();
-                    d2 < r * r
-                },
-            )
+            Box::new(move |x: &[f64; 3]| {
+                let d2: f64 = (0..3).map(|d| (x[d] - c[d]).powi(2)).sum();
+                d2 < r * r
+            })
         }
         Region::Cylinder { base, axis, radius } => {
             let (b, a, r) = (*base, *axis, *radius);
-            let top = [b[0] + a[0], b[1] + a[1], b[2] + a[2]];
-            let min = std::array::from_fn(|d| b[d].min(top[d]) - r);
-            let max = std::array::from_fn(|d| b[d].max(top[d]) + r);
             let aa: f64 = a.iter().map(|c| c * c).sum();
-            fill(min, max, &|x| {
+            Box::new(move |x: &[f64; 3]| {
                 let rel: [f64; 3] = std::array::from_fn(|d| x[d] - b[d]);
                 let t = (0..3).map(|d| rel[d] * a[d]).sum::<f64>() / aa;
                 let radial2: f64 = (0..3).map(|d| (rel[d] - t * a[d]).powi(2)).sum();
                 (0.0..1.0).contains(&t) && radial2 < r * r
             })
         }
-        Region::File(_) => Vec::new(),
+        _ => Box::new(|_: &[f64; 3]| true),
+    };
+    // Points min + (i + 1/2) s along each axis.
+    let n = lattice_dims(min, max, s).map(|k| k as usize);
+    let mut out = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let x = [
+                    min[0] + (i as f64 + 0.5) * s,
+                    min[1] + (j as f64 + 0.5) * s,
+                    min[2] + (k as f64 + 0.5) * s,
+                ];
+                if keep(&x) {
+                    out.push(x);
+                }
+            }
+        }
     }
+    out
 }
 
 /// Reads a particle CSV: header row; columns id,x,y,z and optionally vx,vy,vz,rho,h,mass.

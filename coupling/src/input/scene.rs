@@ -73,6 +73,49 @@ impl Hourglass {
     }
 }
 
+/// `[x, y, z]` keys: exactly three values, each a finite number (serde's fixed arrays would take
+/// the first three of a longer list, and NaN or inf would pass).
+mod vec3 {
+    use serde::de::{Deserializer, Error};
+    use serde::Deserialize;
+
+    fn three<T: Copy>(v: Vec<T>) -> Result<[T; 3], String> {
+        match v.as_slice() {
+            [a, b, c] => Ok([*a, *b, *c]),
+            _ => Err(format!("expected [x, y, z], got {} values", v.len())),
+        }
+    }
+
+    fn finite(v: Vec<f64>) -> Result<[f64; 3], String> {
+        let x = three(v)?;
+        match x.iter().find(|c| !c.is_finite()) {
+            Some(c) => Err(format!(
+                "expected three finite numbers, got {c} in [{}, {}, {}]",
+                x[0], x[1], x[2]
+            )),
+            None => Ok(x),
+        }
+    }
+
+    /// Three finite numbers.
+    pub fn exact<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+        finite(Vec::deserialize(d)?).map_err(D::Error::custom)
+    }
+
+    /// Three finite numbers, when given.
+    pub fn option<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+        Option::<Vec<f64>>::deserialize(d)?
+            .map(finite)
+            .transpose()
+            .map_err(D::Error::custom)
+    }
+
+    /// Three booleans.
+    pub fn bools<'de, D: Deserializer<'de>>(d: D) -> Result<[bool; 3], D::Error> {
+        three(Vec::deserialize(d)?).map_err(D::Error::custom)
+    }
+}
+
 fn d_bv_lin() -> f64 {
     0.06
 }
@@ -88,6 +131,24 @@ fn d_safety() -> f64 {
 fn d_max_err() -> f64 {
     0.05
 }
+fn d_max_steps() -> f64 {
+    MAX_STEPS
+}
+
+/// Default `run.max_steps`: more steps than any run of this code could mean (10^9 steps of even
+/// the smallest mesh take hours).
+pub const MAX_STEPS: f64 = 1e9;
+/// The most field frames a run may ask for (`end_time / output_every`).
+pub const MAX_FRAMES: f64 = 1e6;
+/// The most history rows a run may ask for with `history_every > 0` (`end_time /
+/// history_every`); `history_every = 0` writes a row every step.
+pub const MAX_ROWS: f64 = 1e6;
+/// Frames or rows asked per step beyond which the interval cannot be meant: they come at most
+/// once a step.
+pub const MAX_OUTPUTS_PER_STEP: f64 = 1e3;
+/// The most particles a `[[particles]]` lattice may visit (its region's bounding box at its
+/// spacing), checked before anything is allocated.
+pub const MAX_PARTICLES: f64 = 1e9;
 fn d_mode() -> Mode {
     Mode::Explicit
 }
@@ -135,6 +196,11 @@ pub struct Run {
     /// Stop past this energy error.
     #[serde(default = "d_max_err")]
     pub max_energy_error: f64,
+    /// The most steps the run may take (default [`MAX_STEPS`]): a run that would take more is
+    /// refused before it starts (a wrong unit or a typo in `end_time` or `dt`); raise it to run
+    /// one deliberately.
+    #[serde(default = "d_max_steps")]
+    pub max_steps: f64,
     /// Bulk viscosity.
     #[serde(default = "d_bv")]
     pub bulk_viscosity: BulkViscosity,
@@ -210,6 +276,7 @@ struct RawMesh {
     #[serde(default)]
     params: BTreeMap<String, f64>,
     #[serde(default)]
+    #[serde(deserialize_with = "vec3::exact")]
     translate: [f64; 3],
 }
 
@@ -223,6 +290,7 @@ pub struct Block {
     pub material: String,
     /// Initial velocity, m/s.
     #[serde(default)]
+    #[serde(deserialize_with = "vec3::exact")]
     pub velocity: [f64; 3],
 }
 
@@ -252,6 +320,7 @@ struct RawBoundary {
     group: String,
     kind: String,
     #[serde(default)]
+    #[serde(deserialize_with = "vec3::option")]
     velocity: Option<[f64; 3]>,
 }
 
@@ -309,6 +378,7 @@ pub struct Probe {
     /// Name (column prefix).
     pub name: String,
     /// Point, m.
+    #[serde(deserialize_with = "vec3::exact")]
     pub point: [f64; 3],
     /// Fields.
     pub fields: Vec<ProbeField>,
@@ -357,15 +427,20 @@ impl Default for OutputDef {
 #[allow(missing_docs)]
 pub enum Region {
     Box {
+        #[serde(deserialize_with = "vec3::exact")]
         min: [f64; 3],
+        #[serde(deserialize_with = "vec3::exact")]
         max: [f64; 3],
     },
     Cylinder {
+        #[serde(deserialize_with = "vec3::exact")]
         base: [f64; 3],
+        #[serde(deserialize_with = "vec3::exact")]
         axis: [f64; 3],
         radius: f64,
     },
     Sphere {
+        #[serde(deserialize_with = "vec3::exact")]
         center: [f64; 3],
         radius: f64,
     },
@@ -389,6 +464,7 @@ pub struct ParticlesDef {
     pub h_factor: f64,
     /// Initial velocity.
     #[serde(default)]
+    #[serde(deserialize_with = "vec3::exact")]
     pub velocity: [f64; 3],
     /// Boundary particles.
     #[serde(default)]
@@ -423,8 +499,11 @@ pub struct TensileCorrection {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct Periodic {
+    #[serde(deserialize_with = "vec3::bools")]
     pub axes: [bool; 3],
+    #[serde(deserialize_with = "vec3::exact")]
     pub min: [f64; 3],
+    #[serde(deserialize_with = "vec3::exact")]
     pub max: [f64; 3],
 }
 
@@ -482,6 +561,7 @@ struct RawScene {
     #[serde(default)]
     title: String,
     #[serde(default)]
+    #[serde(deserialize_with = "vec3::exact")]
     gravity: [f64; 3],
     run: Run,
     #[serde(default)]
@@ -598,6 +678,16 @@ impl Ctx {
     }
 }
 
+/// A number as a message shows it: plain when short, in exponent form when very large or
+/// very small.
+pub fn num_text(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// A positive finite number.
 fn pos(v: f64) -> bool {
     v > 0.0 && v.is_finite()
@@ -652,7 +742,29 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
-        let msg = inner.message().trim().to_string();
+        // One line (toml's parse messages run over several).
+        let mut msg = inner
+            .message()
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
+        if msg.is_empty() {
+            // toml's Display ends with what it expected; its message alone may be empty.
+            msg = inner
+                .to_string()
+                .lines()
+                .rev()
+                .map(str::trim)
+                .find(|l| !l.is_empty() && !l.starts_with('|'))
+                .unwrap_or("invalid TOML")
+                .to_string();
+        }
+        if let Some(r) = inner.span() {
+            let (line, column) = line_column(text, r.start);
+            msg = format!("{msg} (line {line}, column {column})");
+        }
         let key = if path.is_empty() || path == "." {
             "(scene)".to_string()
         } else {
@@ -660,6 +772,18 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
         };
         cx.err(&key, msg)
     })
+}
+
+/// The 1-based line and column (in characters) of byte `at` of `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[start..].chars().count() + 1)
 }
 
 /// `[run]`: times, step, intervals, energy limit, bulk viscosity and hourglass control.
@@ -731,7 +855,83 @@ fn check_run(cx: &Ctx, r: &Run) -> Result<(), SceneError> {
             ),
         ));
     }
+    if !(r.max_steps >= 1.0 && r.max_steps.is_finite()) {
+        return Err(cx.err(
+            "run.max_steps",
+            format!("expected a number of steps >= 1, got {}", r.max_steps),
+        ));
+    }
+    work_bounds(cx, r, r.dt)
+}
+
+/// The work a run asks for, refused with its numbers before it starts (SCENE.md "Exit
+/// status"): more than `run.max_steps` steps, more than [`MAX_FRAMES`] frames or [`MAX_ROWS`]
+/// rows, or intervals [`MAX_OUTPUTS_PER_STEP`] times shorter than the step. `dt` is the step
+/// when known (a fixed `run.dt`, or the first step the run takes); the scene check passes the
+/// fixed one, the run the one it starts with ([`check_work`]).
+fn work_bounds(cx: &Ctx, r: &Run, dt: Option<f64>) -> Result<(), SceneError> {
+    let end = r.end_time;
+    if let Some(dt) = dt {
+        let steps = end / dt;
+        if !(steps <= r.max_steps) {
+            let (key, step) = match r.dt {
+                Some(_) => ("run.dt", "run.dt"),
+                None => ("run.end_time", "the stable step times run.dt_safety"),
+            };
+            return Err(cx.err(
+                key,
+                format!(
+                    "run.end_time = {end:e} s in steps of {dt:.3e} s ({step}) is {steps:.3e} steps, more than run.max_steps = {:e}: check the units (SI: m, kg, s) and the values; raise run.max_steps to run it anyway",
+                    r.max_steps
+                ),
+            ));
+        }
+    }
+    let intervals = [
+        ("run.output_every", "frames", r.output_every, MAX_FRAMES),
+        (
+            "run.history_every",
+            "rows",
+            Some(r.history_every).filter(|h| *h > 0.0),
+            MAX_ROWS,
+        ),
+    ];
+    for (key, what, every, max) in intervals {
+        let Some(every) = every else { continue };
+        let every_step = if what == "rows" {
+            " (history_every = 0 writes a row every step)"
+        } else {
+            ""
+        };
+        let count = end / every;
+        if count > max {
+            return Err(cx.err(
+                key,
+                format!(
+                    "{every:e} s over run.end_time = {end:e} s is {count:.3e} {what}, more than the {max:e} a run may write: use a longer interval{every_step}"
+                ),
+            ));
+        }
+        if let Some(dt) = dt.filter(|dt| every * MAX_OUTPUTS_PER_STEP < *dt) {
+            return Err(cx.err(
+                key,
+                format!(
+                    "{every:e} s is {:.3e} times shorter than the step {dt:e} s: {what} come at most once a step; use an interval of at least the step{every_step}",
+                    dt / every
+                ),
+            ));
+        }
+    }
     Ok(())
+}
+
+/// The work bounds of [`work_bounds`] at the step the run starts with (`dt`: the fixed step,
+/// or the safety factor times the stable step), once it is known.
+pub fn check_work(scene: &Scene, dt: f64) -> Result<(), SceneError> {
+    let cx = Ctx {
+        file: scene.file.display().to_string(),
+    };
+    work_bounds(&cx, &scene.run, Some(dt))
 }
 
 /// `[[mesh]]`: each file a .geo or .msh that exists (relative to the scene's directory); a
@@ -758,11 +958,14 @@ fn check_meshes(
                 format!("no such file: {}", f.display()),
             ));
         }
-        meshes.push(MeshDef {
+        let def = MeshDef {
             file: f,
             params: m.params.clone(),
             translate: m.translate,
-        });
+        };
+        crate::input::gmsh::check_params(&def)
+            .map_err(|(name, why)| cx.err(&format!("mesh[{i}].params.{name}"), why))?;
+        meshes.push(def);
     }
     if meshes.is_empty() && no_particles {
         return Err(cx.err(
@@ -822,14 +1025,15 @@ fn check_material(
     let Some((_, keys)) = MODEL_KEYS.iter().find(|(m, _)| *m == model) else {
         return Err(cx.err(&key("model"), format!("unknown model \"{model}\" (expected one of elastic, j2_plastic, johnson_cook, fluid)")));
     };
-    let density = match t.get("density").and_then(num) {
-        Some(d) if pos(d) => d,
-        Some(d) => {
+    let density = match t.get("density").map(number) {
+        Some(Ok(d)) if pos(d) => d,
+        Some(Ok(d)) => {
             return Err(cx.err(
                 &key("density"),
                 format!("expected a positive density in kg/m^3, got {d}"),
             ))
         }
+        Some(Err(e)) => return Err(cx.err(&key("density"), e)),
         None => return Err(cx.err(&key("density"), "missing (kg/m^3)".into())),
     };
     let mut params = BTreeMap::new();
@@ -853,9 +1057,7 @@ fn check_material(
                         ),
                     ));
                 }
-                let Some(x) = num(v) else {
-                    return Err(cx.err(&key(k), "expected a number".into()));
-                };
+                let x = number(v).map_err(|e| cx.err(&key(k), e))?;
                 params.insert(k.clone(), x);
             }
         }
@@ -916,9 +1118,7 @@ fn check_eos(cx: &Ctx, i: usize, v: &toml::Value) -> Result<EosSpec, SceneError>
                 format!("unknown key for eos {kind} (expected {})", ek.join(", ")),
             ));
         }
-        let Some(x) = num(ev) else {
-            return Err(cx.err(&key(&format!("eos.{ekk}")), "expected a number".into()));
-        };
+        let x = number(ev).map_err(|e| cx.err(&key(&format!("eos.{ekk}")), e))?;
         ep.insert(ekk.clone(), x);
     }
     for need in ek.iter() {
@@ -945,6 +1145,15 @@ fn material_names(materials: &[MaterialSpec]) -> String {
 /// EOS keys and values checked); particles take their EOS from the SPH side.
 fn check_blocks(cx: &Ctx, blocks: &[Block], materials: &[MaterialSpec]) -> Result<(), SceneError> {
     for (i, b) in blocks.iter().enumerate() {
+        if let Some(j) = blocks[..i].iter().position(|o| o.group == b.group) {
+            return Err(cx.err(
+                &format!("block[{i}].group"),
+                format!(
+                    "group \"{}\" already has a block (block[{j}]): one [[block]] per physical volume",
+                    b.group
+                ),
+            ));
+        }
         if !materials.iter().any(|m| m.name == b.material) {
             return Err(cx.err(
                 &format!("block[{i}].material"),
@@ -1046,12 +1255,64 @@ fn check_particles(
                 format!("expected a positive factor, got {}", p.h_factor),
             ));
         }
+        check_region(cx, i, p)?;
         if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
             return Err(cx.err(
                 &format!("particles[{i}].liggghts_type"),
                 "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
             ));
         }
+    }
+    Ok(())
+}
+
+/// A lattice region: a box with min < max, a positive radius, a non-zero axis, and no more than
+/// [`MAX_PARTICLES`] lattice points to visit at the entry's spacing (counted before anything
+/// is allocated).
+fn check_region(cx: &Ctx, i: usize, p: &ParticlesDef) -> Result<(), SceneError> {
+    let key = |k: &str| format!("particles[{i}].region.{k}");
+    match &p.region {
+        Region::Box { min, max } => {
+            if let Some(d) = (0..3).find(|&d| !(min[d] < max[d])) {
+                return Err(cx.err(
+                    &key("box"),
+                    format!(
+                        "expected min < max on every axis, got min[{d}] = {} and max[{d}] = {}",
+                        num_text(min[d]),
+                        num_text(max[d])
+                    ),
+                ));
+            }
+        }
+        Region::Sphere { radius, .. } if !pos(*radius) => {
+            return Err(cx.err(
+                &key("sphere.radius"),
+                format!("expected a positive radius in m, got {radius}"),
+            ));
+        }
+        Region::Cylinder { radius, .. } if !pos(*radius) => {
+            return Err(cx.err(
+                &key("cylinder.radius"),
+                format!("expected a positive radius in m, got {radius}"),
+            ));
+        }
+        Region::Cylinder { axis, .. } if axis.iter().all(|a| *a == 0.0) => {
+            return Err(cx.err(
+                &key("cylinder.axis"),
+                "expected a non-zero axis (from the base to the top, m)".into(),
+            ));
+        }
+        _ => {}
+    }
+    let n = crate::input::particles::lattice_points_bound(&p.region, p.spacing);
+    if !(n <= MAX_PARTICLES) {
+        return Err(cx.err(
+            &format!("particles[{i}].spacing"),
+            format!(
+                "the region at a spacing of {:e} m is a lattice of {n:.3e} points, more than the {MAX_PARTICLES:e} particles a run may hold: use a larger spacing or a smaller region",
+                p.spacing
+            ),
+        ));
     }
     Ok(())
 }
@@ -1159,11 +1420,16 @@ fn check_compare(cx: &Ctx, c: &CompareDef, probes: &[Probe]) -> Result<(), Scene
     Ok(())
 }
 
-fn num(v: &toml::Value) -> Option<f64> {
+/// A material's number: an integer or a finite float; anything else named by its type.
+fn number(v: &toml::Value) -> Result<f64, String> {
     match v {
-        toml::Value::Float(f) => Some(*f),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
+        toml::Value::Float(f) if f.is_finite() => Ok(*f),
+        toml::Value::Float(f) => Err(format!("expected a finite number, got {f}")),
+        toml::Value::Integer(i) => Ok(*i as f64),
+        toml::Value::String(s) => Err(format!(
+            "expected a number, got a string (\"{s}\": write it without quotes)"
+        )),
+        other => Err(format!("expected a number, got {}", other.type_str())),
     }
 }
 
