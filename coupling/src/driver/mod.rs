@@ -249,6 +249,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let forced = check_fixed_dt(world, &scene, &model, stable0, opts.quiet)?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut clock = schedule::Clock::new(&scene, stable0);
+    scene::check_work(&scene, clock.dt).map_err(|e| e.to_string())?;
     if opts.setup_only {
         return Ok(RunSummary {
             out: out_dir,

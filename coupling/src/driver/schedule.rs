@@ -107,9 +107,7 @@ impl Clock {
         let eps = TIME_EPS_STEPS * self.dt;
         let due = every <= 0.0 || self.time >= every * self.next_row as f64 - eps || self.at_end();
         if due && every > 0.0 {
-            while every * self.next_row as f64 <= self.time + eps {
-                self.next_row += 1;
-            }
+            self.next_row = next_after(self.next_row, every, self.time + eps);
         }
         due
     }
@@ -120,10 +118,58 @@ impl Clock {
         let eps = TIME_EPS_STEPS * self.dt;
         let due = self.time >= every * self.next_frame as f64 - eps || self.at_end();
         if due {
-            while every * self.next_frame as f64 <= self.time + eps {
-                self.next_frame += 1;
-            }
+            self.next_frame = next_after(self.next_frame, every, self.time + eps);
         }
         due
+    }
+}
+
+/// The smallest k >= `from` with k * `every` > `t`: the next frame or row after time `t`. Jumps
+/// to it (a few steps around t / every for the round-off) rather than counting up to it, so
+/// an interval far shorter than the step costs nothing.
+fn next_after(from: u64, every: f64, t: f64) -> u64 {
+    let guess = (t / every).floor();
+    let mut k = if guess.is_finite() && guess > 1.0 {
+        from.max((guess as u64).saturating_sub(1))
+    } else {
+        from
+    };
+    while k < u64::MAX && every * (k as f64) <= t {
+        k += 1;
+    }
+    k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::next_after;
+
+    #[test]
+    fn the_next_frame_is_the_one_counting_up_finds() {
+        // Counting up one by one (the definition) against the jump, over intervals and times
+        // where round-off matters: multiples of the interval, and just around them.
+        for &every in &[1e-6, 2.5e-6, 1.0 / 3.0, 0.1, 7.0] {
+            for k in 0..2000u64 {
+                for t in [
+                    k as f64 * every,
+                    (k as f64 * every) * (1.0 + 1e-15),
+                    k as f64 * every - 1e-18,
+                ] {
+                    for from in [1u64, k / 2 + 1] {
+                        let mut want = from;
+                        while every * want as f64 <= t {
+                            want += 1;
+                        }
+                        assert_eq!(
+                            next_after(from, every, t),
+                            want,
+                            "every {every}, t {t}, from {from}"
+                        );
+                    }
+                }
+            }
+        }
+        // An interval of 1e-18 s at t = 1e-5 s is frame 1e13 + 1, found at once.
+        assert_eq!(next_after(1, 1e-18, 1e-5), 10_000_000_000_001);
     }
 }
