@@ -1,5 +1,6 @@
 //! Each documented scene mistake (SCENE.md) gives one clear line naming the key, a non-zero exit,
 //! and no hang, at np 2.
+use std::path::{Path, PathBuf};
 use tdyn_tests::*;
 
 fn expect_error(name: &str, mutate: impl Fn(String) -> String, needle: &str) {
@@ -178,5 +179,323 @@ fn tetrahedral_meshes_are_refused_with_a_reason() {
     assert!(
         err.contains("tetrahedron") && err.contains("hexahedral"),
         "names the problem:\n{err}"
+    );
+}
+
+/// One case of issue 16: a scene (and its arguments) that once hung a rank or ran on silently,
+/// and what its one line must say (SCENE.md "Exit status": the file, the key or the element
+/// and its place, what was expected).
+struct Case {
+    name: String,
+    scene: PathBuf,
+    out: PathBuf,
+    needles: Vec<String>,
+}
+
+/// Longest a bad case may take to exit at any rank count (issue 16: "within 10 s").
+const EXIT_WITHIN_S: f64 = 10.0;
+/// mpirun is killed after this long: a case that reaches it hung.
+const HANG_KILL_S: u32 = 40;
+
+/// The rows of the `$Elements` section of msh text, with their line index.
+fn element_rows(text: &str) -> Vec<(usize, Vec<String>)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines.iter().position(|l| *l == "$Elements").unwrap() + 2;
+    lines[start..]
+        .iter()
+        .take_while(|l| !l.starts_with('$'))
+        .enumerate()
+        .map(|(k, l)| (start + k, l.split(' ').map(String::from).collect()))
+        .collect()
+}
+
+/// `text` with line `i` replaced.
+fn with_line(text: &str, i: usize, line: &str) -> String {
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines[i] = line;
+    lines.join("\n") + "\n"
+}
+
+/// A gmsh mesh of the test bar (4 hexahedra along x), msh 2.2, and its variants broken the ways
+/// issue 16 lists; each variant with what its message must name, found from the text here.
+fn broken_meshes(dir: &Path) -> Vec<(&'static str, String, Vec<String>)> {
+    let msh = dir.join("bar.msh");
+    let o = std::process::Command::new("gmsh")
+        .arg(root().join("meshes").join("bar.geo"))
+        .args([
+            "-3",
+            "-format",
+            "msh22",
+            "-setnumber",
+            "N",
+            "4",
+            "-setnumber",
+            "M",
+            "1",
+            "-o",
+        ])
+        .arg(&msh)
+        .output()
+        .expect("gmsh is needed (make setup installs it)");
+    assert!(o.status.success(), "gmsh: {o:?}");
+    let text = std::fs::read_to_string(&msh).unwrap();
+    let rows = element_rows(&text);
+    let (i, hex) = rows.iter().find(|(_, r)| r[1] == "5").unwrap().clone();
+    let (id, nodes) = (&hex[0], &hex[hex.len() - 8..]);
+    let head = hex[..hex.len() - 8].join(" ");
+    let row = |ns: &[String]| format!("{head} {}", ns.join(" "));
+    let mut repeated = nodes.to_vec();
+    repeated[7] = nodes[6].clone();
+    let mut missing = nodes.to_vec();
+    missing[7] = "999999".into();
+    let inverted: Vec<String> = nodes[4..].iter().chain(&nodes[..4]).cloned().collect();
+    let lines: Vec<&str> = text.lines().collect();
+    let n0 = lines.iter().position(|l| *l == "$Nodes").unwrap() + 2;
+    let node: Vec<&str> = lines[n0].split(' ').collect();
+    let nan_node = format!("{} nan {} {}", node[0], node[2], node[3]);
+    let cut = lines[..i].join("\n") + "\n";
+    vec![
+        ("msh_truncated", cut, vec!["truncated".into()]),
+        (
+            "msh_repeated_node",
+            with_line(&text, i, &row(&repeated)),
+            vec![format!(
+                "element {id} (hexahedron) lists node {} twice",
+                nodes[6]
+            )],
+        ),
+        (
+            "msh_missing_node",
+            with_line(&text, i, &row(&missing)),
+            vec![format!("element {id} (hexahedron) refers to node 999999")],
+        ),
+        (
+            "msh_inverted",
+            with_line(&text, i, &row(&inverted)),
+            vec![
+                format!("element {id} (hexahedron) is inverted"),
+                "centroid (".into(),
+            ],
+        ),
+        (
+            "msh_nan_coordinate",
+            with_line(&text, n0, &nan_node),
+            vec![format!("node {} has a non-finite coordinate", node[0])],
+        ),
+    ]
+}
+
+/// Every case of issue 16 (its hangs and its silent inputs), written into `dir`.
+fn issue_16_cases(dir: &Path) -> Vec<Case> {
+    let base_dir = dir.join("base");
+    std::fs::create_dir_all(&base_dir).unwrap();
+    let base = std::fs::read_to_string(bar_scene(
+        &base_dir,
+        4,
+        "end_time = 1.0e-5",
+        "[[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n",
+    ))
+    .unwrap();
+    let geo = root().join("meshes").join("bar.geo").display().to_string();
+    let water = "[[material]]\nname = \"water\"\nmodel = \"fluid\"\ndensity = 1000.0\n\
+                 eos = { kind = \"tait\", rho0 = 1000.0, sound_speed = 1480.0, gamma = 7.0 }\n\
+                 [[particles]]\nname = \"blob\"\nmaterial = \"water\"\nspacing = 0.01\n";
+    let box_region = |min: &str| {
+        format!("region = {{ box = {{ min = [{min}, 0.0, 0.0], max = [0.1, 0.1, 0.1] }} }}\n")
+    };
+    let run = |key: &str| base.replace("end_time = 1.0e-5", key);
+    let mut scenes: Vec<(String, String, Vec<String>)> = vec![
+        (
+            "output_every_1e-18".into(),
+            run("end_time = 1.0e-5\noutput_every = 1e-18"),
+            vec!["run.output_every".into(), "frames".into()],
+        ),
+        (
+            "history_every_1e-18".into(),
+            run("end_time = 1.0e-5\nhistory_every = 1e-18"),
+            vec!["run.history_every".into(), "rows".into()],
+        ),
+        (
+            "dt_1e-300".into(),
+            run("end_time = 1.0e-5\ndt = 1e-300"),
+            vec!["run.dt".into(), "run.max_steps".into()],
+        ),
+        (
+            "end_time_1e30".into(),
+            run("end_time = 1.0e30"),
+            vec!["run.end_time".into(), "run.max_steps".into()],
+        ),
+        (
+            "two_blocks".into(),
+            base.clone() + "[[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+            vec!["block[1].group".into(), "already has a block".into()],
+        ),
+        (
+            "velocity_of_4".into(),
+            base.replace(
+                "material = \"steel\"\n\n",
+                "material = \"steel\"\nvelocity = [1.0, 0.0, 0.0, 4.0]\n\n",
+            ),
+            vec!["block[0].velocity".into(), "got 4 values".into()],
+        ),
+        (
+            "velocity_nan".into(),
+            base.replace(
+                "material = \"steel\"\n\n",
+                "material = \"steel\"\nvelocity = [nan, 0.0, 0.0]\n\n",
+            ),
+            vec!["block[0].velocity".into(), "finite".into()],
+        ),
+        (
+            "density_string".into(),
+            base.replace("density = 7850.0", "density = \"7850\""),
+            vec![
+                "material[0].density".into(),
+                "expected a number, got a string".into(),
+            ],
+        ),
+        (
+            "toml_syntax".into(),
+            base.replace("[run]", "[run"),
+            vec!["line 2, column".into()],
+        ),
+        (
+            "particles_min_-9.2e18".into(),
+            base.clone() + water + &box_region("-9.2e18"),
+            vec!["particles[0].spacing".into(), "more than the 1e9".into()],
+        ),
+        (
+            "particles_min_1e30".into(),
+            base.clone() + water + &box_region("1e30"),
+            vec!["particles[0].region.box".into()],
+        ),
+    ];
+    for n in ["0", "-5", "1e12", "nan", "10.5"] {
+        scenes.push((
+            format!("mesh_param_N_{n}"),
+            base.replace("N = 4,", &format!("N = {n},")),
+            vec!["mesh[0].params.N".into()],
+        ));
+    }
+    for (name, text, needles) in broken_meshes(dir) {
+        let msh = dir.join(format!("{name}.msh"));
+        std::fs::write(&msh, text).unwrap();
+        let mut needles = needles;
+        needles.push(format!("{name}.msh"));
+        scenes.push((
+            name.into(),
+            base.replace(&geo, &msh.display().to_string()),
+            needles,
+        ));
+    }
+    let mut cases: Vec<Case> = scenes
+        .into_iter()
+        .map(|(name, text, mut needles)| {
+            let scene = dir.join(format!("{name}.toml"));
+            std::fs::write(&scene, text).unwrap();
+            needles.push(format!("{name}.toml"));
+            Case {
+                out: dir.join(format!("out_{name}")),
+                name,
+                scene,
+                needles,
+            }
+        })
+        .collect();
+    // `--out` naming a file: the directory cannot be created (and the file stays as it was).
+    let file = dir.join("a_file");
+    std::fs::write(&file, "an earlier result\n").unwrap();
+    let scene = dir.join("out_is_a_file.toml");
+    std::fs::write(&scene, &base).unwrap();
+    cases.push(Case {
+        name: "out_is_a_file".into(),
+        scene,
+        out: file,
+        needles: vec!["cannot create output directory".into(), "a_file".into()],
+    });
+    cases
+}
+
+/// Runs one case at `np` ranks: None when it exits non-zero within [`EXIT_WITHIN_S`] with one
+/// error line that says what it must; else what went wrong.
+fn check_case(case: &Case, np: usize) -> Option<String> {
+    let t0 = std::time::Instant::now();
+    let o = mpirun(np, HANG_KILL_S)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&case.scene)
+        .arg("--out")
+        .arg(&case.out)
+        .arg("--quiet")
+        .output()
+        .expect("mpirun");
+    let took = t0.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let errors = err
+        .lines()
+        .filter(|l| l.starts_with("tdyn: error:"))
+        .count();
+    let what = format!("{} at np {np} ({took:.1} s)", case.name);
+    if o.status.code() == Some(124) {
+        return Some(format!(
+            "{what}: hung (killed after {HANG_KILL_S} s):\n{err}"
+        ));
+    }
+    if o.status.success() {
+        return Some(format!("{what}: exit 0, a failure expected"));
+    }
+    if took > EXIT_WITHIN_S {
+        return Some(format!("{what}: took more than {EXIT_WITHIN_S} s:\n{err}"));
+    }
+    if errors != 1 {
+        return Some(format!(
+            "{what}: {errors} error lines, one expected:\n{err}"
+        ));
+    }
+    let missing: Vec<&String> = case.needles.iter().filter(|n| !err.contains(*n)).collect();
+    if !missing.is_empty() {
+        return Some(format!("{what}: the message lacks {missing:?}:\n{err}"));
+    }
+    None
+}
+
+/// Issue 16: each case that hung a rank, ran until killed or ran on silently exits non-zero
+/// with its one line within 10 s, at np 1, 2 and 3 (two runs at a time: the machine has two
+/// cores).
+#[test]
+fn every_case_of_issue_16_exits_with_its_message_at_np_1_2_3() {
+    let dir = workdir("issue16");
+    let cases = issue_16_cases(&dir);
+    let runs: Vec<(&Case, usize)> = cases
+        .iter()
+        .flat_map(|c| [1, 2, 3].map(|np| (c, np)))
+        .collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let failures = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..2 {
+            s.spawn(|| loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some(&(case, np)) = runs.get(k) else {
+                    break;
+                };
+                if let Some(f) = check_case(case, np) {
+                    failures.lock().unwrap().push(f);
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap();
+    assert!(
+        failures.is_empty(),
+        "{} of {} runs failed:\n{}",
+        failures.len(),
+        runs.len(),
+        failures.join("\n\n")
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("a_file")).unwrap(),
+        "an earlier result\n",
+        "--out naming a file leaves the file as it was"
     );
 }
