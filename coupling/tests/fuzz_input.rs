@@ -1,15 +1,19 @@
-//! Fuzzing what a user hands the code before any rank computes (issue 16): the scene parser.
+//! Fuzzing what a user hands the code before any rank computes (issue 16): the scene parser
+//! and the mesh checks.
 //!
-//! Each case takes a valid scene from `scenes/`, applies one to three random mutations (a line
-//! deleted, duplicated or swapped, a value replaced by a hostile one, a key renamed, a stray
-//! character, the text cut short) and parses it. The contract (SCENE.md "Exit status"): no
-//! panic, only `Ok` or a `SceneError` whose key and message are not empty.
+//! Each scene case takes a valid scene from `scenes/`, applies one to three random mutations
+//! (a line deleted, duplicated or swapped, a value replaced by a hostile one, a key renamed, a
+//! stray character, the text cut short) and parses it. The contract (SCENE.md "Exit status"):
+//! no panic, only `Ok` or a `SceneError` whose key and message are not empty, on one line.
+//! Each mesh case takes a gmsh mesh of a bundled `.geo` (msh 2.2), mutates it the same way (and
+//! swaps nodes within an element row, writes hostile numbers into a row) and checks it: no
+//! panic, only `Ok` or a one-line message.
 //!
 //! The tests run `TDYN_FUZZ_CASES` cases (default 10^4). By hand, a long run:
 //! `TDYN_FUZZ_CASES=1000000 cargo test --release -p coupling --test fuzz_input -- --nocapture`
 //! (`TDYN_FUZZ_SEED` picks another sequence; `TDYN_FUZZ_RECORD=FILE` writes every case's
 //! outcome, for comparing two versions of the parser on the same inputs).
-use coupling::input::scene;
+use coupling::input::{gmsh, msh_check, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -246,4 +250,123 @@ fn the_scene_parser_never_panics_and_always_names_a_key() {
         t0.elapsed().as_secs_f64()
     );
     assert!(refused > 0, "the mutations should produce refused scenes");
+}
+
+/// Tokens a mesh mutation writes into a row: non-finite, absurd and negative numbers, ids no
+/// node has, words.
+const HOSTILE_TOKENS: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "999999",
+    "4294967297",
+    "18446744073709551617",
+    "2.5",
+    "x",
+    "$Nodes",
+    "$EndElements",
+    "",
+];
+
+/// Valid msh 2.2 meshes of bundled `.geo` files (gmsh, cached under target/fuzz/meshes).
+fn mesh_seeds() -> Vec<String> {
+    let cache = root().join("target").join("fuzz").join("meshes");
+    let meshes: [(&str, &[(&str, f64)]); 3] = [
+        ("bar.geo", &[("N", 4.0), ("M", 2.0)]),
+        ("block_plate.geo", &[("NB", 2.0), ("NP", 4.0), ("NH", 1.0)]),
+        ("plate.geo", &[("N", 3.0), ("M", 1.0)]),
+    ];
+    meshes
+        .iter()
+        .map(|(geo, params)| {
+            let def = scene::MeshDef {
+                file: root().join("meshes").join(geo),
+                params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+                translate: [0.0; 3],
+            };
+            let msh = gmsh::mesh_file(&def, &cache).expect("gmsh is needed (make setup)");
+            let text = std::fs::read_to_string(msh).unwrap();
+            msh_check::check(&text)
+                .unwrap_or_else(|e| panic!("{geo}: the seed mesh must pass: {e}"));
+            text
+        })
+        .collect()
+}
+
+/// One random mutation of a mesh's text.
+fn mutate_mesh(text: &str, rng: &mut Rng) -> String {
+    let mut lines: Vec<String> = text.lines().map(|l| l.to_string()).collect();
+    if lines.is_empty() {
+        lines.push(String::new());
+    }
+    let n = lines.len();
+    match rng.below(6) {
+        0 => {
+            lines.remove(rng.below(n));
+        }
+        1 => {
+            let i = rng.below(n);
+            let l = lines[i].clone();
+            lines.insert(i, l);
+        }
+        2 => {
+            // Two tokens of one row swapped (an element's nodes reordered: often inverted).
+            let i = rng.below(n);
+            let mut t: Vec<&str> = lines[i].split(' ').collect();
+            let (a, b) = (rng.below(t.len()), rng.below(t.len()));
+            t.swap(a, b);
+            lines[i] = t.join(" ");
+        }
+        3 | 4 => {
+            let i = rng.below(n);
+            let mut t: Vec<String> = lines[i].split(' ').map(String::from).collect();
+            let k = rng.below(t.len());
+            t[k] = rng.pick(HOSTILE_TOKENS).to_string();
+            lines[i] = t.join(" ");
+        }
+        _ => {
+            let t = lines.join("\n");
+            return t[..rng.below(t.len() + 1)].to_string();
+        }
+    }
+    lines.join("\n") + "\n"
+}
+
+#[test]
+fn the_mesh_checks_never_panic_and_always_say_why() {
+    let seeds = mesh_seeds();
+    let n = cases();
+    let mut rng = Rng::new(seed() ^ 0x6d73_6800);
+    let (mut ok, mut refused) = (0u64, 0u64);
+    let t0 = std::time::Instant::now();
+    for case in 0..n {
+        let mut t = rng.pick(&seeds).clone();
+        for _ in 0..1 + rng.below(3) {
+            t = mutate_mesh(&t, &mut rng);
+        }
+        match std::panic::catch_unwind(|| msh_check::check(&t)) {
+            Ok(Ok(_)) => ok += 1,
+            Ok(Err(e)) if !e.trim().is_empty() && !e.contains('\n') => refused += 1,
+            Ok(Err(e)) => {
+                let p = keep(&format!("mesh_unclear_{case}.msh"), &t);
+                panic!("case {case}: an unclear message {e:?} for {}", p.display());
+            }
+            Err(_) => {
+                let p = keep(&format!("mesh_panic_{case}.msh"), &t);
+                panic!("case {case}: the mesh check panicked on {}", p.display());
+            }
+        }
+    }
+    println!(
+        "fuzz mesh: {n} cases ({ok} accepted, {refused} refused) in {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
+    assert!(
+        refused > 0 && ok > 0,
+        "the mutations should give both outcomes"
+    );
 }
