@@ -180,7 +180,11 @@ fn load_mesh(
     buf.resize(len as usize, 0);
     world.process_at_rank(0).broadcast_into(&mut buf[..]);
     let mesh_path = PathBuf::from(String::from_utf8_lossy(&buf).into_owned());
-    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
+    // Every rank reads the names itself: a rank that cannot (another file system) must not
+    // leave the others in the collective read below.
+    let names = gmsh::physical_names(&mesh_path).map_err(|e| format!("{file}: mesh: {e}"));
+    first_error(world, names.as_ref().err().cloned())?;
+    let names = names?;
     let mut groups = Groups::default();
     for n in &names {
         match n.dim {

@@ -100,30 +100,35 @@ pub fn lattice_points_bound(region: &Region, spacing: f64) -> f64 {
     }
 }
 
+/// Whether the point `x` of the region's box lies in the region.
+fn inside(region: &Region, x: &[f64; 3]) -> bool {
+    match region {
+        Region::Sphere {
+            center: c,
+            radius: r,
+        } => {
+            let d2: f64 = (0..3).map(|d| (x[d] - c[d]).powi(2)).sum();
+            d2 < r * r
+        }
+        Region::Cylinder {
+            base: b,
+            axis: a,
+            radius: r,
+        } => {
+            let aa: f64 = a.iter().map(|c| c * c).sum();
+            let rel: [f64; 3] = std::array::from_fn(|d| x[d] - b[d]);
+            let t = (0..3).map(|d| rel[d] * a[d]).sum::<f64>() / aa;
+            let radial2: f64 = (0..3).map(|d| (rel[d] - t * a[d]).powi(2)).sum();
+            (0.0..1.0).contains(&t) && radial2 < r * r
+        }
+        _ => true,
+    }
+}
+
 /// Lattice points of a region, cell-centred on a simple cubic lattice of `spacing`.
 fn lattice(region: &Region, s: f64) -> Vec<[f64; 3]> {
     let Some((min, max)) = lattice_box(region) else {
         return Vec::new();
-    };
-    let keep: Box<dyn Fn(&[f64; 3]) -> bool> = match region {
-        Region::Sphere { center, radius } => {
-            let (c, r) = (*center, *radius);
-            Box::new(move |x: &[f64; 3]| {
-                let d2: f64 = (0..3).map(|d| (x[d] - c[d]).powi(2)).sum();
-                d2 < r * r
-            })
-        }
-        Region::Cylinder { base, axis, radius } => {
-            let (b, a, r) = (*base, *axis, *radius);
-            let aa: f64 = a.iter().map(|c| c * c).sum();
-            Box::new(move |x: &[f64; 3]| {
-                let rel: [f64; 3] = std::array::from_fn(|d| x[d] - b[d]);
-                let t = (0..3).map(|d| rel[d] * a[d]).sum::<f64>() / aa;
-                let radial2: f64 = (0..3).map(|d| (rel[d] - t * a[d]).powi(2)).sum();
-                (0.0..1.0).contains(&t) && radial2 < r * r
-            })
-        }
-        _ => Box::new(|_: &[f64; 3]| true),
     };
     // Points min + (i + 1/2) s along each axis.
     let n = lattice_dims(min, max, s).map(|k| k as usize);
@@ -136,7 +141,7 @@ fn lattice(region: &Region, s: f64) -> Vec<[f64; 3]> {
                     min[1] + (j as f64 + 0.5) * s,
                     min[2] + (k as f64 + 0.5) * s,
                 ];
-                if keep(&x) {
+                if inside(region, &x) {
                     out.push(x);
                 }
             }
