@@ -192,6 +192,10 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
         },
         setup_only: true,
         algorithms: Default::default(),
+        // the tool's own run folders: a new comparison replaces the last one's runs
+        overwrite: true,
+        restart: None,
+        stop: None,
     };
     let limit = driver::run(world, &probe_opts)
         .map_err(|e| e.message)?
@@ -230,6 +234,9 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
                     },
                     setup_only: false,
                     algorithms: Default::default(),
+                    overwrite: true,
+                    restart: None,
+                    stop: None,
                 };
                 driver::run(world, &o)
             };
@@ -262,7 +269,7 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
                         FailureKind::Unstable => Outcome::Unstable,
                         FailureKind::Refused => Outcome::Refused,
                         FailureKind::Failed => Outcome::Failed,
-                        FailureKind::Input => return Err(e.message),
+                        FailureKind::Input | FailureKind::Stopped => return Err(e.message),
                     };
                     CompareRow {
                         mode,

@@ -65,6 +65,18 @@ fn parse_skins(s: &str) -> Result<(f64, f64), String> {
     Ok((a, b))
 }
 
+/// A flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops at its next step with its output
+/// closed and a checkpoint written (mpirun passes both signals on to every rank).
+fn stop_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // A second signal while the first is being honoured ends the process at once.
+        let _ = signal_hook::flag::register_conditional_shutdown(sig, 130, flag.clone());
+        let _ = signal_hook::flag::register(sig, flag.clone());
+    }
+    flag
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scene: `mpirun -np 2 tdyn run scenes/slug_on_plate.toml [--out DIR] [PETSc
@@ -103,6 +115,17 @@ enum Cmd {
         /// `every-step`: search afresh every step (the reference).
         #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
         sph_pairs: Rebuild,
+        /// Replace an earlier run's results in the output folder (without it they are kept:
+        /// `--out` naming a folder that holds a run is refused, and the default out/<scene
+        /// name> goes on to out/<scene name>-2, -3, ...).
+        #[arg(long)]
+        overwrite: bool,
+        /// Continue the run whose checkpoint is in DIR (its output folder; written with
+        /// `[output] checkpoint_every`, at its end, or when it was stopped with Ctrl-C or
+        /// SIGTERM) to the scene's end time, appending to its history, probes and frames. The
+        /// scene and its --param values must be those of the run; the rank count too.
+        #[arg(long, value_name = "DIR")]
+        restart: Option<PathBuf>,
     },
     /// Chart accuracy against cost over a ladder of resolutions:
     /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
@@ -555,6 +578,8 @@ fn main() -> ExitCode {
             contact_rebuild,
             contact_skins,
             sph_pairs,
+            overwrite,
+            restart,
         } => {
             let mut overrides = driver::RunOverrides {
                 end_time,
@@ -584,6 +609,9 @@ fn main() -> ExitCode {
                     contact_skins,
                     sph_kept_pairs: sph_pairs == Rebuild::Kept,
                 },
+                overwrite,
+                restart,
+                stop: Some(stop_flag()),
                 ..Default::default()
             };
             on_mpi_with_petsc(

@@ -435,6 +435,9 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
         overrides: overrides[0].clone(),
         setup_only: false,
         algorithms: Default::default(),
+        overwrite: true,
+        restart: None,
+        stop: None,
     };
     let _ = driver::run(world, &warm);
     let mut rows = Vec::with_capacity(n_runs);
@@ -464,6 +467,9 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
             overrides: ov,
             setup_only: false,
             algorithms: Default::default(),
+            overwrite: true,
+            restart: None,
+            stop: None,
         };
         world.barrier();
         reset_peak_rss();
@@ -503,6 +509,7 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
                     FailureKind::Refused => "refused",
                     FailureKind::Unstable => "unstable",
                     FailureKind::Failed | FailureKind::Input => "failed",
+                    FailureKind::Stopped => "stopped",
                 };
                 row.message = message;
             }

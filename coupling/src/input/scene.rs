@@ -336,6 +336,10 @@ pub struct OutputDef {
     /// `dump custom` text file `dumps/dump.tdyn.<step>`; 0 (default) = none.
     #[serde(default)]
     pub dump_every: u64,
+    /// Every this many seconds of simulated time, a restart checkpoint in `checkpoint/` (also
+    /// at the end, and always at a clean stop); None (default): only at a clean stop.
+    #[serde(default)]
+    pub checkpoint_every: Option<f64>,
 }
 
 fn d_fields() -> Vec<String> {
@@ -347,6 +351,7 @@ impl Default for OutputDef {
         OutputDef {
             fields: d_fields(),
             dump_every: 0,
+            checkpoint_every: None,
         }
     }
 }
@@ -992,6 +997,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             return Err(err(
                 &format!("probe[{i}].fields"),
                 "expected at least one field".into(),
+            ));
+        }
+    }
+    if let Some(c) = raw.output.checkpoint_every {
+        if !(c > 0.0 && c.is_finite()) {
+            return Err(err(
+                "output.checkpoint_every",
+                format!("expected a positive interval in seconds, got {c}"),
             ));
         }
     }

@@ -231,6 +231,35 @@ impl Contact {
         Ok(())
     }
 
+    /// Writes this rank's restart state: the contact energy and the last step's figures. The
+    /// decomposition and candidate lists are rebuilt at the first step after a restart (the
+    /// kept ones give the contacts of a rebuild: `stage`).
+    pub fn save(&self, w: &mut crate::output::state::StateWriter) {
+        let c = &self.stats;
+        w.put(
+            "contact.state",
+            &[self.energy, c.last_imbalance, c.last_bytes],
+        );
+        w.put("contact.contacts", &[c.contacts]);
+    }
+
+    /// Sets the state `save` wrote.
+    pub fn restore(&mut self, r: &crate::output::state::StateReader) -> Result<(), String> {
+        let s: Vec<f64> = r.get("contact.state")?;
+        if s.len() != 3 {
+            return Err("checkpoint: contact.state".into());
+        }
+        self.energy = s[0];
+        self.stats.last_imbalance = s[1];
+        self.stats.last_bytes = s[2];
+        self.stats.contacts = r
+            .get::<u64>("contact.contacts")?
+            .first()
+            .copied()
+            .unwrap_or(0);
+        Ok(())
+    }
+
     /// history.csv's contact columns: the last step's search imbalance and bytes.
     pub fn history_columns(&self) -> [f64; 2] {
         [self.stats.last_imbalance, self.stats.last_bytes]
