@@ -66,12 +66,12 @@ fn parse_skins(s: &str) -> Result<(f64, f64), String> {
 }
 
 /// A flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops at its next step with its output
-/// closed and a checkpoint written (mpirun passes both signals on to every rank).
+/// closed and a checkpoint written (mpirun passes both signals on to every rank; a rank may get
+/// one twice, from the terminal and from mpirun, so a repeated signal does not end it at once:
+/// mpirun's own second Ctrl-C does).
 fn stop_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        // A second signal while the first is being honoured ends the process at once.
-        let _ = signal_hook::flag::register_conditional_shutdown(sig, 130, flag.clone());
         let _ = signal_hook::flag::register(sig, flag.clone());
     }
     flag
