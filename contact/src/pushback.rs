@@ -1,4 +1,4 @@
-//! Push-back: kinematic contact (Taylor and Flanagan, PRONTO), frictionless.
+//! Push-back: kinematic contact (Taylor and Flanagan, PRONTO), with Coulomb friction.
 //!
 //! # Why kinematic, not penalty
 //!
@@ -54,6 +54,22 @@
 //! box: the shared face nodes then get both boxes' impulses (momentum still conserved, the nodes
 //! left on or outside the faces, possibly a little beyond).
 
+//!
+//! # Friction
+//!
+//! After the normal impulses, each contact's tangential slip over the step is measured on the
+//! corrected positions: `s = sum_j w_j (x1_j + dx_j - x0_j)`, its tangential part
+//! `s_t = s - (s . n) n` (the node's motion relative to the face point it touches, m). The
+//! tangential impulse that stops it (sticking) is `lambda_t = |s_t| / sum_j w_j^2 / m_j`, the
+//! same mass weighting as the normal one; Coulomb's law bounds it by `mu lambda_n` (one
+//! coefficient, static and kinetic, as PRONTO's), so a contact slips when the stopping impulse
+//! would be larger, and then takes `mu lambda_n` against the slip. With several contacts sharing
+//! nodes the tangential impulses are found by the same projected Gauss-Seidel sweeps, each
+//! contact's accumulated tangential impulse kept inside its friction disc. The forces sum to
+//! zero (the weights do), so momentum is conserved; the friction forces' work over the step is
+//! part of [`PushBack::work`] (dissipated: it never adds energy, as the impulse opposes the
+//! slip it reduces). Where the normal impulse is zero there is no friction.
+
 use crate::data::{Config, ContactBox};
 use crate::search::Contact;
 use crate::shape;
@@ -75,6 +91,8 @@ pub struct PushBackParams {
     pub max_sweeps: usize,
     /// Stop when the largest residual is at most `tol` times the largest depth.
     pub tol: f64,
+    /// Coulomb's friction coefficient (`[contact] friction`), >= 0.
+    pub friction: f64,
 }
 
 impl PushBackParams {
@@ -84,6 +102,7 @@ impl PushBackParams {
             dt,
             max_sweeps: DEFAULT_MAX_SWEEPS,
             tol: DEFAULT_TOL,
+            friction: 0.0,
         }
     }
 }
@@ -290,6 +309,18 @@ pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) 
             break;
         }
     }
+    if params.friction > 0.0 {
+        sweeps += friction(
+            b,
+            &rows,
+            &order,
+            &total_lambda,
+            params,
+            &inv_m,
+            &mut dx,
+            &mut force,
+        );
+    }
     let mut work = 0.0;
     let mut kinetic_energy_change = 0.0;
     for (j, f) in force.iter().enumerate() {
@@ -306,4 +337,77 @@ pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) 
         sweeps,
         max_residual,
     }
+}
+
+/// The friction impulses (module documentation, "Friction") on top of the normal ones: sweeps
+/// over the contacts until the tangential slips of the sticking contacts are gone to `tol` of
+/// the largest slip, or `max_sweeps`. Updates the position corrections and forces; returns the
+/// sweeps done.
+#[allow(clippy::too_many_arguments)]
+fn friction(
+    b: &ContactBox,
+    rows: &[Row],
+    order: &[usize],
+    lambda_n: &[f64],
+    params: &PushBackParams,
+    inv_m: &[f64],
+    dx: &mut [V3],
+    force: &mut [V3],
+) -> usize {
+    let slip_of = |r: &Row, dx: &[V3]| -> V3 {
+        let mut s = [0.0; 3];
+        for q in 0..r.len {
+            let j = r.nodes[q];
+            let moved = add(sub(b.nodes.x1[j], b.nodes.x0[j]), dx[j]);
+            axpy(&mut s, r.w[q], moved);
+        }
+        sub(s, scale(r.normal, dot(s, r.normal)))
+    };
+    let norm = |v: V3| dot(v, v).sqrt();
+    let mut lambda_t = vec![[0.0; 3]; rows.len()];
+    let largest = rows
+        .iter()
+        .map(|r| norm(slip_of(r, dx)))
+        .fold(0.0, f64::max);
+    let limit = params.tol * largest;
+    let mut sweeps = 0;
+    while sweeps < params.max_sweeps {
+        let mut change = 0.0f64;
+        for &k in order {
+            let r = &rows[k];
+            let cap = params.friction * lambda_n[k];
+            if r.inv_mass.is_nan() || r.inv_mass <= 0.0 || cap.is_nan() || cap <= 0.0 {
+                continue;
+            }
+            // The impulse that stops this contact's slip, added to what it has, kept inside
+            // the friction disc |lambda_t| <= mu lambda_n.
+            let slip = slip_of(r, dx);
+            let want = sub(lambda_t[k], scale(slip, 1.0 / r.inv_mass));
+            let size = norm(want);
+            let new = if size > cap {
+                scale(want, cap / size)
+            } else {
+                want
+            };
+            let step = sub(new, lambda_t[k]);
+            lambda_t[k] = new;
+            for q in 0..r.len {
+                let j = r.nodes[q];
+                axpy(&mut dx[j], r.w[q] * inv_m[j], step);
+            }
+            change = change.max(norm(step) * r.inv_mass);
+        }
+        sweeps += 1;
+        if change <= limit {
+            break;
+        }
+    }
+    let inv_dt2 = 1.0 / (params.dt * params.dt);
+    for &k in order {
+        let r = &rows[k];
+        for q in 0..r.len {
+            axpy(&mut force[r.nodes[q]], r.w[q] * inv_dt2, lambda_t[k]);
+        }
+    }
+    sweeps
 }

@@ -479,6 +479,9 @@ pub struct ContactDef {
     pub self_contact: bool,
     #[serde(default)]
     pub particles: bool,
+    /// Coulomb's coefficient between all contact pairs (static and kinetic), default 0.
+    #[serde(default)]
+    pub friction: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -997,6 +1000,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             return Err(err(
                 &format!("probe[{i}].fields"),
                 "expected at least one field".into(),
+            ));
+        }
+    }
+    if let Some(c) = &raw.contact {
+        if !(c.friction >= 0.0 && c.friction.is_finite()) {
+            return Err(err(
+                "contact.friction",
+                format!("expected Coulomb's coefficient >= 0, got {}", c.friction),
             ));
         }
     }

@@ -58,6 +58,8 @@ pub struct BaselineStage {
     comm: SimpleCommunicator,
     /// Search parameters (the dynamic stage's).
     pub params: SearchParams,
+    /// Coulomb's friction coefficient (the dynamic stage's).
+    pub friction: f64,
 }
 
 impl BaselineStage {
@@ -66,6 +68,7 @@ impl BaselineStage {
         BaselineStage {
             comm: comm.duplicate(),
             params,
+            friction: 0.0,
         }
     }
 
@@ -162,7 +165,14 @@ impl BaselineStage {
         let work_items = (n_owned + face_recs.len()) as f64;
         let b = crate::stages::contact::stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let contacts = search(&b, &self.params);
-        let pb = push_back(&b, &contacts, &PushBackParams::new(dt));
+        let pb = push_back(
+            &b,
+            &contacts,
+            &PushBackParams {
+                friction: self.friction,
+                ..PushBackParams::new(dt)
+            },
+        );
 
         // 4. Forces on copies back to the faces' FE ranks.
         let mut corner_force = vec![[[0.0f64; 3]; 4]; faces.len()];

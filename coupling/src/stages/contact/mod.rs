@@ -155,8 +155,11 @@ impl Contact {
         }
         let mut dynamic = ContactStage::new(world, def.self_contact);
         dynamic.configure(choice.kept, choice.skins);
+        dynamic.friction = def.friction;
         let search = if choice.static_decomposition {
-            Search::Baseline(BaselineStage::new(world, dynamic.params))
+            let mut b = BaselineStage::new(world, dynamic.params);
+            b.friction = def.friction;
+            Search::Baseline(b)
         } else {
             Search::Dynamic(dynamic)
         };

@@ -140,6 +140,7 @@ fn solve_together(
     parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
+    friction: f64,
 ) -> Result<(Vec<[f64; 3]>, f64, u64), String> {
     let mut mine: Vec<ContactPacket> = Vec::new();
     for (b, contacts) in parts {
@@ -203,7 +204,14 @@ fn solve_together(
             ..p.contact
         })
         .collect();
-    let pb = push_back(&gb, &gc, &PushBackParams::new(dt));
+    let pb = push_back(
+        &gb,
+        &gc,
+        &PushBackParams {
+            friction,
+            ..PushBackParams::new(dt)
+        },
+    );
     for (i, g) in owned.iter().enumerate() {
         if let Some(&k) = slot.get(g) {
             force[i] = pb.force[k];
@@ -332,6 +340,8 @@ pub struct ContactStage {
     pub rebuilds: RebuildStats,
     /// The contact work's imbalance at the last step.
     last_imbalance: f64,
+    /// Coulomb's friction coefficient of every contact pair (`[contact] friction`).
+    pub friction: f64,
 }
 
 impl ContactStage {
@@ -367,6 +377,7 @@ impl ContactStage {
             skins: (GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS),
             rebuilds: RebuildStats::default(),
             last_imbalance: 1.0,
+            friction: 0.0,
         }
     }
 
@@ -587,7 +598,8 @@ impl ContactStage {
         if let Some((_, pb, _)) = &st.pbox {
             parts.push((pb, &pcontacts[..]));
         }
-        let (owned_force, pb_work, gather_bytes) = solve_together(comm, &parts, &owned_gids, dt)?;
+        let (owned_force, pb_work, gather_bytes) =
+            solve_together(comm, &parts, &owned_gids, dt, self.friction)?;
         bytes += gather_bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
@@ -772,7 +784,7 @@ impl ContactStage {
         // `bytes_sent`); contacts are few next to the nodes searched.
         let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
         let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt)?;
+            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt, self.friction)?;
         bytes += gather_bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
