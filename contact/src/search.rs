@@ -80,8 +80,10 @@ const PARAM_REACH: f64 = 2.0;
 /// at both ends of the step, grown by the largest corner motion `max_i |X1_i - X0_i|`, by
 /// `max_radius` (the largest contact radius of any node that may meet it), and by
 /// `(gap_tol + 2 param_tol)` times the face's diameter. A node can only contact the face if its
-/// end position is within its depth of the face's end configuration, and the depth is bounded by
-/// the node's motion plus that growth (rule 4 of [`crate::pair`]); so a node whose
+/// end position is within `|p1 - p0| + max_i |X1_i - X0_i| + r + gap_tol * diameter` of a point
+/// of the face's end configuration with `|xi|, |eta| <= 1 + param_tol` (rule 4 of
+/// [`crate::pair`], in both of its branches: the end projection on the face, or the clamped
+/// point where the path met it); so a node whose
 /// [`node_search_aabb`] misses this box cannot contact the face, and the parallel layer ghosts a
 /// face to every box this overlaps.
 pub fn face_search_aabb(b: &ContactBox, f: usize, params: &SearchParams, max_radius: f64) -> Aabb {
@@ -139,14 +141,17 @@ pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
 ///
 /// Broad phase: a bucket grid over the faces' [`face_search_aabb`]s, queried with each node's
 /// [`node_search_aabb`] ([`Candidates::build`] with no skin). Narrow phase: [`crate::pair::test`].
-/// If a node crossed several faces the contact is
-/// the deepest, then the lowest face gid. A particle (a sphere) can touch two or three faces at
-/// once at an edge or a corner of a cavity, and one contact would leave it inside the others'
-/// offset surfaces, where the next step's crossing test no longer sees it: a particle keeps, in
-/// that order, every further hit whose normal is not within `PARTICLE_SAME_NORMAL_COS` of a kept
-/// one (coplanar neighbours across a seam still give one contact). The result is sorted by node
-/// gid, then depth and face gid; it depends only on the geometry and the gids, never on the
-/// storage order of nodes or faces.
+/// If a node crossed several faces its first contact is the deepest, then the lowest face gid.
+/// A node can cross two or three faces at once at an edge or a corner of a valley between faces
+/// at an angle (a groove, the inner corner of a box, a fold; a particle, a sphere, at any edge
+/// or corner of a cavity), and one contact would leave it behind the others, by its depth times
+/// the sine of the angle between the faces, where the next step's crossing test no longer sees
+/// it (started behind): a node keeps, in that order, every further hit whose normal is not
+/// within `SAME_NORMAL_COS` of a kept one, and the push-back solves them together
+/// (coplanar neighbours across a seam, or the slightly dimpled faces around a node pressed on a
+/// node, still give one contact: the remainder is second order in the angle). The result is
+/// sorted by node gid, then depth and face gid; it depends only on the geometry and the gids,
+/// never on the storage order of nodes or faces.
 pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
     let cands = Candidates::build(b, params, 0.0);
     search_candidates(b, params, &cands)
@@ -343,8 +348,8 @@ pub fn search_candidates(
         for &(h, f) in &hits {
             let distinct = kept
                 .iter()
-                .all(|(k, _)| dot(k.normal, h.normal).abs() < PARTICLE_SAME_NORMAL_COS);
-            if kept.is_empty() || (b.nodes.particle[j] && distinct) {
+                .all(|(k, _)| dot(k.normal, h.normal).abs() < SAME_NORMAL_COS);
+            if kept.is_empty() || distinct {
                 kept.push((h, f));
             }
         }
@@ -365,6 +370,6 @@ pub fn search_candidates(
     out
 }
 
-/// Two hits of one particle whose normals' |cos| is at least this (within about 25 degrees)
-/// are the same contact (coplanar or nearly coplanar faces): only the deeper is kept.
-pub const PARTICLE_SAME_NORMAL_COS: f64 = 0.9;
+/// Two hits of one node whose normals' |cos| is at least this (within about 25 degrees) are the
+/// same contact (coplanar or nearly coplanar faces): only the deeper is kept.
+pub const SAME_NORMAL_COS: f64 = 0.9;

@@ -124,8 +124,12 @@ fn body_rules_and_self_contact() {
             );
         }
         let want = reference_search(&scene, self_contact, params.gap_tol, params.param_tol);
-        let got_pairs: Vec<(u64, u64)> = got.iter().map(|c| (c.node_gid, c.face_gid)).collect();
-        let want_pairs: Vec<(u64, u64)> = want.contacts.iter().map(|(n, v)| (*n, v.0)).collect();
+        let mut got_pairs: Vec<(u64, u64)> = got.iter().map(|c| (c.node_gid, c.face_gid)).collect();
+        let mut want_pairs: Vec<(u64, u64)> =
+            want.contacts.iter().map(|(n, v)| (*n, v.0)).collect();
+        want_pairs.extend(&want.further);
+        got_pairs.sort_unstable();
+        want_pairs.sort_unstable();
         assert_eq!(got_pairs, want_pairs, "self_contact = {self_contact}");
         println!(
             "self_contact = {self_contact}: {} contacts, {same_body} within one body",

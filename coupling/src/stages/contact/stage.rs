@@ -46,7 +46,8 @@ use std::time::Instant;
 /// a few steps and is then never found again (it started the step behind the face). Measured
 /// on `tube_crush` (nodes on the folds' creases, which lie on the opposite wall's face seams):
 /// 0.32 mm (a third of the wall) inside the wall at 1e-6, 1e-9 m at 0.02. A node near a seam
-/// may then be found against both faces; the search keeps the deeper. Used for self-contact
+/// may then be found against both faces; the search keeps the deeper (both where their normals
+/// differ by more than 25 degrees: `contact::search::SAME_NORMAL_COS`). Used for self-contact
 /// pairs only: between bodies the crate's default keeps contacts of neighbouring faces apart,
 /// whose push-backs, when they land in different contact boxes, are solved separately (with
 /// 0.02 between bodies too, `underwater_explosion`'s plug moved 1.4 % differently at np 1 and 3).
