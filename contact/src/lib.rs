@@ -37,7 +37,8 @@ pub mod surfaces;
 mod vec3;
 
 pub use data::{
-    Aabb, Config, ContactBox, ContactFaces, ContactNodes, FaceRecord, NodeRecord, FLAG_PARTICLE,
+    Aabb, Config, ContactBox, ContactFaces, ContactNodes, FaceRecord, NodeRecord, FLAG_MASTER,
+    FLAG_PARTICLE,
 };
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{push_back, PushBack, PushBackParams};

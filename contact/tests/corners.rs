@@ -279,3 +279,61 @@ fn node_pressed_into_a_valley_stays_out_of_both_faces() {
         p = x;
     }
 }
+
+#[test]
+fn node_at_a_convex_edge_leaves_one_face_only() {
+    // The convex edge of an immovable body (x < 0 and z < 0 over 0 < y < 1: a top face with
+    // normal +z, a side face with normal +x): a node ends 0.002 below the top plane and 0.001
+    // inside the side plane, behind both. Leaving either face takes it out of the body, so it
+    // keeps one contact (the deepest: the top face, depth 0.002), not two (pushed out of both
+    // planes, a sideways kick as well). Reference: the geometry of the wedge; after push-back the
+    // node is on the top plane, where it ended in x and y.
+    let top = [
+        [-1.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
+    let side = [
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0],
+        [0.0, 1.0, -1.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let corners = [top[0], top[1], top[2], top[3], side[1], side[2]];
+    let mut nodes = vec![record(
+        1,
+        1,
+        1.0,
+        [0.005, 0.5, 0.005],
+        [-0.001, 0.5, -0.002],
+    )];
+    for (k, x) in corners.iter().enumerate() {
+        nodes.push(record(10 + k as u64, 0, f64::INFINITY, *x, *x));
+    }
+    let faces = [
+        FaceRecord {
+            gid: 100,
+            nodes: [10, 11, 12, 13],
+            body: 0,
+            reserved: 0,
+        },
+        FaceRecord {
+            gid: 101,
+            nodes: [11, 14, 15, 12],
+            body: 0,
+            reserved: 0,
+        },
+    ];
+    let b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    assert_eq!(contacts.len(), 1, "contacts {contacts:?}");
+    assert_eq!(contacts[0].face_gid, 100);
+    assert!((contacts[0].depth - 0.002).abs() < 1e-15);
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let dx = pb.position_correction(&b, 0, DT);
+    assert!(
+        dx[0] == 0.0 && dx[1] == 0.0 && (dx[2] - 0.002).abs() < 1e-15,
+        "correction {dx:?}"
+    );
+}

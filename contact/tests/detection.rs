@@ -321,8 +321,18 @@ fn candidate_list_with_skin_equals_fresh_search() {
                 let m: f64 = (0..3).map(|k| (n.x1[k] - n.x0[k]).powi(2)).sum::<f64>();
                 motion = motion.max(m.sqrt());
             }
-            let n_owned = scene.nodes.len();
-            let now = ContactBox::from_records(&scene.nodes, n_owned, &scene.faces).unwrap();
+            let mut nodes = scene.nodes.clone();
+            if params.one_pass {
+                // Body 0 is the master: its nodes are not searched against the others' faces.
+                for (n, e) in nodes.iter_mut().zip(earlier.iter_mut()) {
+                    if n.body == 0 {
+                        n.flags |= contact::FLAG_MASTER;
+                        e.flags |= contact::FLAG_MASTER;
+                    }
+                }
+            }
+            let n_owned = nodes.len();
+            let now = ContactBox::from_records(&nodes, n_owned, &scene.faces).unwrap();
             let then = ContactBox::from_records(&earlier, n_owned, &scene.faces).unwrap();
             let mut skin = 0.0;
             while !contact::within_skin(d_max, motion, &params, skin) {

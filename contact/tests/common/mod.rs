@@ -359,7 +359,8 @@ pub fn random_scene(rng: &mut Rng, spec: &SceneSpec) -> Scene {
 /// Reference search over all pairs: per node, the deepest crossing (then lowest face gid) under
 /// the body rules. Returns, per node gid with a contact, `(face gid, hit, runner-up depth)`, the
 /// further contacts a node keeps (faces at an angle: each hit whose normal is more than 25
-/// degrees, |cos| < 0.9, from every kept one, deepest first) as (node gid, face gid), and the
+/// degrees, |cos| < 0.9, from every kept one, deepest first, and, for a mesh node, whose face
+/// forms a valley with each kept one's) as (node gid, face gid), and the
 /// smallest margin met over all pairs (how close the configuration came to a threshold).
 pub struct RefResult {
     pub contacts: std::collections::BTreeMap<u64, (u64, RefHit, f64)>,
@@ -419,13 +420,26 @@ pub fn reference_search(
         if let Some(best) = hits.first() {
             let runner_up = hits.get(1).map(|h| h.0).unwrap_or(f64::NEG_INFINITY);
             contacts.insert(n.gid, (best.1, best.2, runner_up));
-            let mut kept = vec![best.2.normal];
+            // (normal, contact point, face centre) of each kept hit.
+            let geometry = |h: &(f64, u64, RefHit)| {
+                let f = scene.faces.iter().find(|f| f.gid == h.1).unwrap();
+                let m = Mono::new(f.nodes.map(|g| by_gid[&g].x1));
+                (h.2.normal, m.at(h.2.xi[0], h.2.xi[1]), m.at(0.0, 0.0))
+            };
+            let mut kept = vec![geometry(best)];
             for h in &hits[1..] {
+                let (normal, at, centre) = geometry(h);
+                // A mesh node: only faces forming a valley with every kept one (each face's
+                // centre in front of the other's tangent plane at its contact point).
+                let valley = |k: &(V3, V3, V3)| {
+                    particle
+                        || (dot(k.0, sub(centre, k.1)) > 0.0 && dot(normal, sub(k.2, at)) > 0.0)
+                };
                 if kept
                     .iter()
-                    .all(|k| dot(*k, h.2.normal).abs() < SAME_NORMAL_COS)
+                    .all(|k| dot(k.0, normal).abs() < SAME_NORMAL_COS && valley(k))
                 {
-                    kept.push(h.2.normal);
+                    kept.push((normal, at, centre));
                     further.push((n.gid, h.1));
                 }
             }
