@@ -306,18 +306,6 @@ impl FeContact {
         )
     }
 
-    /// Adds forces on the corners of this rank's faces (aligned with `records`' faces) to the
-    /// per-local-node array (a corner may be a ghost: the FE ghost sum takes it to the owner).
-    pub fn add_corner_forces(&self, out: &mut [[f64; 3]], corner: &[[[f64; 3]; 4]]) {
-        for ((_, loc), fc) in self.faces.iter().zip(corner) {
-            for k in 0..4 {
-                for c in 0..3 {
-                    out[loc[k] as usize][c] += fc[k][c];
-                }
-            }
-        }
-    }
-
     /// Spreads the forces the contact stage returned (aligned with `records`' nodes) onto a
     /// per-local-node array.
     pub fn forces_on_nodes(&self, n_local: usize, force: &[[f64; 3]]) -> Vec<[f64; 3]> {

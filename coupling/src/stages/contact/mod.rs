@@ -213,12 +213,11 @@ impl Contact {
             Search::Baseline(stage) => {
                 // the benchmark baseline searches mesh nodes only (`particles` is off)
                 let faces = self.fe_side.face_records(fe.state(), &self.node_gid);
-                let b = stage.step(&nodes[..n_fe], &faces, dt)?;
-                let mut f = self
+                let out = stage.step(&nodes[..n_fe], &faces, dt)?;
+                let f = self
                     .fe_side
-                    .forces_on_nodes(fe.state().n_nodes(), &b.outcome.force);
-                self.fe_side.add_corner_forces(&mut f, &b.corner_force);
-                (b.outcome, f)
+                    .forces_on_nodes(fe.state().n_nodes(), &out.force);
+                (out, f)
             }
         };
         let Fe {

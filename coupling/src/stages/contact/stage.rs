@@ -153,10 +153,11 @@ struct ContactPacket {
 }
 
 /// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
-/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact nodes), the push-back's work (the
-/// same on every rank) and the bytes this rank sent.
-fn solve_together(
-    comm: &Rc<SimpleCommunicator>,
+/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact
+/// nodes), the push-back's work (the same on every rank) and the bytes this rank sent. The
+/// static-decomposition baseline solves its contacts with it too.
+pub(crate) fn solve_together(
+    comm: &SimpleCommunicator,
     parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
