@@ -337,3 +337,89 @@ fn node_at_a_convex_edge_leaves_one_face_only() {
         "correction {dx:?}"
     );
 }
+
+#[test]
+fn a_node_on_a_node_found_both_ways_is_one_constraint() {
+    // Two 2 x 2 plates, the upper one facing down and tilted 0.05 about y, its centre node
+    // driven 0.003 down onto the lower one's centre node (equal masses, the plates' other nodes
+    // immovable). The two-pass search finds the gap both ways (each centre node against a face
+    // around the other, at that node), two rows a few degrees apart that Gauss-Seidel converges
+    // slowly and that, both active, would hold the pair together sideways. The push-back makes
+    // them one row along the mean of the two normals. Reference: the geometry of the pair; after
+    // push-back the two nodes are level along that mean normal (to 1e-15), their offset across
+    // it unchanged, each moved by half the depth (equal masses), in one sweep per pass.
+    let lower = plate_nodes(2, (1, 1), 0.0);
+    let tilt = 0.05;
+    let upper0: Vec<V3> = lower
+        .iter()
+        .map(|x| [x[0], x[1], 0.001 + tilt * x[0]])
+        .collect();
+    let mut upper1 = upper0.clone();
+    upper1[4][2] -= 0.003;
+    let mut nodes = Vec::new();
+    for k in 0..9 {
+        let m = if k == 4 { 1.0 } else { f64::INFINITY };
+        nodes.push(record(10 + k as u64, 0, m, lower[k], lower[k]));
+        nodes.push(record(30 + k as u64, 1, m, upper0[k], upper1[k]));
+    }
+    let id = |base: u64, i: usize, j: usize| base + (j * 3 + i) as u64;
+    let mut faces = Vec::new();
+    for j in 0..2 {
+        for i in 0..2 {
+            let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            faces.push(FaceRecord {
+                gid: 100 + (j * 2 + i) as u64,
+                nodes: c.map(|(a, b)| id(10, a, b)),
+                body: 0,
+                reserved: 0,
+            });
+            // Facing down: the same corners the other way round.
+            let mut d = c.map(|(a, b)| id(30, a, b));
+            d.reverse();
+            faces.push(FaceRecord {
+                gid: 200 + (j * 2 + i) as u64,
+                nodes: d,
+                body: 1,
+                reserved: 0,
+            });
+        }
+    }
+    let b = ContactBox::from_records(&nodes, nodes.len(), &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    let gids: Vec<u64> = contacts.iter().map(|c| c.node_gid).collect();
+    assert_eq!(gids, vec![14, 34], "contacts {contacts:?}");
+    let n = {
+        let d = sub(contacts[0].normal, contacts[1].normal);
+        let l = dot(d, d).sqrt();
+        [d[0] / l, d[1] / l, d[2] / l]
+    };
+    assert!(n[0].abs() > 0.01, "the two normals must differ ({n:?})");
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let moved = |j: usize| {
+        let dx = pb.position_correction(&b, j, DT);
+        [
+            b.nodes.x1[j][0] + dx[0],
+            b.nodes.x1[j][1] + dx[1],
+            b.nodes.x1[j][2] + dx[2],
+        ]
+    };
+    let (s, p) = (contacts[1].node as usize, contacts[0].node as usize);
+    let before = sub(b.nodes.x1[s], b.nodes.x1[p]);
+    let after = sub(moved(s), moved(p));
+    assert!(
+        dot(after, n).abs() < 1e-15,
+        "gap along n after {:.3e}",
+        dot(after, n)
+    );
+    let across = |v: V3| sub(v, [n[0] * dot(v, n), n[1] * dot(v, n), n[2] * dot(v, n)]);
+    let (a, c) = (across(before), across(after));
+    assert!(
+        dot(sub(a, c), sub(a, c)).sqrt() < 1e-15,
+        "offset across n changed"
+    );
+    let half = 0.5 * dot(before, n).abs();
+    let ds = pb.position_correction(&b, s, DT);
+    assert!((dot(ds, ds).sqrt() - half).abs() < 1e-15);
+    assert!(pb.sweeps <= 2, "{} sweeps", pb.sweeps);
+    assert_eq!(pb.normal_force[1], 0.0);
+}

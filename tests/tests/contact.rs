@@ -556,8 +556,8 @@ fn flat_block_on_a_plate_never_lets_a_node_through_whatever_the_alignment() {
     // - geometry (non-penetration): in every frame of fields.h5 (every 2.5 us), no surface node
     //   of either body lies inside the other body deeper than 1e-3 of the 5 mm element (5 um;
     //   the issue asks for 1 %), measured with the tests' own projection (tdyn_tests::frames).
-    //   Measured 2e-11 m; before the fix 95 um (node over node), 75 um (over an edge) and 6 um
-    //   (anywhere), one-pass. Frames are dense enough that no node crosses the plate between
+    //   Measured 5.7e-9 m node over node, 1.5e-11 m over an edge, 1e-17 m elsewhere; before the
+    //   fix 95 um (node over node), 75 um (over an edge) and 6 um (anywhere), one-pass. Frames are dense enough that no node crosses the plate between
     //   two (asserted: the largest motion between frames is under half the plate).
     // - momentum: nothing holds the bodies, so it stays the cube's initial m v to 1e-12 of it.
     // - rank independence: the contact count of every step the same at np 1, 2, 3, every other
@@ -656,7 +656,7 @@ fn the_order_of_the_bodies_in_the_mesh_does_not_change_the_answer() {
     // before its plate sank 2 mm into it). Two passes (the default) search both ways.
     // Reference: the same run with the cube meshed second; meshed first (-p BLOCK_FIRST=1: its
     // elements, nodes and body number come first), the final z-displacement of the cube's top
-    // differs by under 1 % (issue 15's limit; measured under 3e-5, and 1.3 %, 0.4 %, 0.8 % and
+    // differs by under 1 % (issue 15's limit; measured under 1e-5, and 1.3 %, 0.4 %, 0.8 % and
     // 0.4 % one-pass before, aligned to offset), for each alignment, at np 2. Then one pass,
     // explicitly (`passes = 1`, `master = ["plate"]`): the report says so and the cube's nodes
     // are still kept out of the plate (5 um, as above).
@@ -709,6 +709,122 @@ fn the_order_of_the_bodies_in_the_mesh_does_not_change_the_answer() {
             d < 1e-3 * FLAT_DROP_H,
             "one pass: cube node {n} is {d} m inside the plate at t = {}",
             fr.times[k]
+        );
+    }
+}
+
+/// Runs `scenes/ball_plate.toml` at `np` with the plate in `np_plate` x `np_plate` elements,
+/// the ball meshed first if `ball_first`; returns the output directory.
+fn ball_on_plate(np: usize, np_plate: usize, ball_first: bool) -> std::path::PathBuf {
+    let out = workdir(&format!(
+        "ball_plate_np_plate{np_plate}_first{}_np{np}",
+        ball_first as u8
+    ))
+    .join("out");
+    let (n, bf) = (
+        format!("NP={np_plate}"),
+        format!("BALL_FIRST={}", ball_first as u8),
+    );
+    run_ok_args(
+        np,
+        &root().join("scenes/ball_plate.toml"),
+        &out,
+        &["-p", &n, "-p", &bf],
+    );
+    out
+}
+
+#[test]
+fn ball_on_a_clamped_plate_stays_out_of_it_with_or_without_a_node_under_its_pole() {
+    // Issue 15's case: a steel ball (5 mm radius, hex O-grid) strikes a clamped 4 mm plate at
+    // 200 m/s (scenes/ball_plate.toml, 20 us). With the plate in 12 x 12 elements a plate node
+    // lies right under the ball's pole node (to 1e-11 m); with 13 x 13 a face centre does. The
+    // ball's faces meet the plate at every angle. References:
+    // - geometry (non-penetration): in every frame (every 1 us; the ball moves 0.2 mm, under
+    //   half the plate, between two), no surface node of either body inside the other deeper
+    //   than 1e-3 of the plate's element (2.5 um at 12 x 12; the issue asks for 1 %): measured
+    //   2.8e-7 m and 6e-19 m; before the fix 0.53 mm (node under the pole) and, with the ball
+    //   meshed first (one pass: the plate's nodes against the ball's faces), 1.95 mm and 0.43 mm.
+    // - energy: the balance (the work of the clamped sides as external work) within the run's
+    //   own 5 % throughout (velocity Verlet's full-step kinetic energy carries its O(dt^2 |a|^2)
+    //   term while nodes are pushed back: measured 2.5e-3) and 1e-3 at the end (8.5e-5).
+    // - rank independence at np 1, 2, 3: the contact count of every step the same, every other
+    //   column of history.csv within 1e-10 of its largest value.
+    // - mesh order: the ball meshed first (-p BALL_FIRST=1) moves its top to within 1 % of the
+    //   same run with the plate first (measured 6e-12; 120 % before, the ball sunk 2 mm).
+    for np_plate in [12, 13] {
+        let element = 0.03 / np_plate as f64;
+        let mut histories = Vec::new();
+        let mut header = Vec::new();
+        for np in 1..=3 {
+            let out = ball_on_plate(np, np_plate, false);
+            let (h, rows) = read_csv(&out.join("history.csv"));
+            let contacts = column(&h, &rows, "contacts");
+            assert!(
+                contacts.iter().any(|&c| c > 0.0),
+                "NP {np_plate} np {np}: the ball never touched the plate"
+            );
+            let err = column(&h, &rows, "energy_error");
+            let err_max = err.iter().cloned().fold(0.0, f64::max);
+            let err_end = *err.last().unwrap();
+            assert!(
+                err_max < 0.05 && err_end < 1e-3,
+                "NP {np_plate} np {np}: energy error {err_max} at most (5 %), {err_end} at the end (1e-3)"
+            );
+            let fr = read_frames(&out);
+            let bodies = bodies(&fr.connectivity);
+            assert_eq!(bodies.len(), 2);
+            assert!(max_frame_motion(&fr) < 0.5 * 0.004);
+            let mut deepest = (0.0f64, 0.0f64, usize::MAX);
+            for (k, pos) in fr.positions.iter().enumerate() {
+                let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
+                if d > deepest.0 {
+                    deepest = (d, fr.times[k], n);
+                }
+            }
+            eprintln!(
+                "ball, plate {np_plate}^2, np {np}: deepest node inside the other body {:.3e} m (t = {:.3e}), energy error {err_max:.2e} at most, {err_end:.2e} at the end",
+                deepest.0, deepest.1
+            );
+            assert!(
+                deepest.0 < 1e-3 * element,
+                "NP {np_plate} np {np}: node {} is {} m inside the other body at t = {} (limit 1e-3 of the plate's {element} m element)",
+                deepest.2,
+                deepest.0,
+                deepest.1
+            );
+            header = h;
+            histories.push(rows);
+        }
+        for (k, rows) in histories.iter().enumerate().skip(1) {
+            let d = column_differences(&histories[0], rows);
+            for (c, col) in header.iter().enumerate() {
+                let tol = match col.as_str() {
+                    "contact_imbalance" | "contact_bytes" => continue,
+                    // Round-off around 0: relative to its own largest value, any order.
+                    "momentum_x" | "momentum_y" => continue,
+                    "contacts" | "step" => 0.0,
+                    _ => 1e-10,
+                };
+                assert!(
+                    d[c] <= tol,
+                    "NP {np_plate} np {}: history column {col} differs from np 1 by {:e} of its largest value (limit {tol:e})",
+                    k + 1,
+                    d[c]
+                );
+            }
+        }
+        let top = |out: &std::path::Path| {
+            let (h, rows) = read_csv(&out.join("probes.csv"));
+            *column(&h, &rows, "ball_top.displacement_z").last().unwrap()
+        };
+        let second = top(&ball_on_plate(2, np_plate, false));
+        let first = top(&ball_on_plate(2, np_plate, true));
+        let rel = (first - second).abs() / second.abs();
+        eprintln!("ball, plate {np_plate}^2: top displacement {second:.6e} m (plate first), {first:.6e} m (ball first): {rel:.2e}");
+        assert!(
+            rel < 0.01,
+            "NP {np_plate}: the ball's top moved {second} m with the plate meshed first, {first} m with the ball first ({rel:.3e}, limit 1 %)"
         );
     }
 }
