@@ -482,6 +482,16 @@ pub struct ContactDef {
     /// Coulomb's coefficient between all contact pairs (static and kinetic), default 0.
     #[serde(default)]
     pub friction: f64,
+    /// 2 (default): every pair of bodies searched both ways; 1: one pass, the other bodies'
+    /// nodes against the faces of the `master` bodies only.
+    #[serde(default = "d_passes")]
+    pub passes: i64,
+    /// With `passes = 1`: the physical volumes whose bodies are masters.
+    #[serde(default)]
+    pub master: Vec<String>,
+}
+fn d_passes() -> i64 {
+    2
 }
 
 #[derive(Debug, Deserialize)]
@@ -987,6 +997,35 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
             }
         }
     }
+    if let Some(c) = &raw.contact {
+        match c.passes {
+            1 if c.master.is_empty() => {
+                return Err(err(
+                    "contact.master",
+                    "passes = 1 needs the master bodies: master = [\"<physical volume>\", ...] \
+                     (the other bodies' nodes are searched against their faces)"
+                        .into(),
+                ))
+            }
+            2 if !c.master.is_empty() => {
+                return Err(err(
+                    "contact.master",
+                    "a master is only read with passes = 1 (two passes search every pair of \
+                     bodies both ways)"
+                        .into(),
+                ))
+            }
+            1 | 2 => {}
+            n => {
+                return Err(err(
+                    "contact.passes",
+                    format!(
+                    "expected 1 (one pass, master/slave) or 2 (both ways, the default), got {n}"
+                ),
+                ))
+            }
+        }
+    }
     let mut names: Vec<&str> = Vec::new();
     for (i, p) in raw.probe.iter().enumerate() {
         if names.contains(&p.name.as_str()) {
@@ -1142,6 +1181,18 @@ pub fn validate_groups(
                     file,
                     key: format!("contact.surfaces[{i}]"),
                     message: format!("no physical surface \"{s}\" in the mesh (physical surfaces: {}; or \"exterior\")", list(surfaces)),
+                });
+            }
+        }
+        for (i, m) in c.master.iter().enumerate() {
+            if !volumes.contains(m) {
+                return Err(SceneError {
+                    file,
+                    key: format!("contact.master[{i}]"),
+                    message: format!(
+                        "no physical volume \"{m}\" in the mesh (physical volumes: {})",
+                        list(volumes)
+                    ),
                 });
             }
         }
