@@ -113,35 +113,84 @@ fn mode_name(m: Mode) -> &'static str {
 /// error. Refused or unstable runs are results, not errors.
 pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<PathBuf, String> {
     let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
-    let file = scene.file.display().to_string();
-    let mut modes = Vec::new();
-    for m in &opts.modes {
-        modes.push(match m.as_str() {
-            "explicit" => Mode::Explicit,
-            "implicit" => Mode::Implicit,
-            _ => {
-                return Err(format!(
-                    "--modes: unknown mode \"{m}\" (expected explicit and/or implicit)"
-                ))
-            }
-        });
+    let plan = plan(world, opts, &scene)?;
+    let limit = explicit_limit(world, opts, &plan.out_dir)?;
+    say(
+        world,
+        opts.quiet,
+        format!(
+            "tdyn compare: {}: explicit stable limit {limit:.4e} s, end time {:e} s, quantity {} ({}), {} ranks",
+            plan.file,
+            plan.end,
+            plan.quantity,
+            plan.def.measure,
+            world.size()
+        ),
+    );
+    let mut rows = run_ladder(world, opts, &plan, limit)?;
+
+    // Errors, CSV and charts on rank 0; every rank learns the outcome.
+    let mut result = Ok(());
+    if world.rank() == 0 {
+        let title = format!(
+            "{}: {} ({}), {} ranks",
+            if scene.title.is_empty() {
+                plan.file.clone()
+            } else {
+                scene.title.clone()
+            },
+            plan.quantity,
+            plan.def.measure,
+            world.size()
+        );
+        result = write_outputs(&mut rows, &plan, title, limit)
+            .map_err(|e| format!("{}: {e}", plan.file));
     }
-    if modes.is_empty() {
-        // Both modes where the scene can run implicitly; explicit alone otherwise (particles,
-        // contact, a meshed fluid: explicit only), said once.
-        modes.push(Mode::Explicit);
-        let mut implicit = scene.clone();
-        implicit.run.mode = Mode::Implicit;
-        implicit.run.dt = Some(implicit.run.end_time);
-        match driver::setup::check_scene(&implicit) {
-            Ok(()) => modes.push(Mode::Implicit),
-            Err(why) => {
-                if world.rank() == 0 && !opts.quiet {
-                    println!("tdyn compare: explicit only: {why}");
-                }
+    first_error(world, result.err())?;
+    if world.rank() == 0 && !opts.quiet {
+        for r in &rows {
+            if r.outcome != Outcome::Finished {
+                println!("  {} x{:.3}: {}", mode_name(r.mode), r.dt_factor, r.message);
             }
         }
     }
+    Ok(plan.out_dir)
+}
+
+/// Prints `s` on rank 0 unless `quiet` (the tools' progress lines).
+pub(crate) fn say(world: &SimpleCommunicator, quiet: bool, s: String) {
+    if world.rank() == 0 && !quiet {
+        println!("{s}");
+    }
+}
+
+/// What a comparison runs and measures, from the options and the scene.
+struct Plan {
+    /// The scene file as loaded, for messages.
+    file: String,
+    /// The modes, in order.
+    modes: Vec<Mode>,
+    /// The steps, as multiples of the explicit stable limit.
+    factors: Vec<f64>,
+    /// The scene's `[compare]` table (or its defaults).
+    def: scene::CompareDef,
+    /// The probe column measured.
+    quantity: String,
+    /// `run.end_time`, s.
+    end: f64,
+    /// The output directory.
+    out_dir: PathBuf,
+}
+
+/// The plan of `opts` on `scene`: an error for an unknown mode, a step factor that is not
+/// positive, or a scene with no probe to measure.
+fn plan(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    scene: &scene::Scene,
+) -> Result<Plan, String> {
+    let file = scene.file.display().to_string();
+    let modes = modes(world, opts, scene)?;
     let factors = opts
         .dt_factors
         .clone()
@@ -179,8 +228,59 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
             .join(scene.file.file_stem().unwrap_or_default())
             .join("compare")
     });
+    Ok(Plan {
+        file,
+        modes,
+        factors,
+        def,
+        quantity,
+        end: scene.run.end_time,
+        out_dir,
+    })
+}
 
-    // The explicit stable limit: set-up only (a fixed dt in the scene must not be refused).
+/// The modes of `--modes`; without it both where the scene can run implicitly, else explicit
+/// alone (particles, contact, a meshed fluid: explicit only), said once.
+fn modes(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    scene: &scene::Scene,
+) -> Result<Vec<Mode>, String> {
+    let mut modes = Vec::new();
+    for m in &opts.modes {
+        modes.push(match m.as_str() {
+            "explicit" => Mode::Explicit,
+            "implicit" => Mode::Implicit,
+            _ => {
+                return Err(format!(
+                    "--modes: unknown mode \"{m}\" (expected explicit and/or implicit)"
+                ))
+            }
+        });
+    }
+    if modes.is_empty() {
+        modes.push(Mode::Explicit);
+        let mut implicit = scene.clone();
+        implicit.run.mode = Mode::Implicit;
+        implicit.run.dt = Some(implicit.run.end_time);
+        match driver::setup::check_scene(&implicit) {
+            Ok(()) => modes.push(Mode::Implicit),
+            Err(why) => say(
+                world,
+                opts.quiet,
+                format!("tdyn compare: explicit only: {why}"),
+            ),
+        }
+    }
+    Ok(modes)
+}
+
+/// The explicit stable limit, s: set-up only (a fixed dt in the scene must not be refused).
+fn explicit_limit(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    out_dir: &Path,
+) -> Result<f64, String> {
     let probe_opts = RunOptions {
         scene: opts.scene.clone(),
         out: Some(out_dir.join("runs").join("setup")),
@@ -193,147 +293,145 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
         setup_only: true,
         algorithms: Default::default(),
     };
-    let limit = driver::run(world, &probe_opts)
+    Ok(driver::run(world, &probe_opts)
         .map_err(|e| e.message)?
-        .dt_stable;
-    let end = scene.run.end_time;
-    let say = |s: String| {
-        if world.rank() == 0 && !opts.quiet {
-            println!("{s}");
-        }
-    };
-    say(format!(
-        "tdyn compare: {file}: explicit stable limit {limit:.4e} s, end time {end:e} s, quantity {quantity} ({}), {} ranks",
-        def.measure,
-        world.size()
-    ));
+        .dt_stable)
+}
 
+/// Runs every (mode, step factor) of `plan`, a progress line each; a row per run (errors not
+/// measured yet). An input error stops the ladder.
+fn run_ladder(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    plan: &Plan,
+    limit: f64,
+) -> Result<Vec<CompareRow>, String> {
     let mut rows = Vec::new();
-    for &mode in &modes {
-        for &f in &factors {
+    for &mode in &plan.modes {
+        for &f in &plan.factors {
             // A whole number of steps ends at end_time exactly.
-            let n = (end / (f * limit)).ceil().max(1.0);
-            let dt = end / n;
-            let dir = out_dir
-                .join("runs")
-                .join(format!("{}_x{}", mode_name(mode), f));
-            let run = |force: bool| {
-                let o = RunOptions {
-                    scene: opts.scene.clone(),
-                    out: Some(dir.clone()),
-                    quiet: true,
-                    overrides: RunOverrides {
-                        mode: Some(mode),
-                        dt: Some(dt),
-                        force_dt: Some(force),
-                        ..Default::default()
-                    },
-                    setup_only: false,
-                    algorithms: Default::default(),
-                };
-                driver::run(world, &o)
-            };
-            let mut res = run(false);
-            let mut refused = false;
-            if let Err(e) = &res {
-                if e.kind == FailureKind::Refused {
-                    refused = true;
-                    res = run(true);
-                }
-            }
-            let row = match res {
-                Ok(s) => CompareRow {
-                    mode,
-                    dt_factor: dt / limit,
-                    dt,
-                    steps: s.steps,
-                    wall_s: s.wall_s,
-                    loop_s: s.loop_s,
-                    error: f64::NAN,
-                    refused,
-                    unstable: false,
-                    outcome: Outcome::Finished,
-                    reference: false,
-                    message: String::new(),
-                    out: dir.clone(),
-                },
-                Err(e) => {
-                    let outcome = match e.kind {
-                        FailureKind::Unstable => Outcome::Unstable,
-                        FailureKind::Refused => Outcome::Refused,
-                        FailureKind::Failed => Outcome::Failed,
-                        FailureKind::Input => return Err(e.message),
-                    };
-                    CompareRow {
-                        mode,
-                        dt_factor: dt / limit,
-                        dt,
-                        steps: 0,
-                        wall_s: f64::NAN,
-                        loop_s: f64::NAN,
-                        error: f64::NAN,
-                        refused,
-                        unstable: outcome == Outcome::Unstable,
-                        outcome,
-                        reference: false,
-                        message: e.message,
-                        out: dir.clone(),
-                    }
-                }
-            };
-            say(format!(
-                "  {:8} dt = {:.4e} s ({:>7.3} x limit): {}{}",
-                mode_name(mode),
+            let n = (plan.end / (f * limit)).ceil().max(1.0);
+            let dt = plan.end / n;
+            let rung = Rung {
+                mode,
                 dt,
-                row.dt_factor,
-                if row.refused { "refused, forced: " } else { "" },
-                match row.outcome {
-                    Outcome::Finished =>
-                        format!("ok, {} steps, loop {:.3} s", row.steps, row.loop_s),
-                    o => o.name().to_string(),
-                }
-            ));
+                dt_factor: dt / limit,
+                dir: plan
+                    .out_dir
+                    .join("runs")
+                    .join(format!("{}_x{}", mode_name(mode), f)),
+            };
+            let row = run_rung(world, &opts.scene, rung)?;
+            say(world, opts.quiet, progress(&row));
             rows.push(row);
         }
     }
+    Ok(rows)
+}
 
-    // Errors, CSV and charts on rank 0; every rank learns the outcome.
-    let mut result = Ok(());
-    if world.rank() == 0 {
-        result = measure(&mut rows, &quantity, &def).and_then(|reference| {
-            write_csv(&out_dir.join("compare.csv"), &rows)?;
-            let chart = Chart {
-                title: format!(
-                    "{}: {} ({}), {} ranks",
-                    if scene.title.is_empty() {
-                        file.clone()
-                    } else {
-                        scene.title.clone()
-                    },
-                    quantity,
-                    def.measure,
-                    world.size()
-                ),
-                y_desc: format!("relative error of the {}", def.measure),
-                reference,
-                limit,
-                rows: &rows,
+/// One run of the ladder.
+struct Rung {
+    /// The mode.
+    mode: Mode,
+    /// The step, s.
+    dt: f64,
+    /// dt / explicit stable limit.
+    dt_factor: f64,
+    /// Its output directory.
+    dir: PathBuf,
+}
+
+/// Runs `scene` at `rung`: an explicit step the driver refuses is run again forced. Its row,
+/// or the message of an input error.
+fn run_rung(world: &SimpleCommunicator, scene: &Path, rung: Rung) -> Result<CompareRow, String> {
+    let run = |force: bool| {
+        let o = RunOptions {
+            scene: scene.to_path_buf(),
+            out: Some(rung.dir.clone()),
+            quiet: true,
+            overrides: RunOverrides {
+                mode: Some(rung.mode),
+                dt: Some(rung.dt),
+                force_dt: Some(force),
+                ..Default::default()
+            },
+            setup_only: false,
+            algorithms: Default::default(),
+        };
+        driver::run(world, &o)
+    };
+    let mut res = run(false);
+    let mut refused = false;
+    if let Err(e) = &res {
+        if e.kind == FailureKind::Refused {
+            refused = true;
+            res = run(true);
+        }
+    }
+    let mut row = CompareRow {
+        mode: rung.mode,
+        dt_factor: rung.dt_factor,
+        dt: rung.dt,
+        steps: 0,
+        wall_s: f64::NAN,
+        loop_s: f64::NAN,
+        error: f64::NAN,
+        refused,
+        unstable: false,
+        outcome: Outcome::Finished,
+        reference: false,
+        message: String::new(),
+        out: rung.dir,
+    };
+    match res {
+        Ok(s) => (row.steps, row.wall_s, row.loop_s) = (s.steps, s.wall_s, s.loop_s),
+        Err(e) => {
+            row.outcome = match e.kind {
+                FailureKind::Unstable => Outcome::Unstable,
+                FailureKind::Refused => Outcome::Refused,
+                FailureKind::Failed => Outcome::Failed,
+                FailureKind::Input => return Err(e.message),
             };
-            crate::chart::save(&chart, &out_dir.join("compare"))
-        });
-        if let Err(e) = &result {
-            result = Err(format!("{file}: {e}"));
+            row.unstable = row.outcome == Outcome::Unstable;
+            row.message = e.message;
         }
     }
-    first_error(world, result.err())?;
-    if world.rank() == 0 && !opts.quiet {
-        for r in &rows {
-            if r.outcome != Outcome::Finished {
-                println!("  {} x{:.3}: {}", mode_name(r.mode), r.dt_factor, r.message);
-            }
+    Ok(row)
+}
+
+/// A run's progress line: its step and how it ended.
+fn progress(row: &CompareRow) -> String {
+    format!(
+        "  {:8} dt = {:.4e} s ({:>7.3} x limit): {}{}",
+        mode_name(row.mode),
+        row.dt,
+        row.dt_factor,
+        if row.refused { "refused, forced: " } else { "" },
+        match row.outcome {
+            Outcome::Finished => format!("ok, {} steps, loop {:.3} s", row.steps, row.loop_s),
+            o => o.name().to_string(),
         }
-    }
-    Ok(out_dir)
+    )
+}
+
+/// Rank 0's outputs: measures the rows, writes compare.csv and draws the chart titled
+/// `title`.
+fn write_outputs(
+    rows: &mut [CompareRow],
+    plan: &Plan,
+    title: String,
+    limit: f64,
+) -> Result<(), String> {
+    let reference = measure(rows, &plan.quantity, &plan.def)?;
+    write_csv(&plan.out_dir.join("compare.csv"), rows)?;
+    let chart = Chart {
+        title,
+        y_desc: format!("relative error of the {}", plan.def.measure),
+        reference,
+        limit,
+        rows,
+    };
+    crate::chart::save(&chart, &plan.out_dir.join("compare"))
 }
 
 /// A probes.csv column: (times, values).
