@@ -25,7 +25,7 @@
 //! against model memory and against peak RSS, log-log, one point per run labelled with its
 //! parameter value, one curve per measure.
 use crate::chart::{self, Figure};
-use crate::compare::read_column;
+use crate::compare::{read_column, say};
 use coupling::driver::{self, FailureKind, RunOptions, RunOverrides, HISTORY_COLUMNS};
 use coupling::input::scene::{self, Scene};
 use coupling::kernels::collective::{self, first_error};
@@ -375,33 +375,84 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
     let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     let file = scene.file.display().to_string();
     let (params, measures) = plan(opts, &scene)?;
-    let n_runs = params[0].1.len();
-    let overrides: Vec<RunOverrides> = (0..n_runs)
-        .map(|k| {
-            let mut ov = RunOverrides::default();
-            for (t, v) in &params {
-                t.set(&mut ov, v[k]);
-            }
-            ov
-        })
-        .collect();
-    // A parameter the scene does not have fails every run: say so once, before running.
-    for ov in &overrides {
-        ov.apply(&mut scene.clone())?;
-    }
+    let overrides = run_overrides(&params, &scene)?;
     let out_dir = opts.out.clone().unwrap_or_else(|| {
         PathBuf::from("out")
             .join(scene.file.file_stem().unwrap_or_default())
             .join("sweep")
     });
-    let say = |s: String| {
-        if world.rank() == 0 && !opts.quiet {
-            println!("{s}");
-        }
-    };
+    say(
+        world,
+        opts.quiet,
+        header(&file, &params, &measures, world.size()),
+    );
+    warm_up(world, &opts.scene, &out_dir, &overrides[0]);
     let names: Vec<String> = params.iter().map(|(t, _)| t.name()).collect();
-    say(format!(
-        "tdyn sweep: {file}: {}; measures {}; {} ranks",
+    let mut rows = Vec::with_capacity(overrides.len());
+    for (k, ov) in overrides.into_iter().enumerate() {
+        let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
+        let label = run_label(&names, &values);
+        let rung = Rung {
+            dir: out_dir.join("runs").join(dir_name(&label)),
+            values,
+            label,
+            overrides: ov,
+        };
+        let row = run_rung(world, &opts.scene, &measures, rung);
+        say(world, opts.quiet, progress(&row));
+        rows.push(row);
+    }
+
+    let mut result = Ok(());
+    if world.rank() == 0 {
+        let notes = errors(&mut rows, &measures);
+        let fig = SweepChart {
+            title: format!(
+                "{}: accuracy against cost, {} ranks",
+                if scene.title.is_empty() {
+                    file.clone()
+                } else {
+                    scene.title.clone()
+                },
+                world.size()
+            ),
+            measures: &measures,
+            rows: &rows,
+            notes,
+        };
+        result = write_csv(&out_dir.join("accuracy_cost.csv"), &names, &measures, &rows)
+            .and_then(|()| chart::save(&fig, &out_dir.join("accuracy_cost")));
+        if !opts.quiet {
+            print_errors(&rows, &measures);
+        }
+        result = result.map_err(|e| format!("{file}: {e}"));
+    }
+    first_error(world, result.err())?;
+    Ok(out_dir)
+}
+
+/// The overrides of each run (value k of every parameter in run k). A parameter the scene does
+/// not have would fail every run: an error, before running.
+fn run_overrides(params: &[Ladder], scene: &Scene) -> Result<Vec<RunOverrides>, String> {
+    let overrides: Vec<RunOverrides> = (0..params[0].1.len())
+        .map(|k| {
+            let mut ov = RunOverrides::default();
+            for (t, v) in params {
+                t.set(&mut ov, v[k]);
+            }
+            ov
+        })
+        .collect();
+    for ov in &overrides {
+        ov.apply(&mut scene.clone())?;
+    }
+    Ok(overrides)
+}
+
+/// The sweep's first line: the ladder, the measures and the ranks.
+fn header(file: &str, params: &[Ladder], measures: &[Measure], ranks: i32) -> String {
+    format!(
+        "tdyn sweep: {file}: {}; measures {}; {ranks} ranks",
         params
             .iter()
             .map(|(t, v)| format!(
@@ -421,153 +472,159 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
                 None => format!("{} (against the finest run)", m.name()),
             })
             .collect::<Vec<_>>()
-            .join(", "),
-        world.size()
-    ));
+            .join(", ")
+    )
+}
 
-    // The first run of a process pays MPI's connection set-up and the first touches of memory
-    // (measured: 10 ms of loop for 25 steps of 10 elements, then 0.5 ms): the first value runs
-    // once unrecorded.
+/// Runs the first value once, unrecorded. The first run of a process pays MPI's connection
+/// set-up and the first touches of memory (measured: 10 ms of loop for 25 steps of 10
+/// elements, then 0.5 ms).
+fn warm_up(world: &SimpleCommunicator, scene: &Path, out_dir: &Path, first: &RunOverrides) {
     let warm = RunOptions {
-        scene: opts.scene.clone(),
+        scene: scene.to_path_buf(),
         out: Some(out_dir.join("runs").join("warm-up")),
         quiet: true,
-        overrides: overrides[0].clone(),
+        overrides: first.clone(),
         setup_only: false,
         algorithms: Default::default(),
     };
     let _ = driver::run(world, &warm);
-    let mut rows = Vec::with_capacity(n_runs);
-    for (k, ov) in overrides.into_iter().enumerate() {
-        let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
-        let label = names
-            .iter()
-            .zip(&values)
-            .map(|(n, v)| format!("{n}={}", value_label(*v)))
-            .collect::<Vec<_>>()
-            .join(" ");
-        let dir_name: String = label
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let dir = out_dir.join("runs").join(dir_name);
-        let o = RunOptions {
-            scene: opts.scene.clone(),
-            out: Some(dir.clone()),
-            quiet: true,
-            overrides: ov,
-            setup_only: false,
-            algorithms: Default::default(),
-        };
-        world.barrier();
-        reset_peak_rss();
-        let res = driver::run(world, &o)
-            .map(|_| ())
-            .map_err(|e| (e.kind, e.message));
-        let rss = collective::max(world, peak_rss());
-        let mut row = SweepRow {
-            values,
-            label,
-            status: "ok",
-            message: String::new(),
-            elements: 0,
-            particles: 0,
-            steps: 0,
-            wall_s: f64::NAN,
-            loop_s: f64::NAN,
-            model_bytes: f64::NAN,
-            rss_peak_bytes: rss,
-            energy_error_max: f64::NAN,
-            measured: Vec::new(),
-            errors: vec![f64::NAN; measures.len()],
-            reference: false,
-            out: dir.clone(),
-        };
-        match res {
-            Ok(()) => {
-                if world.rank() == 0 {
-                    if let Err(e) = read_report(&mut row, &measures) {
-                        row.status = "failed";
-                        row.message = e;
-                    }
-                }
-            }
-            Err((kind, message)) => {
-                row.status = match kind {
-                    FailureKind::Refused => "refused",
-                    FailureKind::Unstable => "unstable",
-                    FailureKind::Failed | FailureKind::Input => "failed",
-                };
-                row.message = message;
-            }
-        }
-        say(format!(
-            "  {:>16}: {}",
-            row.label,
-            if row.status == "ok" {
-                format!(
-                    "ok, {} elements, {} particles, {} steps, loop {:.3e} s, wall {:.3e} s, model {:.3} MB, peak RSS {:.0} MB",
-                    row.elements,
-                    row.particles,
-                    row.steps,
-                    row.loop_s,
-                    row.wall_s,
-                    row.model_bytes / 1e6,
-                    row.rss_peak_bytes / 1e6
-                )
-            } else {
-                format!("{}: {}", row.status, row.message)
-            }
-        ));
-        rows.push(row);
-    }
-
-    let mut result = Ok(());
-    if world.rank() == 0 {
-        let notes = errors(&mut rows, &measures);
-        result = write_csv(&out_dir.join("accuracy_cost.csv"), &names, &measures, &rows).and_then(
-            |()| {
-                let fig = SweepChart {
-                    title: format!(
-                        "{}: accuracy against cost, {} ranks",
-                        if scene.title.is_empty() {
-                            file.clone()
-                        } else {
-                            scene.title.clone()
-                        },
-                        world.size()
-                    ),
-                    measures: &measures,
-                    rows: &rows,
-                    notes,
-                };
-                chart::save(&fig, &out_dir.join("accuracy_cost"))
-            },
-        );
-        if !opts.quiet {
-            for r in rows.iter().filter(|r| r.status == "ok") {
-                let e: Vec<String> = measures
-                    .iter()
-                    .zip(&r.errors)
-                    .map(|(m, e)| format!("{} {}", m.name(), fmt_error(*e, r.reference)))
-                    .collect();
-                println!("  {:>16}: error {}", r.label, e.join(", "));
-            }
-        }
-        if let Err(e) = &result {
-            result = Err(format!("{file}: {e}"));
-        }
-    }
-    first_error(world, result.err())?;
-    Ok(out_dir)
 }
 
+/// A run's label: "N=20 L=1", every parameter with its value.
+fn run_label(names: &[String], values: &[f64]) -> String {
+    names
+        .iter()
+        .zip(values)
+        .map(|(n, v)| format!("{n}={}", value_label(*v)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A run's folder name: its label with every character but letters, digits, `.` and `-` as
+/// `_`.
+fn dir_name(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// One run of the ladder.
+struct Rung {
+    /// The parameters' values.
+    values: Vec<f64>,
+    /// Its label.
+    label: String,
+    /// The scene values it replaces.
+    overrides: RunOverrides,
+    /// Its output directory.
+    dir: PathBuf,
+}
+
+/// Runs `scene` at `rung` (the peak RSS reset before, read after, max over ranks); its row,
+/// with report.json's figures and the measured values on rank 0 when it finished.
+fn run_rung(
+    world: &SimpleCommunicator,
+    scene: &Path,
+    measures: &[Measure],
+    rung: Rung,
+) -> SweepRow {
+    let o = RunOptions {
+        scene: scene.to_path_buf(),
+        out: Some(rung.dir.clone()),
+        quiet: true,
+        overrides: rung.overrides,
+        setup_only: false,
+        algorithms: Default::default(),
+    };
+    world.barrier();
+    reset_peak_rss();
+    let res = driver::run(world, &o)
+        .map(|_| ())
+        .map_err(|e| (e.kind, e.message));
+    let rss = collective::max(world, peak_rss());
+    let mut row = SweepRow {
+        values: rung.values,
+        label: rung.label,
+        status: "ok",
+        message: String::new(),
+        elements: 0,
+        particles: 0,
+        steps: 0,
+        wall_s: f64::NAN,
+        loop_s: f64::NAN,
+        model_bytes: f64::NAN,
+        rss_peak_bytes: rss,
+        energy_error_max: f64::NAN,
+        measured: Vec::new(),
+        errors: vec![f64::NAN; measures.len()],
+        reference: false,
+        out: rung.dir,
+    };
+    match res {
+        Ok(()) => {
+            if world.rank() == 0 {
+                if let Err(e) = read_report(&mut row, measures) {
+                    row.status = "failed";
+                    row.message = e;
+                }
+            }
+        }
+        Err((kind, message)) => {
+            row.status = match kind {
+                FailureKind::Refused => "refused",
+                FailureKind::Unstable => "unstable",
+                FailureKind::Failed | FailureKind::Input => "failed",
+            };
+            row.message = message;
+        }
+    }
+    row
+}
+
+/// A run's progress line: its cost, or how it stopped.
+fn progress(row: &SweepRow) -> String {
+    format!(
+        "  {:>16}: {}",
+        row.label,
+        if row.status == "ok" {
+            format!(
+                "ok, {} elements, {} particles, {} steps, loop {:.3e} s, wall {:.3e} s, model {:.3} MB, peak RSS {:.0} MB",
+                row.elements,
+                row.particles,
+                row.steps,
+                row.loop_s,
+                row.wall_s,
+                row.model_bytes / 1e6,
+                row.rss_peak_bytes / 1e6
+            )
+        } else {
+            format!("{}: {}", row.status, row.message)
+        }
+    )
+}
+
+/// Prints each finished run's errors, one line per run.
+fn print_errors(rows: &[SweepRow], measures: &[Measure]) {
+    for r in rows.iter().filter(|r| r.status == "ok") {
+        let e: Vec<String> = measures
+            .iter()
+            .zip(&r.errors)
+            .map(|(m, e)| format!("{} {}", m.name(), fmt_error(*e, r.reference)))
+            .collect();
+        println!("  {:>16}: error {}", r.label, e.join(", "));
+    }
+}
+
+/// An error as the terminal shows it: "(reference)" for the reference run's 0, "-" when not
+/// measured.
 fn fmt_error(e: f64, reference: bool) -> String {
     if reference && e == 0.0 {
         "(reference)".into()
