@@ -235,6 +235,8 @@ const CAPTION_PX: u32 = 17;
 /// The study's series, in panel order.
 const SERIES: [&str; 2] = ["strong", "weak"];
 
+/// The study's chart: (a) strong and (b) weak time per step by stage, (c) imbalance and (d)
+/// bytes per rank per step against the rank count.
 struct ScalingChart<'a> {
     title: String,
     rows: &'a [ScalingRow],
@@ -302,6 +304,7 @@ impl PerStage {
 }
 
 impl ScalingChart<'_> {
+    /// The runs of series `name`, by rank count.
     fn series(&self, name: &str) -> Vec<&ScalingRow> {
         self.rows.iter().filter(|r| r.series == name).collect()
     }
@@ -316,6 +319,7 @@ impl ScalingChart<'_> {
         2 * (xpos(self.max_np()) as usize + 2)
     }
 
+    /// The largest rank count of the study.
     fn max_np(&self) -> usize {
         self.rows.iter().map(|r| r.np).max().unwrap_or(1)
     }
