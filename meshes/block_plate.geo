@@ -2,8 +2,8 @@
 // scene. Plate "plate": [-W/2, W/2]^2 x [-H, 0], NP x NP x NH hexahedra; block "block": side A,
 // NB hexahedra per edge, turned TX degrees about x then TY degrees about y, its lowest point
 // (a corner for generic angles) G above the plate's top face z = 0. The plate is volume 1, so
-// its elements come first and it is body 0; the block is body 1 (the one-pass contact search
-// tests the block's nodes against the plate's faces). Surfaces: "plate_top", "plate_bottom",
+// its elements come first and it is body 0; the block is body 1 (the two-pass contact search
+// does not depend on that order). Surfaces: "plate_top", "plate_bottom",
 // "plate_sides", "block_skin". Override with -setnumber.
 If(!Exists(A)) A = 0.02; EndIf
 If(!Exists(NB)) NB = 4; EndIf

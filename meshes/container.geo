@@ -16,8 +16,8 @@ If(!Exists(WT)) WT = 0.02; EndIf
 If(!Exists(ANG)) ANG = 30; EndIf
 If(!Exists(GAP)) GAP = 0.005; EndIf
 SetFactory("OpenCASCADE");
-// The wall first (volume 1: its elements and its body come first, so that the one-pass contact
-// search tests the container's nodes, of the higher body, against the wall's faces).
+// The wall first (volume 1: its elements and its body come first; the two-pass contact search
+// does not depend on that order).
 // The wall: a slab wider than the container's half and taller than the container, its front
 // face GAP beyond the container's end at the height of the container's top edge, tilted about
 // that edge so that its lower part leans away: the top edge of the end wall strikes first.

@@ -16,6 +16,9 @@ use crate::ContactError;
 
 /// [`NodeRecord::flags`] bit: the node is an SPH particle centre.
 pub const FLAG_PARTICLE: u32 = 1;
+/// [`NodeRecord::flags`] bit: the node belongs to a master body of a one-pass search
+/// ([`crate::SearchParams::one_pass`]; `[contact] passes = 1`, `master`).
+pub const FLAG_MASTER: u32 = 2;
 
 /// One contact node as bytes (104 bytes, no padding).
 #[repr(C)]
@@ -109,6 +112,8 @@ pub struct ContactNodes {
     pub radius: Vec<f64>,
     /// Whether the node is an SPH particle centre.
     pub particle: Vec<bool>,
+    /// Whether the node belongs to a master body ([`FLAG_MASTER`]).
+    pub master: Vec<bool>,
     /// Start-of-step positions.
     pub x0: Vec<V3>,
     /// Predicted end-of-step positions.
@@ -137,6 +142,7 @@ impl ContactNodes {
         self.mass.clear();
         self.radius.clear();
         self.particle.clear();
+        self.master.clear();
         self.x0.clear();
         self.x1.clear();
         self.v.clear();
@@ -150,6 +156,7 @@ impl ContactNodes {
         self.mass.push(r.mass);
         self.radius.push(r.radius);
         self.particle.push(r.flags & FLAG_PARTICLE != 0);
+        self.master.push(r.flags & FLAG_MASTER != 0);
         self.x0.push(r.x0);
         self.x1.push(r.x1);
         self.v.push(r.v);
@@ -160,7 +167,8 @@ impl ContactNodes {
         NodeRecord {
             gid: self.gid[i],
             body: self.body[i],
-            flags: if self.particle[i] { FLAG_PARTICLE } else { 0 },
+            flags: if self.particle[i] { FLAG_PARTICLE } else { 0 }
+                | if self.master[i] { FLAG_MASTER } else { 0 },
             mass: self.mass[i],
             radius: self.radius[i],
             x0: self.x0[i],

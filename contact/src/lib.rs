@@ -18,8 +18,8 @@
 //! ```
 //!
 //! - [`data`]: nodes (struct-of-arrays) and faces of one box, `Pod` records to move them as bytes.
-//! - [`search()`]: bucket-grid broad phase, node-face crossing narrow phase ([`pair`]), one
-//!   deterministic contact per node.
+//! - [`search()`]: bucket-grid broad phase, node-face crossing narrow phase ([`pair`]), a
+//!   node's contacts chosen deterministically (the deepest, and those on faces at an angle).
 //! - [`push_back()`]: kinematic contact (Taylor and Flanagan), momentum-conserving to round-off.
 //! - [`surfaces()`]: boundary faces and bodies of a hexahedral mesh.
 //!
@@ -37,7 +37,8 @@ pub mod surfaces;
 mod vec3;
 
 pub use data::{
-    Aabb, Config, ContactBox, ContactFaces, ContactNodes, FaceRecord, NodeRecord, FLAG_PARTICLE,
+    Aabb, Config, ContactBox, ContactFaces, ContactNodes, FaceRecord, NodeRecord, FLAG_MASTER,
+    FLAG_PARTICLE,
 };
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{push_back, PushBack, PushBackParams};

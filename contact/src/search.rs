@@ -18,12 +18,17 @@ pub const DEFAULT_PARAM_TOL: f64 = 1e-6;
 pub struct SearchParams {
     /// Also search pairs within one body (`[contact] self_contact`).
     pub self_contact: bool,
-    /// Between two different bodies, search only nodes of the higher-numbered body against
-    /// faces of the lower (one pass), instead of both ways. The parallel stage uses it: with
-    /// two passes, a pair of surfaces whose two passes' contacts land in different boxes is
-    /// pushed apart twice (each box removes the whole penetration); one pass pushes it once.
-    /// The price: a node of the lower body can cross a face of the higher one unseen (fine for
-    /// surfaces of similar resolution).
+    /// One pass between a master body and another (`[contact] passes = 1`): nodes of master
+    /// bodies ([`crate::FLAG_MASTER`]) are not searched against faces of the other bodies, whose
+    /// nodes are searched against the master's faces (LS-DYNA's one-way, slave nodes against
+    /// master segments); pairs of two master bodies or of two others are searched both ways.
+    /// Off (the default, two passes): every pair of bodies both ways, so the answer does not
+    /// depend on which body is which, nor on their order in the mesh. The price of one pass:
+    /// a node of the master can cross a face of the other body unseen (a coarse master's
+    /// corner through a fine slave surface). Two passes find a touching pair from both sides
+    /// (a node of each in a face of the other, two descriptions of one gap); the push-back
+    /// solves them in one system, where such rows share the impulse rather than push twice
+    /// ([`crate::push_back`], "Several contacts sharing nodes").
     pub one_pass: bool,
     /// Capture tolerance, as a fraction of the face's diameter: a node that starts the step up to
     /// this far behind a face still counts as having been outside it (see [`crate::pair`]).
@@ -80,8 +85,10 @@ const PARAM_REACH: f64 = 2.0;
 /// at both ends of the step, grown by the largest corner motion `max_i |X1_i - X0_i|`, by
 /// `max_radius` (the largest contact radius of any node that may meet it), and by
 /// `(gap_tol + 2 param_tol)` times the face's diameter. A node can only contact the face if its
-/// end position is within its depth of the face's end configuration, and the depth is bounded by
-/// the node's motion plus that growth (rule 4 of [`crate::pair`]); so a node whose
+/// end position is within `|p1 - p0| + max_i |X1_i - X0_i| + r + gap_tol * diameter` of a point
+/// of the face's end configuration with `|xi|, |eta| <= 1 + param_tol` (rule 4 of
+/// [`crate::pair`], in both of its branches: the end projection on the face, or the clamped
+/// point where the path met it); so a node whose
 /// [`node_search_aabb`] misses this box cannot contact the face, and the parallel layer ghosts a
 /// face to every box this overlaps.
 pub fn face_search_aabb(b: &ContactBox, f: usize, params: &SearchParams, max_radius: f64) -> Aabb {
@@ -139,14 +146,19 @@ pub fn node_search_aabb(b: &ContactBox, j: usize) -> Aabb {
 ///
 /// Broad phase: a bucket grid over the faces' [`face_search_aabb`]s, queried with each node's
 /// [`node_search_aabb`] ([`Candidates::build`] with no skin). Narrow phase: [`crate::pair::test`].
-/// If a node crossed several faces the contact is
-/// the deepest, then the lowest face gid. A particle (a sphere) can touch two or three faces at
-/// once at an edge or a corner of a cavity, and one contact would leave it inside the others'
-/// offset surfaces, where the next step's crossing test no longer sees it: a particle keeps, in
-/// that order, every further hit whose normal is not within `PARTICLE_SAME_NORMAL_COS` of a kept
-/// one (coplanar neighbours across a seam still give one contact). The result is sorted by node
-/// gid, then depth and face gid; it depends only on the geometry and the gids, never on the
-/// storage order of nodes or faces.
+/// If a node crossed several faces its first contact is the deepest, then the lowest face gid.
+/// A node can cross two or three faces at once at an edge or a corner of a valley between faces
+/// at an angle (a groove, the inner corner of a box, a fold; a particle, a sphere, at any edge
+/// or corner of a cavity), and one contact would leave it behind the others, by its depth times
+/// the sine of the angle between the faces, where the next step's crossing test no longer sees
+/// it (started behind): a node keeps, in that order, every further hit whose normal is not
+/// within `SAME_NORMAL_COS` of a kept one and whose face forms a valley with each kept one's
+/// (`valley`: a mesh node at a convex edge needs to leave one face only; a particle keeps
+/// every hit of another normal, as it always did), and the push-back solves them together
+/// (coplanar neighbours across a seam, or the slightly dimpled faces around a node pressed on a
+/// node, still give one contact: the remainder is second order in the angle). The result is
+/// sorted by node gid, then depth and face gid; it depends only on the geometry and the gids,
+/// never on the storage order of nodes or faces.
 pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
     let cands = Candidates::build(b, params, 0.0);
     search_candidates(b, params, &cands)
@@ -156,10 +168,10 @@ pub fn search(b: &ContactBox, params: &SearchParams) -> Vec<Contact> {
 ///
 /// [`Candidates::build`] lists, for each owned node, the faces whose [`face_search_aabb`]
 /// overlaps the node's [`node_search_aabb`] grown by `skin` (and that the pair rules do not
-/// exclude outright: a corner of the face, the same body without self-contact, the wrong order
-/// in one pass). While the box's nodes have moved little since, the list still holds every face
-/// the node can contact, and [`search_candidates`] gives exactly what [`search`] gives, without
-/// the grid. The bound ([`Candidates::still_valid`]): with `D` the largest displacement of any
+/// exclude outright: a corner of the face, the same body without self-contact, a master
+/// body's node against another's face in one pass). While the box's nodes have moved little
+/// since, the list still holds every face the node can contact, and [`search_candidates`] gives
+/// exactly what [`search`] gives, without the grid. The bound ([`Candidates::still_valid`]): with `D` the largest displacement of any
 /// node of the box since the build and `m` the largest motion of any node over the current step,
 /// a node's box now lies within `D + m` of its end position at the build, and a face's box within
 /// `D + 2m + 2 tau (D + m)` of its own box then (corners moved by `D`, the start configuration
@@ -340,11 +352,13 @@ pub fn search_candidates(
                 .then(b.faces.gid[*f].cmp(&b.faces.gid[*g]))
         });
         kept.clear();
+        let particle = b.nodes.particle[j];
         for &(h, f) in &hits {
-            let distinct = kept
-                .iter()
-                .all(|(k, _)| dot(k.normal, h.normal).abs() < PARTICLE_SAME_NORMAL_COS);
-            if kept.is_empty() || (b.nodes.particle[j] && distinct) {
+            let further = kept.iter().all(|&(k, g)| {
+                dot(k.normal, h.normal).abs() < SAME_NORMAL_COS
+                    && (particle || valley(b, (&k, g), (&h, f)))
+            });
+            if kept.is_empty() || further {
                 kept.push((h, f));
             }
         }
@@ -365,6 +379,19 @@ pub fn search_candidates(
     out
 }
 
-/// Two hits of one particle whose normals' |cos| is at least this (within about 25 degrees)
-/// are the same contact (coplanar or nearly coplanar faces): only the deeper is kept.
-pub const PARTICLE_SAME_NORMAL_COS: f64 = 0.9;
+/// Whether the faces of two hits of one mesh node form a valley (a concave edge or corner, seen
+/// from outside): each face's centre lies in front of the other's tangent plane at its contact
+/// point. Only there does leaving one face leave the node behind the other; at a convex edge the
+/// node is behind both planes yet needs to leave one face only, and a second contact would push
+/// it out of both (measured: a block landing on a plate node for node, each plate node under the
+/// block's lower edge also "behind" the block's side face, pushed sideways with the block: its
+/// top moved 15 % less than over offset meshes).
+fn valley(b: &ContactBox, (k, g): (&pair::Hit, usize), (h, f): (&pair::Hit, usize)) -> bool {
+    let (qg, qf) = (b.quad(g, Config::End), b.quad(f, Config::End));
+    let in_front = |n: V3, at: V3, q: &Quad| dot(n, sub(q.point([0.0, 0.0]), at)) > 0.0;
+    in_front(k.normal, qg.point(k.xi), &qf) && in_front(h.normal, qf.point(h.xi), &qg)
+}
+
+/// Two hits of one node whose normals' |cos| is at least this (within about 25 degrees) are the
+/// same contact (coplanar or nearly coplanar faces): only the deeper is kept.
+pub const SAME_NORMAL_COS: f64 = 0.9;

@@ -124,8 +124,12 @@ fn body_rules_and_self_contact() {
             );
         }
         let want = reference_search(&scene, self_contact, params.gap_tol, params.param_tol);
-        let got_pairs: Vec<(u64, u64)> = got.iter().map(|c| (c.node_gid, c.face_gid)).collect();
-        let want_pairs: Vec<(u64, u64)> = want.contacts.iter().map(|(n, v)| (*n, v.0)).collect();
+        let mut got_pairs: Vec<(u64, u64)> = got.iter().map(|c| (c.node_gid, c.face_gid)).collect();
+        let mut want_pairs: Vec<(u64, u64)> =
+            want.contacts.iter().map(|(n, v)| (*n, v.0)).collect();
+        want_pairs.extend(&want.further);
+        got_pairs.sort_unstable();
+        want_pairs.sort_unstable();
         assert_eq!(got_pairs, want_pairs, "self_contact = {self_contact}");
         println!(
             "self_contact = {self_contact}: {} contacts, {same_body} within one body",
@@ -166,5 +170,72 @@ fn corner_never_contacts_its_face() {
     }
     for c in search(&b, &params) {
         assert!(!b.faces.node_gid[c.face as usize].contains(&c.node_gid));
+    }
+}
+
+/// One pass (`[contact] passes = 1`): the nodes of a master body are not searched against the
+/// faces of the other bodies; everything else is as with two passes. Reference: the two-pass
+/// search of the same scene (itself checked against the all-pairs reference above). With the
+/// sheet as master, its nodes lose their contacts with the plate (a master node is never paired
+/// with a non-master face) and the plate's nodes keep theirs; with the plate as master, the
+/// sheet's nodes keep every contact.
+#[test]
+fn one_pass_searches_only_the_other_bodies_nodes_against_a_masters_faces() {
+    let scene = folded_sheet(8, 0.05, 0.02);
+    let two = SearchParams {
+        self_contact: true,
+        ..SearchParams::default()
+    };
+    let one = SearchParams {
+        one_pass: true,
+        ..two
+    };
+    let key = |c: &contact::Contact| (c.node_gid, c.face_gid);
+    let b = ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
+    let both_ways = search(&b, &two);
+    let sheet_plate = |c: &&contact::Contact| {
+        b.nodes.body[c.node as usize] == 0 && b.faces.body[c.face as usize] == 1
+    };
+    assert!(
+        both_ways.iter().filter(sheet_plate).count() > 10,
+        "the sheet must hit the plate"
+    );
+    for master in [0u32, 1] {
+        let mut nodes = scene.nodes.clone();
+        for n in nodes.iter_mut().filter(|n| n.body == master) {
+            n.flags |= contact::FLAG_MASTER;
+        }
+        let b = ContactBox::from_records(&nodes, nodes.len(), &scene.faces).unwrap();
+        let got = search(&b, &one);
+        for c in &got {
+            assert!(
+                b.nodes.body[c.node as usize] != master || b.faces.body[c.face as usize] == master,
+                "master {master}: node {} of the master against face {} of the other body",
+                c.node_gid,
+                c.face_gid
+            );
+        }
+        let of_slaves = |v: &[contact::Contact]| -> Vec<(u64, u64)> {
+            v.iter()
+                .filter(|c| b.nodes.body[c.node as usize] != master)
+                .map(key)
+                .collect()
+        };
+        assert_eq!(
+            of_slaves(&got),
+            of_slaves(&both_ways),
+            "master {master}: the other body's contacts"
+        );
+        let lost = both_ways.len() - got.len();
+        println!(
+            "master {master}: {} contacts, {lost} fewer than two passes",
+            got.len()
+        );
+        if master == 0 {
+            assert!(
+                lost > 10,
+                "the sheet's nodes kept their contacts with the plate"
+            );
+        }
     }
 }

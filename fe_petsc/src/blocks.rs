@@ -143,7 +143,21 @@ impl BlockWork {
         std::mem::swap(&mut self.f_old, &mut self.f_new);
     }
 
-    /// Bytes held.
+    /// The state a restart needs: the element forces per slot at the last accepted state.
+    pub fn restart_state(&self) -> Vec<f64> {
+        self.f_old.as_flattened().to_vec()
+    }
+
+    /// Sets the state `restart_state` gave; `false` when the length does not fit.
+    pub fn set_restart_state(&mut self, f_old: &[f64]) -> bool {
+        if f_old.len() != 3 * self.f_old.len() {
+            return false;
+        }
+        self.f_old.as_flattened_mut().copy_from_slice(f_old);
+        true
+    }
+
+    /// Bytes held (for the report).
     pub fn bytes(&self) -> usize {
         self.elem_block.len() * 4
             + self.corner_slot.len() * 32

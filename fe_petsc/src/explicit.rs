@@ -618,6 +618,126 @@ impl ExplicitFe {
         }
     }
 
+    /// The state a restart needs to continue bit-identically on the same ranks, as named
+    /// arrays of this rank's local nodes and elements in their local order: positions (now and
+    /// at the step's start), velocities, accelerations, forces and reactions (now and at the
+    /// last step: the energy sums use both), element stress and hourglass state, material
+    /// history, volumes, pressures, the per-block bookkeeping, the global energies and the
+    /// clock.
+    pub fn restart_state(&self) -> Vec<(&'static str, Vec<f64>)> {
+        let flat = |v: &Vec<[f64; 3]>| v.as_flattened().to_vec();
+        let hex: Vec<f64> = self
+            .state
+            .iter()
+            .flat_map(|s| s.stress.iter().chain(s.hg.as_flattened()).copied())
+            .collect();
+        let e = &self.energies;
+        let scalars = vec![
+            e.kinetic,
+            e.internal,
+            e.hourglass,
+            e.external_work,
+            e.momentum[0],
+            e.momentum[1],
+            e.momentum[2],
+            self.internal_plus_hg,
+            self.dt_stable_local,
+            self.time,
+            self.step as f64,
+        ];
+        let blocks: Vec<f64> = self
+            .block_energies
+            .iter()
+            .flat_map(|b| [b.internal, b.hourglass, b.kinetic0, b.internal_plus_hg])
+            .collect();
+        let mut block_sums = self.blocks.step_sums.clone();
+        block_sums.extend(self.blocks.restart_state());
+        vec![
+            ("fe.x", flat(&self.x)),
+            ("fe.x_old", flat(&self.x_old)),
+            ("fe.v", flat(&self.v)),
+            ("fe.a", flat(&self.a)),
+            ("fe.force", flat(&self.force)),
+            ("fe.force_old", flat(&self.force_old)),
+            ("fe.reaction", flat(&self.reaction)),
+            ("fe.reaction_old", flat(&self.reaction_old)),
+            ("fe.hex_state", hex),
+            ("fe.mat_state", self.mat_state.clone()),
+            ("fe.vol", self.vol.clone()),
+            ("fe.pressure", self.pressure.clone()),
+            ("fe.scalars", scalars),
+            ("fe.block_energies", blocks),
+            ("fe.block_work", block_sums),
+        ]
+    }
+
+    /// Sets the state [`ExplicitFe::restart_state`] gave (the same mesh on the same ranks);
+    /// `get` returns each named array. An array missing or of the wrong length is an error
+    /// naming it.
+    pub fn set_restart_state(
+        &mut self,
+        get: &mut dyn FnMut(&str) -> Option<Vec<f64>>,
+    ) -> Result<(), String> {
+        let mut take = |name: &str, len: usize| -> Result<Vec<f64>, String> {
+            let v = get(name).ok_or_else(|| format!("{name}: missing"))?;
+            if v.len() != len {
+                return Err(format!(
+                    "{name}: {} values where this rank's mesh needs {len}",
+                    v.len()
+                ));
+            }
+            Ok(v)
+        };
+        let n3 = 3 * self.x.len();
+        let ne = self.state.len();
+        let unflat = |v: Vec<f64>| -> Vec<[f64; 3]> {
+            v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        };
+        self.x = unflat(take("fe.x", n3)?);
+        self.x_old = unflat(take("fe.x_old", n3)?);
+        self.v = unflat(take("fe.v", n3)?);
+        self.a = unflat(take("fe.a", n3)?);
+        self.force = unflat(take("fe.force", n3)?);
+        self.force_old = unflat(take("fe.force_old", n3)?);
+        self.reaction = unflat(take("fe.reaction", n3)?);
+        self.reaction_old = unflat(take("fe.reaction_old", n3)?);
+        let hex = take("fe.hex_state", 18 * ne)?;
+        for (s, c) in self.state.iter_mut().zip(hex.chunks_exact(18)) {
+            s.stress.copy_from_slice(&c[..6]);
+            s.hg.as_flattened_mut().copy_from_slice(&c[6..]);
+        }
+        self.mat_state = take("fe.mat_state", self.mat_state.len())?;
+        self.vol = take("fe.vol", ne)?;
+        self.pressure = take("fe.pressure", ne)?;
+        let s = take("fe.scalars", 11)?;
+        self.energies = Energies {
+            kinetic: s[0],
+            internal: s[1],
+            hourglass: s[2],
+            external_work: s[3],
+            momentum: [s[4], s[5], s[6]],
+        };
+        self.internal_plus_hg = s[7];
+        self.dt_stable_local = s[8];
+        self.time = s[9];
+        self.step = s[10] as u64;
+        let nb = self.block_energies.len();
+        let b = take("fe.block_energies", 4 * nb)?;
+        for (be, c) in self.block_energies.iter_mut().zip(b.chunks_exact(4)) {
+            be.internal = c[0];
+            be.hourglass = c[1];
+            be.kinetic0 = c[2];
+            be.internal_plus_hg = c[3];
+        }
+        let ns = self.blocks.step_sums.len();
+        let w = get("fe.block_work").ok_or("fe.block_work: missing")?;
+        if w.len() < ns || !self.blocks.set_restart_state(&w[ns..]) {
+            return Err("fe.block_work: does not fit this rank's mesh".into());
+        }
+        self.blocks.step_sums.copy_from_slice(&w[..ns]);
+        Ok(())
+    }
+
     /// Equivalent plastic strain of element `e`.
     pub fn plastic_strain(&self, e: usize) -> f64 {
         let s = self.mat_stride;

@@ -541,6 +541,37 @@ pub struct KeptPairs {
 }
 
 impl KeptPairs {
+    /// The kept list as plain arrays (a restart continues with the very same list, so the
+    /// pairs are summed in the same order): pairs, reference positions, smoothing lengths and
+    /// ids, and the skin.
+    #[allow(clippy::type_complexity)]
+    pub fn to_parts(&self) -> (Vec<[u32; 2]>, Vec<[f64; 3]>, Vec<f64>, Vec<u64>, f64) {
+        (
+            self.pairs.iter().map(|&(a, b)| [a, b]).collect(),
+            self.x_ref.clone(),
+            self.h_ref.clone(),
+            self.id_ref.clone(),
+            self.skin,
+        )
+    }
+
+    /// The list [`KeptPairs::to_parts`] gave.
+    pub fn from_parts(
+        pairs: Vec<[u32; 2]>,
+        x_ref: Vec<[f64; 3]>,
+        h_ref: Vec<f64>,
+        id_ref: Vec<u64>,
+        skin: f64,
+    ) -> Self {
+        KeptPairs {
+            pairs: pairs.into_iter().map(|[a, b]| (a, b)).collect(),
+            x_ref,
+            h_ref,
+            id_ref,
+            skin,
+        }
+    }
+
     /// Candidates of `parts` in the box `lo..hi` (which must hold every sphere: all of space).
     pub fn build(parts: &Particles, opts: &SearchOptions, lo: [f64; 3], hi: [f64; 3]) -> Self {
         let h_min = parts.h.iter().fold(f64::INFINITY, |a, &b| a.min(b));

@@ -1,13 +1,18 @@
 //! What the charts of `tdyn run` (energies), `tdyn compare`, `tdyn sweep`, `tdyn validate` and
 //! `tdyn chart-scaling` share: the font, one drawing written both as PNG and as SVG, the colours,
-//! the legend box, log-axis ranges, SI prefixes and the tick labels.
+//! a panel's frame and axes, notes and marker lines, the legend box, log-axis ranges, SI prefixes
+//! and the tick labels.
+use plotters::chart::{ChartBuilder, MeshStyle};
+use plotters::coord::cartesian::Cartesian2d;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::{CoordTranslate, Shift};
-use plotters::element::DashedPathElement;
+use plotters::element::{DashedPathElement, Text};
 use plotters::prelude::{
-    BitMapBackend, ChartContext, DrawingArea, DrawingAreaErrorKind, DrawingBackend,
-    IntoDrawingArea, PathElement, SVGBackend, SeriesLabelPosition,
+    BitMapBackend, ChartContext, DashedLineSeries, DrawingArea, DrawingAreaErrorKind,
+    DrawingBackend, IntoDrawingArea, PathElement, SVGBackend, SeriesLabelPosition,
 };
-use plotters::style::{Color, RGBColor, BLACK, WHITE};
+use plotters::style::{Color, RGBColor, ShapeStyle, BLACK, WHITE};
 use std::path::Path;
 
 /// TrueType fonts tried for the charts' text (the first found is used).
@@ -93,6 +98,96 @@ pub fn colour(k: usize) -> RGBColor {
 /// A plotters drawing error as the message the charts return.
 pub fn err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
     e.to_string()
+}
+
+/// The coordinates of a log-log panel.
+pub type LogLog = Cartesian2d<LogCoord<f64>, LogCoord<f64>>;
+
+/// The room a panel keeps around its plot, pixels.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    /// Blank margin on every side.
+    pub margin: u32,
+    /// Below the plot, for the x labels and description (only when there is text).
+    pub x_labels: u32,
+    /// Left of the plot, for the y labels and description (only when there is text).
+    pub y_labels: u32,
+}
+
+/// A chart builder on `area` with `frame`'s margin and, when there is `text`, its label areas.
+/// A caption may still be added.
+pub fn panel<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: Frame,
+    text: bool,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(frame.margin);
+    if text {
+        b.x_label_area_size(frame.x_labels)
+            .y_label_area_size(frame.y_labels);
+    }
+    b
+}
+
+/// Draws the axes and grid of `ch`: as `labelled` sets them up when there is `text`, else with
+/// no labels at all (there is no font to write them with).
+pub fn axes<'a, 'b, DB, X, Y, XT, YT>(
+    ch: &'b mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    text: bool,
+    labelled: impl FnOnce(&mut MeshStyle<'a, 'b, X, Y, DB>),
+) -> Result<(), String>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = XT> + ValueFormatter<XT>,
+    Y: Ranged<ValueType = YT> + ValueFormatter<YT>,
+    XT: 'b,
+    YT: 'b,
+{
+    let mut mesh = ch.configure_mesh();
+    if text {
+        labelled(&mut mesh);
+    } else {
+        mesh.x_labels(0).y_labels(0);
+    }
+    mesh.draw().map_err(err)
+}
+
+/// Writes `s` on `ch` with its top left corner at `at` (the chart's coordinates), `font_px`
+/// pixels high.
+pub fn note<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
+    ch: &mut ChartContext<'_, DB, CT>,
+    s: impl Into<String>,
+    at: (f64, f64),
+    font_px: u32,
+) -> Result<(), String> {
+    ch.draw_series(std::iter::once(Text::new(
+        s.into(),
+        at,
+        ("sans-serif", font_px),
+    )))
+    .map_err(err)?;
+    Ok(())
+}
+
+/// Dash and gap of a marker line, pixels.
+pub const MARK_DASH: (u32, u32) = (8, 6);
+
+/// Marks `x` on `ch` with a dashed vertical line of `style` from `y.0` to `y.1`.
+pub fn x_mark<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
+    ch: &mut ChartContext<'_, DB, CT>,
+    x: f64,
+    y: (f64, f64),
+    style: ShapeStyle,
+) -> Result<(), String> {
+    ch.draw_series(DashedLineSeries::new(
+        vec![(x, y.0), (x, y.1)],
+        MARK_DASH.0,
+        MARK_DASH.1,
+        style,
+    ))
+    .map_err(err)?;
+    Ok(())
 }
 
 /// The legend's key for a line series of colour `c`: a short stroke of the same width.

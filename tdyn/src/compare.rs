@@ -19,11 +19,18 @@
 //! "Finest run" = the finished run with the smallest step (either mode). Rank 0 writes
 //! `compare.csv` and draws `compare.png` and `compare.svg`: error against cost (left) and
 //! against the step with the explicit stable limit marked (right), one curve per mode.
+use crate::chart;
 use coupling::driver::{self, FailureKind, RunOptions, RunOverrides};
 use coupling::input::scene::{self, Mode};
 use coupling::kernels::collective::first_error;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use plotters::coord::Shift;
+use plotters::prelude::{
+    ChartContext, Circle, Cross, DrawingArea, DrawingBackend, IntoLogRange, LineSeries,
+    SeriesLabelPosition, Text,
+};
+use plotters::style::{Color, BLACK};
 use std::path::{Path, PathBuf};
 
 /// Steps tried when the user gives none, as multiples of the explicit stable limit: three
@@ -113,35 +120,84 @@ fn mode_name(m: Mode) -> &'static str {
 /// error. Refused or unstable runs are results, not errors.
 pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<PathBuf, String> {
     let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
-    let file = scene.file.display().to_string();
-    let mut modes = Vec::new();
-    for m in &opts.modes {
-        modes.push(match m.as_str() {
-            "explicit" => Mode::Explicit,
-            "implicit" => Mode::Implicit,
-            _ => {
-                return Err(format!(
-                    "--modes: unknown mode \"{m}\" (expected explicit and/or implicit)"
-                ))
-            }
-        });
+    let plan = plan(world, opts, &scene)?;
+    let limit = explicit_limit(world, opts, &plan.out_dir)?;
+    say(
+        world,
+        opts.quiet,
+        format!(
+            "tdyn compare: {}: explicit stable limit {limit:.4e} s, end time {:e} s, quantity {} ({}), {} ranks",
+            plan.file,
+            plan.end,
+            plan.quantity,
+            plan.def.measure,
+            world.size()
+        ),
+    );
+    let mut rows = run_ladder(world, opts, &plan, limit)?;
+
+    // Errors, CSV and charts on rank 0; every rank learns the outcome.
+    let mut result = Ok(());
+    if world.rank() == 0 {
+        let title = format!(
+            "{}: {} ({}), {} ranks",
+            if scene.title.is_empty() {
+                plan.file.clone()
+            } else {
+                scene.title.clone()
+            },
+            plan.quantity,
+            plan.def.measure,
+            world.size()
+        );
+        result = write_outputs(&mut rows, &plan, title, limit)
+            .map_err(|e| format!("{}: {e}", plan.file));
     }
-    if modes.is_empty() {
-        // Both modes where the scene can run implicitly; explicit alone otherwise (particles,
-        // contact, a meshed fluid: explicit only), said once.
-        modes.push(Mode::Explicit);
-        let mut implicit = scene.clone();
-        implicit.run.mode = Mode::Implicit;
-        implicit.run.dt = Some(implicit.run.end_time);
-        match driver::setup::check_scene(&implicit) {
-            Ok(()) => modes.push(Mode::Implicit),
-            Err(why) => {
-                if world.rank() == 0 && !opts.quiet {
-                    println!("tdyn compare: explicit only: {why}");
-                }
+    first_error(world, result.err())?;
+    if world.rank() == 0 && !opts.quiet {
+        for r in &rows {
+            if r.outcome != Outcome::Finished {
+                println!("  {} x{:.3}: {}", mode_name(r.mode), r.dt_factor, r.message);
             }
         }
     }
+    Ok(plan.out_dir)
+}
+
+/// Prints `s` on rank 0 unless `quiet` (the tools' progress lines).
+pub(crate) fn say(world: &SimpleCommunicator, quiet: bool, s: String) {
+    if world.rank() == 0 && !quiet {
+        println!("{s}");
+    }
+}
+
+/// What a comparison runs and measures, from the options and the scene.
+struct Plan {
+    /// The scene file as loaded, for messages.
+    file: String,
+    /// The modes, in order.
+    modes: Vec<Mode>,
+    /// The steps, as multiples of the explicit stable limit.
+    factors: Vec<f64>,
+    /// The scene's `[compare]` table (or its defaults).
+    def: scene::CompareDef,
+    /// The probe column measured.
+    quantity: String,
+    /// `run.end_time`, s.
+    end: f64,
+    /// The output directory.
+    out_dir: PathBuf,
+}
+
+/// The plan of `opts` on `scene`: an error for an unknown mode, a step factor that is not
+/// positive, or a scene with no probe to measure.
+fn plan(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    scene: &scene::Scene,
+) -> Result<Plan, String> {
+    let file = scene.file.display().to_string();
+    let modes = modes(world, opts, scene)?;
     let factors = opts
         .dt_factors
         .clone()
@@ -179,8 +235,59 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
             .join(scene.file.file_stem().unwrap_or_default())
             .join("compare")
     });
+    Ok(Plan {
+        file,
+        modes,
+        factors,
+        def,
+        quantity,
+        end: scene.run.end_time,
+        out_dir,
+    })
+}
 
-    // The explicit stable limit: set-up only (a fixed dt in the scene must not be refused).
+/// The modes of `--modes`; without it both where the scene can run implicitly, else explicit
+/// alone (particles, contact, a meshed fluid: explicit only), said once.
+fn modes(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    scene: &scene::Scene,
+) -> Result<Vec<Mode>, String> {
+    let mut modes = Vec::new();
+    for m in &opts.modes {
+        modes.push(match m.as_str() {
+            "explicit" => Mode::Explicit,
+            "implicit" => Mode::Implicit,
+            _ => {
+                return Err(format!(
+                    "--modes: unknown mode \"{m}\" (expected explicit and/or implicit)"
+                ))
+            }
+        });
+    }
+    if modes.is_empty() {
+        modes.push(Mode::Explicit);
+        let mut implicit = scene.clone();
+        implicit.run.mode = Mode::Implicit;
+        implicit.run.dt = Some(implicit.run.end_time);
+        match driver::setup::check_scene(&implicit) {
+            Ok(()) => modes.push(Mode::Implicit),
+            Err(why) => say(
+                world,
+                opts.quiet,
+                format!("tdyn compare: explicit only: {why}"),
+            ),
+        }
+    }
+    Ok(modes)
+}
+
+/// The explicit stable limit, s: set-up only (a fixed dt in the scene must not be refused).
+fn explicit_limit(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    out_dir: &Path,
+) -> Result<f64, String> {
     let probe_opts = RunOptions {
         scene: opts.scene.clone(),
         out: Some(out_dir.join("runs").join("setup")),
@@ -192,148 +299,153 @@ pub fn compare(world: &SimpleCommunicator, opts: &CompareOptions) -> Result<Path
         },
         setup_only: true,
         algorithms: Default::default(),
+        // the tool's own run folders: a new comparison replaces the last one's runs
+        overwrite: true,
+        restart: None,
+        stop: None,
     };
-    let limit = driver::run(world, &probe_opts)
+    Ok(driver::run(world, &probe_opts)
         .map_err(|e| e.message)?
-        .dt_stable;
-    let end = scene.run.end_time;
-    let say = |s: String| {
-        if world.rank() == 0 && !opts.quiet {
-            println!("{s}");
-        }
-    };
-    say(format!(
-        "tdyn compare: {file}: explicit stable limit {limit:.4e} s, end time {end:e} s, quantity {quantity} ({}), {} ranks",
-        def.measure,
-        world.size()
-    ));
+        .dt_stable)
+}
 
+/// Runs every (mode, step factor) of `plan`, a progress line each; a row per run (errors not
+/// measured yet). An input error stops the ladder.
+fn run_ladder(
+    world: &SimpleCommunicator,
+    opts: &CompareOptions,
+    plan: &Plan,
+    limit: f64,
+) -> Result<Vec<CompareRow>, String> {
     let mut rows = Vec::new();
-    for &mode in &modes {
-        for &f in &factors {
+    for &mode in &plan.modes {
+        for &f in &plan.factors {
             // A whole number of steps ends at end_time exactly.
-            let n = (end / (f * limit)).ceil().max(1.0);
-            let dt = end / n;
-            let dir = out_dir
-                .join("runs")
-                .join(format!("{}_x{}", mode_name(mode), f));
-            let run = |force: bool| {
-                let o = RunOptions {
-                    scene: opts.scene.clone(),
-                    out: Some(dir.clone()),
-                    quiet: true,
-                    overrides: RunOverrides {
-                        mode: Some(mode),
-                        dt: Some(dt),
-                        force_dt: Some(force),
-                        ..Default::default()
-                    },
-                    setup_only: false,
-                    algorithms: Default::default(),
-                };
-                driver::run(world, &o)
-            };
-            let mut res = run(false);
-            let mut refused = false;
-            if let Err(e) = &res {
-                if e.kind == FailureKind::Refused {
-                    refused = true;
-                    res = run(true);
-                }
-            }
-            let row = match res {
-                Ok(s) => CompareRow {
-                    mode,
-                    dt_factor: dt / limit,
-                    dt,
-                    steps: s.steps,
-                    wall_s: s.wall_s,
-                    loop_s: s.loop_s,
-                    error: f64::NAN,
-                    refused,
-                    unstable: false,
-                    outcome: Outcome::Finished,
-                    reference: false,
-                    message: String::new(),
-                    out: dir.clone(),
-                },
-                Err(e) => {
-                    let outcome = match e.kind {
-                        FailureKind::Unstable => Outcome::Unstable,
-                        FailureKind::Refused => Outcome::Refused,
-                        FailureKind::Failed => Outcome::Failed,
-                        FailureKind::Input => return Err(e.message),
-                    };
-                    CompareRow {
-                        mode,
-                        dt_factor: dt / limit,
-                        dt,
-                        steps: 0,
-                        wall_s: f64::NAN,
-                        loop_s: f64::NAN,
-                        error: f64::NAN,
-                        refused,
-                        unstable: outcome == Outcome::Unstable,
-                        outcome,
-                        reference: false,
-                        message: e.message,
-                        out: dir.clone(),
-                    }
-                }
-            };
-            say(format!(
-                "  {:8} dt = {:.4e} s ({:>7.3} x limit): {}{}",
-                mode_name(mode),
+            let n = (plan.end / (f * limit)).ceil().max(1.0);
+            let dt = plan.end / n;
+            let rung = Rung {
+                mode,
                 dt,
-                row.dt_factor,
-                if row.refused { "refused, forced: " } else { "" },
-                match row.outcome {
-                    Outcome::Finished =>
-                        format!("ok, {} steps, loop {:.3} s", row.steps, row.loop_s),
-                    o => o.name().to_string(),
-                }
-            ));
+                dt_factor: dt / limit,
+                dir: plan
+                    .out_dir
+                    .join("runs")
+                    .join(format!("{}_x{}", mode_name(mode), f)),
+            };
+            let row = run_rung(world, &opts.scene, rung)?;
+            say(world, opts.quiet, progress(&row));
             rows.push(row);
         }
     }
+    Ok(rows)
+}
 
-    // Errors, CSV and charts on rank 0; every rank learns the outcome.
-    let mut result = Ok(());
-    if world.rank() == 0 {
-        result = measure(&mut rows, &quantity, &def).and_then(|reference| {
-            write_csv(&out_dir.join("compare.csv"), &rows)?;
-            let chart = Chart {
-                title: format!(
-                    "{}: {} ({}), {} ranks",
-                    if scene.title.is_empty() {
-                        file.clone()
-                    } else {
-                        scene.title.clone()
-                    },
-                    quantity,
-                    def.measure,
-                    world.size()
-                ),
-                y_desc: format!("relative error of the {}", def.measure),
-                reference,
-                limit,
-                rows: &rows,
+/// One run of the ladder.
+struct Rung {
+    /// The mode.
+    mode: Mode,
+    /// The step, s.
+    dt: f64,
+    /// dt / explicit stable limit.
+    dt_factor: f64,
+    /// Its output directory.
+    dir: PathBuf,
+}
+
+/// Runs `scene` at `rung`: an explicit step the driver refuses is run again forced. Its row,
+/// or the message of an input error.
+fn run_rung(world: &SimpleCommunicator, scene: &Path, rung: Rung) -> Result<CompareRow, String> {
+    let run = |force: bool| {
+        let o = RunOptions {
+            scene: scene.to_path_buf(),
+            out: Some(rung.dir.clone()),
+            quiet: true,
+            overrides: RunOverrides {
+                mode: Some(rung.mode),
+                dt: Some(rung.dt),
+                force_dt: Some(force),
+                ..Default::default()
+            },
+            setup_only: false,
+            algorithms: Default::default(),
+            overwrite: true,
+            restart: None,
+            stop: None,
+        };
+        driver::run(world, &o)
+    };
+    let mut res = run(false);
+    let mut refused = false;
+    if let Err(e) = &res {
+        if e.kind == FailureKind::Refused {
+            refused = true;
+            res = run(true);
+        }
+    }
+    let mut row = CompareRow {
+        mode: rung.mode,
+        dt_factor: rung.dt_factor,
+        dt: rung.dt,
+        steps: 0,
+        wall_s: f64::NAN,
+        loop_s: f64::NAN,
+        error: f64::NAN,
+        refused,
+        unstable: false,
+        outcome: Outcome::Finished,
+        reference: false,
+        message: String::new(),
+        out: rung.dir,
+    };
+    match res {
+        Ok(s) => (row.steps, row.wall_s, row.loop_s) = (s.steps, s.wall_s, s.loop_s),
+        Err(e) => {
+            row.outcome = match e.kind {
+                FailureKind::Unstable => Outcome::Unstable,
+                FailureKind::Refused => Outcome::Refused,
+                FailureKind::Failed => Outcome::Failed,
+                FailureKind::Input | FailureKind::Stopped => return Err(e.message),
             };
-            crate::chart::save(&chart, &out_dir.join("compare"))
-        });
-        if let Err(e) = &result {
-            result = Err(format!("{file}: {e}"));
+            row.unstable = row.outcome == Outcome::Unstable;
+            row.message = e.message;
         }
     }
-    first_error(world, result.err())?;
-    if world.rank() == 0 && !opts.quiet {
-        for r in &rows {
-            if r.outcome != Outcome::Finished {
-                println!("  {} x{:.3}: {}", mode_name(r.mode), r.dt_factor, r.message);
-            }
+    Ok(row)
+}
+
+/// A run's progress line: its step and how it ended.
+fn progress(row: &CompareRow) -> String {
+    format!(
+        "  {:8} dt = {:.4e} s ({:>7.3} x limit): {}{}",
+        mode_name(row.mode),
+        row.dt,
+        row.dt_factor,
+        if row.refused { "refused, forced: " } else { "" },
+        match row.outcome {
+            Outcome::Finished => format!("ok, {} steps, loop {:.3} s", row.steps, row.loop_s),
+            o => o.name().to_string(),
         }
-    }
-    Ok(out_dir)
+    )
+}
+
+/// Rank 0's outputs: measures the rows, writes compare.csv and draws the chart titled
+/// `title`.
+fn write_outputs(
+    rows: &mut [CompareRow],
+    plan: &Plan,
+    title: String,
+    limit: f64,
+) -> Result<(), String> {
+    let reference = measure(rows, &plan.quantity, &plan.def)?;
+    write_csv(&plan.out_dir.join("compare.csv"), rows)?;
+    let chart = Chart {
+        title,
+        y_desc: format!("relative error of the {}", plan.def.measure),
+        reference,
+        limit,
+        rows,
+    };
+    chart::save(&chart, &plan.out_dir.join("compare"))
 }
 
 /// A probes.csv column: (times, values).
@@ -629,161 +741,201 @@ fn factor_label(f: f64) -> String {
 
 /// Chart size, pixels.
 const CHART_SIZE: (u32, u32) = (1400, 600);
-impl crate::chart::Figure for Chart<'_> {
-    fn size(&self) -> (u32, u32) {
-        CHART_SIZE
+
+/// Each panel's margin and label areas, pixels.
+const FRAME: chart::Frame = chart::Frame {
+    margin: 15,
+    x_labels: 45,
+    y_labels: 70,
+};
+
+/// The x axis of a panel.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum XAxis {
+    /// Cost: the time-step loop's wall time (left panel).
+    Cost,
+    /// The time step (right panel).
+    Step,
+}
+
+impl XAxis {
+    /// The axis's description.
+    fn desc(self) -> &'static str {
+        match self {
+            XAxis::Cost => "cost: time-step loop wall time (s)",
+            XAxis::Step => "time step dt (s)",
+        }
     }
 
-    fn draw<DB: plotters::prelude::DrawingBackend>(
-        &self,
-        root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String> {
-        use plotters::prelude::*;
-        let (root, text) = crate::chart::canvas(root, &self.title)?;
-        let (left, right) = root.split_horizontally(CHART_SIZE.0 / 2);
-        let finished: Vec<&CompareRow> = self
-            .rows
+    /// Where a run lies on this axis.
+    fn of(self, r: &CompareRow) -> f64 {
+        match self {
+            XAxis::Cost => r.loop_s,
+            XAxis::Step => r.dt,
+        }
+    }
+}
+
+/// A mode's colour.
+fn mode_colour(m: Mode) -> plotters::style::RGBColor {
+    match m {
+        Mode::Explicit => plotters::style::BLUE,
+        Mode::Implicit => plotters::style::RED,
+    }
+}
+
+impl Chart<'_> {
+    /// The finished runs with an error to draw.
+    fn finished(&self) -> Vec<&CompareRow> {
+        self.rows
             .iter()
             .filter(|r| r.outcome == Outcome::Finished && r.error > 0.0 && r.error.is_finite())
-            .collect();
+            .collect()
+    }
+
+    /// The error axis's range (both panels): the drawn errors, with room above them for the
+    /// stopped runs' marks.
+    fn error_span(&self) -> (f64, f64) {
+        let finished = self.finished();
         let (mut y0, mut y1) = finished.iter().fold((f64::INFINITY, 0.0f64), |(a, b), r| {
             (a.min(r.error), b.max(r.error))
         });
         if finished.is_empty() {
             (y0, y1) = (1e-6, 1.0);
         }
-        // Room above the data for the stopped runs' marks.
-        let (y0, y1) = (y0 / 3.0, y1 * 10.0);
-        let y_stop = y1 / 2.0;
-        let span = |v: &mut dyn Iterator<Item = f64>| crate::chart::log_span(v, 2.0, (1e-3, 1.0));
-        let (c0, c1) = span(&mut self.rows.iter().map(|r| r.loop_s));
-        let (d0, d1) = span(&mut self.rows.iter().map(|r| r.dt).chain([self.limit]));
-        let colour = |m: Mode| match m {
-            Mode::Explicit => BLUE,
-            Mode::Implicit => RED,
-        };
-        for (panel, area) in [(0, &left), (1, &right)] {
-            let (x0, x1, x_desc) = if panel == 0 {
-                (c0, c1, "cost: time-step loop wall time (s)")
-            } else {
-                (d0, d1, "time step dt (s)")
-            };
-            let mut builder = ChartBuilder::on(area);
-            builder.margin(15);
+        (y0 / 3.0, y1 * 10.0)
+    }
+
+    /// The range of `axis`: the runs' costs, or their steps and the stable limit.
+    fn x_span(&self, axis: XAxis) -> (f64, f64) {
+        let values = self.rows.iter().map(|r| axis.of(r));
+        let limit = (axis == XAxis::Step).then_some(self.limit);
+        chart::log_span(values.chain(limit), 2.0, (1e-3, 1.0))
+    }
+
+    /// One panel: error against `axis`, `y` the error axis's range.
+    fn panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        axis: XAxis,
+        y: (f64, f64),
+        text: bool,
+    ) -> Result<(), String> {
+        let (x0, x1) = self.x_span(axis);
+        let mut ch = chart::panel(area, FRAME, text)
+            .build_cartesian_2d((x0..x1).log_scale(), (y.0..y.1).log_scale())
+            .map_err(chart::err)?;
+        chart::axes(&mut ch, text, |mesh| {
+            mesh.x_desc(axis.desc())
+                .y_desc(self.y_desc.as_str())
+                .x_label_formatter(&chart::sci)
+                .y_label_formatter(&chart::sci);
+        })?;
+        if axis == XAxis::Step {
+            chart::x_mark(&mut ch, self.limit, y, BLACK.stroke_width(2))?;
             if text {
-                builder.x_label_area_size(45).y_label_area_size(70);
-            }
-            let mut chart = builder
-                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(crate::chart::err)?;
-            let mut mesh = chart.configure_mesh();
-            if text {
-                mesh.x_desc(x_desc)
-                    .y_desc(self.y_desc.as_str())
-                    .x_label_formatter(&crate::chart::sci)
-                    .y_label_formatter(&crate::chart::sci);
-            } else {
-                mesh.x_labels(0).y_labels(0);
-            }
-            mesh.draw().map_err(crate::chart::err)?;
-            let x_of = |r: &CompareRow| if panel == 0 { r.loop_s } else { r.dt };
-            if panel == 1 {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(self.limit, y0), (self.limit, y1)],
-                        8,
-                        6,
-                        BLACK.stroke_width(2),
-                    ))
-                    .map_err(crate::chart::err)?;
-                if text {
-                    chart
-                        .draw_series(std::iter::once(Text::new(
-                            "explicit stable limit",
-                            (self.limit * 1.1, y0 * 1.5),
-                            ("sans-serif", 15),
-                        )))
-                        .map_err(crate::chart::err)?;
-                }
-            }
-            for mode in [Mode::Explicit, Mode::Implicit] {
-                let c = colour(mode);
-                let pts: Vec<(f64, f64, f64)> = finished
-                    .iter()
-                    .filter(|r| r.mode == mode)
-                    .map(|r| (x_of(r), r.error, r.dt_factor))
-                    .collect();
-                let mut line: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
-                line.sort_by(|a, b| a.0.total_cmp(&b.0));
-                if !line.is_empty() {
-                    let s = chart
-                        .draw_series(LineSeries::new(line, c.stroke_width(2)))
-                        .map_err(crate::chart::err)?;
-                    if text {
-                        s.label(mode_name(mode)).legend(crate::chart::line_key(c));
-                    }
-                }
-                chart
-                    .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
-                    .map_err(crate::chart::err)?;
-                let stopped: Vec<&CompareRow> = self
-                    .rows
-                    .iter()
-                    .filter(|r| r.mode == mode && r.outcome != Outcome::Finished)
-                    .collect();
-                // A stopped run has no error: a cross at the top, at its step (right panel) or
-                // at the cost it took before stopping (left panel, when it ran at all).
-                let marks: Vec<(f64, &CompareRow)> = stopped
-                    .iter()
-                    .map(|r| (if panel == 0 { r.loop_s } else { r.dt }, *r))
-                    .filter(|(x, _)| *x > 0.0 && x.is_finite())
-                    .collect();
-                chart
-                    .draw_series(
-                        marks
-                            .iter()
-                            .map(|(x, _)| Cross::new((*x, y_stop), 7, c.stroke_width(3))),
-                    )
-                    .map_err(crate::chart::err)?;
-                if text {
-                    chart
-                        .draw_series(pts.iter().map(|p| {
-                            Text::new(factor_label(p.2), (p.0, p.1 * 1.25), ("sans-serif", 13))
-                        }))
-                        .map_err(crate::chart::err)?;
-                    chart
-                        .draw_series(marks.iter().map(|(x, r)| {
-                            Text::new(
-                                factor_label(r.dt_factor),
-                                (*x, y_stop * 1.4),
-                                ("sans-serif", 13),
-                            )
-                        }))
-                        .map_err(crate::chart::err)?;
-                }
-            }
-            if text {
-                let stopped = |o: Outcome| self.rows.iter().filter(|r| r.outcome == o).count();
-                let note = if panel == 0 {
-                    self.reference.clone()
-                } else {
-                    format!(
-                        "x: stopped ({} unstable, {} failed); labels: dt / explicit stable limit",
-                        stopped(Outcome::Unstable),
-                        stopped(Outcome::Failed)
-                    )
-                };
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        note,
-                        (x0 * 1.05, y1 / 1.3),
-                        ("sans-serif", 13),
-                    )))
-                    .map_err(crate::chart::err)?;
-                crate::chart::legend(&mut chart, SeriesLabelPosition::LowerRight, 15)?;
+                chart::note(
+                    &mut ch,
+                    "explicit stable limit",
+                    (self.limit * 1.1, y.0 * 1.5),
+                    15,
+                )?;
             }
         }
-        root.present().map_err(crate::chart::err)?;
+        for mode in [Mode::Explicit, Mode::Implicit] {
+            self.mode_series(&mut ch, mode, axis, y, text)?;
+        }
+        if text {
+            let stopped = |o: Outcome| self.rows.iter().filter(|r| r.outcome == o).count();
+            let note = match axis {
+                XAxis::Cost => self.reference.clone(),
+                XAxis::Step => format!(
+                    "x: stopped ({} unstable, {} failed); labels: dt / explicit stable limit",
+                    stopped(Outcome::Unstable),
+                    stopped(Outcome::Failed)
+                ),
+            };
+            chart::note(&mut ch, note, (x0 * 1.05, y.1 / 1.3), 13)?;
+            chart::legend(&mut ch, SeriesLabelPosition::LowerRight, 15)?;
+        }
+        Ok(())
+    }
+
+    /// `mode`'s runs on a panel: the finished ones as a labelled curve of points, each with its
+    /// step factor; a stopped run has no error: a cross near the top at its step (or at the
+    /// cost it took before stopping, when it ran at all).
+    fn mode_series<DB: DrawingBackend>(
+        &self,
+        ch: &mut ChartContext<'_, DB, chart::LogLog>,
+        mode: Mode,
+        axis: XAxis,
+        y: (f64, f64),
+        text: bool,
+    ) -> Result<(), String> {
+        let c = mode_colour(mode);
+        let y_stop = y.1 / 2.0;
+        let pts: Vec<(f64, f64, f64)> = self
+            .finished()
+            .iter()
+            .filter(|r| r.mode == mode)
+            .map(|r| (axis.of(r), r.error, r.dt_factor))
+            .collect();
+        let mut line: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
+        line.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if !line.is_empty() {
+            let s = ch
+                .draw_series(LineSeries::new(line, c.stroke_width(2)))
+                .map_err(chart::err)?;
+            if text {
+                s.label(mode_name(mode)).legend(chart::line_key(c));
+            }
+        }
+        ch.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
+            .map_err(chart::err)?;
+        let marks: Vec<(f64, &CompareRow)> = self
+            .rows
+            .iter()
+            .filter(|r| r.mode == mode && r.outcome != Outcome::Finished)
+            .map(|r| (axis.of(r), r))
+            .filter(|(x, _)| *x > 0.0 && x.is_finite())
+            .collect();
+        ch.draw_series(
+            marks
+                .iter()
+                .map(|(x, _)| Cross::new((*x, y_stop), 7, c.stroke_width(3))),
+        )
+        .map_err(chart::err)?;
+        if text {
+            ch.draw_series(
+                pts.iter()
+                    .map(|p| Text::new(factor_label(p.2), (p.0, p.1 * 1.25), ("sans-serif", 13))),
+            )
+            .map_err(chart::err)?;
+            ch.draw_series(marks.iter().map(|(x, r)| {
+                Text::new(
+                    factor_label(r.dt_factor),
+                    (*x, y_stop * 1.4),
+                    ("sans-serif", 13),
+                )
+            }))
+            .map_err(chart::err)?;
+        }
+        Ok(())
+    }
+}
+
+impl chart::Figure for Chart<'_> {
+    fn size(&self) -> (u32, u32) {
+        CHART_SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
+        let (root, text) = chart::canvas(root, &self.title)?;
+        let (left, right) = root.split_horizontally(CHART_SIZE.0 / 2);
+        let y = self.error_span();
+        self.panel(&left, XAxis::Cost, y, text)?;
+        self.panel(&right, XAxis::Step, y, text)?;
+        root.present().map_err(chart::err)?;
         Ok(())
     }
 }

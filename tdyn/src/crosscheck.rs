@@ -188,52 +188,79 @@ pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(stem).join("crosscheck"));
     let (ldir, tdir) = (dir.join("liggghts"), dir.join("tdyn"));
-
     if !o.reuse_liggghts {
-        let _ = std::fs::remove_dir_all(&ldir);
-        std::fs::create_dir_all(&ldir).map_err(|e| format!("{}: {e}", ldir.display()))?;
-        let deck_dir = o.deck.parent().unwrap_or(Path::new("."));
-        let deck_dir = if deck_dir.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            deck_dir
-        };
-        let rd = std::fs::read_dir(deck_dir).map_err(|e| format!("{}: {e}", deck_dir.display()))?;
-        for e in rd.flatten() {
-            let p = e.path();
-            if p.is_file() {
-                std::fs::copy(&p, ldir.join(e.file_name()))
-                    .map_err(|err| format!("{}: {err}", p.display()))?;
-            }
-        }
-        let deck_name = o
-            .deck
-            .file_name()
-            .ok_or_else(|| format!("{}: not a file", o.deck.display()))?;
-        if !ldir.join(deck_name).is_file() {
-            return Err(format!("{}: no such deck", o.deck.display()));
-        }
-        let mut cmd = if o.liggghts_np > 1 {
-            let mut c = Command::new("mpirun");
-            c.args(["-np", &o.liggghts_np.to_string(), "liggghts"]);
-            c
-        } else {
-            Command::new("liggghts")
-        };
-        cmd.arg("-in").arg(deck_name).current_dir(&ldir);
-        for (k, v) in &o.vars {
-            cmd.args(["-var", k, v]);
-        }
-        run_logged(cmd, &ldir.join("liggghts.out"), "liggghts")?;
+        run_liggghts(o, &ldir)?;
     }
-
     let _ = std::fs::remove_dir_all(&tdir);
     let cmd = tdyn_run(o.np, &o.scene, &tdir)?;
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     run_logged(cmd, &dir.join("tdyn.out"), "tdyn run")?;
 
-    let theirs = dumps_in(&ldir, "dump.")?;
-    let ours = dumps_in(&tdir.join("dumps"), "dump.tdyn.")?;
+    let steps = compare_dumps(&tdir.join("dumps"), &ldir)?;
+    let ours_us = std::fs::read_to_string(tdir.join("report.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["us_per_particle_step"].as_f64());
+    let liggghts_us = std::fs::read_to_string(ldir.join("liggghts.out"))
+        .ok()
+        .and_then(|t| liggghts_cost(&t));
+    write_csv(&dir, &steps)?;
+    if let Some(tol) = o.tol {
+        within(&steps, tol, &dir.join("crosscheck.csv"))?;
+    }
+    Ok(CrosscheckSummary {
+        steps,
+        ours_us,
+        liggghts_us,
+        dir,
+    })
+}
+
+/// Runs the deck in `ldir` (emptied, then given a copy of every file of the deck's directory):
+/// `liggghts -in`, under `mpirun -np M` for M > 1 ranks, its output in liggghts.out.
+fn run_liggghts(o: &CrosscheckOptions, ldir: &Path) -> Result<(), String> {
+    let _ = std::fs::remove_dir_all(ldir);
+    std::fs::create_dir_all(ldir).map_err(|e| format!("{}: {e}", ldir.display()))?;
+    let deck_dir = o.deck.parent().unwrap_or(Path::new("."));
+    let deck_dir = if deck_dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        deck_dir
+    };
+    let rd = std::fs::read_dir(deck_dir).map_err(|e| format!("{}: {e}", deck_dir.display()))?;
+    for e in rd.flatten() {
+        let p = e.path();
+        if p.is_file() {
+            std::fs::copy(&p, ldir.join(e.file_name()))
+                .map_err(|err| format!("{}: {err}", p.display()))?;
+        }
+    }
+    let deck_name = o
+        .deck
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file", o.deck.display()))?;
+    if !ldir.join(deck_name).is_file() {
+        return Err(format!("{}: no such deck", o.deck.display()));
+    }
+    let mut cmd = if o.liggghts_np > 1 {
+        let mut c = Command::new("mpirun");
+        c.args(["-np", &o.liggghts_np.to_string(), "liggghts"]);
+        c
+    } else {
+        Command::new("liggghts")
+    };
+    cmd.arg("-in").arg(deck_name).current_dir(ldir);
+    for (k, v) in &o.vars {
+        cmd.args(["-var", k, v]);
+    }
+    run_logged(cmd, &ldir.join("liggghts.out"), "liggghts")
+}
+
+/// Compares our dumps (in `ours_dir`) with LIGGGHTS's (in `ldir`) at every step both wrote;
+/// an error when there is none.
+fn compare_dumps(ours_dir: &Path, ldir: &Path) -> Result<Vec<StepDiff>, String> {
+    let theirs = dumps_in(ldir, "dump.")?;
+    let ours = dumps_in(ours_dir, "dump.tdyn.")?;
     let common: Vec<u64> = ours
         .keys()
         .filter(|s| theirs.contains_key(s))
@@ -252,14 +279,12 @@ pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
         let b = read_dump(&theirs[s])?;
         steps.push(compare_step(*s, &a, &b)?);
     }
-    let ours_us = std::fs::read_to_string(tdir.join("report.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| v["us_per_particle_step"].as_f64());
-    let liggghts_us = std::fs::read_to_string(ldir.join("liggghts.out"))
-        .ok()
-        .and_then(|t| liggghts_cost(&t));
+    Ok(steps)
+}
 
+/// Writes `dir`/crosscheck.csv: per step the fields' differences, then ours, LIGGGHTS's and
+/// their relative difference for the kinetic energy and the front.
+fn write_csv(dir: &Path, steps: &[StepDiff]) -> Result<(), String> {
     let mut csv = std::fs::File::create(dir.join("crosscheck.csv"))
         .map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut header = vec!["step".to_string()];
@@ -276,7 +301,7 @@ pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
         .map(String::from),
     );
     let mut text = header.join(",") + "\n";
-    for d in &steps {
+    for d in steps {
         let mut row = vec![d.step.to_string()];
         row.extend(d.fields.iter().map(|v| format!("{v:e}")));
         for (a, b) in [d.ke, d.front] {
@@ -288,29 +313,25 @@ pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
         }
         text += &(row.join(",") + "\n");
     }
-    csv.write_all(text.as_bytes()).map_err(|e| e.to_string())?;
+    csv.write_all(text.as_bytes()).map_err(|e| e.to_string())
+}
 
-    let summary = CrosscheckSummary {
-        steps,
-        ours_us,
-        liggghts_us,
-        dir: dir.clone(),
-    };
-    if let Some(tol) = o.tol {
-        for d in &summary.steps {
-            for (k, (name, _)) in FIELDS.iter().enumerate() {
-                if !(d.fields[k] <= tol) {
-                    return Err(format!(
-                        "step {}: {name} differs from LIGGGHTS by {:.3e} of its largest value (tolerance {tol:e}); see {}",
-                        d.step,
-                        d.fields[k],
-                        dir.join("crosscheck.csv").display()
-                    ));
-                }
+/// An error naming the first step and field whose difference exceeds `tol` (or is NaN), and
+/// the CSV at `csv` to look at.
+fn within(steps: &[StepDiff], tol: f64, csv: &Path) -> Result<(), String> {
+    for d in steps {
+        for (k, (name, _)) in FIELDS.iter().enumerate() {
+            if !(d.fields[k] <= tol) {
+                return Err(format!(
+                    "step {}: {name} differs from LIGGGHTS by {:.3e} of its largest value (tolerance {tol:e}); see {}",
+                    d.step,
+                    d.fields[k],
+                    csv.display()
+                ));
             }
         }
     }
-    Ok(summary)
+    Ok(())
 }
 
 /// The table `tdyn crosscheck` prints.

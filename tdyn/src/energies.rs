@@ -184,20 +184,40 @@ struct EnergyChart {
     history: History,
 }
 
-impl Figure for EnergyChart {
-    fn size(&self) -> (u32, u32) {
-        CHART_SIZE
-    }
+/// Each panel's margin and label areas, pixels.
+const FRAME: chart::Frame = chart::Frame {
+    margin: 15,
+    x_labels: 45,
+    y_labels: 80,
+};
 
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
-        use plotters::prelude::*;
+/// The time axis both panels share.
+struct TimeAxis {
+    /// The rows' times, in the axis's unit.
+    t: Vec<f64>,
+    /// The axis's end, in its unit.
+    max: f64,
+    /// Its description, with the unit ("time (ms)").
+    desc: String,
+}
+
+impl EnergyChart {
+    /// The time axis: the history's times with an SI prefix.
+    fn time_axis(&self) -> TimeAxis {
         let h = &self.history;
-        let (root, text) = chart::canvas(root, &self.title)?;
-        let (top, bottom) = root.split_vertically(ENERGY_PANEL_HEIGHT);
         let t_end = h.time.last().copied().unwrap_or(0.0);
         let (t_scale, t_prefix) = chart::si_prefix(t_end);
-        let t_max = if t_end > 0.0 { t_end / t_scale } else { 1.0 };
-        let t: Vec<f64> = h.time.iter().map(|x| x / t_scale).collect();
+        TimeAxis {
+            t: h.time.iter().map(|x| x / t_scale).collect(),
+            max: if t_end > 0.0 { t_end / t_scale } else { 1.0 },
+            desc: format!("time ({t_prefix}s)"),
+        }
+    }
+
+    /// The energy axis: (factor to divide by, SI prefix, range), the range over the curves and
+    /// the balance with room for the legend above.
+    fn energy_axis(&self) -> (f64, &'static str, (f64, f64)) {
+        let h = &self.history;
         let finite = |v: &[f64]| {
             v.iter()
                 .copied()
@@ -213,36 +233,39 @@ impl Figure for EnergyChart {
         let hi = all.iter().copied().fold(0.0f64, f64::max);
         let lo = all.iter().copied().fold(0.0f64, f64::min);
         let (e_scale, e_prefix) = chart::si_prefix(hi.max(-lo));
-        let (y0, y1) = if hi > lo {
+        let y = if hi > lo {
             (lo / e_scale, (lo + (hi - lo) * LEGEND_HEADROOM) / e_scale)
         } else {
             (0.0, 1.0)
         };
-        let x_desc = format!("time ({t_prefix}s)");
+        (e_scale, e_prefix, y)
+    }
 
-        // The energies.
-        let mut b = ChartBuilder::on(&top);
-        b.margin(15);
-        if text {
-            b.x_label_area_size(45).y_label_area_size(80);
-        }
-        let mut ch = b
-            .build_cartesian_2d(0.0..t_max, y0..y1)
+    /// The upper panel: each energy, the blocks' shares of the internal energy (dashed in its
+    /// colour) and the balance (dashed, black).
+    fn energies<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        time: &TimeAxis,
+        text: bool,
+    ) -> Result<(), String> {
+        use plotters::prelude::*;
+        let h = &self.history;
+        let (e_scale, e_prefix, (y0, y1)) = self.energy_axis();
+        let mut ch = chart::panel(area, FRAME, text)
+            .build_cartesian_2d(0.0..time.max, y0..y1)
             .map_err(chart::err)?;
-        let mut mesh = ch.configure_mesh();
-        if text {
-            mesh.x_desc(x_desc.as_str())
+        chart::axes(&mut ch, text, |mesh| {
+            mesh.x_desc(time.desc.as_str())
                 .y_desc(format!("energy ({e_prefix}J)"))
                 .x_label_formatter(&chart::plain)
                 .y_label_formatter(&chart::plain)
                 .axis_desc_style(("sans-serif", 16))
                 .label_style(("sans-serif", 14));
-        } else {
-            mesh.x_labels(0).y_labels(0);
-        }
-        mesh.draw().map_err(chart::err)?;
+        })?;
         let line = |v: &[f64]| -> Vec<(f64, f64)> {
-            t.iter()
+            time.t
+                .iter()
                 .zip(v)
                 .filter(|(_, y)| y.is_finite())
                 .map(|(x, y)| (*x, y / e_scale))
@@ -256,7 +279,6 @@ impl Figure for EnergyChart {
             if text {
                 s.label(*label).legend(chart::line_key(c));
             }
-            // The blocks' shares of the internal energy, dashed in its colour.
             if *label != CURVES[INTERNAL].1 {
                 continue;
             }
@@ -288,37 +310,38 @@ impl Figure for EnergyChart {
                 .legend(chart::dashed_key(BLACK, BALANCE_DASH.0, BALANCE_DASH.1));
             chart::legend(&mut ch, SeriesLabelPosition::UpperRight, 15)?;
         }
+        Ok(())
+    }
 
-        // The balance's relative error.
-        let err: Vec<(f64, f64)> = t
+    /// The lower panel: the balance's relative error, %.
+    fn balance_error<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        time: &TimeAxis,
+        text: bool,
+    ) -> Result<(), String> {
+        use plotters::prelude::*;
+        let err: Vec<(f64, f64)> = time
+            .t
             .iter()
-            .zip(&h.error)
+            .zip(&self.history.error)
             .filter(|(_, e)| e.is_finite())
             .map(|(x, e)| (*x, 100.0 * e))
             .collect();
         let e_max = err.iter().map(|p| p.1).fold(0.0f64, f64::max);
         let e_top = if e_max > 0.0 { e_max * 1.3 } else { 1e-3 };
-        let mut b = ChartBuilder::on(&bottom);
-        b.margin(15);
-        if text {
-            b.x_label_area_size(45).y_label_area_size(80);
-        }
-        let mut ch = b
-            .build_cartesian_2d(0.0..t_max, 0.0..e_top)
+        let mut ch = chart::panel(area, FRAME, text)
+            .build_cartesian_2d(0.0..time.max, 0.0..e_top)
             .map_err(chart::err)?;
-        let mut mesh = ch.configure_mesh();
-        if text {
-            mesh.x_desc(x_desc.as_str())
+        chart::axes(&mut ch, text, |mesh| {
+            mesh.x_desc(time.desc.as_str())
                 .y_desc("energy error (%)")
                 .x_label_formatter(&chart::plain)
                 .y_label_formatter(&chart::plain)
                 .y_labels(5)
                 .axis_desc_style(("sans-serif", 16))
                 .label_style(("sans-serif", 14));
-        } else {
-            mesh.x_labels(0).y_labels(0);
-        }
-        mesh.draw().map_err(chart::err)?;
+        })?;
         let c = BLACK;
         let s = ch
             .draw_series(LineSeries::new(err, c.stroke_width(2)))
@@ -328,6 +351,21 @@ impl Figure for EnergyChart {
                 .legend(chart::line_key(c));
             chart::legend(&mut ch, SeriesLabelPosition::LowerRight, 15)?;
         }
+        Ok(())
+    }
+}
+
+impl Figure for EnergyChart {
+    fn size(&self) -> (u32, u32) {
+        CHART_SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
+        let (root, text) = chart::canvas(root, &self.title)?;
+        let (top, bottom) = root.split_vertically(ENERGY_PANEL_HEIGHT);
+        let time = self.time_axis();
+        self.energies(&top, &time, text)?;
+        self.balance_error(&bottom, &time, text)?;
         root.present().map_err(chart::err)?;
         Ok(())
     }

@@ -38,7 +38,7 @@ pub fn tdyn(args: &[&str]) -> Result<Command, String> {
     Ok(cmd)
 }
 
-/// `mpirun -np NP tdyn run SCENE --out OUT --quiet`, not yet started (add `--param` and
+/// `mpirun -np NP tdyn run SCENE --out OUT --overwrite --quiet`, not yet started (add `--param` and
 /// `--end-time` arguments). mpirun takes its environment from this process (as root and with
 /// more ranks than cores it needs the OMPI_* variables the Makefile sets).
 pub fn tdyn_run(np: usize, scene: &Path, out: &Path) -> Result<Command, String> {
@@ -50,6 +50,8 @@ pub fn tdyn_run(np: usize, scene: &Path, out: &Path) -> Result<Command, String> 
         .arg(scene)
         .arg("--out")
         .arg(out)
+        // the tool's own run folder: a new run of the suite replaces the last one's
+        .arg("--overwrite")
         .arg("--quiet");
     Ok(cmd)
 }

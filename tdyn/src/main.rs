@@ -20,7 +20,7 @@ use coupling::driver::{self, RunOptions};
 use coupling::kernels::collective::{first_error, ExitGate, EXIT_GRACE};
 use fe_petsc::petsc::Petsc;
 use mpi::traits::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -71,70 +71,14 @@ enum Cmd {
     /// Run a scene: `mpirun -np 2 tdyn run scenes/slug_on_plate.toml [--out DIR] [PETSc
     /// options]`. Unless --quiet, ends by drawing the energies over time (energies.png and
     /// energies.svg in DIR) and naming the output files.
-    Run {
-        /// The scene file (TOML, see SCENE.md).
-        scene: PathBuf,
-        /// Output directory (default: out/<scene name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// No start line, progress lines, summary or chart (warnings are still printed).
-        #[arg(long, short)]
-        quiet: bool,
-        /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
-        /// defaults to 0; the scene's params table must have it), `particles.spacing=VALUE`
-        /// (or `particles[i].spacing`) a particle spacing; repeatable.
-        #[arg(long = "param", short = 'p')]
-        params: Vec<String>,
-        /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
-        #[arg(long = "end-time")]
-        end_time: Option<f64>,
-        /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
-        /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
-        #[arg(long = "contact-decomposition", value_enum, default_value = "rcb")]
-        contact_decomposition: ContactDecomposition,
-        /// `kept` (default): keep the contact decomposition and candidate lists between steps
-        /// within their skins; `every-step`: rebuild them every step (the reference).
-        #[arg(long = "contact-rebuild", value_enum, default_value = "kept")]
-        contact_rebuild: Rebuild,
-        /// The contact skins GHOST,CANDIDATE as multiples of the step's largest motion
-        /// (default 200,30).
-        #[arg(long = "contact-skins", value_parser = parse_skins)]
-        contact_skins: Option<(f64, f64)>,
-        /// `kept` (default): keep SPH pair candidates between steps where possible;
-        /// `every-step`: search afresh every step (the reference).
-        #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
-        sph_pairs: Rebuild,
-    },
+    Run(RunArgs),
     /// Chart accuracy against cost over a ladder of resolutions:
     /// `mpirun -np 2 tdyn sweep scenes/bar_wave.toml --param N=10,20,40,80
     /// [--measure mid.stress_xx:final=-4.599e7] [--out DIR] [PETSc options]`. Each run is made
     /// in this process, on the same ranks; writes accuracy_cost.csv, accuracy_cost.png and
     /// accuracy_cost.svg in DIR (error against loop wall time, model memory and peak RSS). Runs
     /// that stop or fail are reported: the command still exits 0.
-    Sweep {
-        /// The scene file (TOML; an optional [sweep] table gives the default ladder and measures).
-        scene: PathBuf,
-        /// The swept parameter: `[K:]NAME=v1,v2,...` (a gmsh parameter of [[mesh]] K) or
-        /// `particles.spacing=v1,v2,...`; repeat it to sweep several together (value k of each
-        /// in run k).
-        #[arg(long = "param", short = 'p')]
-        params: Vec<String>,
-        /// The [[mesh]] a parameter without `K:` belongs to.
-        #[arg(long, default_value_t = 0)]
-        mesh: usize,
-        /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
-        /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
-        /// the finest run. Repeatable (default: [sweep] measure, else the first probe column's
-        /// peak).
-        #[arg(long = "measure")]
-        measures: Vec<String>,
-        /// Output directory (default: out/<scene name>/sweep).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// No progress lines.
-        #[arg(long, short)]
-        quiet: bool,
-    },
+    Sweep(SweepArgs),
     /// Draw a run's energies over time from its output folder: `tdyn plot out/slug_on_plate`
     /// writes energies.png and energies.svg there from history.csv (what `tdyn run` draws at
     /// the end of a run). No MPI.
@@ -158,81 +102,20 @@ enum Cmd {
     /// process, on the same ranks, with dt = factor x the explicit stable limit; writes
     /// compare.csv, compare.png and compare.svg in DIR. Refused or unstable runs are results:
     /// the command still exits 0.
-    Compare {
-        /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
-        scene: PathBuf,
-        /// Modes to run, comma-separated (default: explicit,implicit; explicit alone for a
-        /// scene only the explicit integrator runs: particles, contact, meshed fluid).
-        #[arg(long, value_delimiter = ',')]
-        modes: Vec<String>,
-        /// Steps as multiples of the explicit stable limit, comma-separated (default: both
-        /// sides of the limit, 0.25 to 100).
-        #[arg(long = "dt-factors", value_delimiter = ',')]
-        dt_factors: Option<Vec<f64>>,
-        /// Output directory (default: out/<scene name>/compare).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// No progress lines.
-        #[arg(long, short)]
-        quiet: bool,
-    },
+    Compare(CompareArgs),
     /// Cross-check our SPH against LIGGGHTS on the same particles: runs the deck (`liggghts -in`,
     /// or under `mpirun -np M` with `--liggghts-np M`) and the scene (`mpirun -np N tdyn run`),
     /// then compares the two codes' dumps step by step (x, v, f, rho, p; kinetic energy and
     /// front of the moving particles) and their cost. Writes crosscheck.csv in the work
     /// directory. Run it without mpirun:
     /// `tdyn crosscheck scenes/liggghts_random.toml --deck scenes/liggghts/in.random1step --np 2 --tol 1e-12`
-    Crosscheck {
-        /// Our scene (its particles from the deck's data file, `[output] dump_every` set).
-        scene: PathBuf,
-        /// The LIGGGHTS deck (its directory's files are copied beside it).
-        #[arg(long)]
-        deck: PathBuf,
-        /// Ranks for our run.
-        #[arg(long, default_value_t = 1)]
-        np: usize,
-        /// Ranks for LIGGGHTS.
-        #[arg(long = "liggghts-np", default_value_t = 1)]
-        liggghts_np: usize,
-        /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
-        #[arg(long = "var", value_parser = parse_var)]
-        vars: Vec<(String, String)>,
-        /// Work directory (default out/<scene name>/crosscheck).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Exit non-zero when a per-field difference exceeds this fraction of the field's
-        /// largest LIGGGHTS value.
-        #[arg(long)]
-        tol: Option<f64>,
-        /// Compare against the LIGGGHTS dumps already in the work directory.
-        #[arg(long)]
-        reuse_liggghts: bool,
-    },
+    Crosscheck(CrosscheckArgs),
     /// Run the validation suite: each case of `validation/<case>/reference.toml` against its
     /// analytic or published reference. Writes DIR/report.md (ours, reference, error, allowed,
     /// pass/fail) and a chart per case (DIR/<case>.png, .svg); exits non-zero when a judged
     /// measure fails or a run fails. Run it without mpirun (it launches `mpirun -np N tdyn
     /// run` itself): `tdyn validate [--cases a,b] [--np N] [--fast] [--out DIR]`
-    Validate {
-        /// Cases to run, comma-separated (default: every folder of --dir).
-        #[arg(long, value_delimiter = ',')]
-        cases: Vec<String>,
-        /// Ranks per run.
-        #[arg(long, default_value_t = 1)]
-        np: usize,
-        /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
-        #[arg(long)]
-        fast: bool,
-        /// Output directory.
-        #[arg(long, default_value = "out/validation")]
-        out: PathBuf,
-        /// The cases' folder.
-        #[arg(long, default_value = "validation")]
-        dir: PathBuf,
-        /// No progress lines.
-        #[arg(long, short)]
-        quiet: bool,
-    },
+    Validate(ValidateArgs),
     /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
     Selftest {
         /// Which kernel: `comm`, `rcb`, `contact` or `sph`.
@@ -249,6 +132,166 @@ enum Cmd {
         #[arg(long = "param", short = 'p', value_parser = parse_param)]
         params: Vec<(String, f64)>,
     },
+}
+
+/// The arguments of `tdyn run`.
+#[derive(clap::Args)]
+struct RunArgs {
+    /// The scene file (TOML, see SCENE.md).
+    scene: PathBuf,
+    /// Output directory (default: out/<scene name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// No start line, progress lines, summary or chart (warnings are still printed).
+    #[arg(long, short)]
+    quiet: bool,
+    /// Replace a scene value: `[K:]NAME=VALUE` sets `[[mesh]]` K's gmsh parameter NAME (K
+    /// defaults to 0; the scene's params table must have it), `particles.spacing=VALUE`
+    /// (or `particles[i].spacing`) a particle spacing; repeatable.
+    #[arg(long = "param", short = 'p')]
+    params: Vec<String>,
+    /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
+    #[arg(long = "end-time")]
+    end_time: Option<f64>,
+    /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
+    /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
+    #[arg(long = "contact-decomposition", value_enum, default_value = "rcb")]
+    contact_decomposition: ContactDecomposition,
+    /// `kept` (default): keep the contact decomposition and candidate lists between steps
+    /// within their skins; `every-step`: rebuild them every step (the reference).
+    #[arg(long = "contact-rebuild", value_enum, default_value = "kept")]
+    contact_rebuild: Rebuild,
+    /// The contact skins GHOST,CANDIDATE as multiples of the step's largest motion
+    /// (default 200,30).
+    #[arg(long = "contact-skins", value_parser = parse_skins)]
+    contact_skins: Option<(f64, f64)>,
+    /// `kept` (default): keep SPH pair candidates between steps where possible;
+    /// `every-step`: search afresh every step (the reference).
+    #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
+    sph_pairs: Rebuild,
+    /// Replace an earlier run's results in the output folder (without it they are kept:
+    /// `--out` naming a folder that holds a run is refused, and the default out/<scene
+    /// name> goes on to out/<scene name>-2, -3, ...).
+    #[arg(long)]
+    overwrite: bool,
+    /// Continue the run whose checkpoint is in DIR (its output folder; written with
+    /// `[output] checkpoint_every`, at its end, or when it was stopped with Ctrl-C or
+    /// SIGTERM) to the scene's end time, appending to its history, probes and frames. The
+    /// scene and its --param values must be those of the run; the rank count too.
+    #[arg(long, value_name = "DIR")]
+    restart: Option<PathBuf>,
+}
+
+/// A flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops at its next step with its output
+/// closed and a checkpoint written (mpirun passes both signals on to every rank; a rank may get
+/// one twice, from the terminal and from mpirun, so a repeated signal does not end it at once:
+/// mpirun's own second Ctrl-C does).
+fn stop_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, flag.clone());
+    }
+    flag
+}
+
+/// The arguments of `tdyn sweep`.
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// The scene file (TOML; an optional [sweep] table gives the default ladder and measures).
+    scene: PathBuf,
+    /// The swept parameter: `[K:]NAME=v1,v2,...` (a gmsh parameter of [[mesh]] K) or
+    /// `particles.spacing=v1,v2,...`; repeat it to sweep several together (value k of each
+    /// in run k).
+    #[arg(long = "param", short = 'p')]
+    params: Vec<String>,
+    /// The [[mesh]] a parameter without `K:` belongs to.
+    #[arg(long, default_value_t = 0)]
+    mesh: usize,
+    /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
+    /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
+    /// the finest run. Repeatable (default: [sweep] measure, else the first probe column's
+    /// peak).
+    #[arg(long = "measure")]
+    measures: Vec<String>,
+    /// Output directory (default: out/<scene name>/sweep).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// No progress lines.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// The arguments of `tdyn compare`.
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
+    scene: PathBuf,
+    /// Modes to run, comma-separated (default: explicit,implicit; explicit alone for a
+    /// scene only the explicit integrator runs: particles, contact, meshed fluid).
+    #[arg(long, value_delimiter = ',')]
+    modes: Vec<String>,
+    /// Steps as multiples of the explicit stable limit, comma-separated (default: both
+    /// sides of the limit, 0.25 to 100).
+    #[arg(long = "dt-factors", value_delimiter = ',')]
+    dt_factors: Option<Vec<f64>>,
+    /// Output directory (default: out/<scene name>/compare).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// No progress lines.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// The arguments of `tdyn crosscheck`.
+#[derive(clap::Args)]
+struct CrosscheckArgs {
+    /// Our scene (its particles from the deck's data file, `[output] dump_every` set).
+    scene: PathBuf,
+    /// The LIGGGHTS deck (its directory's files are copied beside it).
+    #[arg(long)]
+    deck: PathBuf,
+    /// Ranks for our run.
+    #[arg(long, default_value_t = 1)]
+    np: usize,
+    /// Ranks for LIGGGHTS.
+    #[arg(long = "liggghts-np", default_value_t = 1)]
+    liggghts_np: usize,
+    /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
+    #[arg(long = "var", value_parser = parse_var)]
+    vars: Vec<(String, String)>,
+    /// Work directory (default out/<scene name>/crosscheck).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Exit non-zero when a per-field difference exceeds this fraction of the field's
+    /// largest LIGGGHTS value.
+    #[arg(long)]
+    tol: Option<f64>,
+    /// Compare against the LIGGGHTS dumps already in the work directory.
+    #[arg(long)]
+    reuse_liggghts: bool,
+}
+
+/// The arguments of `tdyn validate`.
+#[derive(clap::Args)]
+struct ValidateArgs {
+    /// Cases to run, comma-separated (default: every folder of --dir).
+    #[arg(long, value_delimiter = ',')]
+    cases: Vec<String>,
+    /// Ranks per run.
+    #[arg(long, default_value_t = 1)]
+    np: usize,
+    /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
+    #[arg(long)]
+    fast: bool,
+    /// Output directory.
+    #[arg(long, default_value = "out/validation")]
+    out: PathBuf,
+    /// The cases' folder.
+    #[arg(long, default_value = "validation")]
+    dir: PathBuf,
+    /// No progress lines.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 /// Runs `work` on MPI's world with PETSc initialised (and finalised before MPI is): on success
@@ -338,281 +381,287 @@ fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
 
 fn main() -> ExitCode {
     let (ours, petsc_args) = split_petsc(std::env::args().collect());
-    let cli = Cli::parse_from(ours);
-    match cli.cmd {
-        Cmd::Mesh { geo, params } => {
-            let def = coupling::input::scene::MeshDef {
-                file: geo.clone(),
-                params: params.into_iter().collect(),
-                translate: [0.0; 3],
-            };
-            let cache = coupling::input::gmsh::default_cache_dir(
-                geo.parent().unwrap_or(std::path::Path::new(".")),
-            );
-            match coupling::input::gmsh::mesh_file(&def, &cache) {
-                Ok(p) => {
-                    println!("{}", p.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("tdyn: {}: {e}", geo.display());
-                    ExitCode::FAILURE
-                }
-            }
+    match Cli::parse_from(ours).cmd {
+        Cmd::Run(a) => run(a, &petsc_args),
+        Cmd::Sweep(a) => sweep(a, &petsc_args),
+        Cmd::Plot { dir } => plot(&dir),
+        Cmd::ChartScaling { dir, title } => chart_scaling(&dir, &title),
+        Cmd::Compare(a) => compare(a, &petsc_args),
+        Cmd::Crosscheck(a) => crosscheck(a),
+        Cmd::Validate(a) => validate(a),
+        Cmd::Selftest { kernel, seed } => selftest(&kernel, seed),
+        Cmd::Mesh { geo, params } => mesh(&geo, params),
+    }
+}
+
+/// `tdyn run`: the scene on MPI's world; unless --quiet, rank 0 then draws the energies and
+/// prints the closing block.
+fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
+    let overrides = match run_overrides(&a) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("tdyn: error: {e}");
+            return ExitCode::FAILURE;
         }
-        Cmd::Crosscheck {
-            scene,
-            deck,
-            np,
-            liggghts_np,
-            vars,
-            out,
-            tol,
-            reuse_liggghts,
-        } => {
-            let opts = crate::crosscheck::CrosscheckOptions {
-                scene,
-                deck,
-                np,
-                liggghts_np,
-                vars,
-                out,
-                tol,
-                reuse_liggghts,
-            };
-            match crate::crosscheck::crosscheck(&opts) {
-                Ok(s) => {
-                    print!("{}", crate::crosscheck::table(&s));
-                    println!("tdyn crosscheck: {}/crosscheck.csv", s.dir.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("tdyn crosscheck: error: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Cmd::Validate {
-            cases,
-            np,
-            fast,
-            out,
-            dir,
-            quiet,
-        } => {
-            let opts = crate::validate::ValidateOptions {
-                dir,
-                cases,
-                np,
-                fast,
-                out,
-                quiet,
-            };
-            match crate::validate::validate(&opts) {
-                Ok(o) => {
-                    let failed: Vec<String> = o
-                        .rows
-                        .iter()
-                        .filter(|r| r.failed())
-                        .map(|r| format!("{} {} {}", r.case, r.rung, r.measure))
-                        .collect();
-                    println!("tdyn validate: {}", o.report.display());
-                    if !o.skipped.is_empty() {
-                        println!("tdyn validate: skipped (--fast): {}", o.skipped.join(", "));
-                    }
-                    if o.passed() {
-                        ExitCode::SUCCESS
-                    } else {
-                        eprintln!("tdyn validate: failed: {}", failed.join("; "));
-                        ExitCode::FAILURE
-                    }
-                }
-                Err(e) => {
-                    eprintln!("tdyn validate: error: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Cmd::Selftest { kernel, seed } => {
-            let Some(universe) = mpi::initialize() else {
-                eprintln!("tdyn: MPI could not be initialised");
-                return ExitCode::FAILURE;
-            };
-            let world = universe.world();
-            let res = match kernel.as_str() {
-                "comm" => coupling::selftest::comm::selftest(&world, seed),
-                "rcb" => coupling::selftest::rcb::selftest(&world, seed),
-                "contact" => coupling::selftest::contact::selftest(&world, seed),
-                "sph" => coupling::selftest::sph::selftest(&world, seed),
-                k => Err(format!(
-                    "unknown kernel {k:?} (expected comm, rcb, contact or sph)"
-                )),
-            };
-            // Every rank must agree on the outcome.
-            let failed =
-                coupling::kernels::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
-            match res {
-                Ok(msg) if !failed => {
-                    if world.rank() == 0 {
-                        println!("{msg}");
-                    }
-                    ExitCode::SUCCESS
-                }
-                Ok(_) => ExitCode::FAILURE,
-                Err(e) => {
-                    eprintln!("tdyn selftest: rank {}: {e}", world.rank());
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Cmd::Compare {
-            scene,
-            modes,
-            dt_factors,
-            out,
-            quiet,
-        } => {
-            let opts = crate::compare::CompareOptions {
-                scene,
-                modes,
-                dt_factors,
-                out,
-                quiet,
-            };
-            on_mpi_with_petsc(
-                &petsc_args,
-                "tdyn compare",
-                |world| crate::compare::compare(world, &opts),
-                |dir| {
-                    if !quiet {
-                        println!(
-                            "tdyn compare: compare.csv, compare.png and compare.svg in {}/",
-                            dir.display()
-                        );
-                    }
-                },
-            )
-        }
-        Cmd::Plot { dir } => match crate::energies::plot(&dir) {
-            Ok(png) => {
-                println!(
-                    "tdyn plot: {} and {}",
-                    png.display(),
-                    png.with_extension("svg").display()
-                );
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("tdyn plot: error: {e}");
-                ExitCode::FAILURE
+    };
+    let quiet = a.quiet;
+    let opts = RunOptions {
+        scene: a.scene,
+        out: a.out,
+        quiet,
+        overrides,
+        algorithms: driver::Algorithms {
+            contact_static: a.contact_decomposition == ContactDecomposition::Static,
+            contact_kept: a.contact_rebuild == Rebuild::Kept,
+            contact_skins: a.contact_skins,
+            sph_kept_pairs: a.sph_pairs == Rebuild::Kept,
+        },
+        overwrite: a.overwrite,
+        restart: a.restart,
+        stop: Some(stop_flag()),
+        ..Default::default()
+    };
+    on_mpi_with_petsc(
+        petsc_args,
+        "tdyn",
+        |world| {
+            driver::run(world, &opts)
+                .map(|s| energies::Finished {
+                    out: s.out,
+                    steps: s.steps,
+                    wall_s: Some(s.wall_s),
+                    energy_error_max: s.energy_error_max,
+                })
+                .map_err(|e| e.to_string())
+        },
+        |mut done| {
+            if !quiet {
+                done.wall_s = done.wall_s.or_else(|| energies::report_wall_s(&done.out));
+                let chart = energies::plot(&done.out);
+                print!("{}", energies::closing(&done, &chart));
             }
         },
-        Cmd::ChartScaling { dir, title } => match crate::scaling::chart_scaling(&dir, &title) {
-            Ok(rows) => {
-                print!("{}", crate::scaling::table(&rows));
+    )
+}
+
+/// `tdyn run`'s `--end-time` and `--param` values as the driver's overrides; the message
+/// (after "tdyn: error: ") when a `--param` is not one value.
+fn run_overrides(a: &RunArgs) -> Result<driver::RunOverrides, String> {
+    let mut overrides = driver::RunOverrides {
+        end_time: a.end_time,
+        ..Default::default()
+    };
+    for p in &a.params {
+        match crate::sweep::parse_param(p, 0) {
+            Ok((t, v)) if v.len() == 1 => t.set(&mut overrides, v[0]),
+            Ok(_) => {
+                return Err(format!(
+                    "--param {p}: expected one value (tdyn sweep runs several)"
+                ))
+            }
+            Err(e) => return Err(format!("--param {e}")),
+        }
+    }
+    Ok(overrides)
+}
+
+/// `tdyn sweep`: the ladder on MPI's world; rank 0 names the outputs unless --quiet.
+fn sweep(a: SweepArgs, petsc_args: &[String]) -> ExitCode {
+    let opts = crate::sweep::SweepOptions {
+        scene: a.scene,
+        params: a.params,
+        mesh: a.mesh,
+        measures: a.measures,
+        out: a.out,
+        quiet: a.quiet,
+    };
+    on_mpi_with_petsc(
+        petsc_args,
+        "tdyn sweep",
+        |world| crate::sweep::sweep(world, &opts),
+        |dir| {
+            if !opts.quiet {
                 println!(
-                    "tdyn chart-scaling: scaling.csv, scaling.png and scaling.svg in {}/",
+                    "tdyn sweep: accuracy_cost.csv, accuracy_cost.png and accuracy_cost.svg in {}/",
                     dir.display()
                 );
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("tdyn chart-scaling: error: {e}");
-                ExitCode::FAILURE
             }
         },
-        Cmd::Sweep {
-            scene,
-            params,
-            mesh,
-            measures,
-            out,
-            quiet,
-        } => {
-            let opts = crate::sweep::SweepOptions {
-                scene,
-                params,
-                mesh,
-                measures,
-                out,
-                quiet,
-            };
-            on_mpi_with_petsc(
-                &petsc_args,
-                "tdyn sweep",
-                |world| crate::sweep::sweep(world, &opts),
-                |dir| {
-                    if !quiet {
-                        println!(
-                            "tdyn sweep: accuracy_cost.csv, accuracy_cost.png and accuracy_cost.svg in {}/",
-                            dir.display()
-                        );
-                    }
-                },
-            )
+    )
+}
+
+/// `tdyn plot`: the energies chart of the run in `dir`. No MPI.
+fn plot(dir: &Path) -> ExitCode {
+    match crate::energies::plot(dir) {
+        Ok(png) => {
+            println!(
+                "tdyn plot: {} and {}",
+                png.display(),
+                png.with_extension("svg").display()
+            );
+            ExitCode::SUCCESS
         }
-        Cmd::Run {
-            scene,
-            out,
-            quiet,
-            params,
-            end_time,
-            contact_decomposition,
-            contact_rebuild,
-            contact_skins,
-            sph_pairs,
-        } => {
-            let mut overrides = driver::RunOverrides {
-                end_time,
-                ..Default::default()
-            };
-            for p in &params {
-                match crate::sweep::parse_param(p, 0) {
-                    Ok((t, v)) if v.len() == 1 => t.set(&mut overrides, v[0]),
-                    Ok(_) => {
-                        eprintln!("tdyn: error: --param {p}: expected one value (tdyn sweep runs several)");
-                        return ExitCode::FAILURE;
-                    }
-                    Err(e) => {
-                        eprintln!("tdyn: error: --param {e}");
-                        return ExitCode::FAILURE;
-                    }
-                }
+        Err(e) => {
+            eprintln!("tdyn plot: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tdyn chart-scaling`: the study in `dir` as a table, scaling.csv and the charts. No MPI.
+fn chart_scaling(dir: &Path, title: &str) -> ExitCode {
+    match crate::scaling::chart_scaling(dir, title) {
+        Ok(rows) => {
+            print!("{}", crate::scaling::table(&rows));
+            println!(
+                "tdyn chart-scaling: scaling.csv, scaling.png and scaling.svg in {}/",
+                dir.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("tdyn chart-scaling: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tdyn compare`: the (mode, step) ladder on MPI's world; rank 0 names the outputs unless
+/// --quiet.
+fn compare(a: CompareArgs, petsc_args: &[String]) -> ExitCode {
+    let opts = crate::compare::CompareOptions {
+        scene: a.scene,
+        modes: a.modes,
+        dt_factors: a.dt_factors,
+        out: a.out,
+        quiet: a.quiet,
+    };
+    on_mpi_with_petsc(
+        petsc_args,
+        "tdyn compare",
+        |world| crate::compare::compare(world, &opts),
+        |dir| {
+            if !opts.quiet {
+                println!(
+                    "tdyn compare: compare.csv, compare.png and compare.svg in {}/",
+                    dir.display()
+                );
             }
-            let opts = RunOptions {
-                scene,
-                out,
-                quiet,
-                overrides,
-                algorithms: driver::Algorithms {
-                    contact_static: contact_decomposition == ContactDecomposition::Static,
-                    contact_kept: contact_rebuild == Rebuild::Kept,
-                    contact_skins,
-                    sph_kept_pairs: sph_pairs == Rebuild::Kept,
-                },
-                ..Default::default()
-            };
-            on_mpi_with_petsc(
-                &petsc_args,
-                "tdyn",
-                |world| {
-                    driver::run(world, &opts)
-                        .map(|s| energies::Finished {
-                            out: s.out,
-                            steps: s.steps,
-                            wall_s: Some(s.wall_s),
-                            energy_error_max: s.energy_error_max,
-                        })
-                        .map_err(|e| e.to_string())
-                },
-                |mut done| {
-                    if !quiet {
-                        done.wall_s = done.wall_s.or_else(|| energies::report_wall_s(&done.out));
-                        let chart = energies::plot(&done.out);
-                        print!("{}", energies::closing(&done, &chart));
-                    }
-                },
-            )
+        },
+    )
+}
+
+/// `tdyn crosscheck`: both codes as child processes, then the table. No MPI in this process.
+fn crosscheck(a: CrosscheckArgs) -> ExitCode {
+    let opts = crate::crosscheck::CrosscheckOptions {
+        scene: a.scene,
+        deck: a.deck,
+        np: a.np,
+        liggghts_np: a.liggghts_np,
+        vars: a.vars,
+        out: a.out,
+        tol: a.tol,
+        reuse_liggghts: a.reuse_liggghts,
+    };
+    match crate::crosscheck::crosscheck(&opts) {
+        Ok(s) => {
+            print!("{}", crate::crosscheck::table(&s));
+            println!("tdyn crosscheck: {}/crosscheck.csv", s.dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("tdyn crosscheck: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tdyn validate`: the suite's runs as child processes; fails when a judged measure or a run
+/// fails, naming them. No MPI in this process.
+fn validate(a: ValidateArgs) -> ExitCode {
+    let opts = crate::validate::ValidateOptions {
+        dir: a.dir,
+        cases: a.cases,
+        np: a.np,
+        fast: a.fast,
+        out: a.out,
+        quiet: a.quiet,
+    };
+    let o = match crate::validate::validate(&opts) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("tdyn validate: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let failed: Vec<String> = o
+        .rows
+        .iter()
+        .filter(|r| r.failed())
+        .map(|r| format!("{} {} {}", r.case, r.rung, r.measure))
+        .collect();
+    println!("tdyn validate: {}", o.report.display());
+    if !o.skipped.is_empty() {
+        println!("tdyn validate: skipped (--fast): {}", o.skipped.join(", "));
+    }
+    if o.passed() {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("tdyn validate: failed: {}", failed.join("; "));
+        ExitCode::FAILURE
+    }
+}
+
+/// `tdyn selftest`: one parallel kernel's self-test on MPI's world; every rank agrees on the
+/// outcome, each failing rank says why.
+fn selftest(kernel: &str, seed: u64) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("tdyn: MPI could not be initialised");
+        return ExitCode::FAILURE;
+    };
+    let world = universe.world();
+    let res = match kernel {
+        "comm" => coupling::selftest::comm::selftest(&world, seed),
+        "rcb" => coupling::selftest::rcb::selftest(&world, seed),
+        "contact" => coupling::selftest::contact::selftest(&world, seed),
+        "sph" => coupling::selftest::sph::selftest(&world, seed),
+        k => Err(format!(
+            "unknown kernel {k:?} (expected comm, rcb, contact or sph)"
+        )),
+    };
+    // Every rank must agree on the outcome.
+    let failed = coupling::kernels::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
+    match res {
+        Ok(msg) if !failed => {
+            if world.rank() == 0 {
+                println!("{msg}");
+            }
+            ExitCode::SUCCESS
+        }
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("tdyn selftest: rank {}: {e}", world.rank());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tdyn mesh`: meshes `geo` with gmsh (cached beside it) and prints the .msh path. No MPI.
+fn mesh(geo: &Path, params: Vec<(String, f64)>) -> ExitCode {
+    let def = coupling::input::scene::MeshDef {
+        file: geo.to_path_buf(),
+        params: params.into_iter().collect(),
+        translate: [0.0; 3],
+    };
+    let cache = coupling::input::gmsh::default_cache_dir(geo.parent().unwrap_or(Path::new(".")));
+    match coupling::input::gmsh::mesh_file(&def, &cache) {
+        Ok(p) => {
+            println!("{}", p.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("tdyn: {}: {e}", geo.display());
+            ExitCode::FAILURE
         }
     }
 }

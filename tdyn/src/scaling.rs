@@ -12,6 +12,13 @@
 //! depend on the machine: imbalance per stage and bytes per rank per step, against the rank
 //! count.
 use crate::chart::{self, Figure};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::{
+    Cartesian2d, ChartContext, DrawingArea, DrawingBackend, IntoLogRange, Rectangle,
+    SeriesLabelPosition,
+};
+use plotters::style::Color;
 use std::path::Path;
 
 /// Stages of report.json, in the order they are charted.
@@ -215,15 +222,24 @@ const BAR_HEADROOM: f64 = 1.7;
 /// Bar width, in units of log2(ranks).
 const BAR_WIDTH: f64 = 0.6;
 
+/// Each panel's margin and label areas, pixels.
+const FRAME: chart::Frame = chart::Frame {
+    margin: 15,
+    x_labels: 40,
+    y_labels: 70,
+};
+
+/// Panel captions' text height, pixels.
+const CAPTION_PX: u32 = 17;
+
+/// The study's series, in panel order.
+const SERIES: [&str; 2] = ["strong", "weak"];
+
+/// The study's chart: (a) strong and (b) weak time per step by stage, (c) imbalance and (d)
+/// bytes per rank per step against the rank count.
 struct ScalingChart<'a> {
     title: String,
     rows: &'a [ScalingRow],
-}
-
-impl ScalingChart<'_> {
-    fn series(&self, name: &str) -> Vec<&ScalingRow> {
-        self.rows.iter().filter(|r| r.series == name).collect()
-    }
 }
 
 /// x of a rank count: log2(np).
@@ -231,180 +247,230 @@ fn xpos(np: usize) -> f64 {
     (np.max(1) as f64).log2()
 }
 
+/// A rank-count axis's tick label at x = log2(np): np at whole powers of two, else none.
+fn np_label(v: &f64) -> String {
+    let p = 2f64.powf(*v);
+    if (p - p.round()).abs() < 1e-6 && *v >= -1e-9 {
+        format!("{}", p.round())
+    } else {
+        String::new()
+    }
+}
+
+/// The caption of `name`'s bar panel (`rows` its runs): the weak series says its size per rank.
+fn bar_caption(name: &str, rows: &[&ScalingRow]) -> String {
+    if name == "strong" {
+        return "strong scaling: time per step by stage (max over ranks)".to_string();
+    }
+    let per =
+        |f: fn(&ScalingRow) -> u64| rows.first().map(|r| f(r) / r.np.max(1) as u64).unwrap_or(0);
+    let parts = per(|r| r.particles);
+    format!(
+        "weak scaling ({} elements{} per rank): time per step by stage",
+        per(|r| r.elements),
+        if parts > 0 {
+            format!(", {parts} particles")
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// What the two lower panels draw per (series, stage).
+#[derive(Clone, Copy)]
+enum PerStage {
+    /// (c) max/mean of the stage's work over ranks.
+    Imbalance,
+    /// (d) bytes sent per rank per step.
+    Bytes,
+}
+
+impl PerStage {
+    /// The value of one stage of one run.
+    fn value(self, s: &StageRow) -> f64 {
+        match self {
+            PerStage::Imbalance => s.imbalance,
+            PerStage::Bytes => s.bytes_per_rank_step,
+        }
+    }
+
+    /// The panel's caption.
+    fn caption(self) -> &'static str {
+        match self {
+            PerStage::Imbalance => "imbalance per stage (max/mean of its work over ranks)",
+            PerStage::Bytes => "bytes sent per rank per step (output: bytes written)",
+        }
+    }
+}
+
+impl ScalingChart<'_> {
+    /// The runs of series `name`, by rank count.
+    fn series(&self, name: &str) -> Vec<&ScalingRow> {
+        self.rows.iter().filter(|r| r.series == name).collect()
+    }
+
+    /// The rank axis: log2(np) from half a bar left of 1 to half a bar right of the most.
+    fn x_range(&self) -> std::ops::Range<f64> {
+        -0.6..xpos(self.max_np()) + 0.6
+    }
+
+    /// Labels asked of the rank axis: two per power of two.
+    fn x_labels(&self) -> usize {
+        2 * (xpos(self.max_np()) as usize + 2)
+    }
+
+    /// The largest rank count of the study.
+    fn max_np(&self) -> usize {
+        self.rows.iter().map(|r| r.np).max().unwrap_or(1)
+    }
+
+    /// (a), (b): `name`'s time per step, one bar per run stacked by stage.
+    fn bars<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        name: &str,
+        text: bool,
+    ) -> Result<(), String> {
+        let rows = self.series(name);
+        let top = rows
+            .iter()
+            .map(|r| bar_parts(r).iter().map(|p| p.1).sum::<f64>())
+            .fold(0.0f64, f64::max)
+            .max(1e-12)
+            * 1e3
+            * BAR_HEADROOM;
+        let mut b = chart::panel(area, FRAME, text);
+        b.caption(bar_caption(name, &rows), ("sans-serif", CAPTION_PX));
+        let mut ch = b
+            .build_cartesian_2d(self.x_range(), 0.0..top)
+            .map_err(chart::err)?;
+        chart::axes(&mut ch, text, |mesh| {
+            mesh.disable_x_mesh()
+                .x_desc("MPI ranks")
+                .y_desc("ms per step")
+                .x_labels(self.x_labels())
+                .x_label_formatter(&np_label);
+        })?;
+        stacked_bars(&mut ch, &rows, top, text)?;
+        if text && !rows.is_empty() {
+            chart::legend(&mut ch, SeriesLabelPosition::UpperRight, 13)?;
+        }
+        Ok(())
+    }
+
+    /// (c) or (d): `what` against the rank count, one curve per (series, stage).
+    fn per_stage<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        what: PerStage,
+        text: bool,
+    ) -> Result<(), String> {
+        let value = |s: &StageRow| what.value(s);
+        let vals: Vec<f64> = self
+            .rows
+            .iter()
+            .flat_map(|r| r.stages.iter().flatten().map(value))
+            .filter(|v| v.is_finite())
+            .collect();
+        let mut b = chart::panel(area, FRAME, text);
+        b.caption(what.caption(), ("sans-serif", CAPTION_PX));
+        let x_desc = "MPI ranks (solid: strong, dashed: weak)";
+        match what {
+            PerStage::Imbalance => {
+                let hi = vals.iter().copied().fold(1.0f64, f64::max);
+                let mut ch = b
+                    .build_cartesian_2d(self.x_range(), 0.95..(1.0 + (hi - 1.0) * 1.3).max(1.1))
+                    .map_err(chart::err)?;
+                chart::axes(&mut ch, text, |mesh| {
+                    mesh.x_desc(x_desc)
+                        .y_desc("max / mean")
+                        .x_labels(self.x_labels())
+                        .x_label_formatter(&np_label);
+                })?;
+                self.curves(&mut ch, &value, text)
+            }
+            PerStage::Bytes => {
+                let (lo, hi) = chart::log_span(vals.iter().copied(), 2.0, (1.0, 1e6));
+                let mut ch = b
+                    .build_cartesian_2d(self.x_range(), (lo..hi).log_scale())
+                    .map_err(chart::err)?;
+                chart::axes(&mut ch, text, |mesh| {
+                    mesh.x_desc(x_desc)
+                        .y_desc("bytes per rank per step")
+                        .x_labels(self.x_labels())
+                        .x_label_formatter(&np_label)
+                        .y_label_formatter(&chart::sci);
+                })?;
+                self.curves(&mut ch, &value, text)
+            }
+        }
+    }
+}
+
+/// One bar per run of `rows` on `ch` (ms, up to `top`), stacked by stage, each stage's colour
+/// in the legend once; with text, the run's element count above its bar.
+fn stacked_bars<DB: DrawingBackend>(
+    ch: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    rows: &[&ScalingRow],
+    top: f64,
+    text: bool,
+) -> Result<(), String> {
+    let mut labelled = [false; STAGES.len() + 1];
+    for r in rows {
+        let x = xpos(r.np);
+        let mut y = 0.0;
+        for (k, v) in bar_parts(r) {
+            let c = chart::colour(k);
+            let s = ch
+                .draw_series(std::iter::once(Rectangle::new(
+                    [
+                        (x - BAR_WIDTH / 2.0, y * 1e3),
+                        (x + BAR_WIDTH / 2.0, (y + v) * 1e3),
+                    ],
+                    c.filled(),
+                )))
+                .map_err(chart::err)?;
+            if text && !labelled[k] {
+                labelled[k] = true;
+                let label = if k < STAGES.len() {
+                    STAGES[k].to_string()
+                } else {
+                    "other (loop less stages)".to_string()
+                };
+                s.label(label).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 14, y + 5)], c.filled())
+                });
+            }
+            y += v;
+        }
+        if text {
+            chart::note(
+                ch,
+                format!("{} el.", r.elements),
+                (x - BAR_WIDTH / 2.0, y * 1e3 + top * 0.02),
+                12,
+            )?;
+        }
+    }
+    Ok(())
+}
+
 impl Figure for ScalingChart<'_> {
     fn size(&self) -> (u32, u32) {
         SCALING_CHART_SIZE
     }
 
-    fn draw<DB: plotters::prelude::DrawingBackend>(
-        &self,
-        root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String> {
-        use plotters::prelude::*;
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
         let (root, text) = chart::canvas(root, &self.title)?;
         let panels = root.split_evenly((2, 2));
-        let max_np = self.rows.iter().map(|r| r.np).max().unwrap_or(1);
-        let (xa, xb) = (-0.6, xpos(max_np) + 0.6);
-        let np_label = |v: &f64| {
-            let p = 2f64.powf(*v);
-            if (p - p.round()).abs() < 1e-6 && *v >= -1e-9 {
-                format!("{}", p.round())
-            } else {
-                String::new()
-            }
-        };
-        let series_names = ["strong", "weak"];
-        // (a), (b): stacked time per step.
-        for (area, name) in panels.iter().take(2).zip(series_names) {
-            let rows = self.series(name);
-            let top = rows
-                .iter()
-                .map(|r| bar_parts(r).iter().map(|p| p.1).sum::<f64>())
-                .fold(0.0f64, f64::max)
-                .max(1e-12)
-                * 1e3
-                * BAR_HEADROOM;
-            let mut b = ChartBuilder::on(area);
-            b.margin(15).caption(
-                match name {
-                    "strong" => {
-                        "strong scaling: time per step by stage (max over ranks)".to_string()
-                    }
-                    _ => {
-                        let per = |f: fn(&ScalingRow) -> u64| {
-                            rows.first().map(|r| f(r) / r.np.max(1) as u64).unwrap_or(0)
-                        };
-                        let parts = per(|r| r.particles);
-                        format!(
-                            "weak scaling ({} elements{} per rank): time per step by stage",
-                            per(|r| r.elements),
-                            if parts > 0 {
-                                format!(", {parts} particles")
-                            } else {
-                                String::new()
-                            }
-                        )
-                    }
-                },
-                ("sans-serif", 17),
-            );
-            if text {
-                b.x_label_area_size(40).y_label_area_size(70);
-            }
-            let mut ch = b.build_cartesian_2d(xa..xb, 0.0..top).map_err(chart::err)?;
-            let mut mesh = ch.configure_mesh();
-            mesh.disable_x_mesh();
-            if text {
-                mesh.x_desc("MPI ranks")
-                    .y_desc("ms per step")
-                    .x_labels(2 * (xpos(max_np) as usize + 2))
-                    .x_label_formatter(&np_label);
-            } else {
-                mesh.x_labels(0).y_labels(0);
-            }
-            mesh.draw().map_err(chart::err)?;
-            let mut labelled = [false; STAGES.len() + 1];
-            for r in &rows {
-                let x = xpos(r.np);
-                let mut y = 0.0;
-                for (k, v) in bar_parts(r) {
-                    let c = chart::colour(k);
-                    let s = ch
-                        .draw_series(std::iter::once(Rectangle::new(
-                            [
-                                (x - BAR_WIDTH / 2.0, y * 1e3),
-                                (x + BAR_WIDTH / 2.0, (y + v) * 1e3),
-                            ],
-                            c.filled(),
-                        )))
-                        .map_err(chart::err)?;
-                    if text && !labelled[k] {
-                        labelled[k] = true;
-                        let label = if k < STAGES.len() {
-                            STAGES[k].to_string()
-                        } else {
-                            "other (loop less stages)".to_string()
-                        };
-                        s.label(label).legend(move |(x, y)| {
-                            Rectangle::new([(x, y - 5), (x + 14, y + 5)], c.filled())
-                        });
-                    }
-                    y += v;
-                }
-                if text {
-                    ch.draw_series(std::iter::once(Text::new(
-                        format!("{} el.", r.elements),
-                        (x - BAR_WIDTH / 2.0, y * 1e3 + top * 0.02),
-                        ("sans-serif", 12),
-                    )))
-                    .map_err(chart::err)?;
-                }
-            }
-            if text && !rows.is_empty() {
-                chart::legend(&mut ch, SeriesLabelPosition::UpperRight, 13)?;
-            }
+        for (area, name) in panels.iter().zip(SERIES) {
+            self.bars(area, name, text)?;
         }
-        // (c) imbalance, (d) bytes per rank per step: one curve per (series, stage).
-        for (p, area) in panels.iter().enumerate().skip(2) {
-            let value = |s: &StageRow| {
-                if p == 2 {
-                    s.imbalance
-                } else {
-                    s.bytes_per_rank_step
-                }
-            };
-            let vals: Vec<f64> = self
-                .rows
-                .iter()
-                .flat_map(|r| r.stages.iter().flatten().map(value))
-                .filter(|v| v.is_finite())
-                .collect();
-            let mut b = ChartBuilder::on(area);
-            b.margin(15).caption(
-                if p == 2 {
-                    "imbalance per stage (max/mean of its work over ranks)"
-                } else {
-                    "bytes sent per rank per step (output: bytes written)"
-                },
-                ("sans-serif", 17),
-            );
-            if text {
-                b.x_label_area_size(40).y_label_area_size(70);
-            }
-            if p == 2 {
-                let hi = vals.iter().copied().fold(1.0f64, f64::max);
-                let mut ch = b
-                    .build_cartesian_2d(xa..xb, 0.95..(1.0 + (hi - 1.0) * 1.3).max(1.1))
-                    .map_err(chart::err)?;
-                let mut mesh = ch.configure_mesh();
-                if text {
-                    mesh.x_desc("MPI ranks (solid: strong, dashed: weak)")
-                        .y_desc("max / mean")
-                        .x_labels(2 * (xpos(max_np) as usize + 2))
-                        .x_label_formatter(&np_label);
-                } else {
-                    mesh.x_labels(0).y_labels(0);
-                }
-                mesh.draw().map_err(chart::err)?;
-                self.curves(&mut ch, &value, text)?;
-            } else {
-                let (lo, hi) = chart::log_span(vals.iter().copied(), 2.0, (1.0, 1e6));
-                let mut ch = b
-                    .build_cartesian_2d(xa..xb, (lo..hi).log_scale())
-                    .map_err(chart::err)?;
-                let mut mesh = ch.configure_mesh();
-                if text {
-                    mesh.x_desc("MPI ranks (solid: strong, dashed: weak)")
-                        .y_desc("bytes per rank per step")
-                        .x_labels(2 * (xpos(max_np) as usize + 2))
-                        .x_label_formatter(&np_label)
-                        .y_label_formatter(&chart::sci);
-                } else {
-                    mesh.x_labels(0).y_labels(0);
-                }
-                mesh.draw().map_err(chart::err)?;
-                self.curves(&mut ch, &value, text)?;
-            }
+        for (area, what) in panels[2..]
+            .iter()
+            .zip([PerStage::Imbalance, PerStage::Bytes])
+        {
+            self.per_stage(area, what, text)?;
         }
         root.present().map_err(chart::err)?;
         Ok(())
@@ -451,7 +517,7 @@ impl ScalingChart<'_> {
     {
         use plotters::prelude::*;
         let mut labelled = [false; STAGES.len()];
-        for name in ["strong", "weak"] {
+        for name in SERIES {
             let rows = self.series(name);
             for (k, stage) in STAGES.iter().enumerate() {
                 let pts: Vec<(f64, f64)> = rows

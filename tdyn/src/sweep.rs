@@ -25,12 +25,19 @@
 //! against model memory and against peak RSS, log-log, one point per run labelled with its
 //! parameter value, one curve per measure.
 use crate::chart::{self, Figure};
-use crate::compare::read_column;
+use crate::compare::{read_column, say};
 use coupling::driver::{self, FailureKind, RunOptions, RunOverrides, HISTORY_COLUMNS};
 use coupling::input::scene::{self, Scene};
 use coupling::kernels::collective::{self, first_error};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use plotters::coord::Shift;
+use plotters::prelude::{
+    ChartContext, Circle, DrawingArea, DrawingBackend, IntoFont, IntoLogRange, LineSeries,
+    SeriesLabelPosition, Text, TextStyle,
+};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters::style::{Color, BLACK};
 use std::path::{Path, PathBuf};
 
 /// What `tdyn sweep` was asked.
@@ -375,33 +382,84 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
     let scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     let file = scene.file.display().to_string();
     let (params, measures) = plan(opts, &scene)?;
-    let n_runs = params[0].1.len();
-    let overrides: Vec<RunOverrides> = (0..n_runs)
-        .map(|k| {
-            let mut ov = RunOverrides::default();
-            for (t, v) in &params {
-                t.set(&mut ov, v[k]);
-            }
-            ov
-        })
-        .collect();
-    // A parameter the scene does not have fails every run: say so once, before running.
-    for ov in &overrides {
-        ov.apply(&mut scene.clone())?;
-    }
+    let overrides = run_overrides(&params, &scene)?;
     let out_dir = opts.out.clone().unwrap_or_else(|| {
         PathBuf::from("out")
             .join(scene.file.file_stem().unwrap_or_default())
             .join("sweep")
     });
-    let say = |s: String| {
-        if world.rank() == 0 && !opts.quiet {
-            println!("{s}");
-        }
-    };
+    say(
+        world,
+        opts.quiet,
+        header(&file, &params, &measures, world.size()),
+    );
+    warm_up(world, &opts.scene, &out_dir, &overrides[0]);
     let names: Vec<String> = params.iter().map(|(t, _)| t.name()).collect();
-    say(format!(
-        "tdyn sweep: {file}: {}; measures {}; {} ranks",
+    let mut rows = Vec::with_capacity(overrides.len());
+    for (k, ov) in overrides.into_iter().enumerate() {
+        let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
+        let label = run_label(&names, &values);
+        let rung = Rung {
+            dir: out_dir.join("runs").join(dir_name(&label)),
+            values,
+            label,
+            overrides: ov,
+        };
+        let row = run_rung(world, &opts.scene, &measures, rung);
+        say(world, opts.quiet, progress(&row));
+        rows.push(row);
+    }
+
+    let mut result = Ok(());
+    if world.rank() == 0 {
+        let notes = errors(&mut rows, &measures);
+        let fig = SweepChart {
+            title: format!(
+                "{}: accuracy against cost, {} ranks",
+                if scene.title.is_empty() {
+                    file.clone()
+                } else {
+                    scene.title.clone()
+                },
+                world.size()
+            ),
+            measures: &measures,
+            rows: &rows,
+            notes,
+        };
+        result = write_csv(&out_dir.join("accuracy_cost.csv"), &names, &measures, &rows)
+            .and_then(|()| chart::save(&fig, &out_dir.join("accuracy_cost")));
+        if !opts.quiet {
+            print_errors(&rows, &measures);
+        }
+        result = result.map_err(|e| format!("{file}: {e}"));
+    }
+    first_error(world, result.err())?;
+    Ok(out_dir)
+}
+
+/// The overrides of each run (value k of every parameter in run k). A parameter the scene does
+/// not have would fail every run: an error, before running.
+fn run_overrides(params: &[Ladder], scene: &Scene) -> Result<Vec<RunOverrides>, String> {
+    let overrides: Vec<RunOverrides> = (0..params[0].1.len())
+        .map(|k| {
+            let mut ov = RunOverrides::default();
+            for (t, v) in params {
+                t.set(&mut ov, v[k]);
+            }
+            ov
+        })
+        .collect();
+    for ov in &overrides {
+        ov.apply(&mut scene.clone())?;
+    }
+    Ok(overrides)
+}
+
+/// The sweep's first line: the ladder, the measures and the ranks.
+fn header(file: &str, params: &[Ladder], measures: &[Measure], ranks: i32) -> String {
+    format!(
+        "tdyn sweep: {file}: {}; measures {}; {ranks} ranks",
         params
             .iter()
             .map(|(t, v)| format!(
@@ -421,153 +479,166 @@ pub fn sweep(world: &SimpleCommunicator, opts: &SweepOptions) -> Result<PathBuf,
                 None => format!("{} (against the finest run)", m.name()),
             })
             .collect::<Vec<_>>()
-            .join(", "),
-        world.size()
-    ));
-
-    // The first run of a process pays MPI's connection set-up and the first touches of memory
-    // (measured: 10 ms of loop for 25 steps of 10 elements, then 0.5 ms): the first value runs
-    // once unrecorded.
-    let warm = RunOptions {
-        scene: opts.scene.clone(),
-        out: Some(out_dir.join("runs").join("warm-up")),
-        quiet: true,
-        overrides: overrides[0].clone(),
-        setup_only: false,
-        algorithms: Default::default(),
-    };
-    let _ = driver::run(world, &warm);
-    let mut rows = Vec::with_capacity(n_runs);
-    for (k, ov) in overrides.into_iter().enumerate() {
-        let values: Vec<f64> = params.iter().map(|(_, v)| v[k]).collect();
-        let label = names
-            .iter()
-            .zip(&values)
-            .map(|(n, v)| format!("{n}={}", value_label(*v)))
-            .collect::<Vec<_>>()
-            .join(" ");
-        let dir_name: String = label
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let dir = out_dir.join("runs").join(dir_name);
-        let o = RunOptions {
-            scene: opts.scene.clone(),
-            out: Some(dir.clone()),
-            quiet: true,
-            overrides: ov,
-            setup_only: false,
-            algorithms: Default::default(),
-        };
-        world.barrier();
-        reset_peak_rss();
-        let res = driver::run(world, &o)
-            .map(|_| ())
-            .map_err(|e| (e.kind, e.message));
-        let rss = collective::max(world, peak_rss());
-        let mut row = SweepRow {
-            values,
-            label,
-            status: "ok",
-            message: String::new(),
-            elements: 0,
-            particles: 0,
-            steps: 0,
-            wall_s: f64::NAN,
-            loop_s: f64::NAN,
-            model_bytes: f64::NAN,
-            rss_peak_bytes: rss,
-            energy_error_max: f64::NAN,
-            measured: Vec::new(),
-            errors: vec![f64::NAN; measures.len()],
-            reference: false,
-            out: dir.clone(),
-        };
-        match res {
-            Ok(()) => {
-                if world.rank() == 0 {
-                    if let Err(e) = read_report(&mut row, &measures) {
-                        row.status = "failed";
-                        row.message = e;
-                    }
-                }
-            }
-            Err((kind, message)) => {
-                row.status = match kind {
-                    FailureKind::Refused => "refused",
-                    FailureKind::Unstable => "unstable",
-                    FailureKind::Failed | FailureKind::Input => "failed",
-                };
-                row.message = message;
-            }
-        }
-        say(format!(
-            "  {:>16}: {}",
-            row.label,
-            if row.status == "ok" {
-                format!(
-                    "ok, {} elements, {} particles, {} steps, loop {:.3e} s, wall {:.3e} s, model {:.3} MB, peak RSS {:.0} MB",
-                    row.elements,
-                    row.particles,
-                    row.steps,
-                    row.loop_s,
-                    row.wall_s,
-                    row.model_bytes / 1e6,
-                    row.rss_peak_bytes / 1e6
-                )
-            } else {
-                format!("{}: {}", row.status, row.message)
-            }
-        ));
-        rows.push(row);
-    }
-
-    let mut result = Ok(());
-    if world.rank() == 0 {
-        let notes = errors(&mut rows, &measures);
-        result = write_csv(&out_dir.join("accuracy_cost.csv"), &names, &measures, &rows).and_then(
-            |()| {
-                let fig = SweepChart {
-                    title: format!(
-                        "{}: accuracy against cost, {} ranks",
-                        if scene.title.is_empty() {
-                            file.clone()
-                        } else {
-                            scene.title.clone()
-                        },
-                        world.size()
-                    ),
-                    measures: &measures,
-                    rows: &rows,
-                    notes,
-                };
-                chart::save(&fig, &out_dir.join("accuracy_cost"))
-            },
-        );
-        if !opts.quiet {
-            for r in rows.iter().filter(|r| r.status == "ok") {
-                let e: Vec<String> = measures
-                    .iter()
-                    .zip(&r.errors)
-                    .map(|(m, e)| format!("{} {}", m.name(), fmt_error(*e, r.reference)))
-                    .collect();
-                println!("  {:>16}: error {}", r.label, e.join(", "));
-            }
-        }
-        if let Err(e) = &result {
-            result = Err(format!("{file}: {e}"));
-        }
-    }
-    first_error(world, result.err())?;
-    Ok(out_dir)
+            .join(", ")
+    )
 }
 
+/// Runs the first value once, unrecorded. The first run of a process pays MPI's connection
+/// set-up and the first touches of memory (measured: 10 ms of loop for 25 steps of 10
+/// elements, then 0.5 ms).
+fn warm_up(world: &SimpleCommunicator, scene: &Path, out_dir: &Path, first: &RunOverrides) {
+    let warm = RunOptions {
+        scene: scene.to_path_buf(),
+        out: Some(out_dir.join("runs").join("warm-up")),
+        quiet: true,
+        overrides: first.clone(),
+        setup_only: false,
+        algorithms: Default::default(),
+        overwrite: true,
+        restart: None,
+        stop: None,
+    };
+    let _ = driver::run(world, &warm);
+}
+
+/// A run's label: "N=20 L=1", every parameter with its value.
+fn run_label(names: &[String], values: &[f64]) -> String {
+    names
+        .iter()
+        .zip(values)
+        .map(|(n, v)| format!("{n}={}", value_label(*v)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A run's folder name: its label with every character but letters, digits, `.` and `-` as
+/// `_`.
+fn dir_name(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// One run of the ladder.
+struct Rung {
+    /// The parameters' values.
+    values: Vec<f64>,
+    /// Its label.
+    label: String,
+    /// The scene values it replaces.
+    overrides: RunOverrides,
+    /// Its output directory.
+    dir: PathBuf,
+}
+
+/// Runs `scene` at `rung` (the peak RSS reset before, read after, max over ranks); its row,
+/// with report.json's figures and the measured values on rank 0 when it finished.
+fn run_rung(
+    world: &SimpleCommunicator,
+    scene: &Path,
+    measures: &[Measure],
+    rung: Rung,
+) -> SweepRow {
+    let o = RunOptions {
+        scene: scene.to_path_buf(),
+        out: Some(rung.dir.clone()),
+        quiet: true,
+        overrides: rung.overrides,
+        setup_only: false,
+        algorithms: Default::default(),
+        overwrite: true,
+        restart: None,
+        stop: None,
+    };
+    world.barrier();
+    reset_peak_rss();
+    let res = driver::run(world, &o)
+        .map(|_| ())
+        .map_err(|e| (e.kind, e.message));
+    let rss = collective::max(world, peak_rss());
+    let mut row = SweepRow {
+        values: rung.values,
+        label: rung.label,
+        status: "ok",
+        message: String::new(),
+        elements: 0,
+        particles: 0,
+        steps: 0,
+        wall_s: f64::NAN,
+        loop_s: f64::NAN,
+        model_bytes: f64::NAN,
+        rss_peak_bytes: rss,
+        energy_error_max: f64::NAN,
+        measured: Vec::new(),
+        errors: vec![f64::NAN; measures.len()],
+        reference: false,
+        out: rung.dir,
+    };
+    match res {
+        Ok(()) => {
+            if world.rank() == 0 {
+                if let Err(e) = read_report(&mut row, measures) {
+                    row.status = "failed";
+                    row.message = e;
+                }
+            }
+        }
+        Err((kind, message)) => {
+            row.status = match kind {
+                FailureKind::Refused => "refused",
+                FailureKind::Unstable => "unstable",
+                FailureKind::Failed | FailureKind::Input => "failed",
+                FailureKind::Stopped => "stopped",
+            };
+            row.message = message;
+        }
+    }
+    row
+}
+
+/// A run's progress line: its cost, or how it stopped.
+fn progress(row: &SweepRow) -> String {
+    format!(
+        "  {:>16}: {}",
+        row.label,
+        if row.status == "ok" {
+            format!(
+                "ok, {} elements, {} particles, {} steps, loop {:.3e} s, wall {:.3e} s, model {:.3} MB, peak RSS {:.0} MB",
+                row.elements,
+                row.particles,
+                row.steps,
+                row.loop_s,
+                row.wall_s,
+                row.model_bytes / 1e6,
+                row.rss_peak_bytes / 1e6
+            )
+        } else {
+            format!("{}: {}", row.status, row.message)
+        }
+    )
+}
+
+/// Prints each finished run's errors, one line per run.
+fn print_errors(rows: &[SweepRow], measures: &[Measure]) {
+    for r in rows.iter().filter(|r| r.status == "ok") {
+        let e: Vec<String> = measures
+            .iter()
+            .zip(&r.errors)
+            .map(|(m, e)| format!("{} {}", m.name(), fmt_error(*e, r.reference)))
+            .collect();
+        println!("  {:>16}: error {}", r.label, e.join(", "));
+    }
+}
+
+/// An error as the terminal shows it: "(reference)" for the reference run's 0, "-" when not
+/// measured.
 fn fmt_error(e: f64, reference: bool) -> String {
     if reference && e == 0.0 {
         "(reference)".into()
@@ -725,154 +796,205 @@ const MIN_AXIS_RATIO: f64 = 10.0;
 /// Labelled ticks asked of each axis (plotters picks round values near this many).
 const AXIS_LABELS: usize = 8;
 
+/// Each panel's margin and label areas, pixels.
+const FRAME: chart::Frame = chart::Frame {
+    margin: 15,
+    x_labels: 45,
+    y_labels: 70,
+};
+
+/// A panel's cost axis: its description and where a run lies on it.
+struct CostAxis {
+    /// The axis's description.
+    desc: &'static str,
+    /// The run's cost in the axis's unit.
+    of: fn(&SweepRow) -> f64,
+}
+
+/// The three panels' cost axes, left to right.
+const COSTS: [CostAxis; 3] = [
+    CostAxis {
+        desc: "time-step loop wall time (s)",
+        of: |r| r.loop_s,
+    },
+    CostAxis {
+        desc: "model memory: bytes per element x elements (MB)",
+        of: |r| r.model_bytes / 1e6,
+    },
+    CostAxis {
+        desc: "peak resident set, max over ranks (MB)",
+        of: |r| r.rss_peak_bytes / 1e6,
+    },
+];
+
+impl SweepChart<'_> {
+    /// The finished runs, in ladder order.
+    fn ok(&self) -> Vec<&SweepRow> {
+        self.rows.iter().filter(|r| r.status == "ok").collect()
+    }
+
+    /// The error axis's range (every panel), with room above the data for the notes.
+    fn error_span(&self) -> (f64, f64) {
+        let (y0, y1) = chart::log_span(
+            self.ok().iter().flat_map(|r| r.errors.iter().copied()),
+            3.0,
+            (1e-4, 1.0),
+        );
+        let (y0, y1) = chart::at_least((y0, y1), MIN_AXIS_RATIO);
+        (y0, y1 * 30.0)
+    }
+
+    /// Panel `p`: the errors against `cost`, `y` the error axis's range.
+    fn panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        p: usize,
+        y: (f64, f64),
+        text: bool,
+    ) -> Result<(), String> {
+        let cost = &COSTS[p];
+        let (x0, x1) = chart::at_least(
+            chart::log_span(self.ok().iter().map(|r| (cost.of)(r)), 1.6, (1e-3, 1.0)),
+            MIN_AXIS_RATIO,
+        );
+        let mut ch = chart::panel(area, FRAME, text)
+            .build_cartesian_2d((x0..x1).log_scale(), (y.0..y.1).log_scale())
+            .map_err(chart::err)?;
+        chart::axes(&mut ch, text, |mesh| {
+            mesh.x_desc(cost.desc)
+                .y_desc("relative error")
+                .x_labels(AXIS_LABELS)
+                .y_labels(AXIS_LABELS)
+                .x_label_formatter(&chart::plain)
+                .y_label_formatter(&chart::sci);
+        })?;
+        self.reference_mark(&mut ch, cost, y, text)?;
+        self.curves(&mut ch, cost, text)?;
+        if text {
+            self.notes(&mut ch, p, (x0, y.1))?;
+            // Cheap and accurate is the corner that runs seldom reach.
+            chart::legend(&mut ch, SeriesLabelPosition::LowerLeft, 14)?;
+        }
+        Ok(())
+    }
+
+    /// The finest run, when it is the reference, has no error to draw: its cost is a dashed
+    /// line, labelled on its left.
+    fn reference_mark<DB: DrawingBackend>(
+        &self,
+        ch: &mut ChartContext<'_, DB, chart::LogLog>,
+        cost: &CostAxis,
+        y: (f64, f64),
+        text: bool,
+    ) -> Result<(), String> {
+        let Some(r) = self.rows.iter().find(|r| r.status == "ok" && r.reference) else {
+            return Ok(());
+        };
+        let x = (cost.of)(r);
+        if !(x > 0.0 && x.is_finite()) {
+            return Ok(());
+        }
+        chart::x_mark(ch, x, y, BLACK.mix(0.5).stroke_width(2))?;
+        if text {
+            let left_of = TextStyle::from(("sans-serif", 13).into_font())
+                .pos(Pos::new(HPos::Right, VPos::Bottom));
+            ch.draw_series(std::iter::once(Text::new(
+                format!("{} (reference)", r.label),
+                (x / 1.05, y.0 * 2.0),
+                left_of,
+            )))
+            .map_err(chart::err)?;
+        }
+        Ok(())
+    }
+
+    /// One labelled curve per measure: its errors against `cost`, in ladder order (the line
+    /// follows the refinement, whatever the timings do); a run's label once, at its first
+    /// drawn measure.
+    fn curves<DB: DrawingBackend>(
+        &self,
+        ch: &mut ChartContext<'_, DB, chart::LogLog>,
+        cost: &CostAxis,
+        text: bool,
+    ) -> Result<(), String> {
+        let ok = self.ok();
+        let drawn = |r: &SweepRow, j: usize| {
+            let (x, y) = ((cost.of)(r), r.errors[j]);
+            x > 0.0 && x.is_finite() && y > 0.0 && y.is_finite()
+        };
+        for (j, m) in self.measures.iter().enumerate() {
+            let c = chart::colour(j);
+            let pts: Vec<(f64, f64, &str)> = ok
+                .iter()
+                .filter(|r| drawn(r, j))
+                .map(|r| {
+                    let first = (0..j).all(|i| !drawn(r, i));
+                    let label = if first { r.label.as_str() } else { "" };
+                    ((cost.of)(r), r.errors[j], label)
+                })
+                .collect();
+            let s = ch
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.0, p.1)),
+                    c.stroke_width(2),
+                ))
+                .map_err(chart::err)?;
+            if text {
+                s.label(m.name()).legend(chart::line_key(c));
+            }
+            ch.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
+                .map_err(chart::err)?;
+            if text {
+                ch.draw_series(pts.iter().filter(|p| !p.2.is_empty()).map(|p| {
+                    Text::new(
+                        p.2.to_string(),
+                        (p.0 * 1.04, p.1 * 1.15),
+                        ("sans-serif", 13),
+                    )
+                }))
+                .map_err(chart::err)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Panel `p`'s notes, one a line down from `top_left`: what the errors are against (the
+    /// first panel), the runs not drawn (the second).
+    fn notes<DB: DrawingBackend>(
+        &self,
+        ch: &mut ChartContext<'_, DB, chart::LogLog>,
+        p: usize,
+        top_left: (f64, f64),
+    ) -> Result<(), String> {
+        let notes: Vec<String> = match p {
+            0 => self.notes.clone(),
+            1 => self
+                .rows
+                .iter()
+                .filter(|r| r.status != "ok")
+                .map(|r| format!("{}: {} (not drawn)", r.label, r.status))
+                .collect(),
+            _ => Vec::new(),
+        };
+        let (x0, y1) = top_left;
+        for (i, n) in notes.into_iter().enumerate() {
+            chart::note(ch, n, (x0 * 1.05, y1 / 1.4 / 1.7f64.powi(i as i32)), 13)?;
+        }
+        Ok(())
+    }
+}
+
 impl Figure for SweepChart<'_> {
     fn size(&self) -> (u32, u32) {
         SWEEP_CHART_SIZE
     }
 
-    fn draw<DB: plotters::prelude::DrawingBackend>(
-        &self,
-        root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String> {
-        use plotters::prelude::*;
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
         let (root, text) = chart::canvas(root, &self.title)?;
-        let panels = root.split_evenly((1, 3));
-        let ok: Vec<&SweepRow> = self.rows.iter().filter(|r| r.status == "ok").collect();
-        let (y0, y1) = chart::log_span(
-            ok.iter().flat_map(|r| r.errors.iter().copied()),
-            3.0,
-            (1e-4, 1.0),
-        );
-        let (y0, y1) = chart::at_least((y0, y1), MIN_AXIS_RATIO);
-        // Room above the data for the notes.
-        let y1 = y1 * 30.0;
-        type Cost = fn(&SweepRow) -> f64;
-        let costs: [(&str, Cost); 3] = [
-            ("time-step loop wall time (s)", |r| r.loop_s),
-            ("model memory: bytes per element x elements (MB)", |r| {
-                r.model_bytes / 1e6
-            }),
-            ("peak resident set, max over ranks (MB)", |r| {
-                r.rss_peak_bytes / 1e6
-            }),
-        ];
-        for (p, (area, (x_desc, cost))) in panels.iter().zip(costs).enumerate() {
-            let (x0, x1) = chart::at_least(
-                chart::log_span(ok.iter().map(|r| cost(r)), 1.6, (1e-3, 1.0)),
-                MIN_AXIS_RATIO,
-            );
-            let mut builder = ChartBuilder::on(area);
-            builder.margin(15);
-            if text {
-                builder.x_label_area_size(45).y_label_area_size(70);
-            }
-            let mut ch = builder
-                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(chart::err)?;
-            let mut mesh = ch.configure_mesh();
-            if text {
-                mesh.x_desc(x_desc)
-                    .y_desc("relative error")
-                    .x_labels(AXIS_LABELS)
-                    .y_labels(AXIS_LABELS)
-                    .x_label_formatter(&chart::plain)
-                    .y_label_formatter(&chart::sci);
-            } else {
-                mesh.x_labels(0).y_labels(0);
-            }
-            mesh.draw().map_err(chart::err)?;
-            // The finest run, when it is the reference, has no error to draw: its cost is a
-            // dashed line.
-            if let Some(r) = ok.iter().find(|r| r.reference) {
-                let x = cost(r);
-                if x > 0.0 && x.is_finite() {
-                    ch.draw_series(DashedLineSeries::new(
-                        vec![(x, y0), (x, y1)],
-                        8,
-                        6,
-                        BLACK.mix(0.5).stroke_width(2),
-                    ))
-                    .map_err(chart::err)?;
-                    if text {
-                        use plotters::style::text_anchor::{HPos, Pos, VPos};
-                        let left_of = TextStyle::from(("sans-serif", 13).into_font())
-                            .pos(Pos::new(HPos::Right, VPos::Bottom));
-                        ch.draw_series(std::iter::once(Text::new(
-                            format!("{} (reference)", r.label),
-                            (x / 1.05, y0 * 2.0),
-                            left_of,
-                        )))
-                        .map_err(chart::err)?;
-                    }
-                }
-            }
-            let drawn = |r: &SweepRow, j: usize| {
-                let (x, y) = (cost(r), r.errors[j]);
-                x > 0.0 && x.is_finite() && y > 0.0 && y.is_finite()
-            };
-            for (j, m) in self.measures.iter().enumerate() {
-                let c = chart::colour(j);
-                // In ladder order (the line follows the refinement, whatever the timings do);
-                // a run's label once, at its first drawn measure.
-                let pts: Vec<(f64, f64, &str)> = ok
-                    .iter()
-                    .filter(|r| drawn(r, j))
-                    .map(|r| {
-                        let first = (0..j).all(|i| !drawn(r, i));
-                        (
-                            cost(r),
-                            r.errors[j],
-                            if first { r.label.as_str() } else { "" },
-                        )
-                    })
-                    .collect();
-                let s = ch
-                    .draw_series(LineSeries::new(
-                        pts.iter().map(|p| (p.0, p.1)),
-                        c.stroke_width(2),
-                    ))
-                    .map_err(chart::err)?;
-                if text {
-                    s.label(m.name()).legend(chart::line_key(c));
-                }
-                ch.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
-                    .map_err(chart::err)?;
-                if text {
-                    ch.draw_series(pts.iter().filter(|p| !p.2.is_empty()).map(|p| {
-                        Text::new(
-                            p.2.to_string(),
-                            (p.0 * 1.04, p.1 * 1.15),
-                            ("sans-serif", 13),
-                        )
-                    }))
-                    .map_err(chart::err)?;
-                }
-            }
-            if text {
-                let mut notes: Vec<String> = if p == 0 {
-                    self.notes.clone()
-                } else {
-                    Vec::new()
-                };
-                if p == 1 {
-                    notes.extend(
-                        self.rows
-                            .iter()
-                            .filter(|r| r.status != "ok")
-                            .map(|r| format!("{}: {} (not drawn)", r.label, r.status)),
-                    );
-                }
-                for (i, n) in notes.iter().enumerate() {
-                    ch.draw_series(std::iter::once(Text::new(
-                        n.clone(),
-                        (x0 * 1.05, y1 / 1.4 / 1.7f64.powi(i as i32)),
-                        ("sans-serif", 13),
-                    )))
-                    .map_err(chart::err)?;
-                }
-                // Cheap and accurate is the corner that runs seldom reach.
-                chart::legend(&mut ch, SeriesLabelPosition::LowerLeft, 14)?;
-            }
+        let panels = root.split_evenly((1, COSTS.len()));
+        let y = self.error_span();
+        for (p, area) in panels.iter().enumerate() {
+            self.panel(area, p, y, text)?;
         }
         root.present().map_err(chart::err)?;
         Ok(())

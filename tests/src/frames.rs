@@ -240,3 +240,60 @@ pub fn column_differences(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<f64> {
         })
         .collect()
 }
+
+/// The bodies of a mesh: its elements grouped into connected sets (elements sharing a node),
+/// numbered by their lowest element id, each with its skin.
+pub fn bodies(conn: &[[usize; 8]]) -> Vec<Body> {
+    let n_nodes = conn.iter().flatten().max().map_or(0, |m| m + 1);
+    // Union-find over nodes, joined through each element.
+    let mut parent: Vec<usize> = (0..n_nodes).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for e in conn {
+        for w in e.windows(2) {
+            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut index: std::collections::HashMap<usize, usize> = std::collections::HashMap::new();
+    let mut elems: Vec<Vec<usize>> = Vec::new();
+    for (e, c) in conn.iter().enumerate() {
+        let root = find(&mut parent, c[0]);
+        let k = *index.entry(root).or_insert_with(|| {
+            elems.push(Vec::new());
+            elems.len() - 1
+        });
+        elems[k].push(e);
+    }
+    elems.into_iter().map(|es| Body::new(conn, es)).collect()
+}
+
+/// The deepest penetration of any skin node of one body into another body of the mesh, in
+/// configuration `pos` (see [`deepest_penetration`]): (depth, node), over every ordered pair of
+/// distinct bodies.
+pub fn deepest_between_bodies(
+    pos: &[[f64; 3]],
+    conn: &[[usize; 8]],
+    bodies: &[Body],
+) -> (f64, usize) {
+    let mut worst = (0.0, usize::MAX);
+    for (a, ba) in bodies.iter().enumerate() {
+        let mut nodes: Vec<usize> = ba.skin.iter().flatten().cloned().collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        for (b, bb) in bodies.iter().enumerate() {
+            if a != b {
+                let d = deepest_penetration(pos, conn, &nodes, bb);
+                if d.0 > worst.0 {
+                    worst = d;
+                }
+            }
+        }
+    }
+    worst
+}

@@ -123,6 +123,26 @@ fn documented_mistakes_give_clear_messages() {
         |s| s.replace("bar.geo", "nope.geo"),
         "nope.geo",
     );
+    // [contact] passes and master (docs/running.md, contact).
+    let contact = |keys: &'static str| {
+        move |s: String| s + "[contact]\nsurfaces = [\"left\", \"right\"]\n" + keys
+    };
+    expect_error("contact_passes", contact("passes = 3\n"), "contact.passes");
+    expect_error(
+        "contact_one_pass_without_master",
+        contact("passes = 1\n"),
+        "passes = 1 needs the master bodies",
+    );
+    expect_error(
+        "contact_master_with_two_passes",
+        contact("master = [\"bar\"]\n"),
+        "a master is only read with passes = 1",
+    );
+    expect_error(
+        "contact_unknown_master",
+        contact("passes = 1\nmaster = [\"rod\"]\n"),
+        "contact.master[0]: no physical volume \"rod\"",
+    );
 }
 
 #[test]

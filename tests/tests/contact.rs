@@ -430,10 +430,11 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
     // `--contact-decomposition static`)
     // must do the same physics as the dynamic stage for its figures to compare like with like.
     // Reference: the dynamic stage's run of scenes/block_drop.toml at the same rank count. The
-    // contact count of every step is equal, momentum equal to 1e-12 of its scale, the energies
-    // within 1e-3 of their largest value and the contact energy within 5e-3 (the baseline
-    // solves its push-back per box, the dynamic stage all contacts together: measured 2.8e-4
-    // and 1.9e-3 when both were per box); the report names the decomposition. At np 3.
+    // same contacts are found and their push-back is solved together in both (the dynamic
+    // stage's step 7b), so every column of the history but the stage's own balance and bytes
+    // is identical, bit for bit (when the baseline solved per box, the contact energy differed
+    // by 2.8e-4, and two passes, a touching pair found from both sides in two boxes, pushed
+    // apart twice: 1.7e-2 on dt); the report names the decomposition. At np 3.
     let np = 3;
     let dir = workdir("block_drop_baseline");
     let scene = root().join("scenes/block_drop.toml");
@@ -451,16 +452,12 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
     let (_, baseline) = &rows[1];
     let d = column_differences(dynamic, baseline);
     for (c, name) in h.iter().enumerate() {
-        let tol = match name.as_str() {
-            "contact_imbalance" | "contact_bytes" => continue,
-            "contacts" | "step" => 0.0,
-            n if n.starts_with("momentum") => 1e-12,
-            "contact_energy" => 5e-3,
-            _ => 1e-3,
-        };
+        if matches!(name.as_str(), "contact_imbalance" | "contact_bytes") {
+            continue;
+        }
         assert!(
-            d[c] <= tol,
-            "baseline: history column {name} differs from the dynamic stage by {:e} of its largest value (limit {tol:e})",
+            d[c] == 0.0,
+            "baseline: history column {name} differs from the dynamic stage by {:e} of its largest value (must be identical)",
             d[c]
         );
     }
@@ -509,5 +506,413 @@ fn rcb_balances_the_contact_work_where_the_static_decomposition_cannot() {
             "np {np}: the dynamic RCB's contact imbalance {} (aim: under 1.1)",
             imb[0]
         );
+    }
+}
+
+/// scenes/block_flat_drop.toml: plate and cube both in 5 mm elements.
+const FLAT_DROP_H: f64 = 0.005;
+/// The cube's momentum, kg m/s: 7850 kg/m^3 x (0.02 m)^3 x 40 m/s, downward.
+const FLAT_DROP_P: f64 = -7850.0 * 0.02 * 0.02 * 0.02 * 40.0;
+
+/// The alignments of `block_flat_drop`'s meshes: (name, DX, DY). The cube's lower nodes over
+/// the plate's nodes, over the middles of its edges, over its face centres, and anywhere.
+const ALIGNMENTS: [(&str, f64, f64); 4] = [
+    ("node_over_node", 0.0, 0.0),
+    ("node_over_edge", 0.0025, 0.0),
+    ("node_over_face", 0.0025, 0.0025),
+    ("offset", 0.0017, 0.0011),
+];
+
+/// Runs `block_flat_drop` at `np` with the cube shifted (dx, dy), meshed first if `block_first`,
+/// returns the output directory.
+fn flat_drop(np: usize, tag: &str, (dx, dy): (f64, f64), block_first: bool) -> std::path::PathBuf {
+    let out = workdir(&format!("block_flat_drop_{tag}_np{np}")).join("out");
+    let (dx, dy) = (format!("DX={dx}"), format!("DY={dy}"));
+    let bf = format!("BLOCK_FIRST={}", block_first as u8);
+    run_ok_args(
+        np,
+        &root().join("scenes/block_flat_drop.toml"),
+        &out,
+        &["-p", &dx, "-p", &dy, "-p", &bf],
+    );
+    out
+}
+
+/// The cube's top at the end of a run: the probe `block_top`'s z-displacement, m.
+fn top_displacement(out: &std::path::Path) -> f64 {
+    let (h, rows) = read_csv(&out.join("probes.csv"));
+    *column(&h, &rows, "block_top.displacement_z")
+        .last()
+        .unwrap()
+}
+
+#[test]
+fn flat_block_on_a_plate_never_lets_a_node_through_whatever_the_alignment() {
+    // Issue 15: a node landing on a node of the other surface went through it (the dead zone of
+    // the closest-point projection behind the dimple it makes; contact crate, `pair`). A steel
+    // cube dropped flat at 40 m/s onto a free steel plate, both in 5 mm elements, its lower
+    // nodes over the plate's nodes, over the middles of its edges, over its face centres, and
+    // anywhere (scenes/block_flat_drop.toml, -p DX, DY), at np 1, 2 and 3. References:
+    // - geometry (non-penetration): in every frame of fields.h5 (every 2.5 us), no surface node
+    //   of either body lies inside the other body deeper than 1e-3 of the 5 mm element (5 um;
+    //   the issue asks for 1 %), measured with the tests' own projection (tdyn_tests::frames).
+    //   Measured 5.7e-9 m node over node, 1.5e-11 m over an edge, 1e-17 m elsewhere; before the
+    //   fix 95 um (node over node), 75 um (over an edge) and 6 um (anywhere), one-pass. Frames are dense enough that no node crosses the plate between
+    //   two (asserted: the largest motion between frames is under half the plate).
+    // - momentum: nothing holds the bodies, so it stays the cube's initial m v to 1e-12 of it.
+    // - rank independence: the contact count of every step the same at np 1, 2, 3, every other
+    //   column of history.csv within 1e-10 of its largest value.
+    // The check itself is checked: the last frame with the cube moved down until its lowest
+    // node is half an element below the plate's top shows a node over a quarter element deep.
+    for (name, dx, dy) in ALIGNMENTS {
+        let mut histories = Vec::new();
+        let mut header = Vec::new();
+        for np in 1..=3 {
+            let out = flat_drop(np, name, (dx, dy), false);
+            let (h, rows) = read_csv(&out.join("history.csv"));
+            let contacts = column(&h, &rows, "contacts");
+            assert!(
+                contacts.iter().cloned().fold(0.0, f64::max) >= 16.0,
+                "{name} np {np}: the cube never landed flat"
+            );
+            for (c, col) in ["momentum_x", "momentum_y", "momentum_z"]
+                .iter()
+                .enumerate()
+            {
+                let p0 = if c == 2 { FLAT_DROP_P } else { 0.0 };
+                for p in column(&h, &rows, col) {
+                    assert!(
+                        (p - p0).abs() <= 1e-12 * FLAT_DROP_P.abs(),
+                        "{name} np {np}: {col} = {p}, initially {p0} (1e-12 of m v)"
+                    );
+                }
+            }
+            let fr = read_frames(&out);
+            let bodies = bodies(&fr.connectivity);
+            assert_eq!(bodies.len(), 2, "{name}: two bodies");
+            assert!(max_frame_motion(&fr) < 0.5 * PLATE_THICKNESS);
+            let mut deepest = (0.0f64, 0.0f64, usize::MAX);
+            for (k, pos) in fr.positions.iter().enumerate() {
+                let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
+                if d > deepest.0 {
+                    deepest = (d, fr.times[k], n);
+                }
+            }
+            eprintln!(
+                "{name} np {np}: deepest node inside the other body {:.3e} m (t = {:.3e}, node {})",
+                deepest.0, deepest.1, deepest.2
+            );
+            assert!(
+                deepest.0 < 1e-3 * FLAT_DROP_H,
+                "{name} np {np}: node {} is {} m inside the other body at t = {} (limit 1e-3 of the 5 mm element)",
+                deepest.2,
+                deepest.0,
+                deepest.1
+            );
+            if np == 1 && name == "node_over_node" {
+                let x0 = &fr.positions[0];
+                let mut moved = fr.positions.last().unwrap().clone();
+                let cube: Vec<usize> = (0..x0.len()).filter(|&n| x0[n][2] > 1e-9).collect();
+                let lowest = cube.iter().fold(f64::INFINITY, |m, &n| m.min(moved[n][2]));
+                for &n in &cube {
+                    moved[n][2] -= lowest + 0.5 * FLAT_DROP_H;
+                }
+                let (d, _) = deepest_between_bodies(&moved, &fr.connectivity, &bodies);
+                assert!(
+                    d > 0.25 * FLAT_DROP_H,
+                    "the check missed the cube sunk half an element into the plate ({d} m)"
+                );
+            }
+            header = h;
+            histories.push(rows);
+        }
+        for (k, rows) in histories.iter().enumerate().skip(1) {
+            let d = column_differences(&histories[0], rows);
+            for (c, col) in header.iter().enumerate() {
+                let tol = match col.as_str() {
+                    // The balance and bytes depend on the rank count by nature; momentum was
+                    // checked against m v above (x and y are round-off around 0, so relative
+                    // to their own largest value they differ at any order).
+                    "contact_imbalance" | "contact_bytes" => continue,
+                    n if n.starts_with("momentum") => continue,
+                    "contacts" | "step" => 0.0,
+                    _ => 1e-10,
+                };
+                assert!(
+                    d[c] <= tol,
+                    "{name} np {}: history column {col} differs from np 1 by {:e} of its largest value (limit {tol:e})",
+                    k + 1,
+                    d[c]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_order_of_the_bodies_in_the_mesh_does_not_change_the_answer() {
+    // Issue 15: with the one-pass search the later body's nodes were searched against the
+    // earlier body's faces, so meshing the other body first changed the answer (a ball meshed
+    // before its plate sank 2 mm into it). Two passes (the default) search both ways.
+    // Reference: the same run with the cube meshed second; meshed first (-p BLOCK_FIRST=1: its
+    // elements, nodes and body number come first), the final z-displacement of the cube's top
+    // differs by under 1 % (issue 15's limit; measured under 1e-5, and 1.3 %, 0.4 %, 0.8 % and
+    // 0.4 % one-pass before, aligned to offset), for each alignment, at np 2. Then one pass,
+    // explicitly (`passes = 1`, `master = ["plate"]`): the report says so and the cube's nodes
+    // are still kept out of the plate (5 um, as above).
+    for (name, dx, dy) in ALIGNMENTS {
+        let second = top_displacement(&flat_drop(2, &format!("{name}_order0"), (dx, dy), false));
+        let first = top_displacement(&flat_drop(2, &format!("{name}_order1"), (dx, dy), true));
+        let rel = (first - second).abs() / second.abs();
+        eprintln!("{name}: top displacement {second:.6e} m (plate first), {first:.6e} m (cube first): {rel:.2e}");
+        assert!(
+            second < -1e-4,
+            "{name}: the cube's top moved {second} m (it must land and press the plate)"
+        );
+        assert!(
+            rel < 0.01,
+            "{name}: the cube's top moved {second} m with the plate meshed first, {first} m with the cube first ({rel:.3e}, limit 1 %)"
+        );
+    }
+    let dir = workdir("block_flat_drop_one_pass");
+    let text = std::fs::read_to_string(root().join("scenes/block_flat_drop.toml"))
+        .unwrap()
+        .replace(
+            "\"../meshes/block_flat.geo\"",
+            &format!("\"{}\"", root().join("meshes/block_flat.geo").display()),
+        )
+        .replace(
+            "surfaces = [\"block_skin\", \"plate_top\"]",
+            "surfaces = [\"block_skin\", \"plate_top\"]\npasses = 1\nmaster = [\"plate\"]",
+        );
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    run_ok(2, &scene, &out);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["contact_passes"], 1);
+    assert_eq!(report["contact_master_bodies"], 1);
+    let fr = read_frames(&out);
+    let x0 = &fr.positions[0];
+    let conn = &fr.connectivity;
+    let plate = Body::new(
+        conn,
+        (0..conn.len())
+            .filter(|&e| conn[e].iter().all(|&n| x0[n][2] <= 1e-9))
+            .collect(),
+    );
+    let cube: Vec<usize> = (0..x0.len()).filter(|&n| x0[n][2] > 1e-9).collect();
+    for (k, pos) in fr.positions.iter().enumerate() {
+        let (d, n) = deepest_penetration(pos, conn, &cube, &plate);
+        assert!(
+            d < 1e-3 * FLAT_DROP_H,
+            "one pass: cube node {n} is {d} m inside the plate at t = {}",
+            fr.times[k]
+        );
+    }
+}
+
+/// Runs `scenes/ball_plate.toml` at `np` with the plate in `np_plate` x `np_plate` elements,
+/// the ball meshed first if `ball_first`; returns the output directory.
+fn ball_on_plate(np: usize, np_plate: usize, ball_first: bool) -> std::path::PathBuf {
+    let out = workdir(&format!(
+        "ball_plate_np_plate{np_plate}_first{}_np{np}",
+        ball_first as u8
+    ))
+    .join("out");
+    let (n, bf) = (
+        format!("NP={np_plate}"),
+        format!("BALL_FIRST={}", ball_first as u8),
+    );
+    run_ok_args(
+        np,
+        &root().join("scenes/ball_plate.toml"),
+        &out,
+        &["-p", &n, "-p", &bf],
+    );
+    out
+}
+
+#[test]
+fn ball_on_a_clamped_plate_stays_out_of_it_with_or_without_a_node_under_its_pole() {
+    // Issue 15's case: a steel ball (5 mm radius, hex O-grid) strikes a clamped 4 mm plate at
+    // 200 m/s (scenes/ball_plate.toml, 20 us). With the plate in 12 x 12 elements a plate node
+    // lies right under the ball's pole node (to 1e-11 m); with 13 x 13 a face centre does. The
+    // ball's faces meet the plate at every angle. References:
+    // - geometry (non-penetration): in every frame (every 1 us; the ball moves 0.2 mm, under
+    //   half the plate, between two), no surface node of either body inside the other deeper
+    //   than 1e-3 of the plate's element (2.5 um at 12 x 12; the issue asks for 1 %): measured
+    //   2.8e-7 m and 6e-19 m; before the fix 0.53 mm (node under the pole) and, with the ball
+    //   meshed first (one pass: the plate's nodes against the ball's faces), 1.95 mm and 0.43 mm.
+    // - energy: the balance (the work of the clamped sides as external work) within the run's
+    //   own 5 % throughout (velocity Verlet's full-step kinetic energy carries its O(dt^2 |a|^2)
+    //   term while nodes are pushed back: measured 2.5e-3) and 1e-3 at the end (8.5e-5).
+    // - rank independence at np 1, 2, 3: the contact count of every step the same, every other
+    //   column of history.csv within 1e-10 of its largest value.
+    // - mesh order: the ball meshed first (-p BALL_FIRST=1) moves its top to within 1 % of the
+    //   same run with the plate first (measured 6e-12; 120 % before, the ball sunk 2 mm).
+    for np_plate in [12, 13] {
+        let element = 0.03 / np_plate as f64;
+        let mut histories = Vec::new();
+        let mut header = Vec::new();
+        for np in 1..=3 {
+            let out = ball_on_plate(np, np_plate, false);
+            let (h, rows) = read_csv(&out.join("history.csv"));
+            let contacts = column(&h, &rows, "contacts");
+            assert!(
+                contacts.iter().any(|&c| c > 0.0),
+                "NP {np_plate} np {np}: the ball never touched the plate"
+            );
+            let err = column(&h, &rows, "energy_error");
+            let err_max = err.iter().cloned().fold(0.0, f64::max);
+            let err_end = *err.last().unwrap();
+            assert!(
+                err_max < 0.05 && err_end < 1e-3,
+                "NP {np_plate} np {np}: energy error {err_max} at most (5 %), {err_end} at the end (1e-3)"
+            );
+            let fr = read_frames(&out);
+            let bodies = bodies(&fr.connectivity);
+            assert_eq!(bodies.len(), 2);
+            assert!(max_frame_motion(&fr) < 0.5 * 0.004);
+            let mut deepest = (0.0f64, 0.0f64, usize::MAX);
+            for (k, pos) in fr.positions.iter().enumerate() {
+                let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
+                if d > deepest.0 {
+                    deepest = (d, fr.times[k], n);
+                }
+            }
+            eprintln!(
+                "ball, plate {np_plate}^2, np {np}: deepest node inside the other body {:.3e} m (t = {:.3e}), energy error {err_max:.2e} at most, {err_end:.2e} at the end",
+                deepest.0, deepest.1
+            );
+            assert!(
+                deepest.0 < 1e-3 * element,
+                "NP {np_plate} np {np}: node {} is {} m inside the other body at t = {} (limit 1e-3 of the plate's {element} m element)",
+                deepest.2,
+                deepest.0,
+                deepest.1
+            );
+            header = h;
+            histories.push(rows);
+        }
+        for (k, rows) in histories.iter().enumerate().skip(1) {
+            let d = column_differences(&histories[0], rows);
+            for (c, col) in header.iter().enumerate() {
+                let tol = match col.as_str() {
+                    "contact_imbalance" | "contact_bytes" => continue,
+                    // Round-off around 0: relative to its own largest value, any order.
+                    "momentum_x" | "momentum_y" => continue,
+                    "contacts" | "step" => 0.0,
+                    _ => 1e-10,
+                };
+                assert!(
+                    d[c] <= tol,
+                    "NP {np_plate} np {}: history column {col} differs from np 1 by {:e} of its largest value (limit {tol:e})",
+                    k + 1,
+                    d[c]
+                );
+            }
+        }
+        let top = |out: &std::path::Path| {
+            let (h, rows) = read_csv(&out.join("probes.csv"));
+            *column(&h, &rows, "ball_top.displacement_z").last().unwrap()
+        };
+        let second = top(&ball_on_plate(2, np_plate, false));
+        let first = top(&ball_on_plate(2, np_plate, true));
+        let rel = (first - second).abs() / second.abs();
+        eprintln!("ball, plate {np_plate}^2: top displacement {second:.6e} m (plate first), {first:.6e} m (ball first): {rel:.2e}");
+        assert!(
+            rel < 0.01,
+            "NP {np_plate}: the ball's top moved {second} m with the plate meshed first, {first} m with the ball first ({rel:.3e}, limit 1 %)"
+        );
+    }
+}
+
+/// The checker by hand, on any run's output (two or more bodies): the deepest surface node of one
+/// body inside another, per frame. `TDYN_OUT=DIR cargo test --release -p tdyn-tests --test
+/// contact penetration_of_a_run -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn penetration_of_a_run() {
+    let out = std::path::PathBuf::from(std::env::var("TDYN_OUT").unwrap());
+    let fr = read_frames(&out);
+    let bodies = bodies(&fr.connectivity);
+    let mut worst = (0.0f64, 0.0f64, usize::MAX);
+    for (k, pos) in fr.positions.iter().enumerate() {
+        let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
+        if d > 0.0 {
+            eprintln!("t = {:.4e}: node {n} {d:.3e} m deep", fr.times[k]);
+        }
+        if d > worst.0 {
+            worst = (d, fr.times[k], n);
+        }
+    }
+    eprintln!(
+        "deepest {:.3e} m at t = {:.4e} (node {})",
+        worst.0, worst.1, worst.2
+    );
+}
+
+/// The block's slope of velocity_x over time (least squares over the last 80 % of the rows).
+fn fitted_acceleration(out: &std::path::Path) -> (f64, f64, f64) {
+    let (h, rows) = read_csv(&out.join("probes.csv"));
+    let t = column(&h, &rows, "time");
+    let v = column(&h, &rows, "block.velocity_x");
+    let d = column(&h, &rows, "block.displacement_x");
+    let k0 = t.len() / 5;
+    let (ts, vs) = (&t[k0..], &v[k0..]);
+    let n = ts.len() as f64;
+    let (mt, mv) = (ts.iter().sum::<f64>() / n, vs.iter().sum::<f64>() / n);
+    let num: f64 = ts.iter().zip(vs).map(|(x, y)| (x - mt) * (y - mv)).sum();
+    let den: f64 = ts.iter().map(|x| (x - mt) * (x - mt)).sum();
+    (num / den, *v.last().unwrap(), *d.last().unwrap())
+}
+
+#[test]
+fn block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_sticks_above_tan() {
+    // scenes/incline_friction.toml: gravity 9.81 m/s^2 tilted 30 degrees from the plate's
+    // normal. Coulomb (one coefficient, static = kinetic): a = g (sin 30 - mu cos 30), within
+    // 1 %, for mu = 0 (4.905 m/s^2) and 0.3 (2.356 m/s^2); for mu = 0.7 > tan 30 the block
+    // stays (its velocity under 1 % of the frictionless one at the end). The energy balance
+    // closes with the friction work in contact_energy (max_energy_error 5 %, the default,
+    // and energy_error at the end under 1e-4). At np 1 and 3.
+    let g = 9.81;
+    let (s, c) = (0.5f64, 3f64.sqrt() / 2.0);
+    let dir = workdir("incline_friction");
+    let text = std::fs::read_to_string(root().join("scenes/incline_friction.toml"))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()));
+    let mut v_free = 0.0;
+    for mu in [0.0, 0.3, 0.7] {
+        for np in [1, 3] {
+            let scene = dir.join(format!("incline_{mu}.toml"));
+            std::fs::write(
+                &scene,
+                text.replace("friction = 0.3", &format!("friction = {mu}")),
+            )
+            .unwrap();
+            let out = dir.join(format!("mu{mu}_np{np}"));
+            run_ok(np, &scene, &out);
+            let (a, v_end, _) = fitted_acceleration(&out);
+            let (hh, hist) = read_csv(&out.join("history.csv"));
+            let err = *column(&hh, &hist, "energy_error").last().unwrap();
+            assert!(err < 1e-4, "mu {mu} np {np}: energy error {err:e} (1e-4)");
+            let expected = g * (s - mu * c);
+            if expected > 0.0 {
+                assert!(
+                    (a - expected).abs() < 0.01 * expected,
+                    "mu {mu} np {np}: a = {a} m/s^2, g (sin - mu cos) = {expected} (1 %)"
+                );
+                if mu == 0.0 {
+                    v_free = v_end;
+                }
+            } else {
+                assert!(
+                    v_end.abs() < 0.01 * v_free,
+                    "mu {mu} np {np}: stays (velocity {v_end} m/s against {v_free} without friction)"
+                );
+            }
+        }
     }
 }

@@ -154,13 +154,18 @@ impl Mono {
 #[derive(Debug, Clone, Copy)]
 pub struct RefHit {
     pub xi: [f64; 2],
+    /// Outward normal of the face at `xi` (end configuration).
+    pub normal: V3,
     pub depth: f64,
     /// Smallest distance of a threshold test to its limit (parametric or length/face size).
     pub margin: f64,
 }
 
 /// The crossing rule (the same definition as the crate's, coded anew) with the margins of every
-/// test, whether it passes or not. `None` only where the projection failed.
+/// test, whether it passes or not. `None` only where the projection failed. Two branches: the end
+/// projection on the face (contact there), or off it (the path's crossing of the offset surface,
+/// interpolated between the start and end projections, must lie on the face; contact at that
+/// point clamped to the face, against the tangent plane there).
 pub fn reference_pair(
     x0: [V3; 4],
     x1: [V3; 4],
@@ -174,22 +179,44 @@ pub fn reference_pair(
     let (s, t) = m1.project(p1);
     let lim = 1.0 + param_tol;
     let size = Mono::diameter(&x1);
+    let tol = gap_tol * size;
     let mut margin = (lim - s.abs()).abs().min((lim - t.abs()).abs());
     let s1 = dot(sub(p1, m1.at(s, t)), m1.normal(s, t));
-    let depth = r - s1;
-    margin = margin.min(depth.abs() / size);
+    margin = margin.min((r - s1).abs() / size);
     let m0 = Mono::new(x0);
-    let s0 = dot(sub(p0, m0.at(s, t)), m0.normal(s, t));
-    margin = margin.min((s0 - (r - gap_tol * size)).abs() / size);
     let corner_motion = (0..4).map(|k| norm(sub(x1[k], x0[k]))).fold(0.0, f64::max);
-    let cap = norm(sub(p1, p0)) + corner_motion + r + gap_tol * size;
-    margin = margin.min((cap - depth).abs() / size);
-    let hit =
-        s.abs() <= lim && t.abs() <= lim && depth > 0.0 && s0 >= r - gap_tol * size && depth <= cap;
+    let cap = norm(sub(p1, p0)) + corner_motion + r + tol;
+    let (hit, xi, depth) = if s.abs() <= lim && t.abs() <= lim {
+        let depth = r - s1;
+        let s0 = dot(sub(p0, m0.at(s, t)), m0.normal(s, t));
+        margin = margin.min((s0 - (r - tol)).abs() / size);
+        margin = margin.min((cap - depth).abs() / size);
+        (depth > 0.0 && s0 >= r - tol && depth <= cap, [s, t], depth)
+    } else {
+        let (a, b) = m0.project(p0);
+        let s0 = dot(sub(p0, m0.at(a, b)), m0.normal(a, b));
+        margin = margin.min((s0 - (r - tol)).abs() / size);
+        let frac = if s0 > r { (s0 - r) / (s0 - s1) } else { 0.0 };
+        let c = [a + frac * (s - a), b + frac * (t - b)];
+        margin = margin.min((lim - c[0].abs()).abs().min((lim - c[1].abs()).abs()));
+        let xi = [c[0].clamp(-1.0, 1.0), c[1].clamp(-1.0, 1.0)];
+        let gap = sub(p1, m1.at(xi[0], xi[1]));
+        let depth = r - dot(gap, m1.normal(xi[0], xi[1]));
+        margin = margin.min(depth.abs() / size);
+        margin = margin.min((cap - norm(gap)).abs() / size);
+        let hit = s1 < r
+            && s0 >= r - tol
+            && c[0].abs() <= lim
+            && c[1].abs() <= lim
+            && depth > 0.0
+            && norm(gap) <= cap;
+        (hit, xi, depth)
+    };
     (
         if hit {
             Some(RefHit {
-                xi: [s, t],
+                xi,
+                normal: m1.normal(xi[0], xi[1]),
                 depth,
                 margin,
             })
@@ -330,12 +357,19 @@ pub fn random_scene(rng: &mut Rng, spec: &SceneSpec) -> Scene {
 }
 
 /// Reference search over all pairs: per node, the deepest crossing (then lowest face gid) under
-/// the body rules. Returns, per node gid with a contact, `(face gid, hit, runner-up depth)`, and
-/// the smallest margin met over all pairs (how close the configuration came to a threshold).
+/// the body rules. Returns, per node gid with a contact, `(face gid, hit, runner-up depth)`, the
+/// further contacts a node keeps (faces at an angle: each hit whose normal is more than 25
+/// degrees, |cos| < 0.9, from every kept one, deepest first, and, for a mesh node, whose face
+/// forms a valley with each kept one's) as (node gid, face gid), and the
+/// smallest margin met over all pairs (how close the configuration came to a threshold).
 pub struct RefResult {
     pub contacts: std::collections::BTreeMap<u64, (u64, RefHit, f64)>,
+    pub further: Vec<(u64, u64)>,
     pub min_margin: f64,
 }
+
+/// |cos| of the angle between two normals under which two hits of one node are one contact.
+pub const SAME_NORMAL_COS: f64 = 0.9;
 
 pub fn reference_search(
     scene: &Scene,
@@ -346,6 +380,7 @@ pub fn reference_search(
     use std::collections::{BTreeMap, HashMap};
     let by_gid: HashMap<u64, &NodeRecord> = scene.nodes.iter().map(|n| (n.gid, n)).collect();
     let mut contacts = BTreeMap::new();
+    let mut further = Vec::new();
     let mut min_margin = f64::INFINITY;
     for n in &scene.nodes {
         let particle = n.flags & FLAG_PARTICLE != 0;
@@ -385,10 +420,34 @@ pub fn reference_search(
         if let Some(best) = hits.first() {
             let runner_up = hits.get(1).map(|h| h.0).unwrap_or(f64::NEG_INFINITY);
             contacts.insert(n.gid, (best.1, best.2, runner_up));
+            // (normal, contact point, face centre) of each kept hit.
+            let geometry = |h: &(f64, u64, RefHit)| {
+                let f = scene.faces.iter().find(|f| f.gid == h.1).unwrap();
+                let m = Mono::new(f.nodes.map(|g| by_gid[&g].x1));
+                (h.2.normal, m.at(h.2.xi[0], h.2.xi[1]), m.at(0.0, 0.0))
+            };
+            let mut kept = vec![geometry(best)];
+            for h in &hits[1..] {
+                let (normal, at, centre) = geometry(h);
+                // A mesh node: only faces forming a valley with every kept one (each face's
+                // centre in front of the other's tangent plane at its contact point).
+                let valley = |k: &(V3, V3, V3)| {
+                    particle
+                        || (dot(k.0, sub(centre, k.1)) > 0.0 && dot(normal, sub(k.2, at)) > 0.0)
+                };
+                if kept
+                    .iter()
+                    .all(|k| dot(k.0, normal).abs() < SAME_NORMAL_COS && valley(k))
+                {
+                    kept.push((normal, at, centre));
+                    further.push((n.gid, h.1));
+                }
+            }
         }
     }
     RefResult {
         contacts,
+        further,
         min_margin,
     }
 }

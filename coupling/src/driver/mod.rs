@@ -14,7 +14,9 @@ use mpi::traits::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
+pub mod checkpoint;
 pub mod energy;
+pub mod outdir;
 pub mod outputs;
 pub mod probes;
 pub mod progress;
@@ -43,6 +45,14 @@ pub struct RunOptions {
     pub setup_only: bool,
     /// Algorithm choices for benchmarks and reference runs (`tdyn run` flags).
     pub algorithms: Algorithms,
+    /// Replace an earlier run's results in `out` (`tdyn run --overwrite`); without it an
+    /// earlier run is kept (driver::outdir).
+    pub overwrite: bool,
+    /// Continue the run whose checkpoint is in this folder (`tdyn run --restart DIR`).
+    pub restart: Option<PathBuf>,
+    /// Set (by a signal handler: Ctrl-C, SIGTERM) to stop at the next step with the output
+    /// closed and a checkpoint written.
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// Algorithm choices that do not change the answer, only how it is computed: the defaults are
@@ -200,6 +210,8 @@ pub enum FailureKind {
     Unstable,
     /// Another numerical failure (inverted element, Newton or KSP not converging).
     Failed,
+    /// Stopped by the user (Ctrl-C, SIGTERM): the output closed, a checkpoint written.
+    Stopped,
 }
 
 /// A run's error: its kind and the one line to print.
@@ -239,20 +251,16 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     opts.overrides.apply(&mut scene)?;
     setup::check_scene(&scene)?;
-    let out_dir = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(scene.file.file_stem().unwrap_or_default()));
+    let default_out = PathBuf::from("out").join(scene.file.file_stem().unwrap_or_default());
     let t_setup = Instant::now();
     let mut model = setup::build(world, &scene, &opts.algorithms)?;
     let stable0 = model.stable_dt(world);
     let forced = check_fixed_dt(world, &scene, &model, stable0, opts.quiet)?;
-    let setup_s = t_setup.elapsed().as_secs_f64();
     let mut clock = schedule::Clock::new(&scene, stable0);
     scene::check_work(&scene, clock.dt).map_err(|e| e.to_string())?;
     if opts.setup_only {
         return Ok(RunSummary {
-            out: out_dir,
+            out: opts.out.clone().unwrap_or(default_out),
             mode: scene.run.mode,
             steps: 0,
             energy_error_max: 0.0,
@@ -263,41 +271,80 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             loop_s: 0.0,
         });
     }
-    let mut outputs = outputs::Outputs::create(world, &out_dir, &scene, &model)?;
-    let mut check = EnergyCheck::new(&scene, &model, forced, stable0);
-    outputs.frame(0.0, &model)?;
-    outputs.dump(world, 0, false, &model)?;
-    outputs.rows(world, &model, &check.row(&clock, &model, 0.0))?;
-    let mut progress = progress::Progress::start(
-        world.rank() == 0 && !opts.quiet,
-        world.rank() == 0,
-        &start_info(world, &scene, &model, stable0, clock.dt),
+    let hash = checkpoint::scene_hash(
+        &std::fs::read_to_string(&scene.file).unwrap_or_default(),
+        &format!("{:?}", opts.overrides),
     );
-
-    let loop_t0 = Instant::now();
-    let output_s0 = outputs.wall_s;
-    while let Some(dt) = clock.next_step() {
-        let next = step::step(world, &mut model, dt).map_err(|e| check.failure(e))?;
-        clock.advance();
-        if let (true, Some(fe)) = (clock.fixed(), model.fe.as_mut()) {
-            fe.set_time(clock.time);
+    let mut check = EnergyCheck::new(&scene, &model, forced, stable0);
+    let restart = match &opts.restart {
+        Some(dir) => {
+            if opts.out.as_ref().is_some_and(|o| o != dir) {
+                return Err(format!(
+                    "--restart {} continues that run in its own folder: leave out --out",
+                    dir.display()
+                )
+                .into());
+            }
+            let (meta, state) =
+                checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
+            let restored: Result<(), String> = model
+                .stages_mut()
+                .into_iter()
+                .try_for_each(|s| s.restore(&state))
+                .and_then(|_| model.contact.as_mut().map_or(Ok(()), |c| c.restore(&state)));
+            collective::first_error(world, restored.err())?;
+            clock.restore(&meta.clock);
+            check.restore(&meta.check);
+            Some(meta)
         }
-        let err = check.after_step(world, &clock, &model, &mut outputs)?;
-        if clock.row_due() {
-            outputs.rows(world, &model, &check.row(&clock, &model, err))?;
-        }
-        if clock.frame_due() {
-            outputs.frame(clock.time, &model)?;
-        }
-        outputs.dump(world, clock.step, clock.at_end(), &model)?;
-        clock.propose(next);
-        progress.update(clock.step, clock.time, clock.fraction(), dt, err);
+        None => None,
+    };
+    let (out_dir, note) = match &opts.restart {
+        Some(dir) => (dir.clone(), None),
+        None => outdir::resolve(
+            world,
+            opts.out.as_deref(),
+            &default_out,
+            opts.overwrite,
+            false,
+        )?,
+    };
+    if let (Some(n), true) = (note, world.rank() == 0 && !opts.quiet) {
+        eprintln!("tdyn: {n}");
     }
-    progress.finish();
-    let loop_s = loop_t0.elapsed().as_secs_f64() - (outputs.wall_s - output_s0);
+    let setup_s = t_setup.elapsed().as_secs_f64();
+    let mut outputs = outputs::Outputs::create(world, &out_dir, &scene, &model, restart.as_ref())?;
+    let mut ctx = LoopCtx {
+        out_dir: &out_dir,
+        hash,
+        next_checkpoint: restart.as_ref().map_or(1, |m| m.next_checkpoint),
+        checkpoint_every: scene.output.checkpoint_every,
+    };
+    if restart.is_none() {
+        outputs.frame(0.0, &model)?;
+        outputs.dump(world, 0, false, &model)?;
+        outputs.rows(world, &model, &check.row(&clock, &model, 0.0))?;
+    } else if world.rank() == 0 && !opts.quiet {
+        eprintln!(
+            "tdyn: restarting from the checkpoint at step {}, t = {:e} s",
+            clock.step, clock.time
+        );
+    }
+    let loop_t0 = Instant::now();
+    let res = time_loop(
+        world,
+        &scene,
+        opts,
+        &mut model,
+        &mut clock,
+        &mut check,
+        &mut outputs,
+        &mut ctx,
+        stable0,
+    );
+    let loop_s = loop_t0.elapsed().as_secs_f64() - outputs.wall_s;
     let output_s = outputs.wall_s;
     let output_bytes = outputs.finish()?;
-
     let loop_s = collective::max(world, loop_s);
     let wall_s = collective::max(world, wall0.elapsed().as_secs_f64());
     report::write(
@@ -317,8 +364,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             dt_stable_initial: stable0,
             dt_min: clock.dt_min,
             hourglass: &check.hourglass,
+            failure: res.as_ref().err().map(|e| (e.kind, e.message.as_str())),
         },
     )?;
+    res?;
     let elements = model.fe.as_ref().map_or(0, |f| f.mesh.local.global_elems);
     Ok(RunSummary {
         out: out_dir,
@@ -335,6 +384,111 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         wall_s,
         loop_s,
     })
+}
+
+/// What the time loop needs besides the model, clock and files.
+struct LoopCtx<'a> {
+    out_dir: &'a std::path::Path,
+    hash: String,
+    next_checkpoint: u64,
+    checkpoint_every: Option<f64>,
+}
+
+/// The time loop: steps until the end time, with rows, frames, dumps, checkpoints, progress,
+/// and a clean stop when asked (collective).
+#[allow(clippy::too_many_arguments)]
+fn time_loop(
+    world: &SimpleCommunicator,
+    scene: &Scene,
+    opts: &RunOptions,
+    model: &mut Model,
+    clock: &mut schedule::Clock,
+    check: &mut EnergyCheck,
+    outputs: &mut outputs::Outputs,
+    ctx: &mut LoopCtx,
+    stable0: f64,
+) -> Result<(), RunFailure> {
+    let mut progress = progress::Progress::start(
+        world.rank() == 0 && !opts.quiet,
+        world.rank() == 0,
+        &start_info(world, scene, model, stable0, clock.dt),
+    );
+    while let Some(dt) = clock.next_step() {
+        let next = step::step(world, model, dt).map_err(|e| check.failure(e))?;
+        clock.advance();
+        if let (true, Some(fe)) = (clock.fixed(), model.fe.as_mut()) {
+            fe.set_time(clock.time);
+        }
+        let err = check.after_step(world, clock, model, outputs)?;
+        if clock.row_due() {
+            outputs.rows(world, model, &check.row(clock, model, err))?;
+        }
+        if clock.frame_due() {
+            outputs.frame(clock.time, model)?;
+        }
+        outputs.dump(world, clock.step, clock.at_end(), model)?;
+        clock.propose(next);
+        let stop = opts
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed));
+        let stop = collective::max(world, if stop { 1.0 } else { 0.0 }) > 0.0;
+        let due = ctx.checkpoint_every.is_some_and(|every| {
+            clock.time >= every * ctx.next_checkpoint as f64 - schedule::TIME_EPS_STEPS * dt
+                || clock.at_end()
+        });
+        if due || stop {
+            if let Some(every) = ctx.checkpoint_every {
+                while every * ctx.next_checkpoint as f64
+                    <= clock.time + schedule::TIME_EPS_STEPS * dt
+                {
+                    ctx.next_checkpoint += 1;
+                }
+            }
+            write_checkpoint(world, clock, check, outputs, model, ctx)?;
+        }
+        if stop {
+            progress.finish();
+            return Err(RunFailure::new(
+                FailureKind::Stopped,
+                format!(
+                    "stopped at step {}, t = {:e} s: the output is closed and a checkpoint written; `tdyn run {} --restart {}` continues",
+                    clock.step,
+                    clock.time,
+                    scene.file.display(),
+                    ctx.out_dir.display()
+                ),
+            ));
+        }
+        progress.update(clock.step, clock.time, clock.fraction(), dt, err);
+    }
+    progress.finish();
+    Ok(())
+}
+
+/// Writes a checkpoint of the run now (collective).
+fn write_checkpoint(
+    world: &SimpleCommunicator,
+    clock: &schedule::Clock,
+    check: &EnergyCheck,
+    outputs: &mut outputs::Outputs,
+    model: &Model,
+    ctx: &LoopCtx,
+) -> Result<(), String> {
+    outputs.flush_rows()?;
+    let (history_rows, probe_rows, frames) = outputs.progress();
+    let meta = checkpoint::Meta {
+        version: 1,
+        ranks: world.size(),
+        scene_hash: ctx.hash.clone(),
+        clock: clock.state(),
+        check: check.state(),
+        history_rows,
+        probe_rows,
+        frames,
+        next_checkpoint: ctx.next_checkpoint,
+    };
+    checkpoint::write(world, ctx.out_dir, &meta, model)
 }
 
 /// The start line's figures (collective: none; every rank has them).
@@ -443,6 +597,24 @@ impl EnergyCheck {
             err_max_checked: 0.0,
             hourglass: energy::HourglassWatch::new(scene),
         }
+    }
+
+    /// The state a checkpoint keeps.
+    fn state(&self) -> checkpoint::CheckState {
+        checkpoint::CheckState {
+            e0: self.e0,
+            err_max: self.err_max,
+            err_max_checked: self.err_max_checked,
+            hourglass: self.hourglass.clone(),
+        }
+    }
+
+    /// Continues from a checkpoint's state.
+    fn restore(&mut self, s: &checkpoint::CheckState) {
+        self.e0 = s.e0;
+        self.err_max = s.err_max;
+        self.err_max_checked = s.err_max_checked;
+        self.hourglass = s.hourglass.clone();
     }
 
     /// A history row now.

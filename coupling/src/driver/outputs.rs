@@ -76,12 +76,14 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// Creates the output folder and files (collective).
+    /// Creates the output folder and files (collective); with `restart`, reopens the run's
+    /// files instead, keeping what was written up to the checkpoint.
     pub fn create(
         world: &SimpleCommunicator,
         out_dir: &Path,
         scene: &Scene,
         model: &Model,
+        restart: Option<&super::checkpoint::Meta>,
     ) -> Result<Outputs, String> {
         let rank = world.rank();
         let mut err = None;
@@ -113,8 +115,12 @@ impl Outputs {
             elements: model.fe.as_ref().map_or(0, |f| f.mesh.local.global_elems),
             particles: model.sph.as_ref().map_or(0, |s| s.n_total),
         };
-        let writer = FieldWriter::create(world, out_dir, counts, &scene.output.fields)
-            .map_err(|e| format!("{}: {e}", out_dir.display()))?;
+        let fields = &scene.output.fields;
+        let writer = match restart {
+            None => FieldWriter::create(world, out_dir, counts, fields),
+            Some(m) => FieldWriter::reopen(world, out_dir, counts, fields, &m.frames),
+        }
+        .map_err(|e| format!("{}: {e}", out_dir.display()))?;
         let mut cols: Vec<String> = HISTORY_COLUMNS.iter().map(|c| c.to_string()).collect();
         if model.contact.is_some() {
             cols.extend(CONTACT_HISTORY_COLUMNS.iter().map(|c| c.to_string()));
@@ -123,17 +129,23 @@ impl Outputs {
             cols.extend(block_history_columns(scene));
         }
         let cols: Vec<&str> = cols.iter().map(|c| c.as_str()).collect();
-        let history = History::create(world, &out_dir.join("history.csv"), &cols)
-            .map_err(|e| e.to_string())?
-            .integer_columns(&HISTORY_INTEGER_COLUMNS);
         let mut probe_cols = vec!["time".to_string()];
         probe_cols.extend(model.probes.columns.iter().cloned());
         let probe_cols: Vec<&str> = probe_cols.iter().map(|s| s.as_str()).collect();
-        let probes = History::create(world, &out_dir.join("probes.csv"), &probe_cols)
-            .map_err(|e| e.to_string())?;
+        let (hpath, ppath) = (out_dir.join("history.csv"), out_dir.join("probes.csv"));
+        let opened = match restart {
+            None => History::create(world, &hpath, &cols)
+                .and_then(|h| History::create(world, &ppath, &probe_cols).map(|p| (h, p))),
+            Some(m) => History::reopen(world, &hpath, &cols, m.history_rows).and_then(|h| {
+                History::reopen(world, &ppath, &probe_cols, m.probe_rows).map(|p| (h, p))
+            }),
+        }
+        .map_err(|e| e.to_string());
+        crate::kernels::collective::first_error(world, opened.as_ref().err().cloned())?;
+        let (history, probes) = opened?;
         Ok(Outputs {
             writer,
-            history,
+            history: history.integer_columns(&HISTORY_INTEGER_COLUMNS),
             probes,
             mesh,
             particle_ranks: Vec::new(),
@@ -147,6 +159,17 @@ impl Outputs {
             rank,
             wall_s: 0.0,
         })
+    }
+
+    /// What a checkpoint keeps of the files: history and probe rows written, the frames.
+    pub fn progress(&self) -> (usize, usize, String) {
+        (self.history.rows(), self.probes.rows(), self.writer.index())
+    }
+
+    /// Flushes the CSV files (before a checkpoint names their row counts).
+    pub fn flush_rows(&mut self) -> Result<(), String> {
+        self.history.flush().map_err(|e| e.to_string())?;
+        self.probes.flush().map_err(|e| e.to_string())
     }
 
     /// Writes a frame of every stage at `time` (collective).

@@ -33,6 +33,8 @@ pub struct RunFigures<'a> {
     pub dt_min: f64,
     /// The blocks' hourglass watch.
     pub hourglass: &'a HourglassWatch,
+    /// How the run ended when it did not finish: the failure's kind and message.
+    pub failure: Option<(super::FailureKind, &'a str)>,
 }
 
 /// Writes `<out_dir>/report.json` (collective; rank 0 writes).
@@ -82,6 +84,22 @@ pub fn write(
     report.energy_error_max = f.energy_error_max;
     let ex = &mut report.extra;
     ex.insert("stages_skipped".into(), serde_json::Value::Object(skipped));
+    match f.failure {
+        None => {
+            ex.insert("status".into(), "finished".into());
+        }
+        Some((kind, message)) => {
+            let status = match kind {
+                super::FailureKind::Stopped => "stopped",
+                _ => "failed",
+            };
+            ex.insert("status".into(), status.into());
+            ex.insert(
+                "failure".into(),
+                serde_json::json!({ "kind": format!("{kind:?}").to_lowercase(), "message": message }),
+            );
+        }
+    }
     ex.insert(
         "energy_error_max_checked".into(),
         f.energy_error_max_checked.into(),

@@ -44,6 +44,28 @@ impl Clock {
         }
     }
 
+    /// The state a checkpoint keeps.
+    pub fn state(&self) -> super::checkpoint::ClockState {
+        super::checkpoint::ClockState {
+            step: self.step,
+            time: self.time,
+            dt: self.dt,
+            dt_min: self.dt_min,
+            next_frame: self.next_frame,
+            next_row: self.next_row,
+        }
+    }
+
+    /// Continues from a checkpoint's state.
+    pub fn restore(&mut self, s: &super::checkpoint::ClockState) {
+        self.step = s.step;
+        self.time = s.time;
+        self.dt = s.dt;
+        self.dt_min = s.dt_min;
+        self.next_frame = s.next_frame;
+        self.next_row = s.next_row;
+    }
+
     /// The size of the next step, clipped onto the end time, or `None` when the run is over.
     pub fn next_step(&mut self) -> Option<f64> {
         match self.fixed_dt {

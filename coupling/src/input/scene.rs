@@ -412,6 +412,10 @@ pub struct OutputDef {
     /// `dump custom` text file `dumps/dump.tdyn.<step>`; 0 (default) = none.
     #[serde(default)]
     pub dump_every: u64,
+    /// Every this many seconds of simulated time, a restart checkpoint in `checkpoint/` (also
+    /// at the end, and always at a clean stop); None (default): only at a clean stop.
+    #[serde(default)]
+    pub checkpoint_every: Option<f64>,
 }
 
 fn d_fields() -> Vec<String> {
@@ -423,6 +427,7 @@ impl Default for OutputDef {
         OutputDef {
             fields: d_fields(),
             dump_every: 0,
+            checkpoint_every: None,
         }
     }
 }
@@ -559,6 +564,19 @@ pub struct ContactDef {
     pub self_contact: bool,
     #[serde(default)]
     pub particles: bool,
+    /// Coulomb's coefficient between all contact pairs (static and kinetic), default 0.
+    #[serde(default)]
+    pub friction: f64,
+    /// 2 (default): every pair of bodies searched both ways; 1: one pass, the other bodies'
+    /// nodes against the faces of the `master` bodies only.
+    #[serde(default = "d_passes")]
+    pub passes: i64,
+    /// With `passes = 1`: the physical volumes whose bodies are masters.
+    #[serde(default)]
+    pub master: Vec<String>,
+}
+fn d_passes() -> i64 {
+    2
 }
 
 #[derive(Debug, Deserialize)]
@@ -715,6 +733,9 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     check_particles(&cx, &raw.particles, &materials)?;
     if let Some(s) = &raw.sph {
         check_sph(&cx, s)?;
+    }
+    if let Some(c) = &raw.contact {
+        check_contact(&cx, c)?;
     }
     check_probes(&cx, &raw.probe)?;
     check_output(&cx, &raw.output)?;
@@ -1356,6 +1377,44 @@ fn check_sph(cx: &Ctx, s: &SphDef) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// `[contact]`: one pass with master bodies or two without, a Coulomb coefficient >= 0.
+fn check_contact(cx: &Ctx, c: &ContactDef) -> Result<(), SceneError> {
+    match c.passes {
+        1 if c.master.is_empty() => {
+            return Err(cx.err(
+                "contact.master",
+                "passes = 1 needs the master bodies: master = [\"<physical volume>\", ...] \
+                 (the other bodies' nodes are searched against their faces)"
+                    .into(),
+            ))
+        }
+        2 if !c.master.is_empty() => {
+            return Err(cx.err(
+                "contact.master",
+                "a master is only read with passes = 1 (two passes search every pair of \
+                 bodies both ways)"
+                    .into(),
+            ))
+        }
+        1 | 2 => {}
+        n => {
+            return Err(cx.err(
+                "contact.passes",
+                format!(
+                    "expected 1 (one pass, master/slave) or 2 (both ways, the default), got {n}"
+                ),
+            ))
+        }
+    }
+    if !(c.friction >= 0.0 && c.friction.is_finite()) {
+        return Err(cx.err(
+            "contact.friction",
+            format!("expected Coulomb's coefficient >= 0, got {}", c.friction),
+        ));
+    }
+    Ok(())
+}
+
 /// `[[probe]]`: unique names, at least one field each.
 fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError> {
     let mut names: Vec<&str> = Vec::new();
@@ -1377,8 +1436,16 @@ fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// `[output]`: known field names.
+/// `[output]`: a positive checkpoint interval, known field names.
 fn check_output(cx: &Ctx, output: &OutputDef) -> Result<(), SceneError> {
+    if let Some(c) = output.checkpoint_every {
+        if !(c > 0.0 && c.is_finite()) {
+            return Err(cx.err(
+                "output.checkpoint_every",
+                format!("expected a positive interval in seconds, got {c}"),
+            ));
+        }
+    }
     for (i, f) in output.fields.iter().enumerate() {
         if !OUTPUT_FIELDS.contains(&f.as_str()) {
             return Err(cx.err(
@@ -1492,6 +1559,18 @@ pub fn validate_groups(
                     file,
                     key: format!("contact.surfaces[{i}]"),
                     message: format!("no physical surface \"{s}\" in the mesh (physical surfaces: {}; or \"exterior\")", list(surfaces)),
+                });
+            }
+        }
+        for (i, m) in c.master.iter().enumerate() {
+            if !volumes.contains(m) {
+                return Err(SceneError {
+                    file,
+                    key: format!("contact.master[{i}]"),
+                    message: format!(
+                        "no physical volume \"{m}\" in the mesh (physical volumes: {})",
+                        list(volumes)
+                    ),
                 });
             }
         }

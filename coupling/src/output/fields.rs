@@ -148,6 +148,7 @@ pub fn redistribute_by_id(
 }
 
 /// One dataset of a frame as the XDMF index needs to know it.
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Item {
     path: String,
     name: String,
@@ -156,6 +157,7 @@ struct Item {
 }
 
 /// Frames written so far (for the XDMF index).
+#[derive(serde::Serialize, serde::Deserialize)]
 struct FrameIndex {
     name: String,
     time: f64,
@@ -198,6 +200,50 @@ impl FieldWriter {
             frames: Vec::new(),
             bytes: 0,
         })
+    }
+
+    /// The frames written so far, as text a restart gives back to [`FieldWriter::reopen`].
+    pub fn index(&self) -> String {
+        serde_json::to_string(&self.frames).expect("the index serialises")
+    }
+
+    /// Reopens `dir/fields.h5` to continue a run (collective): the frames of `index` are
+    /// kept, any frame written after it (the run went on past its checkpoint) is removed, and
+    /// the XDMF index is rewritten.
+    pub fn reopen(
+        comm: &SimpleCommunicator,
+        dir: &Path,
+        counts: GlobalCounts,
+        fields: &[String],
+        index: &str,
+    ) -> Result<FieldWriter, OutputError> {
+        let frames: Vec<FrameIndex> = serde_json::from_str(index)
+            .map_err(|e| OutputError::Layout(format!("checkpoint's frame index: {e}")))?;
+        let raw = comm.as_raw();
+        let file = hdf5::File::with_options()
+            .with_fapl(|p| p.mpio(raw, None))
+            .open_rw(dir.join("fields.h5"))?;
+        let group = file.group("frames")?;
+        let mut names = group.member_names()?;
+        names.sort();
+        for n in names {
+            if !frames.iter().any(|f| f.name == n) {
+                group.unlink(&n)?;
+            }
+        }
+        let w = FieldWriter {
+            comm: comm.duplicate(),
+            file,
+            dir: dir.to_path_buf(),
+            counts,
+            fields: fields.to_vec(),
+            frames,
+            bytes: 0,
+        };
+        if comm.rank() == 0 {
+            w.write_xdmf()?;
+        }
+        Ok(w)
     }
 
     /// Bytes of field data this rank wrote.

@@ -39,6 +39,48 @@ impl History {
         })
     }
 
+    /// Reopens the file to continue a run (rank 0): the header and the first `rows` rows are
+    /// kept (rows written after a checkpoint are dropped), then rows are appended.
+    pub fn reopen(
+        comm: &SimpleCommunicator,
+        path: &Path,
+        columns: &[&str],
+        rows: usize,
+    ) -> std::io::Result<History> {
+        let out = if comm.rank() == 0 {
+            let text = std::fs::read_to_string(path)?;
+            let mut keep: String = text
+                .lines()
+                .take(rows + 1)
+                .flat_map(|l| [l, "\n"])
+                .collect();
+            if !keep.starts_with(&columns.join(",")) {
+                return Err(std::io::Error::other(format!(
+                    "{}: its columns are not this run's",
+                    path.display()
+                )));
+            }
+            let tmp = path.with_extension("csv.tmp");
+            std::fs::write(&tmp, std::mem::take(&mut keep))?;
+            std::fs::rename(&tmp, path)?;
+            let f = std::fs::OpenOptions::new().append(true).open(path)?;
+            Some(BufWriter::new(f))
+        } else {
+            None
+        };
+        Ok(History {
+            out,
+            rows,
+            columns: columns.iter().map(|c| c.to_string()).collect(),
+            integer: vec![false; columns.len()],
+        })
+    }
+
+    /// Rows written so far (the header not counted).
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
     /// Writes the columns named in `names` as integers (those present; others are ignored).
     pub fn integer_columns(mut self, names: &[&str]) -> History {
         for (c, int) in self.columns.iter().zip(self.integer.iter_mut()) {
@@ -47,21 +89,28 @@ impl History {
         self
     }
 
-    /// Writes one row (rank 0; a no-op elsewhere).
+    /// Writes one row (rank 0; a no-op elsewhere). The row is formatted whole and the buffer
+    /// is flushed before a row that would not fit in it, so every write to the file ends at a
+    /// row's end: a run killed at any moment leaves only whole rows.
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
         if let Some(w) = &mut self.out {
+            let mut line = Vec::with_capacity(24 * values.len());
             for (k, v) in values.iter().enumerate() {
                 if k > 0 {
-                    w.write_all(b",")?;
+                    line.push(b',');
                 }
                 // Integer columns hold counts (exact in f64 below 2^53).
                 if self.integer.get(k).copied().unwrap_or(false) && v.is_finite() {
-                    write!(w, "{}", *v as i64)?;
+                    write!(line, "{}", *v as i64)?;
                 } else {
-                    write!(w, "{v:?}")?;
+                    write!(line, "{v:?}")?;
                 }
             }
-            w.write_all(b"\n")?;
+            line.push(b'\n');
+            if w.buffer().len() + line.len() > w.capacity() {
+                w.flush()?;
+            }
+            w.write_all(&line)?;
             self.rows += 1;
             if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
                 w.flush()?;

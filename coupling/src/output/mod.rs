@@ -4,6 +4,7 @@ mod dump;
 mod fields;
 mod history;
 mod report;
+pub mod state;
 
 pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{

@@ -164,7 +164,7 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
     let p = comm.size() as u64;
     let me = comm.rank() as u64;
     let n_faces = 400;
-    let mut stage = ContactStage::new(comm, false);
+    let mut stage = ContactStage::new(comm, false, false);
     let mut total_contacts = 0;
     let mut lines = Vec::new();
     let steps = 9;

@@ -6,6 +6,7 @@
 //! interface the driver's step is written against. The contact stage works between them: it
 //! takes both stages' contact nodes after the drift and corrects them
 //! (`contact::Contact::step`).
+use crate::output::state::{StateReader, StateWriter};
 use crate::output::Report;
 use mpi::topology::SimpleCommunicator;
 
@@ -75,4 +76,8 @@ pub trait Stage {
     /// Writes the stage's section and figures into the report (collective). `loop_s` is the
     /// time loop's wall time without output (max over ranks).
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64);
+    /// Writes this rank's restart state (`driver::checkpoint`).
+    fn save(&self, w: &mut StateWriter);
+    /// Sets the state `save` wrote, on the same ranks.
+    fn restore(&mut self, r: &StateReader) -> Result<(), String>;
 }

@@ -5,8 +5,10 @@
 //! the bodies (the `contact` crate), keeps the faces of the scene's `[contact] surfaces` (a
 //! boundary face all four of whose nodes lie on one of the named physical surfaces; every
 //! boundary face for `"exterior"`), and sends each face to the rank of its element and each
-//! contact node's body to the node's owner. Each step the FE rank then hands the contact stage
-//! its owned contact nodes and its faces with their nodes' records.
+//! contact node's body to the node's owner; the master bodies of a one-pass search (`[contact]
+//! passes = 1`: the bodies with an element in a `master` volume) go to every rank. Each step the
+//! FE rank then hands the contact stage its owned contact nodes and its faces with their nodes'
+//! records (flagged `contact::FLAG_MASTER` on a master body).
 use bytemuck::{Pod, Zeroable};
 use contact::{FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
@@ -39,6 +41,8 @@ pub struct FeContact {
     pub global_faces: u64,
     /// Bodies in the mesh.
     pub n_bodies: u32,
+    /// Whether each body is a master of the one-pass search (all false with two passes).
+    pub master_body: Vec<bool>,
 }
 
 fn gatherv_u64(comm: &SimpleCommunicator, mine: &[u64]) -> (Vec<u64>, Vec<i32>, Vec<i32>) {
@@ -97,11 +101,13 @@ fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> 
 
 impl FeContact {
     /// Finds the contact faces and nodes (collective). `surface_bits`: the bits (in
-    /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`.
+    /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`. `master_volumes`:
+    /// the gmsh tags of the physical volumes whose bodies are masters (`[contact] master`).
     pub fn build(
         comm: &SimpleCommunicator,
         mesh: &LocalMesh,
         surface_bits: Option<u32>,
+        master_volumes: &[i32],
     ) -> FeContact {
         let me = comm.rank();
         // Elements: (elem gid, 8 node gids); owned nodes: (gid, surface bits).
@@ -117,10 +123,17 @@ impl FeContact {
             .filter(|&n| mesh.owned[n])
             .flat_map(|n| [mesh.node_id[n], mesh.node_surfaces[n] as u64])
             .collect();
+        let in_master: Vec<u64> = mesh
+            .elem_block
+            .iter()
+            .map(|t| master_volumes.contains(t) as u64)
+            .collect();
         let (all_e, counts_e, _) = gatherv_u64(comm, &elems);
+        let (all_master, _, _) = gatherv_u64(comm, &in_master);
         let (all_n, counts_n, _) = gatherv_u64(comm, &nodes);
         let mut per_rank: Vec<Vec<u64>> = Vec::new();
         let mut n_bodies = 0u32;
+        let mut master_body: Vec<u64> = Vec::new();
         let mut global_faces = 0u64;
         if me == 0 {
             let p = comm.size() as usize;
@@ -129,8 +142,8 @@ impl FeContact {
             for (r, &c) in counts_e.iter().enumerate() {
                 elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
             }
-            // In element gid order, so that bodies (numbered by their first element) and with
-            // them the one-pass search direction do not depend on the rank count.
+            // In element gid order, so that bodies (numbered by their first element) do not
+            // depend on the rank count.
             let mut order: Vec<usize> = (0..elem_rank.len()).collect();
             order.sort_unstable_by_key(|&k| all_e[9 * k]);
             let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
@@ -151,6 +164,10 @@ impl FeContact {
             }
             let surf = contact::surfaces(&hexes, |_| true);
             n_bodies = surf.n_bodies;
+            master_body = vec![0u64; n_bodies as usize];
+            for (e, &k) in order.iter().enumerate() {
+                master_body[surf.element_body[e] as usize] |= all_master[k];
+            }
             // Keep a face when all four nodes share a named surface bit.
             let mut kept = Vec::new();
             for f in &surf.faces {
@@ -197,6 +214,8 @@ impl FeContact {
         let mine = scatterv_u64(comm, per_rank);
         let mut gf = [global_faces, n_bodies as u64];
         comm.process_at_rank(0).broadcast_into(&mut gf[..]);
+        master_body.resize(gf[1] as usize, 0);
+        comm.process_at_rank(0).broadcast_into(&mut master_body[..]);
         let local: HashMap<u64, u32> = mesh
             .node_id
             .iter()
@@ -210,6 +229,7 @@ impl FeContact {
         let mut out = FeContact {
             global_faces: gf[0],
             n_bodies: gf[1] as u32,
+            master_body: master_body.iter().map(|&m| m != 0).collect(),
             ..Default::default()
         };
         for c in mine[..split].chunks(8) {
@@ -237,12 +257,17 @@ impl FeContact {
         out
     }
 
+    /// Node `n`'s record (gid 0) as a node of `body`.
     fn record(&self, fe: &ExplicitFe, n: u32, body: u32, infinite: &[bool]) -> NodeRecord {
         let i = n as usize;
         NodeRecord {
             gid: 0,
             body,
-            flags: 0,
+            flags: if self.master_body[body as usize] {
+                contact::FLAG_MASTER
+            } else {
+                0
+            },
             mass: if infinite[i] {
                 f64::INFINITY
             } else {
@@ -289,18 +314,6 @@ impl FeContact {
             self.node_records(fe, node_gid),
             self.face_records(fe, node_gid),
         )
-    }
-
-    /// Adds forces on the corners of this rank's faces (aligned with `records`' faces) to the
-    /// per-local-node array (a corner may be a ghost: the FE ghost sum takes it to the owner).
-    pub fn add_corner_forces(&self, out: &mut [[f64; 3]], corner: &[[[f64; 3]; 4]]) {
-        for ((_, loc), fc) in self.faces.iter().zip(corner) {
-            for k in 0..4 {
-                for c in 0..3 {
-                    out[loc[k] as usize][c] += fc[k][c];
-                }
-            }
-        }
     }
 
     /// Spreads the forces the contact stage returned (aligned with `records`' nodes) onto a

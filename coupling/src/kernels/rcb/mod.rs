@@ -138,6 +138,25 @@ impl Rcb {
         &self.tree
     }
 
+    /// The cuts of the last balance, node by node (None before the first): what a restart
+    /// needs to start the next balance from the same cuts.
+    pub fn cuts(&self) -> Option<Vec<Cut>> {
+        self.has_cuts
+            .then(|| self.tree.nodes.iter().map(|n| n.cut).collect())
+    }
+
+    /// Sets the cuts [`Rcb::cuts`] gave (the same rank count); `false` when they do not fit.
+    pub fn set_cuts(&mut self, cuts: &[Cut]) -> bool {
+        if cuts.len() != self.tree.nodes.len() {
+            return false;
+        }
+        for (n, c) in self.tree.nodes.iter_mut().zip(cuts) {
+            n.cut = *c;
+        }
+        self.has_cuts = true;
+        true
+    }
+
     /// Forgets the previous cuts: the next balance starts from scratch.
     pub fn reset(&mut self) {
         self.has_cuts = false;

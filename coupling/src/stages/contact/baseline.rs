@@ -10,9 +10,10 @@
 //! 2. each face (on the FE rank of its element) goes to every other rank whose box its search
 //!    box overlaps (the same search box, grown by the zone of influence, as the dynamic stage);
 //! 3. each rank searches its FE-owned nodes against its own faces and the faces it received
-//!    (the `contact` crate) and computes the push-back;
-//! 4. forces on copies of face nodes go back, with the face, to the face's FE rank, which adds
-//!    them to its (owned or ghost) copy of the node; the FE ghost sum does the rest.
+//!    (the `contact` crate);
+//! 4. the push-back of all contacts is solved together, as the dynamic stage solves it (its
+//!    step 7b, `stage::solve_together`), and each rank keeps the forces on its FE-owned nodes
+//!    (every face corner is a contact node, FE-owned by some rank).
 //!
 //! The contacts found are the same as the dynamic stage's (a node is searched by its FE owner,
 //! once; a face reaches every rank that owns a node whose search box meets it). What differs is
@@ -21,9 +22,7 @@
 //! contact surfaces.
 use crate::kernels::comm::CommPlan;
 use crate::stages::contact::stage::{ContactOutcome, FullFace};
-use contact::{
-    face_records_search_aabb, push_back, search, Aabb, NodeRecord, PushBackParams, SearchParams,
-};
+use contact::{face_records_search_aabb, search, Aabb, NodeRecord, SearchParams};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -33,31 +32,13 @@ use std::time::Instant;
 /// Bytes of one rank's box in the all-gather (six f64).
 const BOX_BYTES: u64 = 48;
 
-/// One baseline step's result: the dynamic stage's outcome (forces aligned with the nodes
-/// handed in) plus forces on the corners of the faces handed in, for corners that are not among
-/// this rank's nodes (they go to this rank's copy of the node).
-#[derive(Clone, Debug, Default)]
-pub struct BaselineOutcome {
-    /// Forces on the nodes handed in, contacts, work, balance, bytes, time.
-    pub outcome: ContactOutcome,
-    /// Per face handed in, the forces on its four corners (zero where the corner is one of
-    /// this rank's nodes: that force is in `outcome.force`), N.
-    pub corner_force: Vec<[[f64; 3]; 4]>,
-}
-
-/// Where a copy of a face node came from: (face index in the sender's list or in the received
-/// list, corner).
-#[derive(Clone, Copy)]
-enum Origin {
-    Own(usize, usize),
-    Received(usize, usize),
-}
-
 /// The baseline contact stage of one run.
 pub struct BaselineStage {
     comm: SimpleCommunicator,
     /// Search parameters (the dynamic stage's).
     pub params: SearchParams,
+    /// Coulomb's friction coefficient (the dynamic stage's).
+    pub friction: f64,
 }
 
 impl BaselineStage {
@@ -66,6 +47,7 @@ impl BaselineStage {
         BaselineStage {
             comm: comm.duplicate(),
             params,
+            friction: 0.0,
         }
     }
 
@@ -76,7 +58,7 @@ impl BaselineStage {
         nodes: &[NodeRecord],
         faces: &[FullFace],
         dt: f64,
-    ) -> Result<BaselineOutcome, String> {
+    ) -> Result<ContactOutcome, String> {
         let t0 = Instant::now();
         let comm = &self.comm;
         let me = comm.rank() as usize;
@@ -140,57 +122,43 @@ impl BaselineStage {
         let n_owned = recs.len();
         let mut index: HashMap<u64, usize> =
             recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
-        let mut origin: Vec<Origin> = Vec::new();
         let mut face_recs = Vec::with_capacity(faces.len() + received.len());
-        let lists = [(faces, true), (&received[..], false)];
-        for (list, own) in lists {
-            for (i, f) in list.iter().enumerate() {
-                for (k, r) in f.nodes.iter().enumerate() {
-                    index.entry(r.gid).or_insert_with(|| {
-                        recs.push(*r);
-                        origin.push(if own {
-                            Origin::Own(i, k)
-                        } else {
-                            Origin::Received(i, k)
-                        });
-                        recs.len() - 1
-                    });
-                }
-                face_recs.push(f.face);
+        for f in faces.iter().chain(&received) {
+            for r in &f.nodes {
+                index.entry(r.gid).or_insert_with(|| {
+                    recs.push(*r);
+                    recs.len() - 1
+                });
             }
+            face_recs.push(f.face);
         }
         let work_items = (n_owned + face_recs.len()) as f64;
         let b = crate::stages::contact::stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let contacts = search(&b, &self.params);
-        let pb = push_back(&b, &contacts, &PushBackParams::new(dt));
-
-        // 4. Forces on copies back to the faces' FE ranks.
-        let mut corner_force = vec![[[0.0f64; 3]; 4]; faces.len()];
-        let mut back = vec![[[0.0f64; 3]; 4]; received.len()];
-        for (j, o) in origin.iter().enumerate() {
-            let f = pb.force[n_owned + j];
-            let slot = match *o {
-                Origin::Own(i, k) => &mut corner_force[i][k],
-                Origin::Received(i, k) => &mut back[i][k],
-            };
-            for c in 0..3 {
-                slot[c] += f[c];
-            }
-        }
-        let returned = plan.reverse(&back);
         bytes += plan.bytes_sent;
-        for (g, fc) in ghost_of.iter().zip(&returned) {
-            for k in 0..4 {
-                for c in 0..3 {
-                    corner_force[*g][k][c] += fc[k][c];
-                }
-            }
-        }
+
+        // 4. The push-back of all contacts together (the dynamic stage's step 7b): two contacts
+        // sharing nodes, found on different ranks (a touching pair found from both sides by
+        // the two passes), are solved as one.
+        let owned: Vec<u64> = nodes.iter().map(|r| r.gid).collect();
+        let (force, pb_work, gather_bytes) = crate::stages::contact::stage::solve_together(
+            comm,
+            &[(&b, &contacts[..])],
+            &owned,
+            dt,
+            self.friction,
+        )?;
+        bytes += gather_bytes;
 
         // Statistics, as the dynamic stage reports them.
         let mut sums = [0.0f64; 4];
         comm.all_reduce_into(
-            &[contacts.len() as f64, pb.work, bytes as f64, work_items][..],
+            &[
+                contacts.len() as f64,
+                if me == 0 { pb_work } else { 0.0 },
+                bytes as f64,
+                work_items,
+            ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
@@ -201,26 +169,23 @@ impl BaselineStage {
             SystemOperation::max(),
         );
         let mean = sums[3] / p as f64;
-        Ok(BaselineOutcome {
-            outcome: ContactOutcome {
-                force: pb.force[..n_owned].to_vec(),
-                contacts: sums[0] as u64,
-                found: contacts
-                    .iter()
-                    .map(|c| (c.node_gid, c.face_gid, c.depth))
-                    .collect(),
-                work: sums[1],
-                imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
-                work_items_max: maxes[0],
-                work_items_total: sums[3],
-                bytes_sent: sums[2] as u64,
-                rcb: Default::default(),
-                wall_s: maxes[1],
-                // the baseline searches where the nodes live: no transfer between
-                // decompositions
-                transfer: Default::default(),
-            },
-            corner_force,
+        Ok(ContactOutcome {
+            force,
+            contacts: sums[0] as u64,
+            found: contacts
+                .iter()
+                .map(|c| (c.node_gid, c.face_gid, c.depth))
+                .collect(),
+            work: sums[1],
+            imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
+            work_items_max: maxes[0],
+            work_items_total: sums[3],
+            bytes_sent: sums[2] as u64,
+            rcb: Default::default(),
+            wall_s: maxes[1],
+            // the baseline searches where the nodes live: no transfer between
+            // decompositions
+            transfer: Default::default(),
         })
     }
 }

@@ -115,6 +115,8 @@ pub struct Contact {
     /// (the mesh's node count, so no particle id meets a node id).
     particles: bool,
     particle_gid_offset: u64,
+    /// Search passes between bodies (`[contact] passes`: 2, or 1 with master bodies).
+    passes: i64,
     /// Energy taken by the push-back (minus the work of the contact forces), J.
     pub energy: f64,
     /// What it found and cost.
@@ -146,17 +148,26 @@ impl Contact {
             }
             Some(b)
         };
-        let fe_side = FeContact::build(world, local, bits);
+        // The master bodies of a one-pass search: those with an element in a `master` volume.
+        let master: Vec<i32> = def
+            .master
+            .iter()
+            .filter_map(|m| groups.volumes.get(m).copied())
+            .collect();
+        let fe_side = FeContact::build(world, local, bits, &master);
         if fe_side.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
                 def.surfaces
             ));
         }
-        let mut dynamic = ContactStage::new(world, def.self_contact);
+        let mut dynamic = ContactStage::new(world, def.self_contact, def.passes == 1);
         dynamic.configure(choice.kept, choice.skins);
+        dynamic.friction = def.friction;
         let search = if choice.static_decomposition {
-            Search::Baseline(BaselineStage::new(world, dynamic.params))
+            let mut b = BaselineStage::new(world, dynamic.params);
+            b.friction = def.friction;
+            Search::Baseline(b)
         } else {
             Search::Dynamic(dynamic)
         };
@@ -166,6 +177,7 @@ impl Contact {
             node_gid: local.node_id.clone(),
             particles: def.particles && with_particles && !choice.static_decomposition,
             particle_gid_offset: local.global_nodes,
+            passes: def.passes,
             energy: 0.0,
             stats: ContactStats {
                 last_imbalance: 1.0,
@@ -204,12 +216,11 @@ impl Contact {
             Search::Baseline(stage) => {
                 // the benchmark baseline searches mesh nodes only (`particles` is off)
                 let faces = self.fe_side.face_records(fe.state(), &self.node_gid);
-                let b = stage.step(&nodes[..n_fe], &faces, dt)?;
-                let mut f = self
+                let out = stage.step(&nodes[..n_fe], &faces, dt)?;
+                let f = self
                     .fe_side
-                    .forces_on_nodes(fe.state().n_nodes(), &b.outcome.force);
-                self.fe_side.add_corner_forces(&mut f, &b.corner_force);
-                (b.outcome, f)
+                    .forces_on_nodes(fe.state().n_nodes(), &out.force);
+                (out, f)
             }
         };
         let Fe {
@@ -228,6 +239,35 @@ impl Contact {
         self.energy -= collective::sum(world, w);
         self.stats.add(&out);
         self.stats.wall_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Writes this rank's restart state: the contact energy and the last step's figures. The
+    /// decomposition and candidate lists are rebuilt at the first step after a restart (the
+    /// kept ones give the contacts of a rebuild: `stage`).
+    pub fn save(&self, w: &mut crate::output::state::StateWriter) {
+        let c = &self.stats;
+        w.put(
+            "contact.state",
+            &[self.energy, c.last_imbalance, c.last_bytes],
+        );
+        w.put("contact.contacts", &[c.contacts]);
+    }
+
+    /// Sets the state `save` wrote.
+    pub fn restore(&mut self, r: &crate::output::state::StateReader) -> Result<(), String> {
+        let s: Vec<f64> = r.get("contact.state")?;
+        if s.len() != 3 {
+            return Err("checkpoint: contact.state".into());
+        }
+        self.energy = s[0];
+        self.stats.last_imbalance = s[1];
+        self.stats.last_bytes = s[2];
+        self.stats.contacts = r
+            .get::<u64>("contact.contacts")?
+            .first()
+            .copied()
+            .unwrap_or(0);
         Ok(())
     }
 
@@ -309,5 +349,8 @@ impl Contact {
         );
         ex.insert("contact_faces".into(), self.fe_side.global_faces.into());
         ex.insert("contact_bodies".into(), self.fe_side.n_bodies.into());
+        ex.insert("contact_passes".into(), self.passes.into());
+        let masters = self.fe_side.master_body.iter().filter(|&&m| m).count();
+        ex.insert("contact_master_bodies".into(), masters.into());
     }
 }

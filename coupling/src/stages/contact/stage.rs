@@ -25,6 +25,17 @@
 //! twice. The push-back of all contacts is solved together (step 7b: the step's contacts are
 //! gathered on every rank and solved as one box, Gauss-Seidel in the `contact` crate), so the
 //! forces do not depend on where the cuts fall; each rank keeps those of its contact nodes.
+//!
+//! The search is two-pass by default (`[contact] passes = 2`: every pair of bodies both ways), so
+//! a touching pair of surfaces is usually found from both sides, a node of each in a face of the
+//! other, often in different boxes. Solved box by box, each box would remove the whole
+//! penetration and the pair would be pushed apart twice (why the stage once searched one pass,
+//! the later body's nodes against the earlier body's faces: the answer then depended on the order
+//! of the bodies in the mesh, a ball meshed before its plate sank 2 mm into it). In the one
+//! solve of step 7b the two descriptions of one gap are two rows of one system on the same
+//! nodes, which share the impulse (`contact::push_back`). A push-back solved where the contacts
+//! were found must keep that: the two passes' contacts of a pair share nodes, so they are among
+//! the contacts coupled across boxes that such a solve exchanges.
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::{CutTree, Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
@@ -46,7 +57,8 @@ use std::time::Instant;
 /// a few steps and is then never found again (it started the step behind the face). Measured
 /// on `tube_crush` (nodes on the folds' creases, which lie on the opposite wall's face seams):
 /// 0.32 mm (a third of the wall) inside the wall at 1e-6, 1e-9 m at 0.02. A node near a seam
-/// may then be found against both faces; the search keeps the deeper. Used for self-contact
+/// may then be found against both faces; the search keeps the deeper (both where their normals
+/// differ by more than 25 degrees: `contact::search::SAME_NORMAL_COS`). Used for self-contact
 /// pairs only: between bodies the crate's default keeps contacts of neighbouring faces apart,
 /// whose push-backs, when they land in different contact boxes, are solved separately (with
 /// 0.02 between bodies too, `underwater_explosion`'s plug moved 1.4 % differently at np 1 and 3).
@@ -133,13 +145,15 @@ struct ContactPacket {
 }
 
 /// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
-/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact nodes), the push-back's work (the
-/// same on every rank) and the bytes this rank sent.
-fn solve_together(
-    comm: &Rc<SimpleCommunicator>,
+/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact
+/// nodes), the push-back's work (the same on every rank) and the bytes this rank sent. The
+/// static-decomposition baseline solves its contacts with it too.
+pub(crate) fn solve_together(
+    comm: &SimpleCommunicator,
     parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
+    friction: f64,
 ) -> Result<(Vec<[f64; 3]>, f64, u64), String> {
     let mut mine: Vec<ContactPacket> = Vec::new();
     for (b, contacts) in parts {
@@ -203,7 +217,14 @@ fn solve_together(
             ..p.contact
         })
         .collect();
-    let pb = push_back(&gb, &gc, &PushBackParams::new(dt));
+    let pb = push_back(
+        &gb,
+        &gc,
+        &PushBackParams {
+            friction,
+            ..PushBackParams::new(dt)
+        },
+    );
     for (i, g) in owned.iter().enumerate() {
         if let Some(&k) = slot.get(g) {
             force[i] = pb.force[k];
@@ -332,6 +353,8 @@ pub struct ContactStage {
     pub rebuilds: RebuildStats,
     /// The contact work's imbalance at the last step.
     last_imbalance: f64,
+    /// Coulomb's friction coefficient of every contact pair (`[contact] friction`).
+    pub friction: f64,
 }
 
 impl ContactStage {
@@ -346,15 +369,16 @@ impl ContactStage {
         }
     }
 
-    /// A stage over `comm` (collective).
-    pub fn new(comm: &SimpleCommunicator, self_contact: bool) -> ContactStage {
+    /// A stage over `comm` (collective): pairs within one body too with `self_contact`, one
+    /// pass between master bodies and the others with `one_pass` (see `contact::SearchParams`).
+    pub fn new(comm: &SimpleCommunicator, self_contact: bool, one_pass: bool) -> ContactStage {
         ContactStage {
             comm: Rc::new(comm.duplicate()),
             rcb: Rcb::new(comm),
             tree: None,
             params: SearchParams {
                 self_contact,
-                one_pass: true,
+                one_pass,
                 self_param_tol: MESH_PARAM_TOL,
                 ..SearchParams::default()
             },
@@ -367,6 +391,7 @@ impl ContactStage {
             skins: (GHOST_SKIN_STEPS, CANDIDATE_SKIN_STEPS),
             rebuilds: RebuildStats::default(),
             last_imbalance: 1.0,
+            friction: 0.0,
         }
     }
 
@@ -587,7 +612,8 @@ impl ContactStage {
         if let Some((_, pb, _)) = &st.pbox {
             parts.push((pb, &pcontacts[..]));
         }
-        let (owned_force, pb_work, gather_bytes) = solve_together(comm, &parts, &owned_gids, dt)?;
+        let (owned_force, pb_work, gather_bytes) =
+            solve_together(comm, &parts, &owned_gids, dt, self.friction)?;
         bytes += gather_bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
@@ -772,7 +798,7 @@ impl ContactStage {
         // `bytes_sent`); contacts are few next to the nodes searched.
         let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
         let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt)?;
+            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt, self.friction)?;
         bytes += gather_bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
@@ -937,6 +963,7 @@ fn particle_box(b: &ContactBox, particles: &[CNode]) -> Option<ContactBox> {
     q.mass.extend_from_slice(&n.mass);
     q.radius.extend_from_slice(&n.radius);
     q.particle.extend_from_slice(&n.particle);
+    q.master.extend_from_slice(&n.master);
     q.x0.extend_from_slice(&n.x0);
     q.x1.extend_from_slice(&n.x1);
     q.v.extend_from_slice(&n.v);

@@ -5,6 +5,7 @@
 use super::{Stage, StageEnergies, StageError};
 use crate::input::scene::Scene;
 use crate::kernels::collective::{self, first_error};
+use crate::output::state::{StateReader, StateWriter};
 use crate::output::{Report, StageStats};
 use fe_petsc::explicit::{ExplicitFe, ExplicitSetup, StepError};
 use fe_petsc::hex::HexControls;
@@ -216,6 +217,25 @@ impl Stage for Fe {
 
     fn wall_s(&self) -> f64 {
         self.wall_s
+    }
+
+    fn save(&self, w: &mut StateWriter) {
+        let arrays = match &self.integrator {
+            Integrator::Explicit(fe) => fe.restart_state(),
+            Integrator::Implicit(imp) => imp.restart_state(),
+        };
+        for (name, a) in arrays {
+            w.put(name, &a);
+        }
+    }
+
+    fn restore(&mut self, r: &StateReader) -> Result<(), String> {
+        let mut get = |name: &str| r.get::<f64>(name).ok();
+        match &mut self.integrator {
+            Integrator::Explicit(fe) => fe.set_restart_state(&mut get),
+            Integrator::Implicit(imp) => imp.set_restart_state(&mut get),
+        }
+        .map_err(|e| format!("checkpoint: {e}"))
     }
 
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {

@@ -8,6 +8,7 @@ pub mod stage;
 use super::{Stage, StageEnergies, StageError};
 use crate::input::particles::{self as particles_setup, ParticleIds};
 use crate::input::scene::Scene;
+use crate::output::state::{StateReader, StateWriter};
 use crate::output::{ParticleFrame, Report, StageStats};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -146,6 +147,41 @@ impl Stage for Sph {
 
     fn wall_s(&self) -> f64 {
         self.wall_s
+    }
+
+    fn save(&self, w: &mut StateWriter) {
+        self.stage.save(w);
+        let g = &self.globals;
+        w.put(
+            "sph.globals",
+            &[
+                g.kinetic,
+                g.internal,
+                g.momentum[0],
+                g.momentum[1],
+                g.momentum[2],
+                g.gravity_power,
+                self.external_work,
+            ],
+        );
+        w.put("sph.steps", &[self.steps]);
+    }
+
+    fn restore(&mut self, r: &StateReader) -> Result<(), String> {
+        self.stage.restore(r)?;
+        let g: Vec<f64> = r.get("sph.globals")?;
+        if g.len() != 7 {
+            return Err("checkpoint: sph.globals".into());
+        }
+        self.globals = SphGlobals {
+            kinetic: g[0],
+            internal: g[1],
+            momentum: [g[2], g[3], g[4]],
+            gravity_power: g[5],
+        };
+        self.external_work = g[6];
+        self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
+        Ok(())
     }
 
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {

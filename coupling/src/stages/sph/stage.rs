@@ -15,6 +15,7 @@
 //! all ranks (the COI rule), so momentum is conserved to round-off whatever the rank count.
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::{Rcb, RcbItem, RcbStats};
+use crate::output::state::{StateReader, StateWriter};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -488,6 +489,93 @@ impl SphStage {
         self.stats.ghosts = sums[1] as u64;
         self.stats.bytes_sent = sums[2] as u64;
         self.stats.wall_s = maxes[1];
+    }
+
+    /// The restart state (`driver::checkpoint`): the owned particles in their order, the RCB
+    /// weights and cuts the next balance starts from, this rank's box, and the kept pair list
+    /// (so the pairs are summed in the same order as without the stop).
+    pub fn save(&self, w: &mut StateWriter) {
+        let recs: Vec<sph::ParticleRecord> = (0..self.parts.n_owned)
+            .map(|i| self.parts.record(i))
+            .collect();
+        w.put("sph.particles", &recs);
+        w.put("sph.pair_count", &self.pair_count);
+        w.put(
+            "sph.flags",
+            &[self.balanced_once as u64, self.pair_searches],
+        );
+        let b = [self.box_lo, self.box_hi];
+        w.put("sph.box", b.as_flattened());
+        if let Some(cuts) = self.rcb.cuts() {
+            let dims: Vec<u64> = cuts.iter().map(|c| c.dim as u64).collect();
+            let values: Vec<f64> = cuts.iter().map(|c| c.value).collect();
+            let ties: Vec<u64> = cuts.iter().map(|c| c.tie_id).collect();
+            w.put("sph.cut_dims", &dims);
+            w.put("sph.cut_values", &values);
+            w.put("sph.cut_ties", &ties);
+        }
+        if let Some(v) = &self.verlet {
+            let (pairs, x_ref, h_ref, id_ref, skin) = v.to_parts();
+            w.put("sph.kept_pairs", &pairs);
+            w.put("sph.kept_x", &x_ref);
+            w.put("sph.kept_h", &h_ref);
+            w.put("sph.kept_id", &id_ref);
+            w.put("sph.kept_skin", &[skin]);
+        }
+    }
+
+    /// Sets the state [`SphStage::save`] wrote (the same rank count).
+    pub fn restore(&mut self, r: &StateReader) -> Result<(), String> {
+        let recs: Vec<sph::ParticleRecord> = r.get("sph.particles")?;
+        let mut parts = Particles::new();
+        for rec in &recs {
+            parts.push_owned(rec);
+        }
+        self.parts = parts;
+        self.pair_count = r.get("sph.pair_count")?;
+        let flags: Vec<u64> = r.get("sph.flags")?;
+        if flags.len() != 2 {
+            return Err("checkpoint: sph.flags".into());
+        }
+        self.balanced_once = flags[0] != 0;
+        self.pair_searches = flags[1];
+        let b: Vec<f64> = r.get("sph.box")?;
+        if b.len() != 6 {
+            return Err("checkpoint: sph.box".into());
+        }
+        self.box_lo = [b[0], b[1], b[2]];
+        self.box_hi = [b[3], b[4], b[5]];
+        if r.has("sph.cut_dims") {
+            let dims: Vec<u64> = r.get("sph.cut_dims")?;
+            let values: Vec<f64> = r.get("sph.cut_values")?;
+            let ties: Vec<u64> = r.get("sph.cut_ties")?;
+            let cuts: Vec<crate::kernels::rcb::Cut> = dims
+                .iter()
+                .zip(&values)
+                .zip(&ties)
+                .map(|((&dim, &value), &tie_id)| crate::kernels::rcb::Cut {
+                    dim: dim as usize,
+                    value,
+                    tie_id,
+                })
+                .collect();
+            if !self.rcb.set_cuts(&cuts) {
+                return Err("checkpoint: the SPH cuts are for another rank count".into());
+            }
+        }
+        self.verlet = if r.has("sph.kept_pairs") {
+            let skin: Vec<f64> = r.get("sph.kept_skin")?;
+            Some(sph::KeptPairs::from_parts(
+                r.get("sph.kept_pairs")?,
+                r.get("sph.kept_x")?,
+                r.get("sph.kept_h")?,
+                r.get("sph.kept_id")?,
+                skin.first().copied().unwrap_or(0.0),
+            ))
+        } else {
+            None
+        };
+        Ok(())
     }
 
     /// The stable step over all ranks (collective), 0.3 min h/(c + |v|).

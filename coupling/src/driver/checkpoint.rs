@@ -1,0 +1,223 @@
+//! Checkpoint and restart (SCENE.md "Runs, restarts and earlier results").
+//!
+//! A checkpoint is a folder `checkpoint/` in the run's output folder: one file per rank,
+//! `rank-RRRRRR-step-SSSSSSSSSS.bin`, holding that rank's state as named arrays
+//! (`output::state`: each stage's `save`), and `meta.json` (rank 0), which names the step and
+//! holds what every rank shares: the clock, the energy check, how many history and probe rows
+//! and which field frames were written, and the scene's hash. The rank files are written in
+//! parallel, each rank its own (no rank waits on another's I/O), then `meta.json` is written
+//! through a temporary file and renamed, and only then are older rank files removed: a run
+//! killed while writing leaves the previous checkpoint whole.
+//!
+//! Written as plain per-rank files rather than one HDF5 file: every rank's arrays have their own
+//! length, and in parallel HDF5 every rank would have to create every other rank's datasets
+//! (creation is collective); a restart on the same ranks reads back exactly its own bytes.
+//!
+//! A restart rebuilds the stages from the scene as a new run would (the mesh distribution is
+//! deterministic on the same ranks), then overwrites their state from the files: on the same
+//! rank count it continues bit for bit (the SPH stage keeps its pair list and RCB cuts; the
+//! contact stage rebuilds its decomposition, whose contacts are those of a rebuild at every
+//! step). Another rank count is refused.
+use super::energy::HourglassWatch;
+use super::setup::Model;
+use crate::kernels::collective::first_error;
+use crate::output::state::{StateReader, StateWriter};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The checkpoint folder's name in the output folder.
+pub const DIR: &str = "checkpoint";
+
+/// Format version written in `meta.json`.
+const VERSION: u32 = 1;
+
+/// The clock's state.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct ClockState {
+    /// Steps taken.
+    pub step: u64,
+    /// Time, s.
+    pub time: f64,
+    /// The next step's size, s.
+    pub dt: f64,
+    /// The smallest step so far, s.
+    pub dt_min: f64,
+    /// The next field frame's and history row's index.
+    pub next_frame: u64,
+    /// See `next_frame`.
+    pub next_row: u64,
+}
+
+/// The energy check's state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CheckState {
+    /// E(0), J.
+    pub e0: f64,
+    /// The largest energy errors so far.
+    pub err_max: f64,
+    /// See `err_max`.
+    pub err_max_checked: f64,
+    /// The blocks' hourglass watch.
+    pub hourglass: HourglassWatch,
+}
+
+/// What every rank shares (`meta.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Meta {
+    /// Format version.
+    pub version: u32,
+    /// Ranks that wrote it.
+    pub ranks: i32,
+    /// SHA-256 of the scene file's text and the command line's replacements of its keys.
+    pub scene_hash: String,
+    /// The clock.
+    pub clock: ClockState,
+    /// The energy check.
+    pub check: CheckState,
+    /// Rows of history.csv and probes.csv written (header not counted).
+    pub history_rows: usize,
+    /// See `history_rows`.
+    pub probe_rows: usize,
+    /// The field frames written (`FieldWriter::index`).
+    pub frames: String,
+    /// The next checkpoint's index (checkpoint k at k * checkpoint_every).
+    pub next_checkpoint: u64,
+}
+
+fn rank_file(dir: &Path, rank: i32, step: u64) -> PathBuf {
+    dir.join(format!("rank-{rank:06}-step-{step:010}.bin"))
+}
+
+/// The hash a checkpoint is tied to: the scene file's text and the replacements of its keys
+/// given on the command line.
+pub fn scene_hash(scene_text: &str, overrides: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update(scene_text.as_bytes());
+    h.update([0u8]);
+    h.update(overrides.as_bytes());
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Writes a checkpoint of `model` into `out_dir/checkpoint` (collective).
+pub fn write(
+    world: &SimpleCommunicator,
+    out_dir: &Path,
+    meta: &Meta,
+    model: &Model,
+) -> Result<(), String> {
+    let dir = out_dir.join(DIR);
+    let rank = world.rank();
+    let mut err = None;
+    if rank == 0 {
+        if let Err(e) = std::fs::create_dir_all(&dir) {
+            err = Some(format!("checkpoint: {}: {e}", dir.display()));
+        }
+    }
+    first_error(world, err)?;
+    let mut w = StateWriter::default();
+    for stage in model.stages() {
+        stage.save(&mut w);
+    }
+    if let Some(c) = &model.contact {
+        c.save(&mut w);
+    }
+    let step = meta.clock.step;
+    let path = rank_file(&dir, rank, step);
+    let res = std::fs::write(&path, w.into_bytes())
+        .map_err(|e| format!("checkpoint: {}: {e}", path.display()));
+    first_error(world, res.err())?;
+    let mut err = None;
+    if rank == 0 {
+        let text = serde_json::to_string_pretty(meta).expect("meta serialises");
+        let tmp = dir.join("meta.json.tmp");
+        let res =
+            std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, dir.join("meta.json")));
+        if let Err(e) = res {
+            err = Some(format!("checkpoint: {}: {e}", dir.display()));
+        }
+    }
+    first_error(world, err)?;
+    // The new checkpoint is whole: this rank's older files go.
+    if let Ok(rd) = std::fs::read_dir(&dir) {
+        let mine = format!("rank-{rank:06}-step-");
+        let keep = path.file_name().map(|n| n.to_os_string());
+        for e in rd.flatten() {
+            let name = e.file_name();
+            let s = name.to_string_lossy();
+            if s.starts_with(&mine) && Some(&name) != keep.as_ref() {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads the checkpoint in `run_dir/checkpoint` for this rank (collective): refused when it was
+/// written on another rank count or for another scene (`scene_hash`).
+pub fn read(
+    world: &SimpleCommunicator,
+    run_dir: &Path,
+    scene_hash: &str,
+    scene_file: &str,
+) -> Result<(Meta, StateReader), String> {
+    let dir = run_dir.join(DIR);
+    let meta_path = dir.join("meta.json");
+    let meta: Result<Meta, String> = std::fs::read_to_string(&meta_path)
+        .map_err(|e| {
+            format!(
+                "--restart {}: no checkpoint there ({}: {e}); a run writes one with [output] checkpoint_every, at its end, or when stopped with Ctrl-C",
+                run_dir.display(),
+                meta_path.display()
+            )
+        })
+        .and_then(|t| {
+            serde_json::from_str(&t).map_err(|e| format!("{}: {e}", meta_path.display()))
+        });
+    let meta = match meta {
+        Ok(m) => m,
+        Err(e) => {
+            first_error(world, Some(e))?;
+            unreachable!("first_error returns the error")
+        }
+    };
+    let mut err = None;
+    if meta.version != VERSION {
+        err = Some(format!(
+            "{}: format version {}, this tdyn reads {VERSION}",
+            meta_path.display(),
+            meta.version
+        ));
+    } else if meta.ranks != world.size() {
+        err = Some(format!(
+            "--restart {}: the checkpoint was written on {} ranks; restart it on {} (mpirun -np {})",
+            run_dir.display(),
+            meta.ranks,
+            meta.ranks,
+            meta.ranks
+        ));
+    } else if meta.scene_hash != scene_hash {
+        err = Some(format!(
+            "--restart {}: {scene_file} (or the values given on the command line) changed since the checkpoint was written; a restart continues the same scene: undo the change, or start a new run",
+            run_dir.display()
+        ));
+    }
+    first_error(world, err)?;
+    let path = rank_file(&dir, world.rank(), meta.clock.step);
+    let state = std::fs::read(&path)
+        .map_err(|e| format!("--restart: {}: {e}", path.display()))
+        .and_then(|b| StateReader::parse(&b));
+    let state = match state {
+        Ok(s) => {
+            first_error(world, None)?;
+            s
+        }
+        Err(e) => {
+            first_error(world, Some(e))?;
+            unreachable!("first_error returns the error")
+        }
+    };
+    Ok((meta, state))
+}
