@@ -39,8 +39,9 @@ fn lines(path: &Path) -> usize {
 }
 
 /// Waits until history.csv in `out` has more than `rows` lines (rows reach the file in
-/// whole-row flushes), then sends `signal` to mpirun (SIGTERM: mpirun passes it on to the
-/// ranks, as it does Ctrl-C) or, for SIGKILL, to mpirun and every rank.
+/// whole-row flushes), then sends `signal` to the ranks (SIGTERM: as a batch system does at
+/// the end of an allocation; Open MPI's mpirun, signalled itself, kills its ranks a second
+/// later) or, for SIGKILL, to mpirun and every rank.
 fn signal_after_rows(child: &mut Child, out: &Path, rows: usize, signal: &str) -> bool {
     let t0 = Instant::now();
     while t0.elapsed() < Duration::from_secs(300) {
@@ -51,7 +52,7 @@ fn signal_after_rows(child: &mut Child, out: &Path, rows: usize, signal: &str) -
             let pattern = if signal == "-KILL" {
                 format!("tdyn run .* --out {}", out.display())
             } else {
-                format!("^mpirun .* --out {}", out.display())
+                format!("^{} run .* --out {}", tdyn().display(), out.display())
             };
             let st = std::process::Command::new("pkill")
                 .args([signal, "-f", &pattern])
