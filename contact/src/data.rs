@@ -162,6 +162,16 @@ impl ContactNodes {
         self.v.push(r.v);
     }
 
+    /// Sets node `i`'s mass, radius, start and end positions and velocity from `r` (a kept
+    /// box's node updated in place for the next step).
+    pub fn set_motion(&mut self, i: usize, r: &NodeRecord) {
+        self.mass[i] = r.mass;
+        self.radius[i] = r.radius;
+        self.x0[i] = r.x0;
+        self.x1[i] = r.x1;
+        self.v[i] = r.v;
+    }
+
     /// Node `i` as a record.
     pub fn record(&self, i: usize) -> NodeRecord {
         NodeRecord {

@@ -523,35 +523,18 @@ impl ContactStage {
         t_bytes += sent;
         let n = &mut st.b.nodes;
         for (r, &slot) in got.iter().zip(&st.recv_slot) {
-            let i = slot as usize;
-            n.mass[i] = r.mass;
-            n.radius[i] = r.radius;
-            n.x0[i] = r.x0;
-            n.x1[i] = r.x1;
-            n.v[i] = r.v;
+            n.set_motion(slot as usize, r);
         }
         // Particles (never face corners) to the box their predicted position falls in: the
         // ghost skin's bound holds for a node inside its box's region.
-        let mut pitems = Vec::new();
-        let mut pplan = None;
-        let mut pgot = Vec::new();
-        if any_particles {
-            let mut pdest = Vec::new();
-            for (i, r) in nodes.iter().enumerate().filter(|(_, r)| is_particle(r)) {
-                pdest.push(tree.owner_of_item(&r.x1, r.gid));
-                pitems.push(CNode {
-                    rec: *r,
-                    home: me as u64,
-                    home_idx: i as u64,
-                    fe_idx: u64::MAX,
-                });
-            }
-            let mut plan = CommPlan::new_shared(comm, &pdest);
-            pgot = plan.exchange(&pitems);
+        let (pitems, pplan, pgot) = if any_particles {
+            let (items, plan, got) = particles_to_boxes(comm, tree, nodes, me);
             bytes += plan.bytes_sent;
             t_bytes += plan.bytes_sent;
-            pplan = Some(plan);
-        }
+            (items, Some(plan), got)
+        } else {
+            (Vec::new(), None, Vec::new())
+        };
         t_s += tt.elapsed().as_secs_f64();
         // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
         if !st.cands.still_valid(&st.b, &self.params) {
@@ -676,22 +659,7 @@ impl ContactStage {
         let keep_next = self.sticky_enabled && self.step_count >= self.retry_at;
         let me = self.comm.rank();
         let mut bytes = 0u64;
-        let mut n_fe = 0u64;
-        let items: Vec<CNode> = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, r)| CNode {
-                rec: *r,
-                home: me as u64,
-                home_idx: i as u64,
-                fe_idx: if is_particle(r) {
-                    u64::MAX
-                } else {
-                    n_fe += 1;
-                    n_fe - 1
-                },
-            })
-            .collect();
+        let items = home_items(nodes, me);
         // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
         // owners to contact owners and back): their bytes and time.
         let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
@@ -732,36 +700,14 @@ impl ContactStage {
         // influence: the largest node motion of the step and the largest particle radius (the
         // face's search box), and the skin the kept decomposition needs (at least the motion).
         let (skin, cand_skin, face_size) = if keep_next {
-            // The faces' mean diameter (caps the skins).
-            let mut sum = [0.0f64; 2];
-            for f in &my_faces {
-                let x: [[f64; 3]; 4] = std::array::from_fn(|k| f.nodes[k].x1);
-                sum[0] += dist(&x[0], &x[2]).max(dist(&x[1], &x[3]));
-                sum[1] += 1.0;
-            }
-            let mut g = [0.0f64; 2];
-            comm.all_reduce_into(&sum[..], &mut g[..], SystemOperation::sum());
-            let face = if g[1] > 0.0 { g[0] / g[1] } else { 0.0 };
+            let face = mean_face_diameter(comm, &my_faces);
             let (a, b) = skins(motion, face, self.skins);
             (a, b, face)
         } else {
             (motion, 0.0, 0.0)
         };
-        let mut dest = Vec::new();
-        let mut ghosts = Vec::new();
-        let mut ranks = Vec::new();
-        for f in &my_faces {
-            let bb = face_records_search_aabb(&f.nodes, &self.params, radius).grown(skin);
-            ranks.clear();
-            tree.ranks_overlapping(&bb.min, &bb.max, &mut ranks);
-            for &r in &ranks {
-                dest.push(r);
-                ghosts.push(*f);
-            }
-        }
-        let mut plan = CommPlan::new_shared(comm, &dest);
-        let held = plan.exchange(&ghosts);
-        bytes += plan.bytes_sent;
+        let (held, ghost_bytes) = ghost_faces(comm, &tree, &my_faces, &self.params, radius, skin);
+        bytes += ghost_bytes;
 
         // 7. The local search: owned nodes first, then copies of face nodes not owned here.
         let mut recs: Vec<NodeRecord> = mine.iter().map(|n| n.rec).collect();
@@ -981,6 +927,95 @@ fn particle_box(b: &ContactBox, particles: &[CNode]) -> Option<ContactBox> {
 
 fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The contact nodes this rank hands in, each with its home (rank and index) and its index
+/// among the mesh nodes (`u64::MAX` for a particle).
+fn home_items(nodes: &[NodeRecord], me: i32) -> Vec<CNode> {
+    let mut n_fe = 0u64;
+    nodes
+        .iter()
+        .enumerate()
+        .map(|(i, r)| CNode {
+            rec: *r,
+            home: me as u64,
+            home_idx: i as u64,
+            fe_idx: if is_particle(r) {
+                u64::MAX
+            } else {
+                n_fe += 1;
+                n_fe - 1
+            },
+        })
+        .collect()
+}
+
+/// Particles (never face corners) to the box their predicted position falls in (collective):
+/// the records sent, the plan (for the forces' way back), the records this rank received.
+fn particles_to_boxes(
+    comm: &Rc<SimpleCommunicator>,
+    tree: &CutTree,
+    nodes: &[NodeRecord],
+    me: i32,
+) -> (Vec<CNode>, CommPlan, Vec<CNode>) {
+    let mut dest = Vec::new();
+    let mut items = Vec::new();
+    for (i, r) in nodes.iter().enumerate().filter(|(_, r)| is_particle(r)) {
+        dest.push(tree.owner_of_item(&r.x1, r.gid));
+        items.push(CNode {
+            rec: *r,
+            home: me as u64,
+            home_idx: i as u64,
+            fe_idx: u64::MAX,
+        });
+    }
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let got = plan.exchange(&items);
+    (items, plan, got)
+}
+
+/// The mean diameter of the faces over all ranks (collective): it caps the skins.
+fn mean_face_diameter(comm: &Rc<SimpleCommunicator>, faces: &[FullFace]) -> f64 {
+    let mut sum = [0.0f64; 2];
+    for f in faces {
+        let x: [[f64; 3]; 4] = std::array::from_fn(|k| f.nodes[k].x1);
+        sum[0] += dist(&x[0], &x[2]).max(dist(&x[1], &x[3]));
+        sum[1] += 1.0;
+    }
+    let mut g = [0.0f64; 2];
+    comm.all_reduce_into(&sum[..], &mut g[..], SystemOperation::sum());
+    if g[1] > 0.0 {
+        g[0] / g[1]
+    } else {
+        0.0
+    }
+}
+
+/// Steps 5-6 of Fig. 10: each face to every box its search box (grown by `skin`) overlaps
+/// (collective). Returns the faces this rank holds, and the bytes it sent.
+fn ghost_faces(
+    comm: &Rc<SimpleCommunicator>,
+    tree: &CutTree,
+    faces: &[FullFace],
+    params: &SearchParams,
+    radius: f64,
+    skin: f64,
+) -> (Vec<FullFace>, u64) {
+    let mut dest = Vec::new();
+    let mut ghosts = Vec::new();
+    let mut ranks = Vec::new();
+    for f in faces {
+        let bb = face_records_search_aabb(&f.nodes, params, radius).grown(skin);
+        ranks.clear();
+        tree.ranks_overlapping(&bb.min, &bb.max, &mut ranks);
+        for &r in &ranks {
+            dest.push(r);
+            ghosts.push(*f);
+        }
+    }
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let held = plan.exchange(&ghosts);
+    (held, plan.bytes_sent)
 }
 
 /// Step 8: each owned node's nonzero force to its home; returns the force on each of the
