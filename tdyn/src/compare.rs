@@ -207,15 +207,7 @@ fn plan(
             "--dt-factors: expected positive multiples of the stable step, got {factors:?}"
         ));
     }
-    let columns: Vec<String> = scene
-        .probes
-        .iter()
-        .flat_map(|p| {
-            p.fields
-                .iter()
-                .map(move |f| format!("{}.{}", p.name, f.name()))
-        })
-        .collect();
+    let columns: Vec<String> = scene.probes.iter().flat_map(|p| p.columns()).collect();
     let def = scene.compare.clone().unwrap_or(scene::CompareDef {
         quantity: None,
         measure: "history".into(),

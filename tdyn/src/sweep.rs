@@ -338,15 +338,7 @@ fn plan(opts: &SweepOptions, scene: &Scene) -> Result<(Vec<Ladder>, Vec<Measure>
             params[0].0.name()
         ));
     }
-    let columns: Vec<String> = scene
-        .probes
-        .iter()
-        .flat_map(|p| {
-            p.fields
-                .iter()
-                .map(move |f| format!("{}.{}", p.name, f.name()))
-        })
-        .collect();
+    let columns: Vec<String> = scene.probes.iter().flat_map(|p| p.columns()).collect();
     let (specs, from) = if !opts.measures.is_empty() {
         (opts.measures.clone(), "--measure")
     } else if !def.measure.is_empty() {

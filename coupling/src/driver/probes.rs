@@ -80,9 +80,7 @@ impl Probes {
                 ));
             }
             let here = best.filter(|b| b.0 == lowest).map(|b| (b.1, b.2));
-            for f in &p.fields {
-                columns.push(format!("{}.{}", p.name, f.name()));
-            }
+            columns.extend(p.columns());
             located.push(Located {
                 here,
                 fields: p.fields.clone(),

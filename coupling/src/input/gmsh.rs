@@ -98,12 +98,7 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         h.update(format!("\n{k}={v:e}").as_bytes());
     }
     h.update(version.as_bytes());
-    let hash: String = h
-        .finalize()
-        .iter()
-        .take(12)
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = short_hash(h);
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh");
     let out = cache_dir.join(format!("{stem}-{hash}.msh"));
     if out.exists() {
@@ -483,12 +478,7 @@ pub fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
     std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
     let mut h = Sha256::new();
     h.update(head.as_bytes());
-    let hash: String = h
-        .finalize()
-        .iter()
-        .take(12)
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = short_hash(h);
     let out = cache_dir.join(format!("converted-{hash}.msh"));
     if out.exists() {
         return Ok(out);
@@ -528,12 +518,7 @@ pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf,
         h.update(format!("{t:?}").as_bytes());
         meshes.push((read_msh22(&p22)?, *t));
     }
-    let hash: String = h
-        .finalize()
-        .iter()
-        .take(12)
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = short_hash(h);
     let out = cache_dir.join(format!("merged-{hash}.msh"));
     if out.exists() {
         return Ok(out);
@@ -616,6 +601,15 @@ pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf,
     std::fs::write(&tmp, text).map_err(|e| bad(&tmp, &e.to_string()))?;
     std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
     Ok(out)
+}
+
+/// The first 12 bytes of a SHA-256 as hex: the cache files' content key.
+fn short_hash(h: Sha256) -> String {
+    h.finalize()
+        .iter()
+        .take(12)
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 #[cfg(test)]

@@ -390,6 +390,15 @@ pub struct Probe {
     pub fields: Vec<ProbeField>,
 }
 
+impl Probe {
+    /// Its columns in probes.csv, `probe.field`, in field order.
+    pub fn columns(&self) -> impl Iterator<Item = String> + '_ {
+        self.fields
+            .iter()
+            .map(move |f| format!("{}.{}", self.name, f.name()))
+    }
+}
+
 /// Output fields (SCENE.md `[output] fields`).
 pub const OUTPUT_FIELDS: [&str; 7] = [
     "displacement",
@@ -1473,14 +1482,7 @@ fn check_compare(cx: &Ctx, c: &CompareDef, probes: &[Probe]) -> Result<(), Scene
         ));
     }
     if let Some(q) = &c.quantity {
-        let known = probes
-            .iter()
-            .flat_map(|p| {
-                p.fields
-                    .iter()
-                    .map(move |f| format!("{}.{}", p.name, f.name()))
-            })
-            .any(|col| &col == q);
+        let known = probes.iter().flat_map(Probe::columns).any(|col| &col == q);
         if !known {
             return Err(cx.err(
                 "compare.quantity",
