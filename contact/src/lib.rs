@@ -32,6 +32,7 @@ pub mod geometry;
 mod grid;
 pub mod pair;
 pub mod pushback;
+pub mod recheck;
 pub mod search;
 pub mod surfaces;
 mod vec3;
@@ -42,6 +43,7 @@ pub use data::{
 };
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{push_back, PushBack, PushBackParams};
+pub use recheck::{recheck, RECHECK_TOL};
 pub use search::{
     face_records_search_aabb, face_search_aabb, node_search_aabb, search, search_candidates,
     within_skin, Candidates, Contact, SearchParams,

@@ -11,7 +11,8 @@ mod common;
 
 use common::{dot, sub, Mono, V3};
 use contact::{
-    push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams, Quad, SearchParams,
+    push_back, recheck, search, Candidates, ContactBox, FaceRecord, NodeRecord, PushBackParams,
+    Quad, SearchParams,
 };
 
 const DT: f64 = 1e-3;
@@ -280,14 +281,9 @@ fn node_pressed_into_a_valley_stays_out_of_both_faces() {
     }
 }
 
-#[test]
-fn node_at_a_convex_edge_leaves_one_face_only() {
-    // The convex edge of an immovable body (x < 0 and z < 0 over 0 < y < 1: a top face with
-    // normal +z, a side face with normal +x): a node ends 0.002 below the top plane and 0.001
-    // inside the side plane, behind both. Leaving either face takes it out of the body, so it
-    // keeps one contact (the deepest: the top face, depth 0.002), not two (pushed out of both
-    // planes, a sideways kick as well). Reference: the geometry of the wedge; after push-back the
-    // node is on the top plane, where it ended in x and y.
+/// The convex edge of the test below, its side face on body `side_body`: the contacts found
+/// and the node's position correction.
+fn convex_edge(side_body: u32) -> (Vec<contact::Contact>, V3) {
     let top = [
         [-1.0, 0.0, 0.0],
         [0.0, 0.0, 0.0],
@@ -309,7 +305,8 @@ fn node_at_a_convex_edge_leaves_one_face_only() {
         [-0.001, 0.5, -0.002],
     )];
     for (k, x) in corners.iter().enumerate() {
-        nodes.push(record(10 + k as u64, 0, f64::INFINITY, *x, *x));
+        let body = if k >= 4 { side_body } else { 0 };
+        nodes.push(record(10 + k as u64, body, f64::INFINITY, *x, *x));
     }
     let faces = [
         FaceRecord {
@@ -321,19 +318,44 @@ fn node_at_a_convex_edge_leaves_one_face_only() {
         FaceRecord {
             gid: 101,
             nodes: [11, 14, 15, 12],
-            body: 0,
+            body: side_body,
             reserved: 0,
         },
     ];
     let b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
     let contacts = search(&b, &SearchParams::default());
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    (contacts.clone(), pb.position_correction(&b, 0, DT))
+}
+
+#[test]
+fn node_at_a_convex_edge_leaves_one_face_only() {
+    // The convex edge of an immovable body (x < 0 and z < 0 over 0 < y < 1: a top face with
+    // normal +z, a side face with normal +x): a node ends 0.002 below the top plane and 0.001
+    // inside the side plane, behind both. Leaving either face takes it out of the body, so it
+    // keeps one contact (the deepest: the top face, depth 0.002), not two (pushed out of both
+    // planes, a sideways kick as well). Reference: the geometry of the wedge; after push-back the
+    // node is on the top plane, where it ended in x and y.
+    let (contacts, dx) = convex_edge(0);
     assert_eq!(contacts.len(), 1, "contacts {contacts:?}");
     assert_eq!(contacts[0].face_gid, 100);
     assert!((contacts[0].depth - 0.002).abs() < 1e-15);
-    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
-    let dx = pb.position_correction(&b, 0, DT);
     assert!(
         dx[0] == 0.0 && dx[1] == 0.0 && (dx[2] - 0.002).abs() < 1e-15,
+        "correction {dx:?}"
+    );
+}
+
+#[test]
+fn node_behind_faces_of_two_bodies_leaves_both() {
+    // The same edge with its side face on another body: behind either face the node is inside
+    // a body, so it keeps both contacts (`search::apart`) and leaves both planes. Reference:
+    // the geometry; the node ends on the edge, (0, 0.5, 0): moved +0.001 in x, +0.002 in z.
+    let (contacts, dx) = convex_edge(2);
+    let faces: Vec<u64> = contacts.iter().map(|c| c.face_gid).collect();
+    assert_eq!(faces, [100, 101], "contacts {contacts:?}");
+    assert!(
+        (dx[0] - 0.001).abs() < 1e-15 && dx[1] == 0.0 && (dx[2] - 0.002).abs() < 1e-15,
         "correction {dx:?}"
     );
 }
@@ -422,4 +444,91 @@ fn a_node_on_a_node_found_both_ways_is_one_constraint() {
     assert!((dot(ds, ds).sqrt() - half).abs() < 1e-15);
     assert!(pb.sweeps <= 2, "{} sweeps", pb.sweeps);
     assert_eq!(pb.normal_force[1], 0.0);
+}
+
+#[test]
+fn a_node_pushed_out_of_one_body_into_another_is_found_by_the_recheck() {
+    // Two immovable bodies meeting in a wedge: a face A of body 0 in the plane through the
+    // y axis with normal (sin 30, 0, cos 30), and a face B of body 2 in the plane x = 0 with
+    // normal -x. A node ends the step 0.00396 behind A and 0.001 in front of B: the search
+    // finds A only, and pushing the node out of A along A's normal carries it 0.00098 past
+    // B (a crossing the push-back made, which the next step could not see: it would start
+    // behind B). `contact::recheck` on the corrected position finds B (another body: a
+    // constraint of its own), and the push-back of both leaves the node on the wedge's edge.
+    // Reference: the geometry of the two planes; the node ends at their intersection straight
+    // across from where it ended, (0, 0.5, 0), to 1e-12 m, and a second recheck finds nothing.
+    let (s, c) = (0.5f64, 0.75f64.sqrt());
+    // Points of A's plane at x = -1 and x = 0.2: z = -x tan 30.
+    let a_at = |x: f64, y: f64| [x, y, -x * s / c];
+    let corners = [
+        a_at(-1.0, 0.0),
+        a_at(0.2, 0.0),
+        a_at(0.2, 1.0),
+        a_at(-1.0, 1.0),
+        [0.0, 0.0, -1.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+        [0.0, 1.0, -1.0],
+    ];
+    let (p0, p1) = ([-0.01, 0.5, 0.01], [-0.001, 0.5, -0.004]);
+    let mut nodes = vec![record(1, 1, 1.0, p0, p1)];
+    for (k, x) in corners.iter().enumerate() {
+        let body = if k < 4 { 0 } else { 2 };
+        nodes.push(record(10 + k as u64, body, f64::INFINITY, *x, *x));
+    }
+    let faces = [
+        FaceRecord {
+            gid: 100,
+            nodes: [10, 11, 12, 13],
+            body: 0,
+            reserved: 0,
+        },
+        FaceRecord {
+            gid: 200,
+            nodes: [14, 15, 16, 17],
+            body: 2,
+            reserved: 0,
+        },
+    ];
+    let mut b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let params = SearchParams::default();
+    let cands = Candidates::build(&b, &params, 0.0);
+    let mut contacts = search(&b, &params);
+    assert_eq!(contacts.len(), 1, "contacts {contacts:?}");
+    assert_eq!(contacts[0].face_gid, 100);
+    let corrections = |pb: &contact::PushBack, b: &ContactBox| -> Vec<V3> {
+        (0..b.nodes.len())
+            .map(|j| pb.position_correction(b, j, DT))
+            .collect()
+    };
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let dx = corrections(&pb, &b);
+    let x = [p1[0] + dx[0][0], p1[1] + dx[0][1], p1[2] + dx[0][2]];
+    // The depth behind A, then the node's x after moving that far along A's normal.
+    let depth_a = -(s * p1[0] + c * p1[2]);
+    let past_b = p1[0] + s * depth_a;
+    assert!(
+        (x[0] - past_b).abs() < 1e-12,
+        "pushed out of A only, the node is {} past B (geometry: {past_b})",
+        x[0]
+    );
+    let new = recheck(&mut b, &params, &cands, &dx, &contacts);
+    assert_eq!(new.len(), 1, "recheck found {new:?}");
+    assert_eq!(new[0].face_gid, 200);
+    // Measured on the uncorrected geometry: the node ended 0.001 in front of B.
+    assert!(
+        (new[0].depth + 0.001).abs() < 1e-12,
+        "depth {}",
+        new[0].depth
+    );
+    contacts.extend(new);
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let dx = corrections(&pb, &b);
+    let x = [p1[0] + dx[0][0], p1[1] + dx[0][1], p1[2] + dx[0][2]];
+    let off = sub(x, [0.0, 0.5, 0.0]);
+    assert!(
+        dot(off, off).sqrt() < 1e-12,
+        "the node ends at {x:?}, not on the wedge's edge (0, 0.5, 0)"
+    );
+    assert!(recheck(&mut b, &params, &cands, &dx, &contacts).is_empty());
 }

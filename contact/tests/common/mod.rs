@@ -360,7 +360,8 @@ pub fn random_scene(rng: &mut Rng, spec: &SceneSpec) -> Scene {
 /// the body rules. Returns, per node gid with a contact, `(face gid, hit, runner-up depth)`, the
 /// further contacts a node keeps (faces at an angle: each hit whose normal is more than 25
 /// degrees, |cos| < 0.9, from every kept one, deepest first, and, for a mesh node, whose face
-/// forms a valley with each kept one's) as (node gid, face gid), and the
+/// bounds another body than each kept one's or forms a valley with it) as (node gid, face
+/// gid), and the
 /// smallest margin met over all pairs (how close the configuration came to a threshold).
 pub struct RefResult {
     pub contacts: std::collections::BTreeMap<u64, (u64, RefHit, f64)>,
@@ -420,26 +421,33 @@ pub fn reference_search(
         if let Some(best) = hits.first() {
             let runner_up = hits.get(1).map(|h| h.0).unwrap_or(f64::NEG_INFINITY);
             contacts.insert(n.gid, (best.1, best.2, runner_up));
-            // (normal, contact point, face centre) of each kept hit.
+            // (normal, contact point, face centre, face body) of each kept hit.
             let geometry = |h: &(f64, u64, RefHit)| {
                 let f = scene.faces.iter().find(|f| f.gid == h.1).unwrap();
                 let m = Mono::new(f.nodes.map(|g| by_gid[&g].x1));
-                (h.2.normal, m.at(h.2.xi[0], h.2.xi[1]), m.at(0.0, 0.0))
+                (
+                    h.2.normal,
+                    m.at(h.2.xi[0], h.2.xi[1]),
+                    m.at(0.0, 0.0),
+                    f.body,
+                )
             };
             let mut kept = vec![geometry(best)];
             for h in &hits[1..] {
-                let (normal, at, centre) = geometry(h);
-                // A mesh node: only faces forming a valley with every kept one (each face's
-                // centre in front of the other's tangent plane at its contact point).
-                let valley = |k: &(V3, V3, V3)| {
+                let (normal, at, centre, body) = geometry(h);
+                // A mesh node: only faces of another body than a kept one's (the node must be
+                // outside both bodies) or forming a valley with it (each face's centre in front
+                // of the other's tangent plane at its contact point).
+                let valley = |k: &(V3, V3, V3, u32)| {
                     particle
+                        || k.3 != body
                         || (dot(k.0, sub(centre, k.1)) > 0.0 && dot(normal, sub(k.2, at)) > 0.0)
                 };
                 if kept
                     .iter()
                     .all(|k| dot(k.0, normal).abs() < SAME_NORMAL_COS && valley(k))
                 {
-                    kept.push((normal, at, centre));
+                    kept.push((normal, at, centre, body));
                     further.push((n.gid, h.1));
                 }
             }

@@ -22,7 +22,9 @@
 //! contact surfaces.
 use crate::kernels::comm::CommPlan;
 use crate::stages::contact::stage::{ContactOutcome, FullFace};
-use contact::{face_records_search_aabb, search, Aabb, NodeRecord, SearchParams};
+use contact::{
+    face_records_search_aabb, search_candidates, Aabb, Candidates, NodeRecord, SearchParams,
+};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -133,22 +135,26 @@ impl BaselineStage {
             face_recs.push(f.face);
         }
         let work_items = (n_owned + face_recs.len()) as f64;
-        let b = crate::stages::contact::stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
-        let contacts = search(&b, &self.params);
+        let mut b =
+            crate::stages::contact::stage::box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
+        let cands = Candidates::build(&b, &self.params, 0.0);
+        let contacts = search_candidates(&b, &self.params, &cands);
         bytes += plan.bytes_sent;
 
         // 4. The push-back of all contacts together (the dynamic stage's step 7b): two contacts
         // sharing nodes, found on different ranks (a touching pair found from both sides by
         // the two passes), are solved as one.
         let owned: Vec<u64> = nodes.iter().map(|r| r.gid).collect();
-        let (force, pb_work, gather_bytes) = crate::stages::contact::stage::solve_together(
-            comm,
-            &[(&b, &contacts[..])],
-            &owned,
-            dt,
-            self.friction,
-        )?;
-        bytes += gather_bytes;
+        use crate::stages::contact::stage::{solve_rechecked, Part};
+        let mut parts = [Part {
+            b: &mut b,
+            cands: &cands,
+            contacts,
+        }];
+        let settled = solve_rechecked(comm, &mut parts, &owned, dt, self.friction, &self.params)?;
+        let [Part { contacts, .. }] = parts;
+        let (force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        bytes += settled.bytes;
 
         // Statistics, as the dynamic stage reports them.
         let mut sums = [0.0f64; 4];
@@ -186,6 +192,7 @@ impl BaselineStage {
             // the baseline searches where the nodes live: no transfer between
             // decompositions
             transfer: Default::default(),
+            pushback,
         })
     }
 }

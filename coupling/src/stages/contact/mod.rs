@@ -80,6 +80,12 @@ pub struct ContactStats {
     pub transfer_s: f64,
     /// See `transfer_bytes`.
     pub transfer_imbalance_sum: f64,
+    /// Push-back solves summed over steps, and the most in one step.
+    pub solves_total: u64,
+    /// See `solves_total`.
+    pub solves_max: u64,
+    /// Contacts the rechecks after a push-back added, summed over steps.
+    pub rechecked_total: u64,
 }
 
 impl ContactStats {
@@ -101,6 +107,9 @@ impl ContactStats {
         self.transfer_bytes += out.transfer.bytes_sent as f64;
         self.transfer_s += out.transfer.wall_s;
         self.transfer_imbalance_sum += out.transfer.imbalance;
+        self.solves_total += out.pushback.solves;
+        self.solves_max = self.solves_max.max(out.pushback.solves);
+        self.rechecked_total += out.pushback.rechecked;
         self.steps += 1;
     }
 }
@@ -321,6 +330,14 @@ impl Contact {
         ex.insert("contact_bytes_per_step".into(), (c.bytes / n_steps).into());
         ex.insert("contact_s_per_step".into(), (wall / n_steps).into());
         ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
+        // Push-back solves per step (1 + the rounds after rechecks that found contacts; 0 in
+        // steps without contacts) and the contacts those rechecks added.
+        ex.insert(
+            "contact_pushback_solves_per_step".into(),
+            (c.solves_total as f64 / n_steps).into(),
+        );
+        ex.insert("contact_pushback_solves_max".into(), c.solves_max.into());
+        ex.insert("contacts_rechecked_total".into(), c.rechecked_total.into());
         if let Search::Dynamic(stage) = &self.search {
             // Steps that rebuilt the decomposition, and candidate-list rebuilds summed over
             // ranks (the other steps kept them: the skins in `stage`).

@@ -119,6 +119,8 @@ pub struct ContactOutcome {
     pub wall_s: f64,
     /// The transfers between decompositions inside the step (included in the above).
     pub transfer: TransferStats,
+    /// The push-back's solves and rechecks.
+    pub pushback: PushbackCounts,
 }
 
 /// The transfers between decompositions in one contact step: the contact nodes' records from
@@ -144,17 +146,29 @@ struct ContactPacket {
     corners: [NodeRecord; 4],
 }
 
+/// What [`solve_together`] returns.
+struct Solved {
+    /// The forces on the `owned` nodes, N.
+    force: Vec<[f64; 3]>,
+    /// The push-back's work, J (the same on every rank).
+    work: f64,
+    /// Bytes this rank sent.
+    sent: u64,
+    /// The force on every node of the solve by gid (the same on every rank).
+    all: HashMap<u64, [f64; 3]>,
+}
+
 /// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
 /// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact
-/// nodes), the push-back's work (the same on every rank) and the bytes this rank sent. The
-/// static-decomposition baseline solves its contacts with it too.
-pub(crate) fn solve_together(
+/// nodes), the push-back's work (the same on every rank), the bytes this rank sent, and the
+/// force on every node of the solve by gid (the same on every rank).
+fn solve_together(
     comm: &SimpleCommunicator,
     parts: &[(&ContactBox, &[Contact])],
     owned: &[u64],
     dt: f64,
     friction: f64,
-) -> Result<(Vec<[f64; 3]>, f64, u64), String> {
+) -> Result<Solved, String> {
     let mut mine: Vec<ContactPacket> = Vec::new();
     for (b, contacts) in parts {
         let rec = |i: usize| b.nodes.record(i);
@@ -177,7 +191,12 @@ pub(crate) fn solve_together(
         .collect();
     let mut force = vec![[0.0; 3]; owned.len()];
     if packets.is_empty() {
-        return Ok((force, 0.0, sent));
+        return Ok(Solved {
+            force,
+            work: 0.0,
+            sent,
+            all: HashMap::default(),
+        });
     }
     // One box: the contact nodes first, then the faces' corners, each once, in gid order of
     // the sorted contacts (the same on every rank).
@@ -230,7 +249,109 @@ pub(crate) fn solve_together(
             force[i] = pb.force[k];
         }
     }
-    Ok((force, pb.work, sent))
+    let all = slot.iter().map(|(&g, &k)| (g, pb.force[k])).collect();
+    Ok(Solved {
+        force,
+        work: pb.work,
+        sent,
+        all,
+    })
+}
+
+/// Most push-back solves in one step (see [`solve_rechecked`]). Measured on `tube_crush` (np
+/// 1, 0.7 ms): ... solves per step at most, ... on average.
+pub const MAX_SOLVES: usize = 4;
+
+/// One box's share of step 7b: the box, the candidate lists its search used, its contacts.
+pub(crate) struct Part<'a> {
+    pub b: &'a mut ContactBox,
+    pub cands: &'a Candidates,
+    pub contacts: Vec<Contact>,
+}
+
+/// What [`solve_rechecked`] returns: the forces on `owned`, the push-back's work, the bytes
+/// this rank sent, the solves made and the contacts the rechecks added over all ranks (the
+/// same on every rank).
+pub(crate) struct Settled {
+    pub force: Vec<[f64; 3]>,
+    pub work: f64,
+    pub bytes: u64,
+    pub counts: PushbackCounts,
+}
+
+/// The push-back's counts in one step (the same on every rank).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PushbackCounts {
+    /// Push-back solves (1 + the rounds after rechecks that found contacts).
+    pub solves: u64,
+    /// Contacts the rechecks added, over all ranks.
+    pub rechecked: u64,
+}
+
+/// Step 7b with its rechecks: the push-back of every contact together ([`solve_together`]);
+/// then each box tests its nodes again on the corrected positions (`contact::recheck`: the
+/// crossings the corrections made, a node pushed out of one face of a crease into the next),
+/// and while any box finds new contacts the push-back is solved again with them added (at
+/// most [`MAX_SOLVES`] solves; what the last one leaves is found by the next step's search,
+/// within its capture tolerance). The new contacts join `parts`' lists. Every rank takes part
+/// in each solve; the rounds end on every rank together (a sum over ranks of the new
+/// contacts). The contacts and forces do not depend on the cuts: each node's rechecks see the
+/// same corrected positions (the solve's, on every rank) wherever the node is owned.
+pub(crate) fn solve_rechecked(
+    comm: &SimpleCommunicator,
+    parts: &mut [Part],
+    owned: &[u64],
+    dt: f64,
+    friction: f64,
+    params: &SearchParams,
+) -> Result<Settled, String> {
+    let mut bytes = 0;
+    let mut counts = PushbackCounts::default();
+    loop {
+        let views: Vec<(&ContactBox, &[Contact])> =
+            parts.iter().map(|p| (&*p.b, &p.contacts[..])).collect();
+        let Solved {
+            force,
+            work,
+            sent,
+            all,
+        } = solve_together(comm, &views, owned, dt, friction)?;
+        bytes += sent;
+        counts.solves += u64::from(!all.is_empty());
+        let done = Settled {
+            force,
+            work,
+            bytes,
+            counts,
+        };
+        if all.is_empty() || counts.solves >= MAX_SOLVES as u64 {
+            return Ok(done);
+        }
+        let mut added = 0u64;
+        for p in parts.iter_mut() {
+            let n = &p.b.nodes;
+            let dx: Vec<[f64; 3]> = (0..n.len())
+                .map(|j| match all.get(&n.gid[j]) {
+                    Some(f) if n.mass[j].is_finite() => {
+                        let s = dt * dt / n.mass[j];
+                        [f[0] * s, f[1] * s, f[2] * s]
+                    }
+                    _ => [0.0; 3],
+                })
+                .collect();
+            let new = contact::recheck(p.b, params, p.cands, &dx, &p.contacts);
+            added += new.len() as u64;
+            p.contacts.extend(new);
+            // The search's order: by node gid (stable: a node's first contacts stay first).
+            p.contacts.sort_by_key(|c| c.node_gid);
+        }
+        let mut total = 0u64;
+        comm.all_reduce_into(&added, &mut total, SystemOperation::sum());
+        if total == 0 {
+            return Ok(done);
+        }
+        counts.rechecked += total;
+    }
 }
 
 /// Ghost skin as a multiple of the step's largest node motion `m`: the decomposition, the
@@ -591,13 +712,31 @@ impl ContactStage {
             }
             None => Vec::new(),
         };
-        let mut parts: Vec<(&ContactBox, &[Contact])> = vec![(&st.b, &contacts[..])];
-        if let Some((_, pb, _)) = &st.pbox {
-            parts.push((pb, &pcontacts[..]));
+        let mut parts = vec![Part {
+            b: &mut st.b,
+            cands: &st.cands,
+            contacts,
+        }];
+        if let Some((_, pb, pc)) = &mut st.pbox {
+            parts.push(Part {
+                b: pb,
+                cands: pc,
+                contacts: pcontacts,
+            });
         }
-        let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &parts, &owned_gids, dt, self.friction)?;
-        bytes += gather_bytes;
+        let settled = solve_rechecked(
+            comm,
+            &mut parts,
+            &owned_gids,
+            dt,
+            self.friction,
+            &self.params,
+        )?;
+        let mut parts = parts.into_iter();
+        let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
         let tt = Instant::now();
@@ -634,6 +773,7 @@ impl ContactStage {
         let mut all_contacts = contacts;
         all_contacts.extend(pcontacts);
         self.outcome(OutcomeParts {
+            pushback,
             force,
             contacts: &all_contacts,
             pb_work,
@@ -730,7 +870,7 @@ impl ContactStage {
             face_recs.push(f.face);
         }
         let work_items = (n_owned + face_recs.len()) as f64;
-        let b = box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
+        let mut b = box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let cands = Candidates::build(&b, &self.params, cand_skin);
         let contacts = search_candidates(&b, &self.params, &cands);
 
@@ -743,9 +883,22 @@ impl ContactStage {
         // everything, at any rank count. The price: bytes grow as P x contacts (reported in
         // `bytes_sent`); contacts are few next to the nodes searched.
         let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
-        let (owned_force, pb_work, gather_bytes) =
-            solve_together(comm, &[(&b, &contacts[..])], &owned_gids, dt, self.friction)?;
-        bytes += gather_bytes;
+        let mut parts = [Part {
+            b: &mut b,
+            cands: &cands,
+            contacts,
+        }];
+        let settled = solve_rechecked(
+            comm,
+            &mut parts,
+            &owned_gids,
+            dt,
+            self.friction,
+            &self.params,
+        )?;
+        let [Part { contacts, .. }] = parts;
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        bytes += settled.bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
             mine.iter().map(|n| (n.home as i32, n.home_idx)).collect();
@@ -777,6 +930,7 @@ impl ContactStage {
         }
         self.tree = Some(tree);
         self.outcome(OutcomeParts {
+            pushback,
             force,
             contacts: &contacts,
             pb_work,
@@ -827,6 +981,7 @@ impl ContactStage {
         }
         Ok(ContactOutcome {
             force: p.force,
+            pushback: p.pushback,
             contacts: sums[0] as u64,
             found: p
                 .contacts
@@ -852,6 +1007,7 @@ impl ContactStage {
 /// What a step's statistics are made from.
 struct OutcomeParts<'a> {
     force: Vec<[f64; 3]>,
+    pushback: PushbackCounts,
     contacts: &'a [Contact],
     pb_work: f64,
     bytes: u64,
