@@ -752,12 +752,52 @@ fn ball_on_a_clamped_plate_stays_out_of_it_with_or_without_a_node_under_its_pole
     //   column of history.csv within 1e-10 of its largest value.
     // - mesh order: the ball meshed first (-p BALL_FIRST=1) moves its top to within 1 % of the
     //   same run with the plate first (measured 6e-12; 120 % before, the ball sunk 2 mm).
+    // - the report's counts: the contacts by pass add up to contacts_found_total, are the same
+    //   at every rank count (the contacts are), both passes find contacts where a node meets a
+    //   node (NP 12; over a face centre the flat plate's nodes never enter the ball), and no
+    //   contact is coupled across boxes on one rank.
+    let kinds = [
+        "contacts_later_on_earlier_total",
+        "contacts_earlier_on_later_total",
+        "contacts_self_total",
+        "contacts_particle_total",
+    ];
     for np_plate in [12, 13] {
         let element = 0.03 / np_plate as f64;
         let mut histories = Vec::new();
         let mut header = Vec::new();
+        let mut counts_np1 = Vec::new();
         for np in 1..=3 {
             let out = ball_on_plate(np, np_plate, false);
+            let report: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                    .unwrap();
+            let count = |k: &str| {
+                report[k]
+                    .as_u64()
+                    .unwrap_or_else(|| panic!("report lacks {k}"))
+            };
+            let by_kind: Vec<u64> = kinds.iter().map(|k| count(k)).collect();
+            assert_eq!(
+                by_kind.iter().sum::<u64>(),
+                count("contacts_found_total"),
+                "NP {np_plate} np {np}: contacts by pass {by_kind:?} do not add up"
+            );
+            // Node on node (NP 12), the gap is found both ways; over a face centre only the
+            // ball's nodes cross the flat plate's faces.
+            assert!(
+                by_kind[0] > 0 && (by_kind[1] > 0) == (np_plate == 12),
+                "NP {np_plate} np {np}: contacts by pass {by_kind:?}"
+            );
+            if np == 1 {
+                assert_eq!(count("contacts_coupled_across_boxes_total"), 0);
+                counts_np1 = by_kind;
+            } else {
+                assert_eq!(
+                    by_kind, counts_np1,
+                    "NP {np_plate} np {np}: contacts by pass"
+                );
+            }
             let (h, rows) = read_csv(&out.join("history.csv"));
             let contacts = column(&h, &rows, "contacts");
             assert!(

@@ -153,21 +153,28 @@ impl BaselineStage {
         }];
         let settled = solve_rechecked(comm, &mut parts, &owned, dt, self.friction, &self.params)?;
         let [Part { contacts, .. }] = parts;
-        let (force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        let (force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
+        let local_kinds = crate::stages::contact::stage::kinds(&b, &contacts);
         bytes += settled.bytes;
 
         // Statistics, as the dynamic stage reports them.
-        let mut sums = [0.0f64; 4];
+        let mut sums = [0.0f64; 8];
+        let k = local_kinds.map(|n| n as f64);
         comm.all_reduce_into(
             &[
                 contacts.len() as f64,
                 if me == 0 { pb_work } else { 0.0 },
                 bytes as f64,
                 work_items,
+                k[0],
+                k[1],
+                k[2],
+                k[3],
             ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
+        pushback.kinds = std::array::from_fn(|i| sums[4 + i] as u64);
         let mut maxes = [0.0f64; 2];
         comm.all_reduce_into(
             &[work_items, t0.elapsed().as_secs_f64()][..],

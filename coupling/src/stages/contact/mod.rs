@@ -86,6 +86,10 @@ pub struct ContactStats {
     pub solves_max: u64,
     /// Contacts the rechecks after a push-back added, summed over steps.
     pub rechecked_total: u64,
+    /// Contacts sharing a node with a contact of another box, summed over steps.
+    pub coupled_total: u64,
+    /// Contacts by kind (`PushbackCounts::kinds`), summed over steps.
+    pub kinds_total: [u64; 4],
 }
 
 impl ContactStats {
@@ -110,6 +114,10 @@ impl ContactStats {
         self.solves_total += out.pushback.solves;
         self.solves_max = self.solves_max.max(out.pushback.solves);
         self.rechecked_total += out.pushback.rechecked;
+        self.coupled_total += out.pushback.coupled;
+        for (t, k) in self.kinds_total.iter_mut().zip(out.pushback.kinds) {
+            *t += k;
+        }
         self.steps += 1;
     }
 }
@@ -338,6 +346,20 @@ impl Contact {
         );
         ex.insert("contact_pushback_solves_max".into(), c.solves_max.into());
         ex.insert("contacts_rechecked_total".into(), c.rechecked_total.into());
+        // Contacts by pass: a node of a later body (bodies numbered by their lowest element
+        // id) in a face of an earlier one (the only pass of a one-pass search without
+        // masters), the other way, self-contact, particles; and the contacts sharing a node
+        // with a contact of another contact box (what a push-back solved box by box would
+        // exchange; the push-back now gathers every contact on every rank).
+        let k = c.kinds_total;
+        ex.insert("contacts_later_on_earlier_total".into(), k[0].into());
+        ex.insert("contacts_earlier_on_later_total".into(), k[1].into());
+        ex.insert("contacts_self_total".into(), k[2].into());
+        ex.insert("contacts_particle_total".into(), k[3].into());
+        ex.insert(
+            "contacts_coupled_across_boxes_total".into(),
+            c.coupled_total.into(),
+        );
         if let Search::Dynamic(stage) = &self.search {
             // Steps that rebuilt the decomposition, and candidate-list rebuilds summed over
             // ranks (the other steps kept them: the skins in `stage`).

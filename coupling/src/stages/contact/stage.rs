@@ -156,6 +156,8 @@ struct Solved {
     sent: u64,
     /// The force on every node of the solve by gid (the same on every rank).
     all: HashMap<u64, [f64; 3]>,
+    /// The contacts that share a node with a contact found on another rank.
+    coupled: u64,
 }
 
 /// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
@@ -196,8 +198,12 @@ fn solve_together(
             work: 0.0,
             sent,
             all: HashMap::default(),
+            coupled: 0,
         });
     }
+    let mut per_rank = vec![0u64; comm.size() as usize];
+    comm.all_gather_into(&(mine.len() as u64), &mut per_rank[..]);
+    let coupled = coupled_across_boxes(&packets, &per_rank);
     // One box: the contact nodes first, then the faces' corners, each once, in gid order of
     // the sorted contacts (the same on every rank).
     packets.sort_by(|p, q| {
@@ -255,7 +261,39 @@ fn solve_together(
         work: pb.work,
         sent,
         all,
+        coupled,
     })
+}
+
+/// How many of the gathered contacts (`packets`, rank by rank in rank order, `per_rank` of
+/// each) share a node (the contact node or a face corner) with a contact found on another
+/// rank: the contacts a push-back solved where they were found would have to exchange.
+fn coupled_across_boxes(packets: &[ContactPacket], per_rank: &[u64]) -> u64 {
+    let ranks = per_rank
+        .iter()
+        .enumerate()
+        .flat_map(|(r, &n)| std::iter::repeat_n(r, n as usize));
+    let gids = |p: &ContactPacket| {
+        let mut g = [p.node.gid, 0, 0, 0, 0];
+        for k in 0..4 {
+            g[k + 1] = p.corners[k].gid;
+        }
+        g
+    };
+    // The first rank seen for each gid, or usize::MAX once a second rank has it.
+    let mut seen: HashMap<u64, usize> = HashMap::default();
+    for (p, r) in packets.iter().zip(ranks.clone()) {
+        for g in gids(p) {
+            let e = seen.entry(g).or_insert(r);
+            if *e != r {
+                *e = usize::MAX;
+            }
+        }
+    }
+    packets
+        .iter()
+        .filter(|p| gids(p).iter().any(|g| seen[g] == usize::MAX))
+        .count() as u64
 }
 
 /// Most push-back solves in one step (see [`solve_rechecked`]). Measured on `tube_crush` (np
@@ -286,6 +324,31 @@ pub struct PushbackCounts {
     pub solves: u64,
     /// Contacts the rechecks added, over all ranks.
     pub rechecked: u64,
+    /// Contacts (of the last solve) sharing a node with a contact found in another box.
+    pub coupled: u64,
+    /// Contacts by kind, over all ranks: a node of a later body in a face of an earlier
+    /// one (bodies numbered by their lowest element id), of an earlier body in a later one's,
+    /// within one body (self-contact), a particle.
+    pub kinds: [u64; 4],
+}
+
+/// [`PushbackCounts::kinds`] of `contacts` found in `b` (this rank's).
+pub(crate) fn kinds(b: &ContactBox, contacts: &[Contact]) -> [u64; 4] {
+    let mut k = [0u64; 4];
+    for c in contacts {
+        let (j, f) = (c.node as usize, c.face as usize);
+        let i = if b.nodes.particle[j] {
+            3
+        } else {
+            match b.nodes.body[j].cmp(&b.faces.body[f]) {
+                std::cmp::Ordering::Greater => 0,
+                std::cmp::Ordering::Less => 1,
+                std::cmp::Ordering::Equal => 2,
+            }
+        };
+        k[i] += 1;
+    }
+    k
 }
 
 /// Step 7b with its rechecks: the push-back of every contact together ([`solve_together`]);
@@ -315,9 +378,11 @@ pub(crate) fn solve_rechecked(
             work,
             sent,
             all,
+            coupled,
         } = solve_together(comm, &views, owned, dt, friction)?;
         bytes += sent;
         counts.solves += u64::from(!all.is_empty());
+        counts.coupled = coupled;
         let done = Settled {
             force,
             work,
@@ -735,7 +800,9 @@ impl ContactStage {
         let mut parts = parts.into_iter();
         let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
         let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
-        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        let (owned_force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
+        pushback.kinds = kinds(&st.b, &contacts);
+        pushback.kinds[3] += pcontacts.len() as u64;
         bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
@@ -897,7 +964,8 @@ impl ContactStage {
             &self.params,
         )?;
         let [Part { contacts, .. }] = parts;
-        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        let (owned_force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
+        pushback.kinds = kinds(&b, &contacts);
         bytes += settled.bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
@@ -947,7 +1015,8 @@ impl ContactStage {
     fn outcome(&mut self, p: OutcomeParts) -> Result<ContactOutcome, String> {
         let comm = &self.comm;
         let me = comm.rank();
-        let mut sums = [0.0f64; 5];
+        let mut sums = [0.0f64; 9];
+        let k = p.pushback.kinds.map(|n| n as f64);
         comm.all_reduce_into(
             &[
                 p.contacts.len() as f64,
@@ -955,10 +1024,16 @@ impl ContactStage {
                 p.bytes as f64,
                 p.work_items,
                 p.t_bytes as f64,
+                k[0],
+                k[1],
+                k[2],
+                k[3],
             ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
+        let mut pushback = p.pushback;
+        pushback.kinds = std::array::from_fn(|i| sums[5 + i] as u64);
         let mut maxes = [0.0f64; 4];
         comm.all_reduce_into(
             &[
@@ -981,7 +1056,7 @@ impl ContactStage {
         }
         Ok(ContactOutcome {
             force: p.force,
-            pushback: p.pushback,
+            pushback,
             contacts: sums[0] as u64,
             found: p
                 .contacts
