@@ -48,8 +48,8 @@ pub use eos::Eos;
 pub use integrate::{first_half, second_half, setup_state, stable_dt, CFL_FACTOR};
 pub use kernel::{Kernel, SmoothingKernel};
 pub use neighbour::{
-    canonical, coi, pairs, pairs_in_box, CellList, Coi, KeptPairs, PairEnd, SearchOptions,
-    KEPT_PAIRS_SKIN_H,
+    canonical, coi, pairs, pairs_in_box, CellList, Coi, KeptBoxPairs, KeptPairs, PairEnd,
+    SearchOptions, KEPT_PAIRS_SKIN_H,
 };
 pub use params::{ArtificialViscosity, DensityMode, Params, Profile, TensileCorrection};
 pub use particles::{EosState, NewParticle, PairSums, ParticleRecord, Particles};

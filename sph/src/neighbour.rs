@@ -623,3 +623,108 @@ impl KeptPairs {
         list
     }
 }
+
+/// Pair candidates kept over several steps by one box of a decomposition (a Verlet list for
+/// a rank of several, no periodic box): the pairs of the box's entries, owned and ghosts, whose
+/// spheres grown by half the skin overlapped at the build and whose centre of interaction,
+/// for the grown spheres, lay within `2 h_max + skin` of the box. While no particle has moved
+/// half the skin since (and h and the entries are the same), every pair whose COI lies in the
+/// box now is among them: the pair's distance changed by at most the two motions, and its COI
+/// now lies within `h_a` of `a` now, within `h_a + skin / 2` of `a` at the build, within
+/// `2 h_a + skin` of the grown COI then. [`KeptBoxPairs::filter`] applies the search's own
+/// tests (overlap, COI in the half-open box) to them: the pairs [`pairs_in_box`] gives, in
+/// another order.
+#[derive(Clone, Debug)]
+pub struct KeptBoxPairs {
+    pairs: Vec<(u32, u32)>,
+    skin: f64,
+}
+
+impl KeptBoxPairs {
+    /// Candidates of `parts` (owned and ghosts) for the box `lo..hi`, skin `skin` (m).
+    pub fn build(
+        parts: &Particles,
+        opts: &SearchOptions,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        skin: f64,
+    ) -> Self {
+        assert!(
+            opts.periodic.is_none(),
+            "kept box pairs without a periodic box"
+        );
+        let mut grown = parts.clone();
+        for h in grown.h.iter_mut() {
+            *h += 0.5 * skin;
+        }
+        let reach = 2.0 * parts.max_h() + skin;
+        let near = |c: [f64; 3]| (0..3).all(|k| lo[k] - reach <= c[k] && c[k] < hi[k] + reach);
+        KeptBoxPairs {
+            pairs: pairs_with_interior(&grown, opts, near, &[]),
+            skin,
+        }
+    }
+
+    /// The skin the list was built with, m.
+    pub fn skin(&self) -> f64 {
+        self.skin
+    }
+
+    /// The candidates as plain arrays (a restart continues with the very same list): pairs
+    /// and skin.
+    pub fn to_parts(&self) -> (Vec<[u32; 2]>, f64) {
+        (self.pairs.iter().map(|&(a, b)| [a, b]).collect(), self.skin)
+    }
+
+    /// The list [`KeptBoxPairs::to_parts`] gave.
+    pub fn from_parts(pairs: Vec<[u32; 2]>, skin: f64) -> Self {
+        KeptBoxPairs {
+            pairs: pairs.into_iter().map(|[a, b]| (a, b)).collect(),
+            skin,
+        }
+    }
+
+    /// Candidate pairs.
+    pub fn len(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Whether there is no candidate.
+    pub fn is_empty(&self) -> bool {
+        self.pairs.is_empty()
+    }
+
+    /// The pairs whose spheres overlap and whose COI lies in the half-open box `lo..hi` now,
+    /// counting the owned entries' pairs in `count` (zeroed first, `n_owned` long).
+    pub fn filter(
+        &self,
+        parts: &Particles,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        count: &mut Vec<u32>,
+    ) -> Vec<(u32, u32)> {
+        let owns = |c: [f64; 3]| (0..3).all(|k| lo[k] <= c[k] && c[k] < hi[k]);
+        let end = |i: usize| PairEnd {
+            id: parts.id[i],
+            x_real: parts.x_real[i],
+            image: [0; 3],
+            h: parts.h[i],
+        };
+        let n = parts.n_owned;
+        count.clear();
+        count.resize(n, 0);
+        let mut list = Vec::with_capacity(self.pairs.len());
+        for &(i, j) in &self.pairs {
+            let c = coi(&end(i as usize), &end(j as usize), None);
+            if c.overlap && owns(c.point) {
+                list.push((i, j));
+                for e in [i as usize, j as usize] {
+                    if e < n {
+                        count[e] += 1;
+                    }
+                }
+            }
+        }
+        list
+    }
+}

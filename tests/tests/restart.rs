@@ -188,6 +188,20 @@ fn contact_run_stopped_and_restarted_ends_bit_identical_at_np_2() {
 }
 
 #[test]
+fn kept_sph_decomposition_stopped_and_restarted_ends_bit_identical_at_np_2() {
+    // Water particles on a plate without a periodic box: on two ranks the SPH stage keeps its
+    // decomposition, ghosts and pair candidates between rebuilds, and the checkpoint carries
+    // them (the candidates, the ghost plan's destinations), so the restarted run sums the same
+    // pairs in the same order: the physics columns bit for bit.
+    stop_and_restart(
+        "scenes/cloud_on_plate.toml",
+        2,
+        400,
+        &["contact_imbalance", "contact_bytes"],
+    );
+}
+
+#[test]
 fn a_killed_run_leaves_whole_rows_and_readable_frames_and_earlier_results_are_kept() {
     let dir = workdir("restart_kill");
     let scene = scene_copy("scenes/taylor_impact.toml", &dir);

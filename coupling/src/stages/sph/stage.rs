@@ -104,11 +104,39 @@ pub struct SphStage {
     /// The kept pair candidates of a run on one rank without a periodic box (see
     /// `SphStage::pair_list`); `None` elsewhere, or until the first search.
     verlet: Option<sph::KeptPairs>,
-    /// Whether such a list may be kept (`TDYN_SPH_VERLET=0` searches afresh every step).
+    /// Whether pair lists may be kept (`tdyn run --sph-pairs every-step` searches afresh every
+    /// step).
     verlet_enabled: bool,
+    /// The kept decomposition of a run on several ranks without a periodic box (see
+    /// [`SphStage::finish`]); `None` until a rebuild makes it.
+    kept_box: Option<KeptBox>,
+    /// The skin of the kept decomposition, m (0 where none is kept).
+    skin: f64,
+    /// Destination rank of each ghost record sent (in the plan's order).
+    ghost_dest: Vec<i32>,
+    /// Whether the last rebuild balanced on counted pairs (see `KeptBox::provisional`).
+    build_weighted: bool,
     /// Pair searches run so far (fresh lists and candidate builds).
     pub pair_searches: u64,
 }
+
+/// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
+/// candidates, and its owned particles' positions and smoothing lengths at the build.
+struct KeptBox {
+    pairs: sph::KeptBoxPairs,
+    x_ref: Vec<[f64; 3]>,
+    h_ref: Vec<f64>,
+    /// The pair imbalance (max/mean over ranks) of the build's step (infinite until known).
+    imbalance: f64,
+    /// Built on unit weights (the set-up's, before any pair was counted): rebuilt at the next
+    /// step, on the pairs then counted (the dam break's fixed walls have few pairs: 1.96 of
+    /// pair imbalance on unit weights at np 2, 1.03 on pair counts).
+    provisional: bool,
+}
+
+/// A kept decomposition is rebuilt (and so rebalanced) when the pair imbalance has grown this
+/// much over its value at the build (the contact stage's rule).
+pub const IMBALANCE_DRIFT: f64 = 0.05;
 
 impl SphStage {
     /// A stage over `comm` (collective) with this rank's initial particles (owned).
@@ -131,7 +159,90 @@ impl SphStage {
             balanced_once: false,
             verlet: None,
             verlet_enabled: true,
+            kept_box: None,
+            skin: 0.0,
+            ghost_dest: Vec::new(),
+            build_weighted: false,
             pair_searches: 0,
+        }
+    }
+
+    /// Whether this run keeps its decomposition, ghosts and pair candidates between rebuilds
+    /// on several ranks (no periodic box, lists not refused).
+    fn keeps_box(&self) -> bool {
+        self.verlet_enabled && self.comm.size() > 1 && self.params.periodic.is_none()
+    }
+
+    /// Whether the kept decomposition still holds every pair (collective): no particle has
+    /// moved half the skin since the build (its ghosts reach `h + skin / 2`, the candidates
+    /// `skin`; see `sph::KeptBoxPairs`), no smoothing length changed, and the pair imbalance
+    /// has not grown [`IMBALANCE_DRIFT`] over its value at the build.
+    fn kept_box_valid(&self) -> bool {
+        let Some(k) = &self.kept_box else {
+            return false;
+        };
+        let p = &self.parts;
+        let n = p.n_owned;
+        let moved = p.x_real[..n]
+            .iter()
+            .zip(&k.x_ref)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>())
+            .fold(0.0, f64::max)
+            .sqrt();
+        let ok = !k.provisional
+            && k.x_ref.len() == n
+            && p.h[..n] == k.h_ref[..]
+            && 2.0 * moved < self.skin
+            && self.stats.pair_imbalance <= k.imbalance + IMBALANCE_DRIFT;
+        crate::kernels::collective::max(&self.comm, if ok { 0.0 } else { 1.0 }) == 0.0
+    }
+
+    /// A rebuild of the decomposition (collective): rebalance, and the skin of the kept lists
+    /// that `make_ghosts` and `pair_list` will use.
+    fn rebuild(&mut self) -> Result<(), String> {
+        self.kept_box = None;
+        // The RCB weights are the pairs counted in the last evaluation (none at the set-up).
+        self.build_weighted = crate::kernels::collective::min(
+            &self.comm,
+            if self.pair_count.len() == self.parts.n_owned && self.parts.n_owned > 0 {
+                1.0
+            } else {
+                0.0
+            },
+        ) > 0.0;
+        self.rebalance()?;
+        self.skin = if self.keeps_box() {
+            let h_min = self.parts.h[..self.parts.n_owned]
+                .iter()
+                .fold(f64::INFINITY, |a, &b| a.min(b));
+            let h_min = crate::kernels::collective::min(&self.comm, h_min);
+            if h_min.is_finite() {
+                sph::KEPT_PAIRS_SKIN_H * h_min
+            } else {
+                0.0
+            }
+        } else {
+            0.0
+        };
+        Ok(())
+    }
+
+    /// The ghosts of a kept decomposition: the same particles to the same ranks as at the
+    /// build, with their current records, through the build's plan (the ghosts arrive in the
+    /// same order, so the kept pairs' indices hold).
+    fn refresh_ghosts(&mut self) {
+        self.parts.truncate_ghosts();
+        let recs: Vec<ParticleRecord> = self
+            .ghost_src
+            .iter()
+            .map(|&i| self.parts.record(i))
+            .collect();
+        let plan = self.plan.as_mut().expect("ghosts made at the build");
+        let got = plan.exchange(&recs);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        for g in &got {
+            self.parts.push_ghost(g);
         }
     }
 
@@ -152,7 +263,7 @@ impl SphStage {
         let t0 = Instant::now();
         self.bytes = 0;
         setup_state(&mut self.parts, &self.params);
-        self.rebalance()?;
+        self.rebuild()?;
         self.make_ghosts();
         let full = self.params.profile.setup_evaluates_density_and_eos();
         self.evaluate(full);
@@ -244,19 +355,41 @@ impl SphStage {
 
     /// The rest of the step after `drift` (and any contact correction): rebalance, ghosts,
     /// passes, second half (collective).
+    ///
+    /// On several ranks (no periodic box) the decomposition, the ghosts and the pair
+    /// candidates are kept between rebuilds while [`SphStage::kept_box_valid`] holds: the
+    /// ghosts then go to the same ranks as at the build through its plan, and the candidates
+    /// are filtered with the search's own tests, so every step computes the pairs a rebuild
+    /// would (each once, by the box holding its COI), summed in another order.
     pub fn finish(&mut self, dt: f64) -> Result<(), String> {
         let t0 = Instant::now();
-        self.rebalance()?;
+        let keep = self.kept_box_valid();
+        if !keep {
+            self.rebuild()?;
+        } else {
+            // No rebalance in this step.
+            self.stats.rcb.migrated = 0;
+            self.stats.rcb.bytes_sent = 0;
+            self.stats.rcb.wall_s = 0.0;
+        }
+
+        let ghosts = |st: &mut Self| {
+            if keep {
+                st.refresh_ghosts();
+            } else {
+                st.make_ghosts();
+            }
+        };
         if self.params.density == DensityMode::Continuity {
             // The forces need (rho, p, c) at the new positions, which continuity density has
             // already (rho was advanced in the first half): the EOS runs on the owners before
             // the ghosts are made (they carry it), and one fused pass computes density rates
             // and forces.
             update_eos(&mut self.parts, &self.params);
-            self.make_ghosts();
+            ghosts(self);
             self.evaluate_fused();
         } else {
-            self.make_ghosts();
+            ghosts(self);
             self.evaluate(true);
         }
         second_half(&mut self.parts, dt, &self.params);
@@ -317,7 +450,9 @@ impl SphStage {
         let mut shifts = Vec::new();
         for i in 0..self.parts.n_owned {
             let x = self.parts.x_real[i];
-            let r = self.parts.h[i] * (1.0 + REACH_MARGIN);
+            // A kept decomposition's ghosts also reach the pairs the particle may enter
+            // before the next rebuild (it moves less than half the skin).
+            let r = self.parts.h[i] * (1.0 + REACH_MARGIN) + 0.5 * self.skin;
             shifts.clear();
             shifts.push([0.0; 3]);
             if let Some(p) = &per {
@@ -349,6 +484,7 @@ impl SphStage {
         self.bytes += plan.bytes_sent;
         plan.bytes_sent = 0;
         self.ghost_src = src;
+        self.ghost_dest = dest;
         self.plan = Some(plan);
     }
 
@@ -392,6 +528,26 @@ impl SphStage {
     /// test: the same pairs as a fresh search (in another order, so sums differ at round-off).
     fn pair_list(&mut self) -> Vec<(u32, u32)> {
         let opts = self.params.search_options();
+        if self.keeps_box() {
+            // Several ranks: the box's candidates, made at the rebuild (the ghosts just made
+            // reach them), filtered every step.
+            if self.kept_box.is_none() {
+                self.pair_searches += 1;
+                let p = &self.parts;
+                let pairs = sph::KeptBoxPairs::build(p, &opts, self.box_lo, self.box_hi, self.skin);
+                self.kept_box = Some(KeptBox {
+                    pairs,
+                    x_ref: p.x_real[..p.n_owned].to_vec(),
+                    h_ref: p.h[..p.n_owned].to_vec(),
+                    imbalance: f64::INFINITY,
+                    provisional: !self.build_weighted,
+                });
+            }
+            let k = self.kept_box.as_ref().expect("just built");
+            return k
+                .pairs
+                .filter(&self.parts, self.box_lo, self.box_hi, &mut self.pair_count);
+        }
         let p = &self.parts;
         let keepable = self.verlet_enabled
             && self.comm.size() == 1
@@ -486,6 +642,11 @@ impl SphStage {
         self.stats.pair_imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
         self.stats.pairs_local = self.stats.pairs;
         self.stats.pairs = sums[0] as u64;
+        if let Some(k) = &mut self.kept_box {
+            if k.imbalance.is_infinite() {
+                k.imbalance = self.stats.pair_imbalance;
+            }
+        }
         self.stats.ghosts = sums[1] as u64;
         self.stats.bytes_sent = sums[2] as u64;
         self.stats.wall_s = maxes[1];
@@ -513,6 +674,32 @@ impl SphStage {
             w.put("sph.cut_dims", &dims);
             w.put("sph.cut_values", &values);
             w.put("sph.cut_ties", &ties);
+        }
+        if let Some(k) = &self.kept_box {
+            // The kept decomposition of several ranks: its candidates, references and ghost
+            // plan (rebuilt from its destinations on restore, so the ghosts arrive in the same
+            // order).
+            let (pairs, skin) = k.pairs.to_parts();
+            w.put("sph.kbox_pairs", &pairs);
+            w.put("sph.kbox_x", &k.x_ref);
+            w.put("sph.kbox_h", &k.h_ref);
+            let flags = [
+                k.provisional as u64 as f64,
+                self.build_weighted as u64 as f64,
+            ];
+            // The last step's pair imbalance decides the next step's rebuild.
+            let meta = [
+                k.imbalance,
+                skin,
+                self.skin,
+                flags[0],
+                flags[1],
+                self.stats.pair_imbalance,
+            ];
+            w.put("sph.kbox_meta", &meta);
+            let src: Vec<u64> = self.ghost_src.iter().map(|&i| i as u64).collect();
+            w.put("sph.ghost_src", &src);
+            w.put("sph.ghost_dest", &self.ghost_dest);
         }
         if let Some(v) = &self.verlet {
             let (pairs, x_ref, h_ref, id_ref, skin) = v.to_parts();
@@ -562,6 +749,28 @@ impl SphStage {
             if !self.rcb.set_cuts(&cuts) {
                 return Err("checkpoint: the SPH cuts are for another rank count".into());
             }
+        }
+        self.kept_box = None;
+        if r.has("sph.kbox_pairs") {
+            let meta: Vec<f64> = r.get("sph.kbox_meta")?;
+            if meta.len() != 6 {
+                return Err("checkpoint: sph.kbox_meta".into());
+            }
+            self.stats.pair_imbalance = meta[5];
+            self.kept_box = Some(KeptBox {
+                pairs: sph::KeptBoxPairs::from_parts(r.get("sph.kbox_pairs")?, meta[1]),
+                x_ref: r.get("sph.kbox_x")?,
+                h_ref: r.get("sph.kbox_h")?,
+                imbalance: meta[0],
+                provisional: meta[3] != 0.0,
+            });
+            self.skin = meta[2];
+            self.build_weighted = meta[4] != 0.0;
+            let src: Vec<u64> = r.get("sph.ghost_src")?;
+            self.ghost_src = src.iter().map(|&i| i as usize).collect();
+            self.ghost_dest = r.get("sph.ghost_dest")?;
+            // Collective: every rank of a kept decomposition has one (builds are collective).
+            self.plan = Some(CommPlan::new_shared(&self.comm, &self.ghost_dest));
         }
         self.verlet = if r.has("sph.kept_pairs") {
             let skin: Vec<f64> = r.get("sph.kept_skin")?;
