@@ -285,13 +285,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 )
                 .into());
             }
-            let (meta, state) =
+            let (meta, saved) =
                 checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
-            let restored: Result<(), String> = model
-                .stages_mut()
-                .into_iter()
-                .try_for_each(|s| s.restore(&state))
-                .and_then(|_| model.contact.as_mut().map_or(Ok(()), |c| c.restore(&state)));
+            let restored = restore(world, &mut model, &saved);
             collective::first_error(world, restored.err())?;
             clock.restore(&meta.clock);
             check.restore(&meta.check);
@@ -466,6 +462,33 @@ fn time_loop(
     }
     progress.finish();
     Ok(())
+}
+
+/// Sets every stage's state from a checkpoint's rank files (collective: a stage's remap on
+/// another rank count communicates, and every stage takes part whatever another's result).
+fn restore(
+    world: &SimpleCommunicator,
+    model: &mut Model,
+    saved: &checkpoint::Saved,
+) -> Result<(), String> {
+    let mut res = Ok(());
+    for stage in model.stages_mut() {
+        let r = match saved {
+            checkpoint::Saved::Mine(state) => stage.restore(state),
+            checkpoint::Saved::All(pieces) => stage.restore_remapped(world, pieces),
+        };
+        res = res.and(r);
+    }
+    // The contact stage keeps only global values (its energy and the last step's figures):
+    // any rank's file serves, rank 0's on another rank count.
+    let contact_state = match saved {
+        checkpoint::Saved::Mine(state) => Some(state),
+        checkpoint::Saved::All(pieces) => pieces.first(),
+    };
+    if let (Some(c), Some(state)) = (model.contact.as_mut(), contact_state) {
+        res = res.and(c.restore(state));
+    }
+    res
 }
 
 /// Writes a checkpoint of the run now (collective).
