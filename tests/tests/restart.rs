@@ -405,6 +405,58 @@ fn implicit_run_checkpointed_on_3_ranks_continues_on_2() {
 }
 
 #[test]
+fn a_full_disk_on_rank_0_ends_every_rank_with_one_message() {
+    // A full disk met by one rank alone (rank 0 writes the particle dumps): the dump files of
+    // the steps after a checkpoint are made links to /dev/full, whose writes fail with ENOSPC
+    // as a full disk's do, and the run is continued from the checkpoint on 3 ranks. Every rank
+    // must stop at that step with the one agreed line naming the file and the cause: exit
+    // status 1, one `tdyn: error:` line, and no rank stopping the job for a hang (the exit
+    // gate's line), well within the exit gate's 5 s grace.
+    let dir = workdir("restart_full_disk");
+    let scene = scene_copy("scenes/sod_tube.toml", &dir);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, format!("{text}\n[output]\ndump_every = 16\n")).unwrap();
+    let out = dir.join("out");
+    stop_after_rows(3, &scene, &out, 40, &[]);
+    let dumps = out.join("dumps");
+    let mut links = 0;
+    for step in (0..200).step_by(16) {
+        let f = dumps.join(format!("dump.tdyn.{step}"));
+        if !f.exists() {
+            std::os::unix::fs::symlink("/dev/full", &f).unwrap();
+            links += 1;
+        }
+    }
+    assert!(links > 2, "steps left to dump after the stop: {links}");
+    let t0 = Instant::now();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--restart")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let wall = t0.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("tdyn:")).collect();
+    assert!(
+        o.status.code() == Some(1)
+            && lines.len() == 1
+            && lines[0].starts_with("tdyn: error:")
+            && lines[0].contains("dump.tdyn.")
+            && lines[0].contains("No space left on device"),
+        "one agreed line naming the dump and the full disk, exit status 1 ({:?}):\n{err}",
+        o.status.code()
+    );
+    assert!(
+        wall < 4.0 + 15.0,
+        "every rank stopped together, not after the exit gate's grace: {wall:.1} s"
+    );
+}
+
+#[test]
 fn a_killed_run_leaves_whole_rows_and_readable_frames_and_earlier_results_are_kept() {
     let dir = workdir("restart_kill");
     let scene = scene_copy("scenes/taylor_impact.toml", &dir);
