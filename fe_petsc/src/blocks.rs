@@ -148,6 +148,12 @@ impl BlockWork {
         self.f_old.as_flattened().to_vec()
     }
 
+    /// The local node and the block of each slot (the keys of `restart_state`'s forces: a
+    /// restart on another rank count remaps them by global node id and block).
+    pub fn slots(&self) -> (&[u32], &[u32]) {
+        (&self.slot_node, &self.slot_block)
+    }
+
     /// Sets the state `restart_state` gave; `false` when the length does not fit.
     pub fn set_restart_state(&mut self, f_old: &[f64]) -> bool {
         if f_old.len() != 3 * self.f_old.len() {

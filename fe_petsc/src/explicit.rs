@@ -68,6 +68,48 @@ pub enum StepError {
     Petsc(#[from] PetscError),
 }
 
+/// How a named restart array ([`ExplicitFe::restart_state`], `ImplicitFe::restart_state`)
+/// lies over the ranks: what a restart on another rank count needs to move it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestartLayout {
+    /// A fixed number of values per local node, in local order; every copy of a node holds the
+    /// same values (each rank integrates its ghosts with the same summed force), so any copy
+    /// serves.
+    Node,
+    /// A fixed number of values per local element, in local order.
+    Element,
+    /// The same on every rank (global energies, the clock), except the entry
+    /// [`RESTART_DT_STABLE`] of `fe.scalars`: this rank's smallest stable step.
+    Global,
+    /// `fe.block_work`: this rank's per-block step sums, then its own element forces per
+    /// (node, block) slot ([`BlockWork::slots`]), partial sums that only add up over ranks.
+    BlockWork,
+}
+
+/// The index in `fe.scalars` of the rank's own smallest stable step (the others are global).
+pub const RESTART_DT_STABLE: usize = 8;
+
+/// The layout of the restart array `name`; `None` for a name neither integrator writes.
+pub fn restart_layout(name: &str) -> Option<RestartLayout> {
+    use RestartLayout::*;
+    Some(match name {
+        "fe.x"
+        | "fe.x_old"
+        | "fe.v"
+        | "fe.a"
+        | "fe.force"
+        | "fe.force_old"
+        | "fe.reaction"
+        | "fe.reaction_old"
+        | "implicit.force_n"
+        | "implicit.reaction_n" => Node,
+        "fe.hex_state" | "fe.mat_state" | "fe.vol" | "fe.pressure" => Element,
+        "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
+        "fe.block_work" => BlockWork,
+        _ => return None,
+    })
+}
+
 /// Global energies and momentum (sums over ranks), J and kg m/s.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Energies {
@@ -641,7 +683,7 @@ impl ExplicitFe {
             e.momentum[1],
             e.momentum[2],
             self.internal_plus_hg,
-            self.dt_stable_local,
+            self.dt_stable_local, // RESTART_DT_STABLE
             self.time,
             self.step as f64,
         ];
@@ -718,7 +760,7 @@ impl ExplicitFe {
             momentum: [s[4], s[5], s[6]],
         };
         self.internal_plus_hg = s[7];
-        self.dt_stable_local = s[8];
+        self.dt_stable_local = s[RESTART_DT_STABLE];
         self.time = s[9];
         self.step = s[10] as u64;
         let nb = self.block_energies.len();

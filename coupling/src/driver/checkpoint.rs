@@ -17,7 +17,13 @@
 //! deterministic on the same ranks), then overwrites their state from the files: on the same
 //! rank count it continues bit for bit (the SPH stage keeps its pair list and RCB cuts; the
 //! contact stage rebuilds its decomposition, whose contacts are those of a rebuild at every
-//! step). Another rank count is refused.
+//! step). On another rank count every rank reads every rank file (a few bytes per node,
+//! element and particle: simpler than a scatter, and each rank needs pieces of many files)
+//! and each stage takes what its new decomposition holds by global id (`Stage::
+//! restore_remapped`): nodes and elements by the mesh's ids, particles by theirs; global
+//! values (energies, the clock, the energy check) are the same in every file. The run then
+//! agrees with the run without a stop to round-off (sums are taken in another order), as runs
+//! on different rank counts do.
 use super::energy::HourglassWatch;
 use super::setup::Model;
 use crate::kernels::collective::first_error;
@@ -155,14 +161,23 @@ pub fn write(
     Ok(())
 }
 
-/// Reads the checkpoint in `run_dir/checkpoint` for this rank (collective): refused when it was
-/// written on another rank count or for another scene (`scene_hash`).
+/// The rank files a restart reads.
+pub enum Saved {
+    /// This rank's own file: the checkpoint was written on this rank count.
+    Mine(StateReader),
+    /// Every writing rank's file, in rank order: it was written on another rank count.
+    All(Vec<StateReader>),
+}
+
+/// Reads the checkpoint in `run_dir/checkpoint` (collective): this rank's file, or every
+/// rank's when it was written on another rank count. Refused when it was written for another
+/// scene (`scene_hash`) or by another format version.
 pub fn read(
     world: &SimpleCommunicator,
     run_dir: &Path,
     scene_hash: &str,
     scene_file: &str,
-) -> Result<(Meta, StateReader), String> {
+) -> Result<(Meta, Saved), String> {
     let dir = run_dir.join(DIR);
     let meta_path = dir.join("meta.json");
     let meta: Result<Meta, String> = std::fs::read_to_string(&meta_path)
@@ -190,14 +205,8 @@ pub fn read(
             meta_path.display(),
             meta.version
         ));
-    } else if meta.ranks != world.size() {
-        err = Some(format!(
-            "--restart {}: the checkpoint was written on {} ranks; restart it on {} (mpirun -np {})",
-            run_dir.display(),
-            meta.ranks,
-            meta.ranks,
-            meta.ranks
-        ));
+    } else if meta.ranks < 1 {
+        err = Some(format!("{}: ranks {}", meta_path.display(), meta.ranks));
     } else if meta.scene_hash != scene_hash {
         err = Some(format!(
             "--restart {}: {scene_file} (or the values given on the command line) changed since the checkpoint was written; a restart continues the same scene: undo the change, or start a new run",
@@ -205,19 +214,28 @@ pub fn read(
         ));
     }
     first_error(world, err)?;
-    let path = rank_file(&dir, world.rank(), meta.clock.step);
-    let state = std::fs::read(&path)
-        .map_err(|e| format!("--restart: {}: {e}", path.display()))
-        .and_then(|b| StateReader::parse(&b));
-    let state = match state {
+    let read_one = |rank: i32| {
+        let path = rank_file(&dir, rank, meta.clock.step);
+        std::fs::read(&path)
+            .map_err(|e| format!("--restart: {}: {e}", path.display()))
+            .and_then(|b| StateReader::parse(&b))
+    };
+    let saved = if meta.ranks == world.size() {
+        read_one(world.rank()).map(Saved::Mine)
+    } else {
+        (0..meta.ranks)
+            .map(read_one)
+            .collect::<Result<Vec<_>, _>>()
+            .map(Saved::All)
+    };
+    match saved {
         Ok(s) => {
             first_error(world, None)?;
-            s
+            Ok((meta, s))
         }
         Err(e) => {
             first_error(world, Some(e))?;
             unreachable!("first_error returns the error")
         }
-    };
-    Ok((meta, state))
+    }
 }

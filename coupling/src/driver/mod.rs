@@ -9,6 +9,7 @@
 use crate::input::scene::{self, Mode, Scene};
 use crate::kernels::collective;
 use crate::stages::{StageEnergies, StageError};
+use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::path::PathBuf;
@@ -285,13 +286,9 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
                 )
                 .into());
             }
-            let (meta, state) =
+            let (meta, saved) =
                 checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
-            let restored: Result<(), String> = model
-                .stages_mut()
-                .into_iter()
-                .try_for_each(|s| s.restore(&state))
-                .and_then(|_| model.contact.as_mut().map_or(Ok(()), |c| c.restore(&state)));
+            let restored = restore(world, &mut model, &saved);
             collective::first_error(world, restored.err())?;
             clock.restore(&meta.clock);
             check.restore(&meta.check);
@@ -321,9 +318,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         checkpoint_every: scene.output.checkpoint_every,
     };
     if restart.is_none() {
-        outputs.frame(0.0, &model)?;
-        outputs.dump(world, 0, false, &model)?;
-        outputs.rows(world, &model, &check.row(&clock, &model, 0.0))?;
+        // Each is collective and may fail on one rank alone: all three, then one agreement.
+        let frame = outputs.frame(0.0, &model);
+        let dump = outputs.dump(world, 0, false, &model);
+        let rows = outputs.rows(world, &model, &check.row(&clock, &model, 0.0));
+        collective::first_error(world, frame.and(dump).and(rows).err())?;
     } else if world.rank() == 0 && !opts.quiet {
         eprintln!(
             "tdyn: restarting from the checkpoint at step {}, t = {:e} s",
@@ -346,7 +345,12 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     );
     let loop_s = loop_t0.elapsed().as_secs_f64() - (outputs.wall_s - output_s0);
     let output_s = outputs.wall_s;
-    let output_bytes = outputs.finish()?;
+    let finished = outputs.finish();
+    if let Err(e) = collective::first_error(world, finished.as_ref().err().cloned()) {
+        // The loop's own failure, when it had one, is what the user needs to read.
+        return Err(res.err().unwrap_or_else(|| e.into()));
+    }
+    let output_bytes = finished.expect("agreed");
     let loop_s = collective::max(world, loop_s);
     let wall_s = collective::max(world, wall0.elapsed().as_secs_f64());
     report::write(
@@ -422,19 +426,23 @@ fn time_loop(
             fe.set_time(clock.time);
         }
         let err = check.after_step(world, clock, model, outputs)?;
+        // This rank's first output failure; the others go on with their (collective) output.
+        let mut out_err = None;
         if clock.row_due() {
-            outputs.rows(world, model, &check.row(clock, model, err))?;
+            out_err = outputs
+                .rows(world, model, &check.row(clock, model, err))
+                .err();
         }
         if clock.frame_due() {
-            outputs.frame(clock.time, model)?;
+            out_err = out_err.or(outputs.frame(clock.time, model).err());
         }
-        outputs.dump(world, clock.step, clock.at_end(), model)?;
+        out_err = out_err.or(outputs.dump(world, clock.step, clock.at_end(), model).err());
         clock.propose(next);
         let stop = opts
             .stop
             .as_ref()
             .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed));
-        let stop = collective::max(world, if stop { 1.0 } else { 0.0 }) > 0.0;
+        let stop = agree_step(world, stop, out_err)?;
         let due = ctx.checkpoint_every.is_some_and(|every| {
             clock.time >= every * ctx.next_checkpoint as f64 - schedule::TIME_EPS_STEPS * dt
                 || clock.at_end()
@@ -468,6 +476,54 @@ fn time_loop(
     Ok(())
 }
 
+/// The step's one agreement (collective): whether any rank was asked to stop, and, when any
+/// rank's output failed this step, the lowest such rank's message on every rank. Output may
+/// fail on one rank alone (rank 0 writes the CSV rows and the dumps; a full disk): agreed
+/// here, every rank stops at the same step with the same line instead of the others waiting
+/// in the next step's collective calls. Both ride in the one reduction the stop request
+/// needs anyway; the message's broadcast happens only on failure.
+fn agree_step(
+    world: &SimpleCommunicator,
+    stop: bool,
+    out_err: Option<String>,
+) -> Result<bool, String> {
+    let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    let mine = [flag(stop), flag(out_err.is_some())];
+    let mut any = [0.0f64; 2];
+    world.all_reduce_into(&mine[..], &mut any[..], SystemOperation::max());
+    if any[1] > 0.0 {
+        collective::first_error(world, out_err)?;
+    }
+    Ok(any[0] > 0.0)
+}
+
+/// Sets every stage's state from a checkpoint's rank files (collective: a stage's remap on
+/// another rank count communicates, and every stage takes part whatever another's result).
+fn restore(
+    world: &SimpleCommunicator,
+    model: &mut Model,
+    saved: &checkpoint::Saved,
+) -> Result<(), String> {
+    let mut res = Ok(());
+    for stage in model.stages_mut() {
+        let r = match saved {
+            checkpoint::Saved::Mine(state) => stage.restore(state),
+            checkpoint::Saved::All(pieces) => stage.restore_remapped(world, pieces),
+        };
+        res = res.and(r);
+    }
+    // The contact stage keeps only global values (its energy and the last step's figures):
+    // any rank's file serves, rank 0's on another rank count.
+    let contact_state = match saved {
+        checkpoint::Saved::Mine(state) => Some(state),
+        checkpoint::Saved::All(pieces) => pieces.first(),
+    };
+    if let (Some(c), Some(state)) = (model.contact.as_mut(), contact_state) {
+        res = res.and(c.restore(state));
+    }
+    res
+}
+
 /// Writes a checkpoint of the run now (collective).
 fn write_checkpoint(
     world: &SimpleCommunicator,
@@ -478,7 +534,8 @@ fn write_checkpoint(
     ctx: &LoopCtx,
 ) -> Result<(), String> {
     let t0 = Instant::now();
-    outputs.flush_rows()?;
+    // Rank 0 writes the rows: its failure (a full disk) agreed before the collective writes.
+    collective::first_error(world, outputs.flush_rows().err())?;
     let (history_rows, probe_rows, frames) = outputs.progress();
     let meta = checkpoint::Meta {
         version: 1,

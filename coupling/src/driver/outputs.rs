@@ -69,6 +69,8 @@ pub struct Outputs {
     particle_ranks: Vec<i32>,
     particle_labels: Vec<u64>,
     dump_dir: PathBuf,
+    /// The run's folder (for messages naming history.csv and probes.csv).
+    dir: PathBuf,
     dump_every: u64,
     rank: i32,
     /// Time spent writing (this rank), s.
@@ -151,6 +153,7 @@ impl Outputs {
             particle_ranks: Vec::new(),
             particle_labels: Vec::new(),
             dump_dir: out_dir.join("dumps"),
+            dir: out_dir.to_path_buf(),
             dump_every: if model.sph.is_some() {
                 scene.output.dump_every
             } else {
@@ -168,8 +171,12 @@ impl Outputs {
 
     /// Flushes the CSV files (before a checkpoint names their row counts).
     pub fn flush_rows(&mut self) -> Result<(), String> {
-        self.history.flush().map_err(|e| e.to_string())?;
-        self.probes.flush().map_err(|e| e.to_string())
+        let history = self
+            .history
+            .flush()
+            .map_err(|e| self.named("history.csv", e));
+        let probes = self.probes.flush().map_err(|e| self.named("probes.csv", e));
+        history.and(probes)
     }
 
     /// Writes a frame of every stage at `time` (collective).
@@ -235,28 +242,40 @@ impl Outputs {
             return Ok(());
         }
         let t0 = Instant::now();
-        write_particle_dump(world, &self.dump_dir, step, &s.stage.parts, &s.ids)
-            .map_err(|e| format!("{}: {e}", self.dump_dir.display()))?;
+        write_particle_dump(world, &self.dump_dir, step, &s.stage.parts, &s.ids).map_err(|e| {
+            let file = self.dump_dir.join(format!("dump.tdyn.{step}"));
+            format!("{}: {e}", file.display())
+        })?;
         self.wall_s += t0.elapsed().as_secs_f64();
         Ok(())
     }
 
     /// A history.csv row and a probes.csv row (collective: the probes are sampled on every
-    /// rank).
+    /// rank, also when the history row failed, which only rank 0 writes). The error is this
+    /// rank's own: the caller agrees on it.
     pub fn rows(
         &mut self,
         world: &SimpleCommunicator,
         model: &Model,
         row: &HistoryRow,
     ) -> Result<(), String> {
-        self.history_row(model, row)?;
+        let history = self.history_row(model, row);
         let mut pr = vec![row.time];
         pr.extend(model.probes.sample(
             world,
             model.fe.as_ref().map(|f| f.state()),
             model.sph.as_ref().map(|s| &s.stage),
         ));
-        self.probes.row(&pr).map_err(|e| e.to_string())
+        let probes = self
+            .probes
+            .row(&pr)
+            .map_err(|e| self.named("probes.csv", e));
+        history.and(probes)
+    }
+
+    /// A write error of the run's file `name` as the line to print.
+    fn named(&self, name: &str, e: std::io::Error) -> String {
+        format!("{}: {e}", self.dir.join(name).display())
     }
 
     /// Only the history.csv row (the row before a run stops), flushed.
@@ -288,7 +307,9 @@ impl Outputs {
                 r.extend([b.hourglass, b.internal]);
             }
         }
-        self.history.row(&r).map_err(|e| e.to_string())
+        self.history
+            .row(&r)
+            .map_err(|e| self.named("history.csv", e))
     }
 
     /// Flushes history.csv (before a run stops with an error).
@@ -300,10 +321,10 @@ impl Outputs {
     /// Closes the files; returns the bytes of fields.h5 this rank wrote.
     pub fn finish(mut self) -> Result<u64, String> {
         let written = self.writer.bytes_written();
+        // Both whatever the other's result (closing fields.h5 is collective).
+        let rows = self.flush_rows();
         self.writer.finish().map_err(|e| e.to_string())?;
-        self.history.flush().map_err(|e| e.to_string())?;
-        self.probes.flush().map_err(|e| e.to_string())?;
-        Ok(written)
+        rows.map(|_| written)
     }
 }
 

@@ -80,4 +80,12 @@ pub trait Stage {
     fn save(&self, w: &mut StateWriter);
     /// Sets the state `save` wrote, on the same ranks.
     fn restore(&mut self, r: &StateReader) -> Result<(), String>;
+    /// Sets the state `save` wrote on another rank count (collective): `pieces` holds every
+    /// writing rank's sections, in rank order; each rank takes what its part of the new
+    /// decomposition needs, by global id. An error names what did not fit.
+    fn restore_remapped(
+        &mut self,
+        world: &SimpleCommunicator,
+        pieces: &[StateReader],
+    ) -> Result<(), String>;
 }

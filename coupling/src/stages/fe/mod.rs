@@ -16,6 +16,7 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod remap;
 pub mod setup;
 
 /// The integrator of the scene's mode. Both keep their state in an [`ExplicitFe`], which
@@ -227,10 +228,25 @@ impl Stage for Fe {
         for (name, a) in arrays {
             w.put(name, &a);
         }
+        remap::save_ids(w, &self.mesh.local, self.state());
     }
 
     fn restore(&mut self, r: &StateReader) -> Result<(), String> {
         let mut get = |name: &str| r.get::<f64>(name).ok();
+        match &mut self.integrator {
+            Integrator::Explicit(fe) => fe.set_restart_state(&mut get),
+            Integrator::Implicit(imp) => imp.set_restart_state(&mut get),
+        }
+        .map_err(|e| format!("checkpoint: {e}"))
+    }
+
+    fn restore_remapped(
+        &mut self,
+        world: &SimpleCommunicator,
+        pieces: &[StateReader],
+    ) -> Result<(), String> {
+        let arrays = remap::arrays(world, self, pieces)?;
+        let mut get = |name: &str| arrays.get(name).cloned();
         match &mut self.integrator {
             Integrator::Explicit(fe) => fe.set_restart_state(&mut get),
             Integrator::Implicit(imp) => imp.set_restart_state(&mut get),

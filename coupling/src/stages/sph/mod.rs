@@ -105,6 +105,23 @@ impl Sph {
     ) -> ParticleFrame<'a> {
         particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank)
     }
+
+    /// Sets the global energies, the gravity work and the step count `save` wrote.
+    fn restore_globals(&mut self, r: &StateReader) -> Result<(), String> {
+        let g: Vec<f64> = r.get("sph.globals")?;
+        if g.len() != 7 {
+            return Err("checkpoint: sph.globals".into());
+        }
+        self.globals = SphGlobals {
+            kinetic: g[0],
+            internal: g[1],
+            momentum: [g[2], g[3], g[4]],
+            gravity_power: g[5],
+        };
+        self.external_work = g[6];
+        self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
+        Ok(())
+    }
 }
 
 impl Stage for Sph {
@@ -169,19 +186,17 @@ impl Stage for Sph {
 
     fn restore(&mut self, r: &StateReader) -> Result<(), String> {
         self.stage.restore(r)?;
-        let g: Vec<f64> = r.get("sph.globals")?;
-        if g.len() != 7 {
-            return Err("checkpoint: sph.globals".into());
-        }
-        self.globals = SphGlobals {
-            kinetic: g[0],
-            internal: g[1],
-            momentum: [g[2], g[3], g[4]],
-            gravity_power: g[5],
-        };
-        self.external_work = g[6];
-        self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
-        Ok(())
+        self.restore_globals(r)
+    }
+
+    fn restore_remapped(
+        &mut self,
+        _world: &SimpleCommunicator,
+        pieces: &[StateReader],
+    ) -> Result<(), String> {
+        self.stage.restore_remapped(pieces)?;
+        // The energies, the gravity work and the step count are global: rank 0's file.
+        self.restore_globals(pieces.first().ok_or("checkpoint: no rank files")?)
     }
 
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {

@@ -787,6 +787,40 @@ impl SphStage {
         Ok(())
     }
 
+    /// Sets the state [`SphStage::save`] wrote on another rank count: `pieces` holds every
+    /// writing rank's sections. This rank takes the block of the particles (ordered by id)
+    /// that its rank number gives, with their RCB weights; the first step's rebalance moves
+    /// them into the decomposition that the set-up at t = 0 made on these ranks (RCB takes
+    /// its items from anywhere) and the pairs are searched afresh. The pairs are then summed
+    /// in another order than without the stop: the run agrees with it to round-off.
+    pub fn restore_remapped(&mut self, pieces: &[StateReader]) -> Result<(), String> {
+        let mut all: Vec<(sph::ParticleRecord, u32)> = Vec::new();
+        let mut searches = 0;
+        for r in pieces {
+            let recs: Vec<sph::ParticleRecord> = r.get("sph.particles")?;
+            let counts: Vec<u32> = r.get("sph.pair_count")?;
+            let n = recs.len();
+            all.extend(
+                recs.into_iter()
+                    .zip(counts.into_iter().chain(std::iter::repeat(0)).take(n)),
+            );
+            searches += r.get::<u64>("sph.flags")?.get(1).copied().unwrap_or(0);
+        }
+        all.sort_by_key(|(rec, _)| rec.id);
+        let (p, me) = (self.comm.size() as usize, self.comm.rank() as usize);
+        let (lo, hi) = (all.len() * me / p, all.len() * (me + 1) / p);
+        let mut parts = Particles::new();
+        for (rec, _) in &all[lo..hi] {
+            parts.push_owned(rec);
+        }
+        self.parts = parts;
+        self.pair_count = all[lo..hi].iter().map(|(_, c)| *c).collect();
+        self.verlet = None;
+        // The report sums the searches over ranks.
+        self.pair_searches = if me == 0 { searches } else { 0 };
+        Ok(())
+    }
+
     /// The stable step over all ranks (collective), 0.3 min h/(c + |v|).
     pub fn stable_dt(&self) -> f64 {
         crate::kernels::collective::min(&self.comm, sph::stable_dt(&self.parts))

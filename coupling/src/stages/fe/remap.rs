@@ -1,0 +1,220 @@
+//! The FE stage's restart on another rank count (`driver::checkpoint`): every rank holds all
+//! writing ranks' sections (`pieces`) and builds its own arrays, in its local order, by global
+//! node and element id (the mesh's ids, those fields.h5 writes).
+//!
+//! Each array's layout (`fe_petsc::explicit::restart_layout`) says how:
+//! - per node: from the copy the writing rank owned (every copy of a node holds the same
+//!   values: each rank integrates its ghosts with the same summed force);
+//! - per element: from the one rank that held the element;
+//! - global (energies, the clock): from rank 0's file, except the rank's own smallest stable
+//!   step, set to the minimum over the files (only its minimum over ranks is ever read, and
+//!   the next force evaluation replaces it);
+//! - the per-block work bookkeeping (`fe_petsc::blocks`): each rank's element forces per
+//!   (node, block) slot are partial sums that only add up over ranks. Their sums over the
+//!   writing ranks go to the lowest new rank holding that slot, zeros to the others: the next
+//!   step's per-block work, sum over ranks and slots of (f_old + f_new)/2 . dx with dx the same
+//!   on every copy of a node, is unchanged but for the order of the additions. The step sums
+//!   before the forces are zero: the next force evaluation fills them before they are read.
+use super::Fe;
+use crate::kernels::collective::all_gather_varcount;
+use crate::output::state::{StateReader, StateWriter};
+use fe_petsc::explicit::{restart_layout, ExplicitFe, RestartLayout, RESTART_DT_STABLE};
+use fe_petsc::mesh::LocalMesh;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::collections::HashMap;
+
+/// Sections naming the ids of the local arrays, written beside them (`save_ids`).
+const NODE_ID: &str = "fe.node_id";
+const NODE_OWNED: &str = "fe.node_owned";
+const ELEM_ID: &str = "fe.elem_id";
+/// (global node id, block) of each per-block slot, flattened.
+const BLOCK_SLOTS: &str = "fe.block_slots";
+
+/// Writes the global ids of this rank's nodes and elements, which nodes it owns, and its
+/// per-block slots' keys: what a restart on another rank count maps the arrays by.
+pub fn save_ids(w: &mut StateWriter, mesh: &LocalMesh, fe: &ExplicitFe) {
+    w.put(NODE_ID, &mesh.node_id);
+    let owned: Vec<u8> = fe.owned.iter().map(|&o| o as u8).collect();
+    w.put(NODE_OWNED, &owned);
+    w.put(ELEM_ID, &fe.elem_id);
+    w.put(BLOCK_SLOTS, &slot_keys(mesh, fe));
+}
+
+/// (global node id, block) of each of this rank's per-block slots, flattened.
+fn slot_keys(mesh: &LocalMesh, fe: &ExplicitFe) -> Vec<u64> {
+    let (nodes, blocks) = fe.blocks.slots();
+    nodes
+        .iter()
+        .zip(blocks)
+        .flat_map(|(&n, &b)| [mesh.node_id[n as usize], b as u64])
+        .collect()
+}
+
+/// Where the items (nodes or elements) of the writing ranks lie.
+struct Located {
+    /// (piece, local index) of each global id.
+    at: HashMap<u64, (usize, usize)>,
+    /// Local items per piece.
+    counts: Vec<usize>,
+}
+
+/// Where each id lies among the pieces. With `owned`, only the copies their rank owned count
+/// (one per node).
+fn locate(pieces: &[StateReader], ids: &str, owned: Option<&str>) -> Result<Located, String> {
+    let mut at = HashMap::new();
+    let mut counts = Vec::with_capacity(pieces.len());
+    for (p, r) in pieces.iter().enumerate() {
+        let id: Vec<u64> = r.get(ids).map_err(|e| {
+            format!("{e}: the checkpoint predates restarts on another rank count; restart it on the rank count that wrote it")
+        })?;
+        let own: Option<Vec<u8>> = owned.map(|o| r.get(o)).transpose()?;
+        for (i, &g) in id.iter().enumerate() {
+            if own.as_ref().is_none_or(|o| o.get(i) == Some(&1)) {
+                at.insert(g, (p, i));
+            }
+        }
+        counts.push(id.len());
+    }
+    Ok(Located { at, counts })
+}
+
+/// The array `name` (`width` values per item) for the items with ids `mine`, gathered from
+/// the pieces where `from` finds them.
+fn gather(
+    pieces: &[StateReader],
+    name: &str,
+    width: usize,
+    mine: &[u64],
+    from: &Located,
+) -> Result<Vec<f64>, String> {
+    let counts = &from.counts;
+    let arrays: Vec<Vec<f64>> = pieces
+        .iter()
+        .map(|r| r.get::<f64>(name))
+        .collect::<Result<_, _>>()?;
+    for (p, a) in arrays.iter().enumerate() {
+        if a.len() != width * counts[p] {
+            return Err(format!(
+                "checkpoint: {name}: rank {p} wrote {} values for {} items of {width}",
+                a.len(),
+                counts[p]
+            ));
+        }
+    }
+    let mut out = Vec::with_capacity(width * mine.len());
+    for g in mine {
+        let &(p, i) = from
+            .at
+            .get(g)
+            .ok_or_else(|| format!("checkpoint: {name}: id {g} is in no rank's file"))?;
+        out.extend_from_slice(&arrays[p][i * width..(i + 1) * width]);
+    }
+    Ok(out)
+}
+
+/// The per-block bookkeeping for this rank (`len` values: `n_sums` step sums, then 3 per
+/// slot), from the writing ranks' slot forces; `holder`: the lowest new rank holding each slot.
+fn block_work(
+    pieces: &[StateReader],
+    keys: &[u64],
+    n_sums: usize,
+    holder: &HashMap<(u64, u64), i32>,
+    rank: i32,
+) -> Result<Vec<f64>, String> {
+    let mut total: HashMap<(u64, u64), [f64; 3]> = HashMap::new();
+    for (p, r) in pieces.iter().enumerate() {
+        let k: Vec<u64> = r.get(BLOCK_SLOTS)?;
+        let w: Vec<f64> = r.get("fe.block_work")?;
+        let n_slots = k.len() / 2;
+        if w.len() < 3 * n_slots {
+            return Err(format!("checkpoint: fe.block_work of rank {p} is short"));
+        }
+        let f = &w[w.len() - 3 * n_slots..];
+        for (s, key) in k.chunks_exact(2).enumerate() {
+            let t = total.entry((key[0], key[1])).or_insert([0.0; 3]);
+            for c in 0..3 {
+                t[c] += f[3 * s + c];
+            }
+        }
+    }
+    let mut out = vec![0.0; n_sums];
+    for key in keys.chunks_exact(2) {
+        let k = (key[0], key[1]);
+        let f = match holder.get(&k) {
+            Some(&h) if h == rank => total.get(&k).copied().unwrap_or([0.0; 3]),
+            _ => [0.0; 3],
+        };
+        out.extend_from_slice(&f);
+    }
+    Ok(out)
+}
+
+/// The lowest rank holding each (node, block) slot (collective: every rank's keys).
+fn slot_holders(world: &SimpleCommunicator, keys: &[u64]) -> HashMap<(u64, u64), i32> {
+    let rank = world.rank() as u64;
+    let mine: Vec<u64> = keys
+        .chunks_exact(2)
+        .flat_map(|k| [k[0], k[1], rank])
+        .collect();
+    let all = all_gather_varcount(world, &mine);
+    let mut holder = HashMap::new();
+    for t in all.chunks_exact(3) {
+        let h = holder.entry((t[0], t[1])).or_insert(t[2] as i32);
+        *h = (*h).min(t[2] as i32);
+    }
+    holder
+}
+
+/// This rank's restart arrays, by name, built from every writing rank's (collective).
+pub fn arrays(
+    world: &SimpleCommunicator,
+    fe: &Fe,
+    pieces: &[StateReader],
+) -> Result<HashMap<&'static str, Vec<f64>>, String> {
+    let (mesh, st) = (&fe.mesh.local, fe.state());
+    // The one collective step first, so that an error below cannot leave a rank out of it.
+    let keys = slot_keys(mesh, st);
+    let holder = slot_holders(world, &keys);
+    let first = pieces.first().ok_or("checkpoint: no rank files")?;
+    let nodes = locate(pieces, NODE_ID, Some(NODE_OWNED))?;
+    let elems = locate(pieces, ELEM_ID, None)?;
+    let now = match &fe.integrator {
+        super::Integrator::Explicit(e) => e.restart_state(),
+        super::Integrator::Implicit(i) => i.restart_state(),
+    };
+    let mut out = HashMap::new();
+    for (name, current) in now {
+        let layout = restart_layout(name)
+            .ok_or_else(|| format!("checkpoint: {name}: no layout for another rank count"))?;
+        // Values per item from this rank's own array (no items: nothing to fill).
+        let per = |n: usize| current.len().checked_div(n).unwrap_or(0);
+        let a = match layout {
+            RestartLayout::Node => {
+                let w = per(mesh.node_id.len());
+                gather(pieces, name, w, &mesh.node_id, &nodes)?
+            }
+            RestartLayout::Element => {
+                let w = per(st.elem_id.len());
+                gather(pieces, name, w, &st.elem_id, &elems)?
+            }
+            RestartLayout::Global => {
+                let mut a: Vec<f64> = first.get(name)?;
+                if name == "fe.scalars" && a.len() > RESTART_DT_STABLE {
+                    for r in pieces {
+                        let s: Vec<f64> = r.get(name)?;
+                        let d = s.get(RESTART_DT_STABLE).copied().unwrap_or(f64::INFINITY);
+                        a[RESTART_DT_STABLE] = a[RESTART_DT_STABLE].min(d);
+                    }
+                }
+                a
+            }
+            RestartLayout::BlockWork => {
+                let n_sums = st.blocks.step_sums.len();
+                block_work(pieces, &keys, n_sums, &holder, world.rank())?
+            }
+        };
+        out.insert(name, a);
+    }
+    Ok(out)
+}
