@@ -7,11 +7,15 @@ use std::process::Child;
 use std::time::{Duration, Instant};
 use tdyn_tests::*;
 
-/// The scene at `rel` with its mesh paths made absolute, written into `dir`.
+/// The scene at `rel` with its mesh and particle-file paths made absolute, written into `dir`.
 fn scene_copy(rel: &str, dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(root().join(rel))
         .unwrap()
-        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()));
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+        .replace(
+            "\"liggghts/",
+            &format!("\"{}/scenes/liggghts/", root().display()),
+        );
     let p = dir.join(Path::new(rel).file_name().unwrap());
     std::fs::write(&p, text).unwrap();
     p
@@ -354,6 +358,22 @@ fn sph_run_checkpointed_on_3_ranks_continues_on_2_and_1() {
         64,
         m_u_star,
         &["--end-time", "0.15"],
+    );
+}
+
+#[test]
+fn kept_sph_decomposition_checkpointed_on_3_ranks_continues_on_2() {
+    // Water particles on a plate without a periodic box (FE, SPH and contact): on several
+    // ranks the SPH stage keeps its decomposition, ghosts and pair candidates between
+    // rebuilds; on other ranks the checkpoint's kept state does not apply, and the first step
+    // rebuilds it.
+    restart_on_other_ranks(
+        "scenes/cloud_on_plate.toml",
+        3,
+        &[2],
+        400,
+        0.0,
+        &["--end-time", "1e-3"],
     );
 }
 

@@ -816,6 +816,8 @@ impl SphStage {
         self.parts = parts;
         self.pair_count = all[lo..hi].iter().map(|(_, c)| *c).collect();
         self.verlet = None;
+        // Another rank count: the kept decomposition is rebuilt at the first step.
+        self.kept_box = None;
         // The report sums the searches over ranks.
         self.pair_searches = if me == 0 { searches } else { 0 };
         Ok(())
