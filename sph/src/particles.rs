@@ -348,6 +348,33 @@ impl Particles {
         self.c[i] = s.c;
     }
 
+    /// Bytes held by the per-particle arrays (owned and ghost entries, allocated capacity).
+    pub fn bytes(&self) -> usize {
+        fn b<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        b(&self.id)
+            + b(&self.x)
+            + b(&self.x_real)
+            + b(&self.shift)
+            + b(&self.v)
+            + b(&self.vhat)
+            + b(&self.f)
+            + b(&self.m)
+            + b(&self.rho)
+            + b(&self.drho)
+            + b(&self.p)
+            + b(&self.c)
+            + b(&self.e)
+            + b(&self.de)
+            + b(&self.work)
+            + b(&self.h)
+            + b(&self.rho_half)
+            + b(&self.e_half)
+            + b(&self.mat)
+            + b(&self.fixed)
+    }
+
     /// The largest smoothing length over all entries (0 if none).
     pub fn max_h(&self) -> f64 {
         self.h.iter().fold(0.0, |a: f64, &b| a.max(b))

@@ -280,25 +280,6 @@ pub struct SweepRow {
     pub out: PathBuf,
 }
 
-/// The peak resident set of this process (VmHWM), bytes; NaN where /proc is not there.
-fn peak_rss() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|kb| kb.parse::<f64>().ok())
-        })
-        .map(|kb| kb * 1024.0)
-        .unwrap_or(f64::NAN)
-}
-
-/// Resets the peak resident set to the current one (Linux: "5" to clear_refs).
-fn reset_peak_rss() {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
-}
-
 /// A value as a short label: 20, 0.002, 1.5.
 fn value_label(v: f64) -> String {
     if v == v.round() && v.abs() < 1e9 {
@@ -550,11 +531,11 @@ fn run_rung(
         stop: None,
     };
     world.barrier();
-    reset_peak_rss();
+    coupling::driver::report::reset_peak_rss();
     let res = driver::run(world, &o)
         .map(|_| ())
         .map_err(|e| (e.kind, e.message));
-    let rss = collective::max(world, peak_rss());
+    let rss = collective::max(world, coupling::driver::report::peak_rss());
     let mut row = SweepRow {
         values: rung.values,
         label: rung.label,

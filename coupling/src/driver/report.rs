@@ -37,6 +37,25 @@ pub struct RunFigures<'a> {
     pub failure: Option<(super::FailureKind, &'a str)>,
 }
 
+/// This process's peak resident set (`VmHWM` of /proc/self/status), bytes; NaN where /proc is
+/// not there. Read from the kernel rather than through a crate: one line of a Linux file.
+pub fn peak_rss() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb * 1024.0)
+}
+
+/// Resets the peak resident set to the current one (Linux: "5" to /proc/self/clear_refs), so
+/// that a later [`peak_rss`] measures what came after; nothing where that is refused.
+pub fn reset_peak_rss() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
 /// Writes `<out_dir>/report.json` (collective; rank 0 writes).
 pub fn write(
     world: &SimpleCommunicator,
@@ -119,6 +138,27 @@ pub fn write(
     ex.insert("dt_stable_initial".into(), f.dt_stable_initial.into());
     ex.insert("dt_min".into(), f.dt_min.into());
     ex.insert("setup_s".into(), collective::max(world, f.setup_s).into());
+    // The processes' peak memory (the largest resident set each reached, summed over ranks;
+    // the set-up's mesh structures included), over the elements and over the particles: the
+    // whole process's figure, so with both a mesh and particles each ratio counts both.
+    let rss = collective::sum(world, peak_rss());
+    ex.insert("peak_rss_bytes".into(), rss.into());
+    ex.insert(
+        "peak_rss_bytes_max_rank".into(),
+        collective::max(world, peak_rss()).into(),
+    );
+    if report.elements > 0 {
+        ex.insert(
+            "peak_rss_bytes_per_element".into(),
+            (rss / report.elements as f64).into(),
+        );
+    }
+    if report.particles > 0 {
+        ex.insert(
+            "peak_rss_bytes_per_particle".into(),
+            (rss / report.particles as f64).into(),
+        );
+    }
     ex.insert("loop_s".into(), f.loop_s.into());
     if world.rank() == 0 {
         report

@@ -229,6 +229,12 @@ impl Stage for Sph {
             (crate::kernels::collective::sum(world, s.pair_searches as f64) as u64).into(),
         );
         ex.insert("sph_ghosts_last_step".into(), s.stats.ghosts.into());
+        // The particle arrays (owned and ghost entries) over the particles, all ranks.
+        let bytes = crate::kernels::collective::sum(world, s.parts.bytes() as f64);
+        ex.insert(
+            "bytes_per_particle".into(),
+            (bytes / self.n_total.max(1) as f64).into(),
+        );
         ex.insert(
             "sph_pair_imbalance_last_step".into(),
             s.stats.pair_imbalance.into(),
