@@ -27,7 +27,7 @@ for scene in $SCENES; do
       if [ "$scene" = container_crush ]; then extra=(--end-time "$CONTAINER_END"); fi
       for r in $(seq "$REPEATS"); do
         mpirun -np "$np" target/release/tdyn run "scenes/$scene.toml" \
-          --contact-decomposition "$decomposition" --quiet "${extra[@]}" --out "out/bench_contact/${scene}_np${np}_b${mode}_r${r}"
+          --contact-decomposition "$decomposition" --quiet --overwrite "${extra[@]}" --out "out/bench_contact/${scene}_np${np}_b${mode}_r${r}"
       done
     done
   done

@@ -9,7 +9,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 target/release/tdyn mesh meshes/bar.geo -p L=1 -p A=1 -p N=47 -p M=47 >/dev/null
 for np in 1 2; do
   for r in $(seq "$REPEATS"); do
-    mpirun -np "$np" target/release/tdyn run scenes/bench_block.toml --quiet --out "out/bench_np${np}_r${r}"
+    mpirun -np "$np" target/release/tdyn run scenes/bench_block.toml --quiet --overwrite --out "out/bench_np${np}_r${r}"
   done
   python3 - "$np" "$REPEATS" <<'PY'
 import json, statistics, sys

@@ -26,7 +26,7 @@ for np in 1 2; do
   done
 done
 for np in 2 4; do
-  mpirun -np "$np" $T run "$scene" --quiet --out "out/bench_sph/alone_np${np}"
+  mpirun -np "$np" $T run "$scene" --quiet --overwrite --out "out/bench_sph/alone_np${np}"
 done
 python3 - "$REPEATS" <<'PY'
 import json, re, statistics, sys
