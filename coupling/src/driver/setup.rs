@@ -165,10 +165,14 @@ fn load_mesh(
 ) -> Result<(DistributedMesh, Groups), RunFailure> {
     let file = scene.file.display().to_string();
     let mut mesh_path = PathBuf::new();
+    let mut surfaces = Vec::new();
     let mut err = None;
     if world.rank() == 0 {
-        match mesh_on_root(scene).and_then(|p| check_on_root(scene, &p).map(|()| p)) {
-            Ok(p) => mesh_path = p,
+        match mesh_on_root(scene).and_then(|p| check_on_root(scene, &p)) {
+            Ok((p, summary)) => {
+                mesh_path = p;
+                surfaces = summary.surfaces;
+            }
             Err(e) => err = Some(format!("{file}: {e}")),
         }
     }
@@ -200,8 +204,8 @@ fn load_mesh(
     let vols: Vec<String> = groups.volumes.keys().cloned().collect();
     let surfs: Vec<String> = groups.surfaces.keys().cloned().collect();
     scene::validate_groups(scene, &vols, &surfs).map_err(|e| e.to_string())?;
-    let mut dm =
-        DistributedMesh::load(world, &mesh_path).map_err(|e| format!("{file}: mesh: {e}"))?;
+    let mut dm = DistributedMesh::load(world, &mesh_path, &surfaces)
+        .map_err(|e| format!("{file}: mesh: {e}"))?;
     // One mesh is moved here; several were moved when merged.
     let tr = scene.meshes[0].translate;
     if scene.meshes.len() == 1 && tr != [0.0; 3] {
@@ -216,12 +220,15 @@ fn load_mesh(
 
 /// Rank 0 checks the mesh file before PETSc reads it (`msh_check`: a whole file, sound nodes
 /// and elements, no inverted or flat element); a mesh in another format than ASCII msh 2.2 is
-/// checked through its conversion by gmsh.
-fn check_on_root(scene: &Scene, msh: &Path) -> Result<(), String> {
+/// checked through its conversion by gmsh, and that conversion is what PETSc reads (the
+/// physical surfaces' faces, from the check, index its nodes in its order). Returns the file
+/// to read and the check's summary.
+fn check_on_root(scene: &Scene, msh: &Path) -> Result<(PathBuf, msh_check::MshSummary), String> {
     let cache = gmsh::default_cache_dir(&scene.dir);
     let m22 = gmsh::as_msh22(msh, &cache).map_err(|e| format!("mesh: {e}"))?;
-    msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
-    Ok(())
+    let summary =
+        msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
+    Ok((m22, summary))
 }
 
 /// The `.msh` of the scene's meshes, meshed and merged on rank 0.

@@ -73,12 +73,16 @@ const PYRAMID_FACES: [&[usize]; 5] = [
 ];
 
 /// What a whole, sound mesh holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct MshSummary {
     /// Nodes defined.
     pub nodes: usize,
     /// Elements of each dimension 0..=3.
     pub elements: [usize; 4],
+    /// The faces of each physical surface (msh 2.2's first tag of a surface element), by
+    /// tag: each face's corners as indices of the nodes in the file's order (PETSc numbers
+    /// its vertices in that order), so the FE stage marks its surfaces from them.
+    pub surfaces: Vec<(i32, Vec<Vec<usize>>)>,
 }
 
 /// One element row.
@@ -179,7 +183,36 @@ pub fn check(text: &str) -> Result<MshSummary, String> {
     }
     let nodes = nodes.ok_or("no $Nodes section")?;
     let elements = elements.ok_or("no $Elements section")?;
-    check_elements(&nodes, &elements)
+    let mut summary = check_elements(&nodes, &elements)?;
+    summary.surfaces = physical_surfaces(&nodes, &elements);
+    Ok(summary)
+}
+
+/// [`MshSummary::surfaces`] of a checked file: every surface element with a physical tag.
+fn physical_surfaces(
+    nodes: &FxHashMap<i64, ([f64; 3], usize)>,
+    elements: &[Element],
+) -> Vec<(i32, Vec<Vec<usize>>)> {
+    // The nodes' order in the file is the order of their lines.
+    let mut by_line: Vec<(usize, i64)> = nodes.iter().map(|(&id, &(_, l))| (l, id)).collect();
+    by_line.sort_unstable();
+    let index: FxHashMap<i64, usize> = by_line
+        .iter()
+        .enumerate()
+        .map(|(k, &(_, id))| (id, k))
+        .collect();
+    let mut out: std::collections::BTreeMap<i32, Vec<Vec<usize>>> = Default::default();
+    for e in elements.iter().filter(|e| e.dim() == 2) {
+        let Some(&tag) = e.tags.first() else {
+            continue;
+        };
+        if tag <= 0 {
+            continue;
+        }
+        let face = e.corners().iter().map(|v| index[v]).collect();
+        out.entry(tag as i32).or_default().push(face);
+    }
+    out.into_iter().collect()
 }
 
 /// A section this check does not read (`$PhysicalNames`, `$Periodic`, ...): up to its end.
