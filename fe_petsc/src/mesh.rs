@@ -641,17 +641,58 @@ fn face_normal(v: &[[f64; 3]]) -> Option<[f64; 3]> {
 }
 
 /// METIS k-way partition of the cells' dual graph (cells sharing a face), on rank 0.
+/// A hexahedron's faces as positions in its DMPlex vertex cone, in the order of the faces in
+/// an interpolated DMPlex's cell cone (PETSc's `DMPlexGetRawFaces_Internal`).
+const HEX_CONE_FACES: [[usize; 4]; 6] = [
+    [0, 1, 2, 3],
+    [4, 5, 6, 7],
+    [0, 3, 5, 4],
+    [2, 1, 7, 6],
+    [3, 2, 6, 5],
+    [0, 4, 7, 1],
+];
+
 fn metis_partition(dm: &Dm, c0: i32, c1: i32, nparts: i32) -> Result<Vec<i32>, String> {
+    // The cell dual graph: two hexahedra are neighbours when they share a face, i.e. four
+    // vertices (the DM holds cells and vertices only: no face points to walk through).
     let nc = (c1 - c0) as usize;
+    let s = |e: PetscError| e.to_string();
+    let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
+    let mut cones = Vec::with_capacity(nc);
+    let mut cells_of: Vec<Vec<i32>> = vec![Vec::new(); (v1 - v0).max(0) as usize];
+    for c in c0..c1 {
+        let cone = dm.cone(c).map_err(s)?;
+        for &v in &cone {
+            if v >= v0 && v < v1 {
+                cells_of[(v - v0) as usize].push(c - c0);
+            }
+        }
+        cones.push(cone);
+    }
     let mut xadj: Vec<i32> = Vec::with_capacity(nc + 1);
     let mut adj: Vec<i32> = Vec::with_capacity(6 * nc);
     xadj.push(0);
-    for c in c0..c1 {
-        for f in dm.cone(c).map_err(|e| e.to_string())? {
-            for n in dm.support(f).map_err(|e| e.to_string())? {
-                if n != c && n >= c0 && n < c1 {
-                    adj.push(n - c0);
-                }
+    for (c, cone) in cones.iter().enumerate() {
+        if cone.len() != 8 {
+            return Err(format!("cell {c} has {} vertices, not 8", cone.len()));
+        }
+        // The faces in the order PETSc's interpolation gives a hexahedron's cone (bottom, top,
+        // front, back, right, left), so the graph, and METIS's partition, are those of the
+        // interpolated mesh the code read before.
+        for face in HEX_CONE_FACES {
+            let v: [i32; 4] = face.map(|k| cone[k]);
+            if v.iter().any(|&x| x < v0 || x >= v1) {
+                continue;
+            }
+            let first = &cells_of[(v[0] - v0) as usize];
+            let n = first.iter().copied().find(|&n| {
+                n as usize != c
+                    && v[1..]
+                        .iter()
+                        .all(|&x| cells_of[(x - v0) as usize].contains(&n))
+            });
+            if let Some(n) = n {
+                adj.push(n);
             }
         }
         xadj.push(adj.len() as i32);
