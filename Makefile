@@ -1,7 +1,7 @@
 # Two commands (README): `make run` runs the default scene on 2 ranks, `make test` runs the tests.
 # Both install the system packages they need first (scripts/setup.sh). The default scene couples
 # all three parts of the paper: a water slug (SPH) strikes a clamped plate (FE) through contact,
-# about a minute on 2 cores; the run ends by naming its outputs and out/slug_on_plate/energies.png.
+# about 10 s of run on 2 cores; the run ends by naming its outputs and out/slug_on_plate/energies.png.
 NP ?= 2
 SCENE ?= scenes/slug_on_plate.toml
 # mpirun as root (CI, containers) and more ranks than cores (tests at np 3 and 4 on 2 cores).
