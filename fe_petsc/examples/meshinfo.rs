@@ -17,7 +17,8 @@ fn main() {
     let world = universe.world();
     let path = std::env::args().nth(1).expect("usage: meshinfo FILE.msh");
     let petsc = Petsc::init(world.as_raw(), &[]).unwrap();
-    let mut m = DistributedMesh::load(&world, std::path::Path::new(&path), &[]).unwrap();
+    let mut m =
+        DistributedMesh::load(&world, std::path::Path::new(&path), &Default::default()).unwrap();
     let l = &m.local;
     let mut vol = 0.0;
     for e in &l.elems {

@@ -137,21 +137,31 @@ struct RootFacts {
     totals: [u64; 2],
 }
 
+/// The physical surfaces as rank 0's check of the mesh file found them: the DM is read
+/// without faces, so the surfaces' faces come from the file's surface elements.
+#[derive(Debug, Clone, Default)]
+pub struct FileSurfaces {
+    /// Nodes in the file: PETSc makes a vertex of each, in the file's order (0: not checked).
+    pub nodes: usize,
+    /// The faces of each physical surface: its gmsh tag, and each face's corners as indices of
+    /// the file's nodes in their order.
+    pub surfaces: Vec<(i32, Vec<Vec<usize>>)>,
+}
+
 impl DistributedMesh {
     /// Reads `path` (gmsh .msh) on rank 0, partitions it with METIS (unless the user chose a
     /// PETSc partitioner with `-petscpartitioner_type`), distributes it and extracts the flat
     /// arrays. Collective; every rank returns the same error. The caller checks the file first
     /// (PETSc's reader fails on rank 0 alone, inside a collective call) and hands rank 0 the
-    /// faces of each physical surface (`surfaces`: gmsh tag, each face's corners as indices of
-    /// the file's nodes in their order, which is PETSc's vertex order); other ranks pass none.
+    /// file's physical surfaces ([`FileSurfaces`]); other ranks pass the default.
     pub fn load(
         comm: &SimpleCommunicator,
         path: &Path,
-        surfaces: &[(i32, Vec<Vec<usize>>)],
+        file: &FileSurfaces,
     ) -> Result<Self, MeshError> {
         let dm = read_gmsh(comm, path)?;
         let facts = if comm.rank() == 0 {
-            inspect_on_root(&dm, path, comm.size(), surfaces)
+            inspect_on_root(&dm, path, comm.size(), file)
         } else {
             Ok(RootFacts::default())
         };
@@ -207,13 +217,22 @@ fn inspect_on_root(
     dm: &Dm,
     path: &Path,
     size: i32,
-    surfaces: &[(i32, Vec<Vec<usize>>)],
+    file: &FileSurfaces,
 ) -> Result<RootFacts, String> {
+    let surfaces = &file.surfaces;
     let s = |e: PetscError| e.to_string();
     let (p0, p1) = dm.chart().map_err(s)?;
     let (c0, c1) = dm.height_stratum(0).map_err(s)?;
     let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
     check_cells(dm, path, c0, c1)?;
+    if file.nodes != 0 && file.nodes != (v1 - v0) as usize {
+        return Err(format!(
+            "mesh {}: PETSc read {} vertices from a file of {} nodes: its surfaces cannot be matched to them",
+            path.display(),
+            v1 - v0,
+            file.nodes
+        ));
+    }
     let npts = (p1 - p0) as usize;
     let mut facts = RootFacts {
         orig: vec![-1i32; npts],

@@ -165,13 +165,16 @@ fn load_mesh(
 ) -> Result<(DistributedMesh, Groups), RunFailure> {
     let file = scene.file.display().to_string();
     let mut mesh_path = PathBuf::new();
-    let mut surfaces = Vec::new();
+    let mut surfaces = fe_petsc::mesh::FileSurfaces::default();
     let mut err = None;
     if world.rank() == 0 {
         match mesh_on_root(scene).and_then(|p| check_on_root(scene, &p)) {
             Ok((p, summary)) => {
                 mesh_path = p;
-                surfaces = summary.surfaces;
+                surfaces = fe_petsc::mesh::FileSurfaces {
+                    nodes: summary.nodes,
+                    surfaces: summary.surfaces,
+                };
             }
             Err(e) => err = Some(format!("{file}: {e}")),
         }
