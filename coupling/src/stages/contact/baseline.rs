@@ -154,7 +154,7 @@ impl BaselineStage {
         let settled = solve_rechecked(comm, &mut parts, &owned, dt, self.friction, &self.params)?;
         let [Part { contacts, .. }] = parts;
         let (force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
-        let local_kinds = crate::stages::contact::stage::kinds(&b, &contacts);
+        let local_kinds = pushback.kinds;
         bytes += settled.bytes;
 
         // Statistics, as the dynamic stage reports them.

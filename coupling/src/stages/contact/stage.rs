@@ -386,6 +386,13 @@ pub(crate) fn solve_rechecked(
         bytes += sent;
         counts.solves += u64::from(!all.is_empty());
         counts.coupled = coupled;
+        // This rank's contacts by kind (the outcome sums them over ranks).
+        counts.kinds = [0; 4];
+        for p in parts.iter() {
+            for (t, k) in counts.kinds.iter_mut().zip(kinds(p.b, &p.contacts)) {
+                *t += k;
+            }
+        }
         let done = Settled {
             force,
             work,
@@ -734,45 +741,8 @@ impl ContactStage {
         let contacts = search_candidates(&st.b, &self.params, &st.cands);
         let n_owned = st.b.nodes.n_owned;
         let mut owned_gids: Vec<u64> = st.b.nodes.gid[..n_owned].to_vec();
-        // The particles this box holds now, searched against its faces (a box of their own:
-        // the particles owned, every node of the kept box as copies, the same faces). The same
-        // particles as at the last step, in the same order: that box is updated in place and
-        // its candidate lists kept while their skin covers; others: a new box and lists.
-        let same_particles = match &st.pbox {
-            Some((gids, _, _)) => {
-                gids.len() == pgot.len() && gids.iter().zip(&pgot).all(|(g, c)| *g == c.rec.gid)
-            }
-            None => pgot.is_empty(),
-        };
-        if !same_particles {
-            st.pbox = particle_box(&st.b, &pgot).map(|pb| {
-                let (_, cand_skin) = skins(motion, st.face_size, self.skins);
-                let pc = Candidates::build(&pb, &self.params, cand_skin);
-                self.rebuilds.candidates += 1;
-                (pgot.iter().map(|c| c.rec.gid).collect(), pb, pc)
-            });
-        } else if let Some((_, pb, pc)) = &mut st.pbox {
-            let np = pgot.len();
-            let q = &mut pb.nodes;
-            for (i, c) in pgot.iter().enumerate() {
-                q.mass[i] = c.rec.mass;
-                q.radius[i] = c.rec.radius;
-                q.x0[i] = c.rec.x0;
-                q.x1[i] = c.rec.x1;
-                q.v[i] = c.rec.v;
-            }
-            let n = &st.b.nodes;
-            q.mass[np..].copy_from_slice(&n.mass);
-            q.radius[np..].copy_from_slice(&n.radius);
-            q.x0[np..].copy_from_slice(&n.x0);
-            q.x1[np..].copy_from_slice(&n.x1);
-            q.v[np..].copy_from_slice(&n.v);
-            if !pc.still_valid(pb, &self.params) {
-                let (_, cand_skin) = skins(motion, st.face_size, self.skins);
-                *pc = Candidates::build(pb, &self.params, cand_skin);
-                self.rebuilds.candidates += 1;
-            }
-        }
+        let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+        self.rebuilds.candidates += refresh_particle_box(st, &pgot, &self.params, cand_skin);
         let pcontacts = match &st.pbox {
             Some((_, pb, pc)) => {
                 owned_gids.extend(pgot.iter().map(|c| c.rec.gid));
@@ -803,30 +773,13 @@ impl ContactStage {
         let mut parts = parts.into_iter();
         let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
         let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
-        let (owned_force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
-        pushback.kinds = kinds(&st.b, &contacts);
-        pushback.kinds[3] += pcontacts.len() as u64;
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
         let tt = Instant::now();
-        let mut lists: Vec<Vec<Back>> = vec![Vec::new(); st.plan.sources().count()];
-        for (f, &(home, idx)) in owned_force[..n_owned].iter().zip(&st.owned_home) {
-            if f.iter().any(|c| *c != 0.0) {
-                let k = st.source_of_home[home as usize];
-                lists[k as usize].push(Back { key: idx, f: *f });
-            }
-        }
-        let before = st.plan.bytes_sent;
-        let got = st.plan.reverse_lists(&lists);
-        let back_bytes = st.plan.bytes_sent - before;
-        let mut force = vec![[0.0; 3]; nodes.len()];
-        for bk in &got {
-            let f = &mut force[fe_inputs[bk.key as usize] as usize];
-            for k in 0..3 {
-                f[k] += bk.f[k];
-            }
-        }
+        let (mut force, back_bytes) =
+            mesh_forces_home(st, &owned_force[..n_owned], &fe_inputs, nodes.len());
         bytes += back_bytes;
         t_bytes += back_bytes;
         if let Some(mut plan) = pplan {
@@ -967,8 +920,7 @@ impl ContactStage {
             &self.params,
         )?;
         let [Part { contacts, .. }] = parts;
-        let (owned_force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
-        pushback.kinds = kinds(&b, &contacts);
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
@@ -1094,6 +1046,85 @@ struct OutcomeParts<'a> {
     t_s: f64,
     rcb: RcbStats,
     t0: Instant,
+}
+
+/// The particles a kept box holds this step (`pgot`), searched against its faces in a box of
+/// their own: the particles owned, every node of the kept box as copies, the same faces. The
+/// same particles as at the last step, in the same order: that box is updated in place and its
+/// candidate lists kept while their skin covers; others: a new box and lists (skin
+/// `cand_skin`). Returns the candidate lists built.
+fn refresh_particle_box(
+    st: &mut Sticky,
+    pgot: &[CNode],
+    params: &SearchParams,
+    cand_skin: f64,
+) -> u64 {
+    let same_particles = match &st.pbox {
+        Some((gids, _, _)) => {
+            gids.len() == pgot.len() && gids.iter().zip(pgot).all(|(g, c)| *g == c.rec.gid)
+        }
+        None => pgot.is_empty(),
+    };
+    if !same_particles {
+        st.pbox = particle_box(&st.b, pgot).map(|pb| {
+            let pc = Candidates::build(&pb, params, cand_skin);
+            (pgot.iter().map(|c| c.rec.gid).collect(), pb, pc)
+        });
+        return u64::from(st.pbox.is_some());
+    }
+    let Some((_, pb, pc)) = &mut st.pbox else {
+        return 0;
+    };
+    let np = pgot.len();
+    let q = &mut pb.nodes;
+    for (i, c) in pgot.iter().enumerate() {
+        q.mass[i] = c.rec.mass;
+        q.radius[i] = c.rec.radius;
+        q.x0[i] = c.rec.x0;
+        q.x1[i] = c.rec.x1;
+        q.v[i] = c.rec.v;
+    }
+    let n = &st.b.nodes;
+    q.mass[np..].copy_from_slice(&n.mass);
+    q.radius[np..].copy_from_slice(&n.radius);
+    q.x0[np..].copy_from_slice(&n.x0);
+    q.x1[np..].copy_from_slice(&n.x1);
+    q.v[np..].copy_from_slice(&n.v);
+    if pc.still_valid(pb, params) {
+        return 0;
+    }
+    *pc = Candidates::build(pb, params, cand_skin);
+    1
+}
+
+/// Step 8 for a kept box's mesh nodes: the nonzero forces of its owned nodes (`owned_force`)
+/// back to their FE homes along the plan's own pairs of ranks (collective), summed there into
+/// the input nodes' slots (`fe_inputs`: the input index of each mesh input, `n_inputs` in
+/// all). Returns the forces on the inputs and the bytes sent.
+fn mesh_forces_home(
+    st: &mut Sticky,
+    owned_force: &[[f64; 3]],
+    fe_inputs: &[u32],
+    n_inputs: usize,
+) -> (Vec<[f64; 3]>, u64) {
+    let mut lists: Vec<Vec<Back>> = vec![Vec::new(); st.plan.sources().count()];
+    for (f, &(home, idx)) in owned_force.iter().zip(&st.owned_home) {
+        if f.iter().any(|c| *c != 0.0) {
+            let k = st.source_of_home[home as usize];
+            lists[k as usize].push(Back { key: idx, f: *f });
+        }
+    }
+    let before = st.plan.bytes_sent;
+    let got = st.plan.reverse_lists(&lists);
+    let back_bytes = st.plan.bytes_sent - before;
+    let mut force = vec![[0.0; 3]; n_inputs];
+    for bk in &got {
+        let f = &mut force[fe_inputs[bk.key as usize] as usize];
+        for k in 0..3 {
+            f[k] += bk.f[k];
+        }
+    }
+    (force, back_bytes)
 }
 
 /// The box a rebuild made, for [`build_sticky`].
