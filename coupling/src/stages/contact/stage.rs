@@ -828,20 +828,9 @@ impl ContactStage {
         let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
         // 1. To last step's contact owners.
         let tt = Instant::now();
-        let items = match &self.tree {
-            Some(t) => {
-                let dest: Vec<i32> = items
-                    .iter()
-                    .map(|n| t.owner_of_item(&n.rec.x1, n.rec.gid))
-                    .collect();
-                let mut plan = CommPlan::new_shared(&self.comm, &dest);
-                let got = plan.exchange(&items);
-                bytes += plan.bytes_sent;
-                t_bytes += plan.bytes_sent;
-                got
-            }
-            None => items,
-        };
+        let (items, sent) = to_owners(&self.comm, self.tree.as_ref(), items);
+        bytes += sent;
+        t_bytes += sent;
         t_s += tt.elapsed().as_secs_f64();
         // 2. RCB over nodes and particles, from the previous cuts.
         let (mine, rcb_stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
@@ -873,25 +862,8 @@ impl ContactStage {
         bytes += ghost_bytes;
 
         // 7. The local search: owned nodes first, then copies of face nodes not owned here.
-        let mut recs: Vec<NodeRecord> = mine.iter().map(|n| n.rec).collect();
-        let mut index: HashMap<u64, usize> =
-            recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
-        let n_owned = recs.len();
-        let mut face_recs = Vec::with_capacity(held.len());
-        let mut seen_faces: HashMap<u64, ()> =
-            HashMap::with_capacity_and_hasher(held.len(), Default::default());
-        for f in &held {
-            if seen_faces.insert(f.face.gid, ()).is_some() {
-                continue;
-            }
-            for r in &f.nodes {
-                index.entry(r.gid).or_insert_with(|| {
-                    recs.push(*r);
-                    recs.len() - 1
-                });
-            }
-            face_recs.push(f.face);
-        }
+        let (recs, index, face_recs) = box_records(&mine, &held);
+        let n_owned = mine.len();
         let work_items = (n_owned + face_recs.len()) as f64;
         let mut b = box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
         let cands = Candidates::build(&b, &self.params, cand_skin);
@@ -1046,6 +1018,54 @@ struct OutcomeParts<'a> {
     t_s: f64,
     rcb: RcbStats,
     t0: Instant,
+}
+
+/// Step 1 of a rebuild: the contact nodes' records (`items`) to their contact owners in the
+/// previous step's cut tree (`tree`; none at the first step: they stay), so that the RCB that
+/// follows starts near its answer (collective). Returns the records this rank now holds and
+/// the bytes it sent.
+fn to_owners(
+    comm: &Rc<SimpleCommunicator>,
+    tree: Option<&CutTree>,
+    items: Vec<CNode>,
+) -> (Vec<CNode>, u64) {
+    let Some(t) = tree else {
+        return (items, 0);
+    };
+    let dest: Vec<i32> = items
+        .iter()
+        .map(|n| t.owner_of_item(&n.rec.x1, n.rec.gid))
+        .collect();
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let got = plan.exchange(&items);
+    (got, plan.bytes_sent)
+}
+
+/// A rebuilt box's records: the owned nodes (`mine`) first, then the corners of the faces it
+/// holds (`held`, each face once) not owned here. Returns the node records, the slot of each
+/// node gid, and the face records.
+fn box_records(
+    mine: &[CNode],
+    held: &[FullFace],
+) -> (Vec<NodeRecord>, HashMap<u64, usize>, Vec<FaceRecord>) {
+    let mut recs: Vec<NodeRecord> = mine.iter().map(|n| n.rec).collect();
+    let mut index: HashMap<u64, usize> = recs.iter().enumerate().map(|(i, r)| (r.gid, i)).collect();
+    let mut face_recs = Vec::with_capacity(held.len());
+    let mut seen_faces: HashMap<u64, ()> =
+        HashMap::with_capacity_and_hasher(held.len(), Default::default());
+    for f in held {
+        if seen_faces.insert(f.face.gid, ()).is_some() {
+            continue;
+        }
+        for r in &f.nodes {
+            index.entry(r.gid).or_insert_with(|| {
+                recs.push(*r);
+                recs.len() - 1
+            });
+        }
+        face_recs.push(f.face);
+    }
+    (recs, index, face_recs)
 }
 
 /// The particles a kept box holds this step (`pgot`), searched against its faces in a box of
