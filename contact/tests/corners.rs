@@ -281,6 +281,31 @@ fn node_pressed_into_a_valley_stays_out_of_both_faces() {
     }
 }
 
+/// A box of one moving node (gid 1, body 1, unit mass, from `p.0` to `p.1`) and immovable
+/// corners (gids 10, 11, ... at `corners`, of `bodies`), with `faces` (gid, the positions of
+/// its corners in `corners`, body).
+fn node_and_faces(
+    p: (V3, V3),
+    corners: &[V3],
+    bodies: &[u32],
+    faces: &[(u64, [usize; 4], u32)],
+) -> ContactBox {
+    let mut nodes = vec![record(1, 1, 1.0, p.0, p.1)];
+    for (k, (x, &body)) in corners.iter().zip(bodies).enumerate() {
+        nodes.push(record(10 + k as u64, body, f64::INFINITY, *x, *x));
+    }
+    let faces: Vec<FaceRecord> = faces
+        .iter()
+        .map(|&(gid, c, body)| FaceRecord {
+            gid,
+            nodes: c.map(|k| 10 + k as u64),
+            body,
+            reserved: 0,
+        })
+        .collect();
+    ContactBox::from_records(&nodes, 1, &faces).unwrap()
+}
+
 /// The convex edge of the test below, its side face on body `side_body`: the contacts found
 /// and the node's position correction.
 fn convex_edge(side_body: u32) -> (Vec<contact::Contact>, V3) {
@@ -297,32 +322,13 @@ fn convex_edge(side_body: u32) -> (Vec<contact::Contact>, V3) {
         [0.0, 1.0, 0.0],
     ];
     let corners = [top[0], top[1], top[2], top[3], side[1], side[2]];
-    let mut nodes = vec![record(
-        1,
-        1,
-        1.0,
-        [0.005, 0.5, 0.005],
-        [-0.001, 0.5, -0.002],
-    )];
-    for (k, x) in corners.iter().enumerate() {
-        let body = if k >= 4 { side_body } else { 0 };
-        nodes.push(record(10 + k as u64, body, f64::INFINITY, *x, *x));
-    }
-    let faces = [
-        FaceRecord {
-            gid: 100,
-            nodes: [10, 11, 12, 13],
-            body: 0,
-            reserved: 0,
-        },
-        FaceRecord {
-            gid: 101,
-            nodes: [11, 14, 15, 12],
-            body: side_body,
-            reserved: 0,
-        },
-    ];
-    let b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let bodies = [0, 0, 0, 0, side_body, side_body];
+    let b = node_and_faces(
+        ([0.005, 0.5, 0.005], [-0.001, 0.5, -0.002]),
+        &corners,
+        &bodies,
+        &[(100, [0, 1, 2, 3], 0), (101, [1, 4, 5, 2], side_body)],
+    );
     let contacts = search(&b, &SearchParams::default());
     let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
     (contacts.clone(), pb.position_correction(&b, 0, DT))
@@ -471,26 +477,12 @@ fn a_node_pushed_out_of_one_body_into_another_is_found_by_the_recheck() {
         [0.0, 1.0, -1.0],
     ];
     let (p0, p1) = ([-0.01, 0.5, 0.01], [-0.001, 0.5, -0.004]);
-    let mut nodes = vec![record(1, 1, 1.0, p0, p1)];
-    for (k, x) in corners.iter().enumerate() {
-        let body = if k < 4 { 0 } else { 2 };
-        nodes.push(record(10 + k as u64, body, f64::INFINITY, *x, *x));
-    }
-    let faces = [
-        FaceRecord {
-            gid: 100,
-            nodes: [10, 11, 12, 13],
-            body: 0,
-            reserved: 0,
-        },
-        FaceRecord {
-            gid: 200,
-            nodes: [14, 15, 16, 17],
-            body: 2,
-            reserved: 0,
-        },
-    ];
-    let mut b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let mut b = node_and_faces(
+        (p0, p1),
+        &corners,
+        &[0, 0, 0, 0, 2, 2, 2, 2],
+        &[(100, [0, 1, 2, 3], 0), (200, [4, 5, 6, 7], 2)],
+    );
     let params = SearchParams::default();
     let cands = Candidates::build(&b, &params, 0.0);
     let mut contacts = search(&b, &params);
