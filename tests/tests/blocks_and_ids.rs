@@ -230,7 +230,7 @@ fn energies_by_block_add_up_to_the_totals_at_np_1_and_3() {
                     .and_then(|p| p.parse().ok())
                     .unwrap();
                 assert!(
-                    lines[0].ends_with("(guideline: under 10 %)")
+                    lines[0].contains("(guideline: under 10 %)")
                         && pct > 10.0
                         && pct <= 100.0 * rep + 0.05,
                     "np {np}: the line says a ratio past 10 % and at most the largest ({:.2} %): {}",
