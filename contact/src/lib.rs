@@ -42,7 +42,10 @@ pub use data::{
     FLAG_PARTICLE,
 };
 pub use geometry::{shape, Projection, Quad};
-pub use pushback::{push_back, PushBack, PushBackParams};
+pub use pushback::{
+    anchor, push_back, push_back_in, reach, Alone, Cells, Exchange, PushBack, PushBackParams,
+    COLOURS,
+};
 pub use recheck::{recheck, RECHECK_TOL};
 pub use search::{
     face_records_search_aabb, face_search_aabb, node_search_aabb, search, search_candidates,

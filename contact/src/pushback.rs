@@ -68,9 +68,31 @@
 //! contact needs one pass: its node lands on the corrected face exactly. Redundant contacts (two
 //! coincident surfaces, each node penetrating the other's face) share the impulse instead of
 //! pushing twice. The answer depends only on the contacts handed in (sorted internally), never on
-//! their order. Contacts that share nodes but lie in different boxes are solved separately in each
-//! box: the shared face nodes then get both boxes' impulses (momentum still conserved, the nodes
-//! left on or outside the faces, possibly a little beyond).
+//! their order.
+//!
+//! # Sweeps in cells: one answer however the contacts are spread over ranks
+//!
+//! Gauss-Seidel's answer depends on the order of its updates, so a solve spread over ranks must
+//! fix that order without reference to the ranks. Each contact has an *anchor* node ([`anchor`]:
+//! its node, or for a contact point on a face corner the lower gid of the two, so both
+//! contacts of a mutual pair share it) and a *reach* ([`reach`]: the farthest of its nodes from
+//! the anchor, end positions). Space is cut into cubic cells of side `L > 2 R` ([`Cells`], `R`
+//! the largest reach of the solve, origin 0), and a cell's *colour* is the parity of its three
+//! indices (8 colours). Two contacts sharing a node have anchors less than `2 R < L` apart, so
+//! their cells are the same or neighbours, and neighbouring cells differ in colour: **contacts
+//! of one colour in different cells share no node**. A sweep takes the colours in turn, and in a
+//! colour the cells in any order, each cell's contacts in (node gid, face gid) order. Every node
+//! is then changed by one cell at most in each colour, so its accumulated impulse takes the same
+//! sequence of values whichever cells are solved together and whichever first: a rank solving
+//! some cells needs, after each colour, only the new values of the nodes it shares with other
+//! ranks' cells ([`Exchange::sync`]), and the largest residuals over all ranks ([`Exchange::max`])
+//! to stop where every rank stops. [`push_back`] is the solve alone ([`Alone`]); the coupling
+//! layer runs [`push_back_in`] on each rank's cells.
+//!
+//! The state of a node is its accumulated impulse `I_j = sum_k w_kj lambda_k n_k` (kg m): its
+//! force over the step is `I_j / dt^2` (an infinite mass takes it as its reaction) and its
+//! position correction `I_j / m_j`, both functions of `I_j` alone, so ranks holding copies of a
+//! node agree bit for bit.
 
 //!
 //! # Friction
@@ -325,17 +347,6 @@ impl Row {
             self.len += 1;
         }
     }
-
-    /// Penetration left given the position corrections `dx`, of which `base` were already there
-    /// when `depth` was measured: `d - n . sum_j w_j (dx_j - base_j)`.
-    fn residual(&self, dx: &[V3], base: &[V3]) -> f64 {
-        let mut opened = 0.0;
-        for k in 0..self.len {
-            let j = self.nodes[k];
-            opened += self.w[k] * dot(self.normal, sub(dx[j], base[j]));
-        }
-        self.depth - opened
-    }
 }
 
 /// Geometric penetration left by corrections `dx` for contact `c`: re-projects the corrected node
@@ -356,110 +367,225 @@ fn regauge(b: &ContactBox, c: &Contact, dx: &[V3]) -> Option<([f64; 2], V3, f64)
     ))
 }
 
+/// Number of cell colours ([`Cells::colour`]): the parities of three indices.
+pub const COLOURS: usize = 8;
+
+/// What a push-back spread over ranks needs from its neighbours (see the module documentation,
+/// "Sweeps in cells"). The `contact` crate never talks to other ranks itself.
+pub trait Exchange {
+    /// The largest of `x` over every part of the solve (collective: every part calls it the same
+    /// number of times).
+    fn max(&mut self, x: f64) -> f64;
+    /// After the contacts of `colour` were updated: the new accumulated impulses of the nodes
+    /// this part shares with others' cells, from the part whose cell changed them (collective).
+    fn sync(&mut self, colour: usize, impulse: &mut [V3]);
+}
+
+/// The solve in one piece: nothing to exchange.
+pub struct Alone;
+
+impl Exchange for Alone {
+    fn max(&mut self, x: f64) -> f64 {
+        x
+    }
+    fn sync(&mut self, _colour: usize, _impulse: &mut [V3]) {}
+}
+
+/// The cells of a solve: cubes of side `size`, origin 0 (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cells {
+    /// Side, m.
+    pub size: f64,
+}
+
+impl Cells {
+    /// Cells for contacts reaching at most `reach` (m, the largest [`reach`] of the solve) from
+    /// their anchors: side `2 reach` and a margin of 1e-6 of it (two anchors of contacts sharing a
+    /// node are under `2 reach` apart, so their cell indices differ by at most one per axis).
+    pub fn for_reach(reach: f64) -> Cells {
+        Cells {
+            size: (2.0 * reach * (1.0 + 1e-6)).max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// The cell of point `x`.
+    pub fn cell(&self, x: V3) -> [i64; 3] {
+        std::array::from_fn(|a| (x[a] / self.size).floor() as i64)
+    }
+
+    /// The colour of cell `c`, in `0..COLOURS`.
+    pub fn colour(c: [i64; 3]) -> usize {
+        ((c[0] & 1) | (c[1] & 1) << 1 | (c[2] & 1) << 2) as usize
+    }
+}
+
+/// The anchor of contact `c` in `b` (a box node): its node, or where its contact point lies on a
+/// face corner (within `tol` of the face's diameter, [`PushBackParams::same_point_tol`]), the
+/// lower gid of the node and that corner, so the two contacts of a mutual node-on-node pair share
+/// their anchor and their cell.
+pub fn anchor(b: &ContactBox, c: &Contact, tol: f64) -> usize {
+    let s = c.node as usize;
+    match corner_node(b, c, tol) {
+        Some(p) if b.nodes.gid[p] < b.nodes.gid[s] => p,
+        _ => s,
+    }
+}
+
+/// The reach of contact `c` from box node `a`: the largest distance from `a` to the contact's
+/// node and its face's corners, end positions, m.
+pub fn reach(b: &ContactBox, c: &Contact, a: usize) -> f64 {
+    let xa = b.nodes.x1[a];
+    let corners = b.faces.nodes[c.face as usize].map(|i| i as usize);
+    std::iter::once(c.node as usize)
+        .chain(corners)
+        .map(|j| norm(sub(b.nodes.x1[j], xa)))
+        .fold(0.0, f64::max)
+}
+
 /// Computes the kinematic push-back of `contacts` (from [`crate::search()`] on the same box) over
-/// step `params.dt`. See the module documentation for the method.
+/// step `params.dt`, in one piece. See the module documentation for the method.
 pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) -> PushBack {
+    let anchors: Vec<usize> = contacts
+        .iter()
+        .map(|c| anchor(b, c, params.same_point_tol))
+        .collect();
+    let r = contacts
+        .iter()
+        .zip(&anchors)
+        .fold(0.0, |m: f64, (c, &a)| m.max(reach(b, c, a)));
+    let cells = Cells::for_reach(r);
+    let cell: Vec<[i64; 3]> = anchors.iter().map(|&a| cells.cell(b.nodes.x1[a])).collect();
+    push_back_in(b, contacts, &cell, params, &mut Alone)
+}
+
+/// The contacts in sweep order (colour, cell, node gid, face gid), and where each colour's run
+/// ends in it.
+fn sweep_order(contacts: &[Contact], cell: &[[i64; 3]]) -> (Vec<usize>, [usize; COLOURS]) {
+    let key = |k: usize| {
+        (
+            Cells::colour(cell[k]),
+            cell[k],
+            contacts[k].node_gid,
+            contacts[k].face_gid,
+        )
+    };
     let mut order: Vec<usize> = (0..contacts.len()).collect();
-    order.sort_by_key(|&k| (contacts[k].node_gid, contacts[k].face_gid));
+    order.sort_by_key(|&k| key(k));
+    let ends = std::array::from_fn(|c| order.partition_point(|&k| Cells::colour(cell[k]) <= c));
+    (order, ends)
+}
+
+/// The position corrections `I_j / m_j` of the accumulated impulses.
+fn corrections(impulse: &[V3], inv_m: &[f64]) -> Vec<V3> {
+    impulse
+        .iter()
+        .zip(inv_m)
+        .map(|(i, &w)| scale(*i, w))
+        .collect()
+}
+
+/// One part of a push-back spread over ranks (module documentation, "Sweeps in cells"): the
+/// contacts of this part's cells, `cell[k]` the cell of contact `k` (of its anchor), the
+/// neighbours through `ex`. With [`Alone`] and every contact's cell it is [`push_back`]. The
+/// forces, normal forces and residuals are this part's; `work` and `kinetic_energy_change` sum
+/// over this part's nodes (a node shared with another part is in both).
+pub fn push_back_in(
+    b: &ContactBox,
+    contacts: &[Contact],
+    cell: &[[i64; 3]],
+    params: &PushBackParams,
+    ex: &mut dyn Exchange,
+) -> PushBack {
+    let (order, ends) = sweep_order(contacts, cell);
     let inv_m: Vec<f64> = b.nodes.mass.iter().map(|&m| inverse_mass(m)).collect();
-    let max_depth = contacts.iter().fold(0.0, |a: f64, c| a.max(c.depth));
+    let max_depth = ex.max(contacts.iter().fold(0.0, |a: f64, c| a.max(c.depth)));
     let limit = params.tol * max_depth;
     let mut rows: Vec<Row> = contacts
         .iter()
         .map(|c| Row::new(b, c, c.xi, c.normal, c.depth))
         .collect();
-    let mutual = mutual_pairs(b, contacts, &order, params.same_point_tol);
-    for &(k, m) in &mutual {
+    for &(k, m) in &mutual_pairs(b, contacts, &order, params.same_point_tol) {
         rows[k] = Row::node_on_node(b, &contacts[k], &contacts[m], &[]);
         rows[m] = Row::inert();
     }
-    let mut dx = vec![[0.0; 3]; b.nodes.len()];
+    let mut impulse = vec![[0.0; 3]; b.nodes.len()];
     let mut total_lambda = vec![0.0; contacts.len()];
-    let mut force = vec![[0.0; 3]; b.nodes.len()];
-    let inv_dt2 = 1.0 / (params.dt * params.dt);
     let mut sweeps = 0;
     let mut max_residual = max_depth;
     for _ in 0..MAX_GEOMETRIC_PASSES {
         // Linear complementarity by projected Gauss-Seidel, from the gaps measured at the start
-        // of this pass (the corrections of earlier passes are already in `dx`).
+        // of this pass (the impulses of earlier passes are already in `impulse`).
         let mut lambda = vec![0.0; rows.len()];
-        let pass_start = dx.clone();
-        let rel = |r: &Row, dx: &[V3]| r.residual(dx, &pass_start);
-        let residual_of = |lambda: &[f64], dx: &[V3]| {
-            rows.iter().zip(lambda).fold(0.0, |a: f64, (r, &l)| {
-                let res = rel(r, dx);
-                a.max(if l > 0.0 { res.abs() } else { res.max(0.0) })
-            })
+        let start = impulse.clone();
+        let pass = Pass {
+            rows: &rows,
+            start: &start,
+            inv_m: &inv_m,
         };
-        let mut linear_residual = residual_of(&lambda, &dx);
+        let mut linear_residual = ex.max(pass.residual(&lambda, &impulse));
         let mut pass_sweeps = 0;
         while pass_sweeps < params.max_sweeps && linear_residual > limit {
-            for &k in &order {
-                let r = &rows[k];
-                if r.inv_mass.is_nan() || r.inv_mass <= 0.0 {
-                    continue;
+            for (colour, range) in colour_ranges(&ends).enumerate() {
+                for &k in &order[range] {
+                    pass.update(k, &mut lambda, &mut impulse);
                 }
-                let new = (lambda[k] + rel(r, &dx) / r.inv_mass).max(0.0);
-                let step = new - lambda[k];
-                lambda[k] = new;
-                for q in 0..r.len {
-                    let j = r.nodes[q];
-                    axpy(&mut dx[j], r.w[q] * step * inv_m[j], r.normal);
-                }
+                ex.sync(colour, &mut impulse);
             }
             pass_sweeps += 1;
-            linear_residual = residual_of(&lambda, &dx);
+            linear_residual = ex.max(pass.residual(&lambda, &impulse));
         }
         sweeps += pass_sweeps;
-        // Forces from the impulses (not from dx, so infinite masses get their reactions).
-        for &k in &order {
-            let r = &rows[k];
-            total_lambda[k] += lambda[k];
-            for q in 0..r.len {
-                axpy(
-                    &mut force[r.nodes[q]],
-                    r.w[q] * lambda[k] * inv_dt2,
-                    r.normal,
-                );
-            }
+        for (t, l) in total_lambda.iter_mut().zip(&lambda) {
+            *t += l;
         }
         // Measure the penetration left on the corrected geometry; re-linearise there.
-        max_residual = 0.0;
+        let dx = corrections(&impulse, &inv_m);
+        let mut left = 0.0f64;
         for (k, c) in contacts.iter().enumerate() {
             if rows[k].len == 0 {
                 continue;
             }
             if rows[k].node_on_node {
                 let pen = rows[k].gap_left(b, &dx);
-                max_residual = max_residual.max(pen);
+                left = left.max(pen);
                 rows[k].depth = pen;
             } else if let Some((xi, normal, pen)) = regauge(b, c, &dx) {
-                max_residual = max_residual.max(pen);
+                left = left.max(pen);
                 rows[k] = Row::new(b, c, xi, normal, pen);
             }
         }
+        max_residual = ex.max(left);
         if max_residual <= limit {
             break;
         }
     }
     if params.friction > 0.0 {
+        let sweep = Sweep {
+            order: &order,
+            ends: &ends,
+        };
         sweeps += friction(
             b,
             &rows,
-            &order,
+            sweep,
             &total_lambda,
             params,
             &inv_m,
-            &mut dx,
-            &mut force,
+            &mut impulse,
+            ex,
         );
     }
+    let inv_dt2 = 1.0 / (params.dt * params.dt);
+    let force: Vec<V3> = impulse.iter().map(|i| scale(*i, inv_dt2)).collect();
     let mut work = 0.0;
     let mut kinetic_energy_change = 0.0;
     for (j, f) in force.iter().enumerate() {
         let dv = scale(*f, params.dt * inv_m[j]);
         kinetic_energy_change += dot(*f, add(b.nodes.v[j], scale(dv, 0.5))) * params.dt;
-        let moved = add(sub(b.nodes.x1[j], b.nodes.x0[j]), dx[j]);
+        let moved = add(
+            sub(b.nodes.x1[j], b.nodes.x0[j]),
+            scale(impulse[j], inv_m[j]),
+        );
         work += dot(*f, moved);
     }
     PushBack {
@@ -472,74 +598,127 @@ pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) 
     }
 }
 
+/// The index ranges of the colours' runs in the sweep order.
+fn colour_ranges(ends: &[usize; COLOURS]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    (0..COLOURS).map(|c| if c == 0 { 0 } else { ends[c - 1] }..ends[c])
+}
+
+/// The rows of one geometric pass with the impulses at its start.
+struct Pass<'a> {
+    rows: &'a [Row],
+    start: &'a [V3],
+    inv_m: &'a [f64],
+}
+
+impl Pass<'_> {
+    /// Penetration left by row `r` with impulses `impulse`:
+    /// `d - n . sum_j w_j (I_j - I0_j) / m_j`.
+    fn left(&self, r: &Row, impulse: &[V3]) -> f64 {
+        let mut opened = 0.0;
+        for q in 0..r.len {
+            let j = r.nodes[q];
+            opened += r.w[q] * self.inv_m[j] * dot(r.normal, sub(impulse[j], self.start[j]));
+        }
+        r.depth - opened
+    }
+
+    /// The largest residual: penetration left, or separation where the impulse is positive.
+    fn residual(&self, lambda: &[f64], impulse: &[V3]) -> f64 {
+        self.rows.iter().zip(lambda).fold(0.0, |a: f64, (r, &l)| {
+            let res = self.left(r, impulse);
+            a.max(if l > 0.0 { res.abs() } else { res.max(0.0) })
+        })
+    }
+
+    /// Row `k`'s Gauss-Seidel update: its impulse from its residual, kept non-negative.
+    fn update(&self, k: usize, lambda: &mut [f64], impulse: &mut [V3]) {
+        let r = &self.rows[k];
+        if r.inv_mass.is_nan() || r.inv_mass <= 0.0 {
+            return;
+        }
+        let new = (lambda[k] + self.left(r, impulse) / r.inv_mass).max(0.0);
+        let step = new - lambda[k];
+        lambda[k] = new;
+        for q in 0..r.len {
+            axpy(&mut impulse[r.nodes[q]], r.w[q] * step, r.normal);
+        }
+    }
+}
+
+/// The sweep order and its colours' runs.
+#[derive(Clone, Copy)]
+struct Sweep<'a> {
+    order: &'a [usize],
+    ends: &'a [usize; COLOURS],
+}
+
 /// The friction impulses (module documentation, "Friction") on top of the normal ones: sweeps
-/// over the contacts until the tangential slips of the sticking contacts are gone to `tol` of
-/// the largest slip, or `max_sweeps`. Updates the position corrections and forces; returns the
-/// sweeps done.
+/// over the contacts, colour by colour, until the tangential slips of the sticking contacts are
+/// gone to `tol` of the largest slip, or `max_sweeps`. Updates the accumulated impulses;
+/// returns the sweeps done.
 #[allow(clippy::too_many_arguments)]
 fn friction(
     b: &ContactBox,
     rows: &[Row],
-    order: &[usize],
+    sweep: Sweep,
     lambda_n: &[f64],
     params: &PushBackParams,
     inv_m: &[f64],
-    dx: &mut [V3],
-    force: &mut [V3],
+    impulse: &mut [V3],
+    ex: &mut dyn Exchange,
 ) -> usize {
-    let slip_of = |r: &Row, dx: &[V3]| -> V3 {
+    let slip_of = |r: &Row, impulse: &[V3]| -> V3 {
         let mut s = [0.0; 3];
         for q in 0..r.len {
             let j = r.nodes[q];
-            let moved = add(sub(b.nodes.x1[j], b.nodes.x0[j]), dx[j]);
+            let moved = add(
+                sub(b.nodes.x1[j], b.nodes.x0[j]),
+                scale(impulse[j], inv_m[j]),
+            );
             axpy(&mut s, r.w[q], moved);
         }
         sub(s, scale(r.normal, dot(s, r.normal)))
     };
     let norm = |v: V3| dot(v, v).sqrt();
     let mut lambda_t = vec![[0.0; 3]; rows.len()];
-    let largest = rows
-        .iter()
-        .map(|r| norm(slip_of(r, dx)))
-        .fold(0.0, f64::max);
+    let largest = ex.max(
+        rows.iter()
+            .map(|r| norm(slip_of(r, impulse)))
+            .fold(0.0, f64::max),
+    );
     let limit = params.tol * largest;
     let mut sweeps = 0;
     while sweeps < params.max_sweeps {
         let mut change = 0.0f64;
-        for &k in order {
-            let r = &rows[k];
-            let cap = params.friction * lambda_n[k];
-            if r.inv_mass.is_nan() || r.inv_mass <= 0.0 || cap.is_nan() || cap <= 0.0 {
-                continue;
+        for (colour, range) in colour_ranges(sweep.ends).enumerate() {
+            for &k in &sweep.order[range] {
+                let r = &rows[k];
+                let cap = params.friction * lambda_n[k];
+                if r.inv_mass.is_nan() || r.inv_mass <= 0.0 || cap.is_nan() || cap <= 0.0 {
+                    continue;
+                }
+                // The impulse that stops this contact's slip, added to what it has, kept
+                // inside the friction disc |lambda_t| <= mu lambda_n.
+                let slip = slip_of(r, impulse);
+                let want = sub(lambda_t[k], scale(slip, 1.0 / r.inv_mass));
+                let size = norm(want);
+                let new = if size > cap {
+                    scale(want, cap / size)
+                } else {
+                    want
+                };
+                let step = sub(new, lambda_t[k]);
+                lambda_t[k] = new;
+                for q in 0..r.len {
+                    axpy(&mut impulse[r.nodes[q]], r.w[q], step);
+                }
+                change = change.max(norm(step) * r.inv_mass);
             }
-            // The impulse that stops this contact's slip, added to what it has, kept inside
-            // the friction disc |lambda_t| <= mu lambda_n.
-            let slip = slip_of(r, dx);
-            let want = sub(lambda_t[k], scale(slip, 1.0 / r.inv_mass));
-            let size = norm(want);
-            let new = if size > cap {
-                scale(want, cap / size)
-            } else {
-                want
-            };
-            let step = sub(new, lambda_t[k]);
-            lambda_t[k] = new;
-            for q in 0..r.len {
-                let j = r.nodes[q];
-                axpy(&mut dx[j], r.w[q] * inv_m[j], step);
-            }
-            change = change.max(norm(step) * r.inv_mass);
+            ex.sync(colour, impulse);
         }
         sweeps += 1;
-        if change <= limit {
+        if ex.max(change) <= limit {
             break;
-        }
-    }
-    let inv_dt2 = 1.0 / (params.dt * params.dt);
-    for &k in order {
-        let r = &rows[k];
-        for q in 0..r.len {
-            axpy(&mut force[r.nodes[q]], r.w[q] * inv_dt2, lambda_t[k]);
         }
     }
     sweeps

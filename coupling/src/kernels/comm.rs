@@ -253,3 +253,37 @@ impl CommPlan {
         out
     }
 }
+
+/// Message tag for [`exchange_known`].
+const TAG_KNOWN: i32 = 7004;
+
+/// Moves lists between ranks that already know who sends what to whom and how much (a halo
+/// whose partners and sizes were agreed earlier): `sends[k] = (rank, items)`, `recvs[k] =
+/// (rank, count)`, neither naming this rank. No collective and no size messages: a step of an
+/// iteration between neighbours costs one message to each partner with something to send.
+/// Returns the lists received, in `recvs`' order, and the bytes and messages sent.
+pub fn exchange_known<T: Pod>(
+    comm: &SimpleCommunicator,
+    sends: &[(i32, Vec<T>)],
+    recvs: &[(i32, usize)],
+) -> (Vec<Vec<T>>, u64, u64) {
+    let mut out: Vec<Vec<T>> = recvs.iter().map(|&(_, n)| vec![T::zeroed(); n]).collect();
+    let (mut bytes, mut messages) = (0u64, 0u64);
+    mpi::request::scope(|scope| {
+        let mut guards = Vec::with_capacity(sends.len());
+        for (r, items) in sends {
+            let b: &[u8] = bytemuck::cast_slice(&items[..]);
+            bytes += b.len() as u64;
+            messages += 1;
+            let req = comm
+                .process_at_rank(*r)
+                .immediate_send_with_tag(scope, b, TAG_KNOWN);
+            guards.push(WaitGuard::from(req));
+        }
+        for (k, &(r, _)) in recvs.iter().enumerate() {
+            let b: &mut [u8] = bytemuck::cast_slice_mut(&mut out[k][..]);
+            comm.process_at_rank(r).receive_into_with_tag(b, TAG_KNOWN);
+        }
+    });
+    (out, bytes, messages)
+}

@@ -29,6 +29,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::collections::HashMap;
+use std::rc::Rc;
 use std::time::Instant;
 
 /// Bytes of one rank's box in the all-gather (six f64).
@@ -36,7 +37,7 @@ const BOX_BYTES: u64 = 48;
 
 /// The baseline contact stage of one run.
 pub struct BaselineStage {
-    comm: SimpleCommunicator,
+    comm: Rc<SimpleCommunicator>,
     /// Search parameters (the dynamic stage's).
     pub params: SearchParams,
     /// Coulomb's friction coefficient (the dynamic stage's).
@@ -47,7 +48,7 @@ impl BaselineStage {
     /// A stage over `comm` with the search parameters of the dynamic stage (collective).
     pub fn new(comm: &SimpleCommunicator, params: SearchParams) -> BaselineStage {
         BaselineStage {
-            comm: comm.duplicate(),
+            comm: Rc::new(comm.duplicate()),
             params,
             friction: 0.0,
         }
@@ -151,7 +152,14 @@ impl BaselineStage {
             cands: &cands,
             contacts,
         }];
-        let settled = solve_rechecked(comm, &mut parts, &owned, dt, self.friction, &self.params)?;
+        let settled = solve_rechecked(
+            comm,
+            None,
+            &mut parts,
+            &owned,
+            dt,
+            (self.friction, &self.params),
+        )?;
         let [Part { contacts, .. }] = parts;
         let (force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
         let local_kinds = pushback.kinds;

@@ -14,6 +14,7 @@ use stage::{ContactOutcome, ContactStage};
 use std::time::Instant;
 
 pub mod baseline;
+mod cells;
 pub mod stage;
 
 /// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only

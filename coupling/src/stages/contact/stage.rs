@@ -40,8 +40,8 @@ use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::{CutTree, Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
 use contact::{
-    face_records_search_aabb, push_back, search_candidates, within_skin, Candidates, Contact,
-    ContactBox, FaceRecord, NodeRecord, PushBackParams, SearchParams,
+    face_records_search_aabb, search_candidates, within_skin, Candidates, Contact, ContactBox,
+    FaceRecord, NodeRecord, SearchParams,
 };
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -136,166 +136,6 @@ pub struct TransferStats {
     pub wall_s: f64,
 }
 
-/// A contact with what the push-back needs: the node, the face and its corners (Pod, 640 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ContactPacket {
-    contact: Contact,
-    node: NodeRecord,
-    face: FaceRecord,
-    corners: [NodeRecord; 4],
-}
-
-/// What [`solve_together`] returns.
-struct Solved {
-    /// The forces on the `owned` nodes, N.
-    force: Vec<[f64; 3]>,
-    /// The push-back's work, J (the same on every rank).
-    work: f64,
-    /// Bytes this rank sent.
-    sent: u64,
-    /// The force on every node of the solve by gid (the same on every rank).
-    all: HashMap<u64, [f64; 3]>,
-    /// The contacts that share a node with a contact found on another rank.
-    coupled: u64,
-}
-
-/// Gathers every rank's contacts (found in the boxes `parts`) on every rank and solves their
-/// push-back as one box (see step 7b). Returns the forces on `owned` (this rank's contact
-/// nodes), the push-back's work (the same on every rank), the bytes this rank sent, and the
-/// force on every node of the solve by gid (the same on every rank).
-fn solve_together(
-    comm: &SimpleCommunicator,
-    parts: &[(&ContactBox, &[Contact])],
-    owned: &[u64],
-    dt: f64,
-    friction: f64,
-) -> Result<Solved, String> {
-    let mut mine: Vec<ContactPacket> = Vec::new();
-    for (b, contacts) in parts {
-        let rec = |i: usize| b.nodes.record(i);
-        mine.extend(contacts.iter().map(|c| {
-            let f = c.face as usize;
-            ContactPacket {
-                contact: *c,
-                node: rec(c.node as usize),
-                face: b.faces.record(f),
-                corners: std::array::from_fn(|k| rec(b.faces.nodes[f][k] as usize)),
-            }
-        }));
-    }
-    let sent = (std::mem::size_of_val(&mine[..]) * (comm.size() as usize - 1)) as u64;
-    let bytes: Vec<u8> = bytemuck::cast_slice(&mine).to_vec();
-    let all = crate::kernels::collective::all_gather_varcount(comm, &bytes);
-    let mut packets: Vec<ContactPacket> = all
-        .chunks_exact(std::mem::size_of::<ContactPacket>())
-        .map(bytemuck::pod_read_unaligned)
-        .collect();
-    let mut force = vec![[0.0; 3]; owned.len()];
-    if packets.is_empty() {
-        return Ok(Solved {
-            force,
-            work: 0.0,
-            sent,
-            all: HashMap::default(),
-            coupled: 0,
-        });
-    }
-    let mut per_rank = vec![0u64; comm.size() as usize];
-    comm.all_gather_into(&(mine.len() as u64), &mut per_rank[..]);
-    let coupled = coupled_across_boxes(&packets, &per_rank);
-    // One box: the contact nodes first, then the faces' corners, each once, in gid order of
-    // the sorted contacts (the same on every rank).
-    packets.sort_by(|p, q| {
-        (p.contact.node_gid, p.contact.face_gid).cmp(&(q.contact.node_gid, q.contact.face_gid))
-    });
-    let mut nodes: Vec<NodeRecord> = Vec::new();
-    let mut slot: HashMap<u64, usize> = HashMap::default();
-    for p in &packets {
-        slot.entry(p.node.gid).or_insert_with(|| {
-            nodes.push(p.node);
-            nodes.len() - 1
-        });
-    }
-    let n_contact_nodes = nodes.len();
-    let mut faces: Vec<FaceRecord> = Vec::new();
-    let mut face_slot: HashMap<u64, usize> = HashMap::default();
-    for p in &packets {
-        for r in &p.corners {
-            slot.entry(r.gid).or_insert_with(|| {
-                nodes.push(*r);
-                nodes.len() - 1
-            });
-        }
-        face_slot.entry(p.face.gid).or_insert_with(|| {
-            faces.push(p.face);
-            faces.len() - 1
-        });
-    }
-    let gb =
-        ContactBox::from_records(&nodes, n_contact_nodes, &faces).map_err(|e| e.to_string())?;
-    let gc: Vec<Contact> = packets
-        .iter()
-        .map(|p| Contact {
-            node: slot[&p.contact.node_gid] as u32,
-            face: face_slot[&p.contact.face_gid] as u32,
-            ..p.contact
-        })
-        .collect();
-    let pb = push_back(
-        &gb,
-        &gc,
-        &PushBackParams {
-            friction,
-            ..PushBackParams::new(dt)
-        },
-    );
-    for (i, g) in owned.iter().enumerate() {
-        if let Some(&k) = slot.get(g) {
-            force[i] = pb.force[k];
-        }
-    }
-    let all = slot.iter().map(|(&g, &k)| (g, pb.force[k])).collect();
-    Ok(Solved {
-        force,
-        work: pb.work,
-        sent,
-        all,
-        coupled,
-    })
-}
-
-/// How many of the gathered contacts (`packets`, rank by rank in rank order, `per_rank` of
-/// each) share a node (the contact node or a face corner) with a contact found on another
-/// rank: the contacts a push-back solved where they were found would have to exchange.
-fn coupled_across_boxes(packets: &[ContactPacket], per_rank: &[u64]) -> u64 {
-    let ranks = per_rank
-        .iter()
-        .enumerate()
-        .flat_map(|(r, &n)| std::iter::repeat_n(r, n as usize));
-    let gids = |p: &ContactPacket| {
-        let mut g = [p.node.gid, 0, 0, 0, 0];
-        for k in 0..4 {
-            g[k + 1] = p.corners[k].gid;
-        }
-        g
-    };
-    // The first rank seen for each gid, or usize::MAX once a second rank has it.
-    let mut seen: HashMap<u64, usize> = HashMap::default();
-    for (p, r) in packets.iter().zip(ranks.clone()) {
-        for g in gids(p) {
-            let e = seen.entry(g).or_insert(r);
-            if *e != r {
-                *e = usize::MAX;
-            }
-        }
-    }
-    packets
-        .iter()
-        .filter(|p| gids(p).iter().any(|g| seen[g] == usize::MAX))
-        .count() as u64
-}
-
 /// Most push-back solves in one step (see [`solve_rechecked`]). Measured on `rod_wall` (np 2,
 /// 4,650 steps): the rechecks added 450 contacts in all, 0.69 solves per step on average over
 /// all steps (none in steps without contact), and this limit was reached in some steps (what
@@ -354,37 +194,42 @@ pub(crate) fn kinds(b: &ContactBox, contacts: &[Contact]) -> [u64; 4] {
     k
 }
 
-/// Step 7b with its rechecks: the push-back of every contact together ([`solve_together`]);
-/// then each box tests its nodes again on the corrected positions (`contact::recheck`: the
-/// crossings the corrections made, a node pushed out of one face of a crease into the next),
-/// and while any box finds new contacts the push-back is solved again with them added (at
-/// most [`MAX_SOLVES`] solves; what the last one leaves is found by the next step's search,
-/// within its capture tolerance). The new contacts join `parts`' lists. Every rank takes part
-/// in each solve; the rounds end on every rank together (a sum over ranks of the new
-/// contacts). The contacts and forces do not depend on the cuts: each node's rechecks see the
-/// same corrected positions (the solve's, on every rank) wherever the node is owned.
+/// Step 7b with its rechecks: the push-back of every contact, solved in cells where the
+/// contacts are (`cells::solve_in_cells`); then each box tests its nodes again on the corrected
+/// positions (`contact::recheck`: the crossings the corrections made, a node pushed out of one
+/// face of a crease into the next), and while any box finds new contacts the push-back is solved
+/// again with them added (at most [`MAX_SOLVES`] solves; what the last one leaves is found by
+/// the next step's search, within its capture tolerance). The new contacts join `parts`' lists.
+/// Every rank takes part in each solve; the rounds end on every rank together (a sum over ranks
+/// of the new contacts). The contacts and forces do not depend on the cuts: the solve's answer
+/// does not (`contact::pushback`, "Sweeps in cells"), and each node's rechecks see the same
+/// corrected positions wherever the node is held. `tree`: the contact decomposition's cuts
+/// (where cells and nodes' homes are; `None`: all on rank 0).
 pub(crate) fn solve_rechecked(
-    comm: &SimpleCommunicator,
+    comm: &Rc<SimpleCommunicator>,
+    tree: Option<&CutTree>,
     parts: &mut [Part],
     owned: &[u64],
     dt: f64,
-    friction: f64,
-    params: &SearchParams,
+    (friction, params): (f64, &SearchParams),
 ) -> Result<Settled, String> {
-    let mut bytes = 0;
     let mut counts = PushbackCounts::default();
+    let boxes: Vec<&ContactBox> = parts.iter().map(|p| &*p.b).collect();
+    let mut holders = super::cells::Holders::new(comm, tree, &boxes);
+    drop(boxes);
+    let mut bytes = holders.bytes();
     loop {
         let views: Vec<(&ContactBox, &[Contact])> =
             parts.iter().map(|p| (&*p.b, &p.contacts[..])).collect();
-        let Solved {
-            force,
+        let super::cells::Solved {
+            all,
             work,
             sent,
-            all,
+            total,
             coupled,
-        } = solve_together(comm, &views, owned, dt, friction)?;
+        } = super::cells::solve_in_cells(comm, tree, &views, &mut holders, dt, friction)?;
         bytes += sent;
-        counts.solves += u64::from(!all.is_empty());
+        counts.solves += u64::from(total > 0);
         counts.coupled = coupled;
         // This rank's contacts by kind (the outcome sums them over ranks).
         counts.kinds = [0; 4];
@@ -394,12 +239,15 @@ pub(crate) fn solve_rechecked(
             }
         }
         let done = Settled {
-            force,
+            force: owned
+                .iter()
+                .map(|g| all.get(g).copied().unwrap_or([0.0; 3]))
+                .collect(),
             work,
             bytes,
             counts,
         };
-        if all.is_empty() || counts.solves >= MAX_SOLVES as u64 {
+        if total == 0 || counts.solves >= MAX_SOLVES as u64 {
             return Ok(done);
         }
         let mut added = 0u64;
@@ -764,11 +612,11 @@ impl ContactStage {
         }
         let settled = solve_rechecked(
             comm,
+            Some(tree),
             &mut parts,
             &owned_gids,
             dt,
-            self.friction,
-            &self.params,
+            (self.friction, &self.params),
         )?;
         let mut parts = parts.into_iter();
         let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
@@ -885,11 +733,11 @@ impl ContactStage {
         }];
         let settled = solve_rechecked(
             comm,
+            Some(&tree),
             &mut parts,
             &owned_gids,
             dt,
-            self.friction,
-            &self.params,
+            (self.friction, &self.params),
         )?;
         let [Part { contacts, .. }] = parts;
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
