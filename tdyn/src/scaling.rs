@@ -21,8 +21,12 @@ use plotters::prelude::{
 use plotters::style::Color;
 use std::path::Path;
 
-/// Stages of report.json, in the order they are charted.
-pub const STAGES: [&str; 6] = ["fe", "sph", "contact", "transfer", "rcb", "output"];
+/// Stages of report.json, in the order they are charted. "pushback" is the contact stage's
+/// step 7b, inside "contact" (its bytes and imbalance from report.json's
+/// `contact_pushback_*` keys; no time of its own).
+pub const STAGES: [&str; 7] = [
+    "fe", "sph", "contact", "transfer", "rcb", "output", "pushback",
+];
 
 /// The stages inside the time-step loop (their times add up to at most the loop's).
 const LOOP_STAGES: [&str; 3] = ["fe", "sph", "contact"];
@@ -90,6 +94,9 @@ pub fn read_runs(dir: &Path) -> Result<Vec<ScalingRow>, String> {
         let stages = STAGES
             .iter()
             .map(|s| {
+                if *s == "pushback" {
+                    return pushback_row(&r, ranks, per);
+                }
                 let st = r.get(*s).filter(|v| v.is_object())?;
                 Some(StageRow {
                     per_step_s: f(st, "wall_s")? / per,
@@ -117,6 +124,25 @@ pub fn read_runs(dir: &Path) -> Result<Vec<ScalingRow>, String> {
     }
     rows.sort_by(|a, b| a.series.cmp(&b.series).then(a.np.cmp(&b.np)));
     Ok(rows)
+}
+
+/// The push-back's row (see [`STAGES`]): bytes per rank per step over all ranks, and the
+/// imbalance of its work, the contacts the busiest rank solved per step over the mean per rank
+/// (contacts found per step over the ranks).
+fn pushback_row(r: &serde_json::Value, ranks: f64, steps: f64) -> Option<StageRow> {
+    let f = |k: &str| r.get(k).and_then(|x| x.as_f64());
+    let bytes = f("contact_pushback_bytes_per_step")?;
+    let mean_rows = f("contacts_found_total").unwrap_or(0.0) / steps / ranks;
+    let max_rows = f("contact_pushback_rows_per_rank_step_max").unwrap_or(f64::NAN);
+    Some(StageRow {
+        per_step_s: f64::NAN,
+        imbalance: if mean_rows > 0.0 {
+            max_rows / mean_rows
+        } else {
+            f64::NAN
+        },
+        bytes_per_rank_step: bytes / ranks,
+    })
 }
 
 /// Writes scaling.csv.
@@ -199,12 +225,15 @@ pub fn table(rows: &[ScalingRow]) -> String {
         );
         for (name, st) in STAGES.iter().zip(&r.stages) {
             if let Some(x) = st {
+                let ms = if x.per_step_s.is_finite() {
+                    format!("{:.4}", x.per_step_s * 1e3)
+                } else {
+                    "-".to_string()
+                };
                 let _ = write!(
                     s,
-                    " {name}: {:.4} {:.3} {:.0}",
-                    x.per_step_s * 1e3,
-                    x.imbalance,
-                    x.bytes_per_rank_step
+                    " {name}: {ms} {:.3} {:.0}",
+                    x.imbalance, x.bytes_per_rank_step
                 );
             }
         }

@@ -11,9 +11,10 @@
 //!    box overlaps (the same search box, grown by the zone of influence, as the dynamic stage);
 //! 3. each rank searches its FE-owned nodes against its own faces and the faces it received
 //!    (the `contact` crate);
-//! 4. the push-back of all contacts is solved together, as the dynamic stage solves it (its
-//!    step 7b, `stage::solve_together`), and each rank keeps the forces on its FE-owned nodes
-//!    (every face corner is a contact node, FE-owned by some rank).
+//! 4. the push-back is solved as the dynamic stage solves it (its step 7b, `cells`), with no
+//!    cut tree: every cell and every node's home on rank 0 (the baseline is for comparing
+//!    searches), and each rank keeps the forces on its FE-owned nodes (every face corner is a
+//!    contact node, FE-owned by some rank).
 //!
 //! The contacts found are the same as the dynamic stage's (a node is searched by its FE owner,
 //! once; a face reaches every rank that owns a node whose search box meets it). What differs is
@@ -142,7 +143,7 @@ impl BaselineStage {
         let contacts = search_candidates(&b, &self.params, &cands);
         bytes += plan.bytes_sent;
 
-        // 4. The push-back of all contacts together (the dynamic stage's step 7b): two contacts
+        // 4. The push-back (the dynamic stage's step 7b, all on rank 0 here): two contacts
         // sharing nodes, found on different ranks (a touching pair found from both sides by
         // the two passes), are solved as one.
         let owned: Vec<u64> = nodes.iter().map(|r| r.gid).collect();
@@ -166,7 +167,7 @@ impl BaselineStage {
         bytes += settled.bytes;
 
         // Statistics, as the dynamic stage reports them.
-        let mut sums = [0.0f64; 8];
+        let mut sums = [0.0f64; 9];
         let k = local_kinds.map(|n| n as f64);
         comm.all_reduce_into(
             &[
@@ -178,17 +179,26 @@ impl BaselineStage {
                 k[1],
                 k[2],
                 k[3],
+                pushback.bytes as f64,
             ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
         pushback.kinds = std::array::from_fn(|i| sums[4 + i] as u64);
-        let mut maxes = [0.0f64; 2];
+        let mut maxes = [0.0f64; 4];
         comm.all_reduce_into(
-            &[work_items, t0.elapsed().as_secs_f64()][..],
+            &[
+                work_items,
+                t0.elapsed().as_secs_f64(),
+                pushback.bytes as f64,
+                pushback.rows as f64,
+            ][..],
             &mut maxes[..],
             SystemOperation::max(),
         );
+        pushback.bytes = sums[8] as u64;
+        pushback.bytes_max = maxes[2] as u64;
+        pushback.rows = maxes[3] as u64;
         let mean = sums[3] / p as f64;
         Ok(ContactOutcome {
             force,

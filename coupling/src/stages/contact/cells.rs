@@ -134,6 +134,10 @@ pub(crate) struct Solved {
     pub total: u64,
     /// Contacts over all ranks that touch a node another rank's cells touch.
     pub coupled: u64,
+    /// Gauss-Seidel sweeps (all passes, normal and friction; the same on every rank).
+    pub sweeps: u64,
+    /// Contacts this rank solved (those of its cells).
+    pub rows: u64,
 }
 
 /// The push-back of the contacts found in `parts` (each box with its contacts), solved in
@@ -162,6 +166,8 @@ pub(crate) fn solve_in_cells(
             sent: 0,
             total: 0,
             coupled: 0,
+            sweeps: 0,
+            rows: 0,
         });
     }
     let cells = Cells::for_reach(largest);
@@ -233,6 +239,8 @@ pub(crate) fn solve_in_cells(
         sent,
         total,
         coupled: sums[1] as u64,
+        sweeps: pb.sweeps as u64,
+        rows: local.contacts.len() as u64,
     })
 }
 
@@ -405,7 +413,6 @@ impl<'a> Halo<'a> {
             at += k;
         }
         let others = announce.reverse_lists(&lists);
-        let bytes = announce.bytes_sent;
         let me = comm.rank();
         let index: HashMap<u64, u32> = (0..n as u32)
             .map(|j| (b.nodes.gid[j as usize], j))
@@ -452,7 +459,7 @@ impl<'a> Halo<'a> {
             shared,
             sends,
             recvs,
-            bytes,
+            bytes: 0,
         })
     }
 }

@@ -91,6 +91,14 @@ pub struct ContactStats {
     pub coupled_total: u64,
     /// Contacts by kind (`PushbackCounts::kinds`), summed over steps.
     pub kinds_total: [u64; 4],
+    /// The push-back's Gauss-Seidel sweeps, summed over steps.
+    pub sweeps_total: u64,
+    /// The push-back's bytes over all ranks, and the largest rank's, summed over steps.
+    pub pushback_bytes: f64,
+    /// See `pushback_bytes`.
+    pub pushback_bytes_max_sum: f64,
+    /// Contacts solved by the busiest rank's push-back, summed over steps.
+    pub pushback_rows_max_sum: f64,
 }
 
 impl ContactStats {
@@ -116,6 +124,10 @@ impl ContactStats {
         self.solves_max = self.solves_max.max(out.pushback.solves);
         self.rechecked_total += out.pushback.rechecked;
         self.coupled_total += out.pushback.coupled;
+        self.sweeps_total += out.pushback.sweeps;
+        self.pushback_bytes += out.pushback.bytes as f64;
+        self.pushback_bytes_max_sum += out.pushback.bytes_max as f64;
+        self.pushback_rows_max_sum += out.pushback.rows as f64;
         for (t, k) in self.kinds_total.iter_mut().zip(out.pushback.kinds) {
             *t += k;
         }
@@ -349,9 +361,8 @@ impl Contact {
         ex.insert("contacts_rechecked_total".into(), c.rechecked_total.into());
         // Contacts by pass: a node of a later body (bodies numbered by their lowest element
         // id) in a face of an earlier one (the only pass of a one-pass search without
-        // masters), the other way, self-contact, particles; and the contacts sharing a node
-        // with a contact of another contact box (what a push-back solved box by box would
-        // exchange; the push-back now gathers every contact on every rank).
+        // masters), the other way, self-contact, particles; and the contacts touching a node
+        // another rank's cells touch (what the push-back exchanges between ranks).
         let k = c.kinds_total;
         ex.insert("contacts_later_on_earlier_total".into(), k[0].into());
         ex.insert("contacts_earlier_on_later_total".into(), k[1].into());
@@ -360,6 +371,25 @@ impl Contact {
         ex.insert(
             "contacts_coupled_across_boxes_total".into(),
             c.coupled_total.into(),
+        );
+        // The push-back's own cost (step 7b, solved in cells where the contacts are): bytes
+        // per step over all ranks and on the busiest rank, Gauss-Seidel sweeps per step, and
+        // the contacts the busiest rank solved per step.
+        ex.insert(
+            "contact_pushback_bytes_per_step".into(),
+            (c.pushback_bytes / n_steps).into(),
+        );
+        ex.insert(
+            "contact_pushback_bytes_per_rank_step_max".into(),
+            (c.pushback_bytes_max_sum / n_steps).into(),
+        );
+        ex.insert(
+            "contact_pushback_sweeps_per_step".into(),
+            (c.sweeps_total as f64 / n_steps).into(),
+        );
+        ex.insert(
+            "contact_pushback_rows_per_rank_step_max".into(),
+            (c.pushback_rows_max_sum / n_steps).into(),
         );
         if let Search::Dynamic(stage) = &self.search {
             // Steps that rebuilt the decomposition, and candidate-list rebuilds summed over

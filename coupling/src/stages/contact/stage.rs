@@ -22,9 +22,11 @@
 //! rebuild would.
 //!
 //! Every contact is found in exactly one box (a node is owned by one rank), so nothing is counted
-//! twice. The push-back of all contacts is solved together (step 7b: the step's contacts are
-//! gathered on every rank and solved as one box, Gauss-Seidel in the `contact` crate), so the
-//! forces do not depend on where the cuts fall; each rank keeps those of its contact nodes.
+//! twice. The push-back (step 7b, `cells`) is solved where the contacts are: each contact goes to
+//! the rank owning its cell, and ranks exchange only the nodes their cells share; its
+//! Gauss-Seidel order is fixed by the cells, not the ranks, so the forces do not depend on where
+//! the cuts fall (`contact::pushback`, "Sweeps in cells"); each rank keeps those of its contact
+//! nodes.
 //!
 //! The search is two-pass by default (`[contact] passes = 2`: every pair of bodies both ways), so
 //! a touching pair of surfaces is usually found from both sides, a node of each in a face of the
@@ -33,9 +35,8 @@
 //! the later body's nodes against the earlier body's faces: the answer then depended on the order
 //! of the bodies in the mesh, a ball meshed before its plate sank 2 mm into it). In the one
 //! solve of step 7b the two descriptions of one gap are two rows of one system on the same
-//! nodes, which share the impulse (`contact::push_back`). A push-back solved where the contacts
-//! were found must keep that: the two passes' contacts of a pair share nodes, so they are among
-//! the contacts coupled across boxes that such a solve exchanges.
+//! nodes, which share the impulse (`contact::push_back`); in cells, the two rows share nodes, so
+//! they are in one cell or in cells of different colours, and are solved in turn either way.
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::{CutTree, Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
@@ -167,8 +168,19 @@ pub struct PushbackCounts {
     pub solves: u64,
     /// Contacts the rechecks added, over all ranks.
     pub rechecked: u64,
-    /// Contacts (of the last solve) sharing a node with a contact found in another box.
+    /// Contacts (of the last solve) touching a node that another rank's cells touch (what
+    /// the push-back exchanges between ranks after each colour).
     pub coupled: u64,
+    /// Gauss-Seidel sweeps, all solves.
+    pub sweeps: u64,
+    /// Bytes the push-back sent: this rank's in `solve_rechecked`, over all ranks in the
+    /// step's outcome.
+    pub bytes: u64,
+    /// The largest over ranks of the push-back's bytes (set in the step's outcome).
+    pub bytes_max: u64,
+    /// Contacts solved (all solves): this rank's in `solve_rechecked`, the largest over ranks
+    /// in the step's outcome (the push-back's work on its busiest rank).
+    pub rows: u64,
     /// Contacts by kind, over all ranks: a node of a later body in a face of an earlier
     /// one (bodies numbered by their lowest element id), of an earlier body in a later one's,
     /// within one body (self-contact), a particle.
@@ -227,10 +239,15 @@ pub(crate) fn solve_rechecked(
             sent,
             total,
             coupled,
+            sweeps,
+            rows,
         } = super::cells::solve_in_cells(comm, tree, &views, &mut holders, dt, friction)?;
         bytes += sent;
         counts.solves += u64::from(total > 0);
         counts.coupled = coupled;
+        counts.sweeps += sweeps;
+        counts.rows += rows;
+        counts.bytes = bytes;
         // This rank's contacts by kind (the outcome sums them over ranks).
         counts.kinds = [0; 4];
         for p in parts.iter() {
@@ -717,14 +734,10 @@ impl ContactStage {
         let cands = Candidates::build(&b, &self.params, cand_skin);
         let contacts = search_candidates(&b, &self.params, &cands);
 
-        // 7b. The push-back of all contacts together. Contacts that share face nodes but were
-        // found in different boxes must be solved together for the answer not to depend on the
-        // decomposition (solved box by box, each box removed the whole penetration of its own
-        // contacts: block_drop's energies differed at 1e-3 between rank counts). Every rank
-        // gathers every contact with its node's and its face's records (640 bytes each) and
-        // solves the same problem in the same order, so the forces are those of one box holding
-        // everything, at any rank count. The price: bytes grow as P x contacts (reported in
-        // `bytes_sent`); contacts are few next to the nodes searched.
+        // 7b. The push-back, solved in cells where the contacts are (`cells`): contacts that
+        // share nodes but were found in different boxes (a touching pair found from both sides
+        // by the two passes) are rows of one Gauss-Seidel whose order the cells fix, so the
+        // forces are those of one box holding everything, at any rank count.
         let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
         let mut parts = [Part {
             b: &mut b,
@@ -790,7 +803,7 @@ impl ContactStage {
     fn outcome(&mut self, p: OutcomeParts) -> Result<ContactOutcome, String> {
         let comm = &self.comm;
         let me = comm.rank();
-        let mut sums = [0.0f64; 9];
+        let mut sums = [0.0f64; 10];
         let k = p.pushback.kinds.map(|n| n as f64);
         comm.all_reduce_into(
             &[
@@ -803,23 +816,29 @@ impl ContactStage {
                 k[1],
                 k[2],
                 k[3],
+                p.pushback.bytes as f64,
             ][..],
             &mut sums[..],
             SystemOperation::sum(),
         );
         let mut pushback = p.pushback;
         pushback.kinds = std::array::from_fn(|i| sums[5 + i] as u64);
-        let mut maxes = [0.0f64; 4];
+        pushback.bytes = sums[9] as u64;
+        let mut maxes = [0.0f64; 6];
         comm.all_reduce_into(
             &[
                 p.work_items,
                 p.t0.elapsed().as_secs_f64(),
                 p.t_bytes as f64,
                 p.t_s,
+                p.pushback.bytes as f64,
+                p.pushback.rows as f64,
             ][..],
             &mut maxes[..],
             SystemOperation::max(),
         );
+        pushback.bytes_max = maxes[4] as u64;
+        pushback.rows = maxes[5] as u64;
         let t_mean = sums[4] / comm.size() as f64;
         let mean = sums[3] / comm.size() as f64;
         let imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
