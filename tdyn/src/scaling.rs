@@ -288,6 +288,9 @@ fn np_label(v: &f64) -> String {
 
 /// The caption of `name`'s bar panel (`rows` its runs): the weak series says its size per rank.
 fn bar_caption(name: &str, rows: &[&ScalingRow]) -> String {
+    if rows.is_empty() {
+        return format!("{name} scaling: no runs in this study");
+    }
     if name == "strong" {
         return "strong scaling: time per step by stage (max over ranks)".to_string();
     }
