@@ -303,7 +303,7 @@ fn hughes_winget(w01: F4, w12: F4, w20: F4, dt: f64) -> [[F4; 3]; 3] {
         ],
     ];
     let det = m[0][0] * c[0][0] + m[0][1] * c[1][0] + m[0][2] * c[2][0];
-    let singular = det.eq(F4::ZERO).or(det.is_finite().not());
+    let singular = det.eq(F4::ZERO).or(!det.is_finite());
     let id = 1.0 / det;
     let mut ai = [[F4::ZERO; 3]; 3];
     for i in 0..3 {

@@ -8,7 +8,7 @@
 //! computes for its element. (`f64::mul_add` without the `fma` target feature, which the baseline
 //! target lacks, is a library call, and a fused product would round differently from the scalar
 //! kernel that the remainder elements and the tests use.)
-use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
 /// Elements per group.
 pub const LANES: usize = 4;
@@ -48,10 +48,13 @@ impl M4 {
         let (a, b) = (self.0, o.0);
         M4([a[0] & b[0], a[1] & b[1], a[2] & b[2], a[3] & b[3]])
     }
+}
 
+impl Not for M4 {
+    type Output = M4;
     /// Lane-wise not.
     #[inline(always)]
-    pub fn not(self) -> M4 {
+    fn not(self) -> M4 {
         let a = self.0;
         M4([!a[0], !a[1], !a[2], !a[3]])
     }
