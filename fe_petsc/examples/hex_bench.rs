@@ -2,7 +2,7 @@
 //! Times the element update in a tight loop (no mesh, no MPI), the scalar kernel and the batched
 //! one: `cargo run --release --example hex_bench -- [reps] [scalar|batched|both]`.
 use fe_petsc::hex::{self, HexControls, HexState};
-use fe_petsc::hex_lanes::{self, LaneMaterial, LaneState};
+use fe_petsc::hex_lanes::{self, LaneGroup, LaneMaterial, LaneState};
 use fe_petsc::lanes::{F4, LANES};
 use fe_petsc::material::{build_material, MaterialSpec};
 use std::time::Instant;
@@ -84,15 +84,20 @@ fn main() {
             .map(|g| (lane_nodes(&x, g * LANES), lane_nodes(&v, g * LANES)))
             .collect();
         let mut st = vec![LaneState::default(); groups.len()];
+        let mut group = LaneGroup {
+            vol0: F4::splat(vol0),
+            ..Default::default()
+        };
         let t = Instant::now();
         for _ in 0..reps {
             for (g, (xg, vg)) in groups.iter().enumerate() {
-                let o = hex_lanes::update(xg, vg, 1e-7, F4::splat(vol0), &lm, &ctl, &mut st[g])
-                    .unwrap();
-                acc += o.force[0][0].0[0];
+                (group.x, group.v, group.state) = (*xg, *vg, st[g]);
+                group.update(1e-7, &lm, &ctl).unwrap();
+                st[g] = group.state;
+                acc += group.out.force[0][0].0[0];
             }
         }
         let ns = t.elapsed().as_secs_f64() * 1e9 / (reps * groups.len() * LANES) as f64;
-        println!("hex_lanes::update {ns:.1} ns/element (checksum {acc:e})");
+        println!("hex_lanes::LaneGroup::update {ns:.1} ns/element (checksum {acc:e})");
     }
 }

@@ -18,7 +18,7 @@
 //! energy to O(dt^2) without drift.
 use crate::blocks::BlockWork;
 use crate::hex::{self, HexControls, HexState};
-use crate::hex_lanes::{self, LaneMaterial, LaneState};
+use crate::hex_lanes::{self, LaneGroup, LaneMaterial};
 use crate::lanes::{F4, LANES};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
@@ -521,11 +521,12 @@ impl ExplicitFe {
             inverted: None,
         };
         self.blocks.begin();
+        let mut group = Box::<LaneGroup>::default();
         let mut e = 0;
         while e < self.elems.len() {
             match self.lane_group(e) {
                 Some(m) => {
-                    if !self.group_update(e, &m, dt, &mut sums) {
+                    if !self.group_update(e, &m, dt, &mut group, &mut sums) {
                         // An inverted element in the group: the scalar kernel names it.
                         for k in e..e + LANES {
                             self.element_update(k, dt, &mut sums);
@@ -603,20 +604,27 @@ impl ExplicitFe {
         }
     }
 
-    /// Updates elements `e0..e0 + LANES` (material `m`) with the batched kernel and adds their
-    /// outputs in element order; `false`, with nothing changed, when one of them is inverted.
+    /// Updates elements `e0..e0 + LANES` (material `m`) with the batched kernel in the buffer
+    /// `g` and adds their outputs in element order; `false`, with nothing changed, when one of
+    /// them is inverted.
     ///
     /// Cost per element beyond the kernel: the gather of 48 nodal doubles (384 B) and the
     /// scatter-add of 24 (192 B read and written) through the connectivity (32 B), 19 state
     /// doubles in and out (304 B), no flops.
-    fn group_update(&mut self, e0: usize, m: &LaneMaterial, dt: f64, sums: &mut LoopSums) -> bool {
+    fn group_update(
+        &mut self,
+        e0: usize,
+        m: &LaneMaterial,
+        dt: f64,
+        g: &mut LaneGroup,
+        sums: &mut LoopSums,
+    ) -> bool {
         let conn: [&[u32; 8]; LANES] = std::array::from_fn(|l| &self.elems[e0 + l]);
-        let x = hex_lanes::gather(&self.x, conn);
-        let v = hex_lanes::gather(&self.v, conn);
-        let vol0 = F4(std::array::from_fn(|l| self.vol0[e0 + l]));
+        hex_lanes::gather(&self.x, conn, &mut g.x);
+        hex_lanes::gather(&self.v, conn, &mut g.v);
+        g.vol0 = F4(std::array::from_fn(|l| self.vol0[e0 + l]));
         let stride = self.mat_stride;
         let history = m.n_state() > 0;
-        let mut st = LaneState::default();
         for l in 0..LANES {
             let e = e0 + l;
             let h = if history {
@@ -624,19 +632,19 @@ impl ExplicitFe {
             } else {
                 0.0
             };
-            st.set_lane(l, &self.state[e], h);
+            g.state.set_lane(l, &self.state[e], h);
         }
-        let Some(out) = hex_lanes::update(&x, &v, dt, vol0, m, &self.controls, &mut st) else {
+        if g.update(dt, m, &self.controls).is_err() {
             return false;
-        };
+        }
         for l in 0..LANES {
             let e = e0 + l;
-            let (s, h) = st.lane(l);
+            let (s, h) = g.state.lane(l);
             self.state[e] = s;
             if history {
                 self.mat_state[e * stride] = h;
             }
-            self.add_output(e, &out.lane(l), sums);
+            self.add_output(e, &g.out.lane(l), sums);
         }
         true
     }

@@ -99,7 +99,7 @@ impl LaneState {
 }
 
 /// What one update of four elements produced ([`HexOutput`] in lanes).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct LaneOutput {
     /// Force on each node from each element, N.
     pub force: LaneNodes,
@@ -127,13 +127,13 @@ impl LaneOutput {
     }
 }
 
-/// Gathers the nodal vectors `xs` of the four elements `conn` into lanes.
+/// Writes the nodal vectors `xs` of the four elements `conn` into the lanes `out` (every entry:
+/// a buffer can be reused from group to group without clearing).
 ///
 /// Cost: 24 doubles read per element from `xs` (192 B, scattered over the nodes' cache lines),
 /// 24 written to the lanes; no flops.
 #[inline]
-pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES]) -> LaneNodes {
-    let mut out = [[F4::ZERO; 3]; NODES];
+pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES], out: &mut LaneNodes) {
     for (l, c) in conn.iter().enumerate() {
         for (k, &n) in c.iter().enumerate() {
             let p = &xs[n as usize];
@@ -142,7 +142,6 @@ pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES]) -> LaneNodes {
             }
         }
     }
-    out
 }
 
 /// [`crate::hex`]'s volume gradient B[I] = dV/dx_I (not divided by V) and the volume, in
@@ -182,6 +181,11 @@ fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F4; 3] {
     }
     s
 }
+
+/// A group with an element whose volume (end of step or mid-step) is not positive and finite:
+/// its elements are for the scalar kernel, which names the element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GroupInverted;
 
 /// Lanes whose volume is positive and finite.
 #[inline(always)]
@@ -356,62 +360,80 @@ fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F4, rho: F4, c: F4, ev: F4) -> (
     (q, dt)
 }
 
-/// One explicit update of four elements of the material `m`, lane `l` being the element with
-/// nodal coordinates `x[..][..].0[l]` at t(n+1), velocities `v` at t(n+1/2), reference volume
-/// `vol0.0[l]` and state `st` (lane `l`): in each lane what [`crate::hex::update`] computes.
-/// `None`, with `st` untouched, when a lane's volume is not positive and finite.
-///
-/// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
-/// branches (about 150: the radial return, the hourglass loading test and yield bound);
-/// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written (304 B),
-/// the 24 force doubles handed back (192 B): about 1 flop per 0.4 B from the lanes, while the
-/// gather/scatter of the nodal arrays is the memory-bound part.
-pub fn update(
-    x: &LaneNodes,
-    v: &LaneNodes,
-    dt: f64,
-    vol0: F4,
-    m: &LaneMaterial,
-    ctl: &HexControls,
-    st: &mut LaneState,
-) -> Option<LaneOutput> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { update_avx2(x, v, dt, vol0, m, ctl, st) };
-    }
-    update_inline(x, v, dt, vol0, m, ctl, st)
+/// Four elements in lanes: their nodal values, reference volumes and state going in, their
+/// output coming out. One buffer serves group after group without clearing: [`gather`] and
+/// [`LaneState::set_lane`] write every entry, and [`LaneGroup::update`] every output.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LaneGroup {
+    /// Nodal coordinates at t(n+1), m.
+    pub x: LaneNodes,
+    /// Nodal velocities at t(n+1/2), m/s.
+    pub v: LaneNodes,
+    /// Reference volumes, m^3.
+    pub vol0: F4,
+    /// The elements' state.
+    pub state: LaneState,
+    /// What the last update produced.
+    pub out: LaneOutput,
 }
 
-/// [`update`] compiled for AVX2: one instruction per lane operation, and three-operand forms
-/// that spare the register copies of SSE2's two-operand ones. The same IEEE operations in the
-/// same order (no FMA), so the same bits as the baseline build.
+impl LaneGroup {
+    /// One explicit update over the step `dt` of four elements of the material `m`: in each
+    /// lane what [`crate::hex::update`] computes for its element; writes `state` and `out`.
+    /// `Err`, with `state` and `out` untouched, when a lane's volume is not positive and
+    /// finite.
+    ///
+    /// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
+    /// branches (about 150: the radial return, the hourglass loading test and yield bound);
+    /// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written
+    /// (304 B), the 24 force doubles handed back (192 B): about 1 flop per 0.4 B from the
+    /// lanes, while the gather/scatter of the nodal arrays is the memory-bound part.
+    pub fn update(
+        &mut self,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { update_avx2(self, dt, m, ctl) };
+        }
+        update_inline(self, dt, m, ctl)
+    }
+}
+
+/// [`LaneGroup::update`] compiled for AVX2: one instruction per lane operation, and
+/// three-operand forms that spare the register copies of SSE2's two-operand ones. The same IEEE
+/// operations in the same order (no FMA), so the same bits as the baseline build.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn update_avx2(
-    x: &LaneNodes,
-    v: &LaneNodes,
+    g: &mut LaneGroup,
     dt: f64,
-    vol0: F4,
     m: &LaneMaterial,
     ctl: &HexControls,
-    st: &mut LaneState,
-) -> Option<LaneOutput> {
-    update_inline(x, v, dt, vol0, m, ctl, st)
+) -> Result<(), GroupInverted> {
+    update_inline(g, dt, m, ctl)
 }
 
-/// The body of [`update`], inlined into each of its builds.
+/// The body of [`LaneGroup::update`], inlined into each of its builds.
 #[inline(always)]
 fn update_inline(
-    x: &LaneNodes,
-    v: &LaneNodes,
+    g: &mut LaneGroup,
     dt: f64,
-    vol0: F4,
     m: &LaneMaterial,
     ctl: &HexControls,
-    st: &mut LaneState,
-) -> Option<LaneOutput> {
-    let k = kinematics(x, v, dt)?;
+) -> Result<(), GroupInverted> {
+    let LaneGroup {
+        x,
+        v,
+        vol0,
+        state: st,
+        out,
+    } = g;
+    let (x, v, vol0) = (&*x, &*v, *vol0);
+    let k = kinematics(x, v, dt).ok_or(GroupInverted)?;
     let mut stress = rotate(&k.r, &st.stress);
     let mut deps = [F4::ZERO; 6];
     for i in 0..6 {
@@ -437,6 +459,8 @@ fn update_inline(
         stress[5],
     ];
     // f_I = -sigma . (V b_I): 8 x 15 flops.
+    // A local array (writing through `out` kept every partial sum in memory: 30 % more
+    // instructions), copied out at the end.
     let mut force = [[F4::ZERO; 3]; NODES];
     for i in 0..NODES {
         let bi = &k.bv[i];
@@ -464,12 +488,10 @@ fn update_inline(
         yield_stress: m.law.yield_stress(st.history),
         stress,
     };
-    let hg_work = hourglass_lanes::physical(&hg, &mut st.hg, &mut force);
-    Some(LaneOutput {
-        force,
-        hg_work,
-        volume: k.vol,
-        dt_stable,
-        pressure: -(stress[0] + stress[1] + stress[2]) / 3.0,
-    })
+    out.hg_work = hourglass_lanes::physical(&hg, &mut st.hg, &mut force);
+    out.force = force;
+    out.volume = k.vol;
+    out.dt_stable = dt_stable;
+    out.pressure = -(stress[0] + stress[1] + stress[2]) / 3.0;
+    Ok(())
 }

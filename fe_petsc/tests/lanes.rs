@@ -1,9 +1,9 @@
-//! The batched element kernel (`hex_lanes::update`, four elements in lanes) against the scalar
+//! The batched element kernel (`hex_lanes::LaneGroup::update`, four elements in lanes) against the scalar
 //! kernel (`hex::update`), which is the reference: a randomly distorted block driven through
 //! steps of a velocity field with random nodal parts (hourglass modes), elastic and J2 plastic
 //! (yielding), the default physical hourglass control. No MPI, no PETSc.
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
-use fe_petsc::hex_lanes::{self, LaneMaterial, LaneState};
+use fe_petsc::hex_lanes::{self, LaneGroup, LaneMaterial};
 use fe_petsc::lanes::{F4, LANES};
 use fe_petsc::material::{build_material, Material, MaterialSpec};
 
@@ -144,6 +144,8 @@ fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usiz
     let mut st_s = vec![HexState::default(); elems.len()];
     let mut ms_s = vec![0.0; elems.len() * ns];
     let mut st_b = st_s.clone();
+    // One buffer for every group, as the explicit loop uses it.
+    let mut group = LaneGroup::default();
     let mut ms_b = ms_s.clone();
     let dt = 2e-7;
     let (mut flowed, mut mixed) = (0, 0);
@@ -174,21 +176,15 @@ fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usiz
         }
         for g in (0..elems.len()).step_by(LANES) {
             let conn: [&[u32; 8]; LANES] = std::array::from_fn(|l| &elems[g + l]);
-            let mut st = LaneState::default();
             for l in 0..LANES {
-                st.set_lane(l, &st_b[g + l], ms_b[(g + l) * ns]);
+                group.state.set_lane(l, &st_b[g + l], ms_b[(g + l) * ns]);
             }
-            let before = st.history;
-            let out = hex_lanes::update(
-                &hex_lanes::gather(&x, conn),
-                &hex_lanes::gather(&v, conn),
-                dt,
-                F4(std::array::from_fn(|l| vol0[g + l])),
-                &lm,
-                &ctl,
-                &mut st,
-            )
-            .expect("no inverted element");
+            hex_lanes::gather(&x, conn, &mut group.x);
+            hex_lanes::gather(&v, conn, &mut group.v);
+            group.vol0 = F4(std::array::from_fn(|l| vol0[g + l]));
+            let before = group.state.history;
+            group.update(dt, &lm, &ctl).expect("no inverted element");
+            let (st, out) = (&group.state, &group.out);
             let flows = (0..LANES)
                 .filter(|&l| st.history.0[l] > before.0[l])
                 .count();
@@ -262,20 +258,18 @@ fn a_group_with_an_inverted_element_is_left_to_the_scalar_kernel() {
         .map(|l| std::array::from_fn(|k| (8 * l + k) as u32))
         .collect();
     let lanes: [&[u32; 8]; LANES] = std::array::from_fn(|l| &conn[l]);
-    let x = hex_lanes::gather(&xs, lanes);
-    let v = hex_lanes::gather(&vec![[1.0, 0.0, 0.0]; 32], lanes);
-    let mut st = LaneState::default();
-    st.stress[0] = F4::splat(1e6);
-    let before = format!("{st:?}");
-    let out = hex_lanes::update(&x, &v, 1e-7, F4::splat(1.25e-7), &lm, &ctl, &mut st);
-    assert!(
-        out.is_none(),
-        "lane 2 is inverted: the group must be refused"
-    );
+    let mut group = LaneGroup::default();
+    hex_lanes::gather(&xs, lanes, &mut group.x);
+    hex_lanes::gather(&vec![[1.0, 0.0, 0.0]; 32], lanes, &mut group.v);
+    group.vol0 = F4::splat(1.25e-7);
+    group.state.stress[0] = F4::splat(1e6);
+    let before = format!("{group:?}");
+    let r = group.update(1e-7, &lm, &ctl);
+    assert!(r.is_err(), "lane 2 is inverted: the group must be refused");
     assert_eq!(
         before,
-        format!("{st:?}"),
-        "a refused group changes no state"
+        format!("{group:?}"),
+        "a refused group changes no state and no output"
     );
     // The scalar kernel, which then runs the group's elements, names the inverted one.
     let mut s = HexState::default();
