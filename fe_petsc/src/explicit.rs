@@ -230,7 +230,7 @@ pub struct ExplicitFe {
 pub enum ElementKernel {
     /// [`hex::update`], one element at a time.
     Scalar,
-    /// [`hex_lanes::update`] on groups of four consecutive elements of one material with a lane
+    /// [`hex_lanes::LaneGroup::update`] on groups of four consecutive elements of one material with a lane
     /// form; the scalar kernel for the others.
     #[default]
     Batched,
@@ -501,7 +501,7 @@ impl ExplicitFe {
     /// exchange. Returns the local hourglass work of this step; sets `dt_stable_local`.
     ///
     /// With [`ElementKernel::Batched`] (the default), four consecutive elements of one material
-    /// with a lane form ([`LaneMaterial`]) are updated together by [`hex_lanes::update`]; the
+    /// with a lane form ([`LaneMaterial`]) are updated together by [`hex_lanes::LaneGroup::update`]; the
     /// other elements, and a group with an inverted element, go through [`hex::update`] one
     /// by one. Either way each element's forces are added to the nodes in element order, so
     /// the two kernels' sums are the same.

@@ -11,7 +11,7 @@
 //!
 //! Scope: the materials with a lane form ([`crate::material::LaneLaw`]: elastic, J2 plastic)
 //! under the physical hourglass control. A group with an element whose volume (end of step or
-//! mid-step) is not positive and finite returns `None` before it changes any state, so that the
+//! mid-step) is not positive and finite returns an error before it changes any state, so that the
 //! caller runs its four elements through the scalar kernel, which reports the error as it
 //! always has.
 use crate::hex::{HexControls, HexOutput, HexState, MAX_PAIRS, NODES, VOLUME_TERMS};
