@@ -88,12 +88,12 @@ pub enum ElementError {
 /// 2-point Gauss is exact). V is linear in the x-components, so B_xI = dV/dx_I gives
 /// sum_I B_xI x_I = V and sum_I B_xI y_I = 0: the FB uniform-strain gradient, exact for linear
 /// fields.
-struct VolumeTerms {
-    pairs: [[(u8, u8, f64); MAX_PAIRS]; 8],
+pub(crate) struct VolumeTerms {
+    pub(crate) pairs: [[(u8, u8, f64); MAX_PAIRS]; 8],
 }
 
 /// Non-zero (J, K) pairs per node in dV/dx_I (9 for the trilinear hexahedron).
-const MAX_PAIRS: usize = 9;
+pub(crate) const MAX_PAIRS: usize = 9;
 
 const fn dshape(xi: [f64; 3]) -> [[f64; 3]; 8] {
     let mut d = [[0.0; 3]; 8];
@@ -114,7 +114,7 @@ const GAUSS_2PT: f64 = 0.577_350_269_189_625_8;
 
 /// The table, computed at compile time so that the loops in `volume_gradient` unroll into
 /// straight-line code with constant coefficients and indices.
-const VOLUME_TERMS: VolumeTerms = {
+pub(crate) const VOLUME_TERMS: VolumeTerms = {
     let mut c = [[[0.0f64; 8]; 8]; 8];
     let mut p = 0;
     while p < 8 {

@@ -298,13 +298,14 @@ pub fn poisson_ratio(dilatational: f64, mu: f64) -> f64 {
     lambda / (2.0 * (lambda + mu))
 }
 
+/// Strain increments below this norm are round-off: no tangent ratio can be measured.
+pub(crate) const MIN_STRAIN_INCREMENT: f64 = 1e-14;
+
 /// Tangent ratio s = (dsigma' : deps') / (2 mu deps' : deps') in [0, 1] from the stress change
 /// of the material update `dsig` and the strain increment `deps` (Voigt, tensor shears): how
 /// stiff the material was in the direction it was strained, relative to elastic. 1 when the
 /// increment is below round-off (1e-14 in strain) or the material has no shear modulus.
 pub fn tangent_ratio(dsig: &[f64; 6], deps: &[f64; 6], mu: f64) -> f64 {
-    /// Strain increments below this norm are round-off: no ratio can be measured.
-    const MIN_STRAIN_INCREMENT: f64 = 1e-14;
     if mu <= 0.0 {
         return 1.0;
     }

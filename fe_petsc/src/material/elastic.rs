@@ -1,8 +1,11 @@
 //! Linear elastic, hypo-elastic rate form: sigma_dot (objective) = lambda tr(D) I + 2 mu D.
-use super::{add_elastic, lame, take, Material, MaterialError, MaterialSpec};
+use super::{
+    add_elastic, add_elastic_lanes, lame, take, LaneLaw, Material, MaterialError, MaterialSpec,
+};
+use crate::lanes::F4;
 
 /// Isotropic linear elasticity.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Elastic {
     rho: f64,
     lambda: f64,
@@ -19,6 +22,12 @@ impl Elastic {
             lambda,
             mu,
         }))
+    }
+
+    /// [`Material::update_stress`] in lanes (the batched element kernel).
+    #[inline(always)]
+    pub(crate) fn update_lanes(&self, stress: &mut [F4; 6], deps: &[F4; 6]) {
+        add_elastic_lanes(stress, deps, self.lambda, self.mu);
     }
 }
 
@@ -41,5 +50,8 @@ impl Material for Elastic {
         _density: f64,
     ) {
         add_elastic(stress, deps, self.lambda, self.mu);
+    }
+    fn lane_law(&self) -> Option<LaneLaw> {
+        Some(LaneLaw::Elastic(*self))
     }
 }

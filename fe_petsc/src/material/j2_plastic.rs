@@ -4,10 +4,14 @@
 //! f = q_tr - (sigma_y + H ep) > 0, the plastic increment is dgamma = f / (3 mu + H) and the
 //! deviator is scaled back to the yield surface: s = s_tr (1 - 3 mu dgamma / q_tr)
 //! (Simo & Hughes, Computational Inelasticity, 1998, Box 3.1). State: [ep].
-use super::{add_elastic, bad, deviator, lame, take, Material, MaterialError, MaterialSpec};
+use super::{
+    add_elastic, add_elastic_lanes, bad, deviator, deviator_lanes, lame, take, LaneLaw, Material,
+    MaterialError, MaterialSpec,
+};
+use crate::lanes::F4;
 
 /// Elastic-plastic J2 material with linear hardening.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct J2Plastic {
     rho: f64,
     lambda: f64,
@@ -53,6 +57,30 @@ impl J2Plastic {
             hardening: v[3],
         }))
     }
+
+    /// [`Material::update_stress`] in lanes (the batched element kernel): the same trial
+    /// stress and radial return, the return taken in the lanes that flow (f > 0) and the trial
+    /// stress kept in the others. `ep`: the plastic strain of each lane.
+    #[inline(always)]
+    pub(crate) fn update_lanes(&self, stress: &mut [F4; 6], ep: &mut F4, deps: &[F4; 6]) {
+        add_elastic_lanes(stress, deps, self.lambda, self.mu);
+        let (s, p, q) = deviator_lanes(stress);
+        let f = q - (self.yield_stress + self.hardening * *ep);
+        let flow = f.gt(F4::ZERO);
+        let dgamma = f / (3.0 * self.mu + self.hardening);
+        let scale = 1.0 - 3.0 * self.mu * dgamma / q;
+        for k in 0..3 {
+            stress[k] = F4::select(flow, s[k] * scale + p, stress[k]);
+            stress[k + 3] = F4::select(flow, s[k + 3] * scale, stress[k + 3]);
+        }
+        *ep = F4::select(flow, *ep + dgamma, *ep);
+    }
+
+    /// [`Material::yield_stress`] in lanes.
+    #[inline(always)]
+    pub(crate) fn yield_stress_lanes(&self, ep: F4) -> F4 {
+        self.yield_stress + self.hardening * ep
+    }
 }
 
 impl Material for J2Plastic {
@@ -94,5 +122,8 @@ impl Material for J2Plastic {
     }
     fn yield_stress(&self, state: &[f64]) -> Option<f64> {
         Some(self.yield_stress + self.hardening * state[0])
+    }
+    fn lane_law(&self) -> Option<LaneLaw> {
+        Some(LaneLaw::J2Plastic(*self))
     }
 }

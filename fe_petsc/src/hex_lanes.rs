@@ -1,0 +1,497 @@
+//! The hexahedron of [`crate::hex`] on four elements at once, one element per lane
+//! ([`crate::lanes::F4`]): the same operations in every lane, the scalar kernel's branches as
+//! masked lane operations, the nodal values gathered into lanes and the forces handed back per
+//! element. Each lane computes what [`crate::hex::update`] computes for its element, operation
+//! for operation in the same order (no fused or reassociated arithmetic), so the two kernels
+//! agree to the last bit in practice (the tests hold them to 1e-12 relative).
+//!
+//! Why: the scalar update is one serial dependency chain of about 4,500 instructions per
+//! element at about 1.5 flops per cycle (DESIGN.md section 7); four independent elements in
+//! lanes fill the vector units and hide the latencies.
+//!
+//! Scope: the materials with a lane form ([`crate::material::LaneLaw`]: elastic, J2 plastic)
+//! under the physical hourglass control. A group with an element whose volume (end of step or
+//! mid-step) is not positive and finite returns an error before it changes any state, so that the
+//! caller runs its four elements through the scalar kernel, which reports the error as it
+//! always has.
+use crate::hex::{HexControls, HexOutput, HexState, MAX_PAIRS, NODES, VOLUME_TERMS};
+use crate::hourglass::{self, Hourglass};
+use crate::hourglass_lanes::{self, LaneHourglass};
+use crate::lanes::{F4, LANES, M4};
+use crate::material::{LaneLaw, Material};
+
+/// Nodal vectors of four elements in lanes: `[node][component]`.
+pub type LaneNodes = [[F4; 3]; NODES];
+
+/// A material the batched kernel can update, with the constants the scalar kernel asks the
+/// material for at each element (the same values: the same calls).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaneMaterial {
+    law: LaneLaw,
+    rho0: f64,
+    dilatational: f64,
+    mu: f64,
+    nu: f64,
+    hourglass_scale: f64,
+}
+
+impl LaneMaterial {
+    /// The lane form of `mat` under the controls `ctl`; `None` when `mat` has none or the
+    /// hourglass control is not the physical kind (the FB stiffness and viscous forms take the
+    /// scalar kernel).
+    pub fn new(mat: &dyn Material, ctl: &HexControls) -> Option<LaneMaterial> {
+        let law = mat.lane_law()?;
+        let mu = mat.shear_modulus();
+        let Hourglass::Physical { scale } = ctl.hourglass.for_material(mu) else {
+            return None;
+        };
+        Some(LaneMaterial {
+            law,
+            rho0: mat.density(),
+            dilatational: mat.dilatational_modulus(),
+            mu,
+            nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
+            hourglass_scale: scale,
+        })
+    }
+
+    /// History variables per element of the material (0 or 1).
+    pub fn n_state(&self) -> usize {
+        self.law.n_state()
+    }
+}
+
+/// The state of four elements ([`HexState`] and the material's history variable) in lanes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LaneState {
+    /// Cauchy stress (Voigt), Pa.
+    pub stress: [F4; 6],
+    /// Hourglass stress amplitudes in each element's frame, Pa.
+    pub hg: [[F4; 3]; 4],
+    /// The material's history variable (the plastic strain of J2), 0 for elastic.
+    pub history: F4,
+}
+
+impl LaneState {
+    /// Writes element state `s` and history value `h` into lane `l`.
+    #[inline]
+    pub fn set_lane(&mut self, l: usize, s: &HexState, h: f64) {
+        for k in 0..6 {
+            self.stress[k].0[l] = s.stress[k];
+        }
+        for a in 0..4 {
+            for i in 0..3 {
+                self.hg[a][i].0[l] = s.hg[a][i];
+            }
+        }
+        self.history.0[l] = h;
+    }
+
+    /// The element state and history value of lane `l`.
+    #[inline]
+    pub fn lane(&self, l: usize) -> (HexState, f64) {
+        let s = HexState {
+            stress: std::array::from_fn(|k| self.stress[k].0[l]),
+            hg: std::array::from_fn(|a| std::array::from_fn(|i| self.hg[a][i].0[l])),
+        };
+        (s, self.history.0[l])
+    }
+}
+
+/// What one update of four elements produced ([`HexOutput`] in lanes).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LaneOutput {
+    /// Force on each node from each element, N.
+    pub force: LaneNodes,
+    /// Hourglass work of each element this step, J.
+    pub hg_work: F4,
+    /// Current volumes, m^3.
+    pub volume: F4,
+    /// Stable steps (no safety factor), s.
+    pub dt_stable: F4,
+    /// Pressures without bulk viscosity, Pa.
+    pub pressure: F4,
+}
+
+impl LaneOutput {
+    /// The output of the element in lane `l`.
+    #[inline]
+    pub fn lane(&self, l: usize) -> HexOutput {
+        HexOutput {
+            force: std::array::from_fn(|k| std::array::from_fn(|c| self.force[k][c].0[l])),
+            hg_work: self.hg_work.0[l],
+            volume: self.volume.0[l],
+            dt_stable: self.dt_stable.0[l],
+            pressure: self.pressure.0[l],
+        }
+    }
+}
+
+/// Writes the nodal vectors `xs` of the four elements `conn` into the lanes `out` (every entry:
+/// a buffer can be reused from group to group without clearing).
+///
+/// Cost: 24 doubles read per element from `xs` (192 B, scattered over the nodes' cache lines),
+/// 24 written to the lanes; no flops.
+#[inline]
+pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES], out: &mut LaneNodes) {
+    for (l, c) in conn.iter().enumerate() {
+        for (k, &n) in c.iter().enumerate() {
+            let p = &xs[n as usize];
+            for d in 0..3 {
+                out[k][d].0[l] = p[d];
+            }
+        }
+    }
+}
+
+/// [`crate::hex`]'s volume gradient B[I] = dV/dx_I (not divided by V) and the volume, in
+/// lanes: the same table of (J, K, c) terms, node by node with the node a const parameter.
+/// About 450 flops per element.
+#[inline(always)]
+fn volume_gradient(x: &LaneNodes) -> (LaneNodes, F4) {
+    let b = [
+        node_volume_gradient::<0>(x),
+        node_volume_gradient::<1>(x),
+        node_volume_gradient::<2>(x),
+        node_volume_gradient::<3>(x),
+        node_volume_gradient::<4>(x),
+        node_volume_gradient::<5>(x),
+        node_volume_gradient::<6>(x),
+        node_volume_gradient::<7>(x),
+    ];
+    let mut v = x[0][0] * b[0][0];
+    for i in 1..NODES {
+        v += x[i][0] * b[i][0];
+    }
+    (b, v)
+}
+
+/// dV/dx_I for node `I` in lanes.
+#[inline(always)]
+fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F4; 3] {
+    let mut s = [F4::ZERO; 3];
+    let mut n = 0;
+    while n < MAX_PAIRS {
+        let (j, k, c) = VOLUME_TERMS.pairs[I][n];
+        let (p, q) = (&x[j as usize], &x[k as usize]);
+        s[0] += c * (p[1] * q[2] - q[1] * p[2]);
+        s[1] += c * (p[2] * q[0] - q[2] * p[0]);
+        s[2] += c * (p[0] * q[1] - q[0] * p[1]);
+        n += 1;
+    }
+    s
+}
+
+/// A group with an element whose volume (end of step or mid-step) is not positive and finite:
+/// its elements are for the scalar kernel, which names the element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GroupInverted;
+
+/// Lanes whose volume is positive and finite.
+#[inline(always)]
+fn valid_volume(v: F4) -> M4 {
+    v.gt(F4::ZERO).and(v.is_finite())
+}
+
+/// The kinematics of one step in lanes: the end-of-step gradients, the rate of deformation and
+/// the Hughes-Winget rotation of the step.
+struct Kinematics {
+    /// V b at t(n+1).
+    bv: LaneNodes,
+    /// b = B / V at t(n+1).
+    b: LaneNodes,
+    /// Sum of b^2.
+    bb: F4,
+    vol: F4,
+    iv: F4,
+    /// Rate of deformation (Voigt, tensor shears), 1/s.
+    d: [F4; 6],
+    /// The incremental rotation R.
+    r: [[F4; 3]; 3],
+}
+
+/// The gradients at the end and the middle of the step, the velocity gradient at mid-step and
+/// its split, as [`crate::hex::update`] computes them; `None` when a lane's volume (end or
+/// middle) is not positive and finite.
+///
+/// Cost per element: about 2 x 450 flops (two volume gradients) + 24 x 3 (mid-step geometry) +
+/// 3 x 72 + 24 (L and b) + 60 (the rotation); 48 doubles read from the lanes, none written
+/// outside.
+#[inline(always)]
+fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
+    let (bv, vol) = volume_gradient(x);
+    // x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (see `hex::update`).
+    let mut xh = [[F4::ZERO; 3]; NODES];
+    for i in 0..NODES {
+        for a in 0..3 {
+            xh[i][a] = x[i][a] - 0.5 * dt * v[i][a];
+        }
+    }
+    let (bvh, volh) = volume_gradient(&xh);
+    if !(valid_volume(vol).all() && valid_volume(volh).all()) {
+        return None;
+    }
+    let iv = 1.0 / vol;
+    let mut b = [[F4::ZERO; 3]; NODES];
+    let mut bb = F4::ZERO;
+    for i in 0..NODES {
+        for j in 0..3 {
+            b[i][j] = bv[i][j] * iv;
+            bb += b[i][j] * b[i][j];
+        }
+    }
+    let ivh = 1.0 / volh;
+    let mut l = [[F4::ZERO; 3]; 3];
+    for i in 0..NODES {
+        for a in 0..3 {
+            for j in 0..3 {
+                l[a][j] += v[i][a] * bvh[i][j] * ivh;
+            }
+        }
+    }
+    let d = [
+        l[0][0],
+        l[1][1],
+        l[2][2],
+        0.5 * (l[0][1] + l[1][0]),
+        0.5 * (l[1][2] + l[2][1]),
+        0.5 * (l[2][0] + l[0][2]),
+    ];
+    let w01 = 0.5 * (l[0][1] - l[1][0]);
+    let w12 = 0.5 * (l[1][2] - l[2][1]);
+    let w20 = 0.5 * (l[2][0] - l[0][2]);
+    let r = hughes_winget(w01, w12, w20, dt);
+    Some(Kinematics {
+        bv,
+        b,
+        bb,
+        vol,
+        iv,
+        d,
+        r,
+    })
+}
+
+/// Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective; the inverse by
+/// cofactors, the identity in a lane whose determinant is zero or not finite (as the scalar
+/// kernel's `unwrap_or`). About 60 flops per element.
+#[inline(always)]
+fn hughes_winget(w01: F4, w12: F4, w20: F4, dt: f64) -> [[F4; 3]; 3] {
+    let h = 0.5 * dt;
+    let one = F4::splat(1.0);
+    let m = [
+        [one, -h * w01, h * w20],
+        [h * w01, one, -h * w12],
+        [-h * w20, h * w12, one],
+    ];
+    let p = [
+        [one, h * w01, -h * w20],
+        [-h * w01, one, h * w12],
+        [h * w20, -h * w12, one],
+    ];
+    let c = [
+        [
+            m[1][1] * m[2][2] - m[1][2] * m[2][1],
+            m[0][2] * m[2][1] - m[0][1] * m[2][2],
+            m[0][1] * m[1][2] - m[0][2] * m[1][1],
+        ],
+        [
+            m[1][2] * m[2][0] - m[1][0] * m[2][2],
+            m[0][0] * m[2][2] - m[0][2] * m[2][0],
+            m[0][2] * m[1][0] - m[0][0] * m[1][2],
+        ],
+        [
+            m[1][0] * m[2][1] - m[1][1] * m[2][0],
+            m[0][1] * m[2][0] - m[0][0] * m[2][1],
+            m[0][0] * m[1][1] - m[0][1] * m[1][0],
+        ],
+    ];
+    let det = m[0][0] * c[0][0] + m[0][1] * c[1][0] + m[0][2] * c[2][0];
+    let singular = det.eq(F4::ZERO).or(!det.is_finite());
+    let id = 1.0 / det;
+    let mut ai = [[F4::ZERO; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let eye = F4::splat(if i == j { 1.0 } else { 0.0 });
+            ai[i][j] = F4::select(singular, eye, c[i][j] * id);
+        }
+    }
+    let mut r = [[F4::ZERO; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] = ai[i][0] * p[0][j] + ai[i][1] * p[1][j] + ai[i][2] * p[2][j];
+        }
+    }
+    r
+}
+
+/// sigma <- R sigma R^T (Voigt in, Voigt out). 90 flops per element.
+#[inline(always)]
+fn rotate(r: &[[F4; 3]; 3], s: &[F4; 6]) -> [F4; 6] {
+    let sm = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
+    let mut rs = [[F4::ZERO; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            rs[i][j] = r[i][0] * sm[0][j] + r[i][1] * sm[1][j] + r[i][2] * sm[2][j];
+        }
+    }
+    let rot = |i: usize, j: usize| rs[i][0] * r[j][0] + rs[i][1] * r[j][1] + rs[i][2] * r[j][2];
+    [
+        rot(0, 0),
+        rot(1, 1),
+        rot(2, 2),
+        rot(0, 1),
+        rot(1, 2),
+        rot(2, 0),
+    ]
+}
+
+/// The bulk viscosity's pressure q and damping ratio xi ([`crate::hex`]'s `bulk_viscosity`, whose
+/// comment derives them) and the element's stable step (its `critical_dt`), in lanes.
+#[inline(always)]
+fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F4, rho: F4, c: F4, ev: F4) -> (F4, F4) {
+    let len = 3f64.sqrt() / (2.0 * bb).sqrt();
+    let comp = (-ev).max(F4::ZERO);
+    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
+    let q = rho * len * c * ev * lin_quad;
+    let xi = lin_quad * len * (2.0 * bb).sqrt();
+    let omega = 2.0 * c * (2.0 * bb).sqrt();
+    let dt = (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi);
+    (q, dt)
+}
+
+/// Four elements in lanes: their nodal values, reference volumes and state going in, their
+/// output coming out. One buffer serves group after group without clearing: [`gather`] and
+/// [`LaneState::set_lane`] write every entry, and [`LaneGroup::update`] every output.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LaneGroup {
+    /// Nodal coordinates at t(n+1), m.
+    pub x: LaneNodes,
+    /// Nodal velocities at t(n+1/2), m/s.
+    pub v: LaneNodes,
+    /// Reference volumes, m^3.
+    pub vol0: F4,
+    /// The elements' state.
+    pub state: LaneState,
+    /// What the last update produced.
+    pub out: LaneOutput,
+}
+
+impl LaneGroup {
+    /// One explicit update over the step `dt` of four elements of the material `m`: in each
+    /// lane what [`crate::hex::update`] computes for its element; writes `state` and `out`.
+    /// `Err`, with `state` and `out` untouched, when a lane's volume is not positive and
+    /// finite.
+    ///
+    /// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
+    /// branches (about 150: the radial return, the hourglass loading test and yield bound);
+    /// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written
+    /// (304 B), the 24 force doubles handed back (192 B): about 1 flop per 0.4 B from the
+    /// lanes, while the gather/scatter of the nodal arrays is the memory-bound part.
+    pub fn update(
+        &mut self,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { update_avx2(self, dt, m, ctl) };
+        }
+        update_inline(self, dt, m, ctl)
+    }
+}
+
+/// [`LaneGroup::update`] compiled for AVX2: one instruction per lane operation, and
+/// three-operand forms that spare the register copies of SSE2's two-operand ones. The same IEEE
+/// operations in the same order (no FMA), so the same bits as the baseline build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn update_avx2(
+    g: &mut LaneGroup,
+    dt: f64,
+    m: &LaneMaterial,
+    ctl: &HexControls,
+) -> Result<(), GroupInverted> {
+    update_inline(g, dt, m, ctl)
+}
+
+/// The body of [`LaneGroup::update`], inlined into each of its builds.
+#[inline(always)]
+fn update_inline(
+    g: &mut LaneGroup,
+    dt: f64,
+    m: &LaneMaterial,
+    ctl: &HexControls,
+) -> Result<(), GroupInverted> {
+    let LaneGroup {
+        x,
+        v,
+        vol0,
+        state: st,
+        out,
+    } = g;
+    let (x, v, vol0) = (&*x, &*v, *vol0);
+    let k = kinematics(x, v, dt).ok_or(GroupInverted)?;
+    let mut stress = rotate(&k.r, &st.stress);
+    let mut deps = [F4::ZERO; 6];
+    for i in 0..6 {
+        deps[i] = k.d[i] * dt;
+    }
+    // rho = m / V with the exact volume.
+    let rho = m.rho0 * vol0 * k.iv;
+    let rotated = stress;
+    m.law.update_stress(&mut stress, &mut st.history, &deps);
+    st.stress = stress;
+
+    // Bulk viscosity on the normal stresses for the force only; a material with a lane form has
+    // the constant wave modulus lambda + 2 mu and keeps no heat.
+    let c = (m.dilatational / rho).sqrt();
+    let ev = k.d[0] + k.d[1] + k.d[2];
+    let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, c, ev);
+    let st_tot = [
+        stress[0] + q,
+        stress[1] + q,
+        stress[2] + q,
+        stress[3],
+        stress[4],
+        stress[5],
+    ];
+    // f_I = -sigma . (V b_I): 8 x 15 flops.
+    // A local array (writing through `out` kept every partial sum in memory: 30 % more
+    // instructions), copied out at the end.
+    let mut force = [[F4::ZERO; 3]; NODES];
+    for i in 0..NODES {
+        let bi = &k.bv[i];
+        force[i] = [
+            -(st_tot[0] * bi[0] + st_tot[3] * bi[1] + st_tot[5] * bi[2]),
+            -(st_tot[3] * bi[0] + st_tot[1] * bi[1] + st_tot[4] * bi[2]),
+            -(st_tot[5] * bi[0] + st_tot[4] * bi[1] + st_tot[2] * bi[2]),
+        ];
+    }
+
+    let mut dsig = [F4::ZERO; 6];
+    for i in 0..6 {
+        dsig[i] = stress[i] - rotated[i];
+    }
+    let hg = LaneHourglass {
+        x,
+        v,
+        b: &k.b,
+        vol: k.vol,
+        dt,
+        mu: m.mu,
+        nu: m.nu,
+        scale: m.hourglass_scale,
+        tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
+        yield_stress: m.law.yield_stress(st.history),
+        stress,
+    };
+    out.hg_work = hourglass_lanes::physical(&hg, &mut st.hg, &mut force);
+    out.force = force;
+    out.volume = k.vol;
+    out.dt_stable = dt_stable;
+    out.pressure = -(stress[0] + stress[1] + stress[2]) / 3.0;
+    Ok(())
+}

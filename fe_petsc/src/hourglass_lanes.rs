@@ -1,0 +1,322 @@
+//! The physical hourglass control of [`crate::hourglass`] (whose module comment derives it) on
+//! four elements at once, for the batched kernel [`crate::hex_lanes`]: the same operations in
+//! the same order in each lane, the branches (loading or unloading, the yield bound's cases, the
+//! tangent ratio's round-off guard) as masked lane operations.
+use crate::hex::NODES;
+use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT};
+use crate::lanes::{F4, M4};
+
+type V3 = [F4; 3];
+type M3 = [[F4; 3]; 3];
+
+/// One step of four elements' hourglass control (what [`crate::hourglass::HourglassStep`] and
+/// [`crate::hourglass::HourglassMaterial`] hold for one element; the shear modulus is positive:
+/// the physical kind).
+pub struct LaneHourglass<'a> {
+    /// Nodal coordinates at the end of the step.
+    pub x: &'a [V3; NODES],
+    /// Nodal velocities over the step.
+    pub v: &'a [V3; NODES],
+    /// Mean gradient b at the end of the step.
+    pub b: &'a [V3; NODES],
+    /// Current volumes, m^3.
+    pub vol: F4,
+    /// The step, s.
+    pub dt: f64,
+    /// Elastic shear modulus (positive), Pa.
+    pub mu: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// Multiplier of the physical stiffness.
+    pub scale: f64,
+    /// Tangent ratios in [0, 1].
+    pub tangent_ratio: F4,
+    /// Current yield stresses, for materials with a yield surface.
+    pub yield_stress: Option<F4>,
+    /// The elements' centre stresses (global axes, Voigt), Pa.
+    pub stress: [F4; 6],
+}
+
+#[inline(always)]
+fn dot(a: &V3, b: &V3) -> F4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// [`crate::hourglass::tangent_ratio`] in lanes, for a positive `mu`. About 40 flops.
+#[inline(always)]
+pub fn tangent_ratio(dsig: &[F4; 6], deps: &[F4; 6], mu: f64) -> F4 {
+    let es = (deps[0] + deps[1] + deps[2]) / 3.0;
+    let ss = (dsig[0] + dsig[1] + dsig[2]) / 3.0;
+    let de = [deps[0] - es, deps[1] - es, deps[2] - es];
+    let ds = [dsig[0] - ss, dsig[1] - ss, dsig[2] - ss];
+    let ee = de[0] * de[0]
+        + de[1] * de[1]
+        + de[2] * de[2]
+        + 2.0 * (deps[3] * deps[3] + deps[4] * deps[4] + deps[5] * deps[5]);
+    let round_off = ee.lt(F4::splat(MIN_STRAIN_INCREMENT * MIN_STRAIN_INCREMENT));
+    let se = ds[0] * de[0]
+        + ds[1] * de[1]
+        + ds[2] * de[2]
+        + 2.0 * (dsig[3] * deps[3] + dsig[4] * deps[4] + dsig[5] * deps[5]);
+    let ratio = (se / (2.0 * mu * ee)).clamp(0.0, 1.0);
+    F4::select(round_off, F4::splat(1.0), ratio)
+}
+
+/// [`crate::hourglass::vectors`] in lanes: gamma_aI = Gamma_aI - (Gamma_a . x) . b_I.
+/// 4 x (24 + 8 x 6) = 288 flops per element.
+#[inline(always)]
+fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F4; NODES]; 4] {
+    let mut gam = [[F4::ZERO; NODES]; 4];
+    for al in 0..4 {
+        let g = &GAMMA[al];
+        let mut gx = [F4::ZERO; 3];
+        for k in 0..NODES {
+            for c in 0..3 {
+                gx[c] += g[k] * x[k][c];
+            }
+        }
+        for k in 0..NODES {
+            gam[al][k] = g[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2]);
+        }
+    }
+    gam
+}
+
+/// [`crate::hourglass::Frame`] in lanes: rows e_j and half-lengths a_j.
+struct Frame {
+    e: M3,
+    a: V3,
+}
+
+impl Frame {
+    /// Gram-Schmidt on the centre Jacobian's columns, as `Frame::new`. About 120 flops.
+    #[inline(always)]
+    fn new(x: &[V3; NODES]) -> Frame {
+        let mut j = [[F4::ZERO; 3]; 3];
+        for (xi, xn) in crate::hex::NODE_XI.iter().zip(x.iter()) {
+            for d in 0..3 {
+                for c in 0..3 {
+                    j[d][c] += 0.125 * xi[d] * xn[c];
+                }
+            }
+        }
+        let norm = |v: &V3| dot(v, v).sqrt();
+        let scale = |v: &V3, s: F4| [v[0] * s, v[1] * s, v[2] * s];
+        let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
+        let e0 = scale(&j[0], 1.0 / a[0]);
+        let d01 = dot(&j[1], &e0);
+        let t = [
+            j[1][0] - d01 * e0[0],
+            j[1][1] - d01 * e0[1],
+            j[1][2] - d01 * e0[2],
+        ];
+        let e1 = scale(&t, 1.0 / norm(&t));
+        let e2 = [
+            e0[1] * e1[2] - e0[2] * e1[1],
+            e0[2] * e1[0] - e0[0] * e1[2],
+            e0[0] * e1[1] - e0[1] * e1[0],
+        ];
+        Frame { e: [e0, e1, e2], a }
+    }
+
+    #[inline(always)]
+    fn to_local(&self, v: &V3) -> V3 {
+        [dot(&self.e[0], v), dot(&self.e[1], v), dot(&self.e[2], v)]
+    }
+
+    #[inline(always)]
+    fn to_global(&self, v: &V3) -> V3 {
+        let e = &self.e;
+        [
+            e[0][0] * v[0] + e[1][0] * v[1] + e[2][0] * v[2],
+            e[0][1] * v[0] + e[1][1] * v[1] + e[2][1] * v[2],
+            e[0][2] * v[0] + e[1][2] * v[1] + e[2][2] * v[2],
+        ]
+    }
+}
+
+/// [`crate::hourglass::physical_strain_rates`] in lanes. 24 flops.
+#[inline(always)]
+fn strain_rates(qd: &[V3; 4], a: &V3) -> [V3; 4] {
+    let mut e = [[F4::ZERO; 3]; 4];
+    for g in 0..3 {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        e[g] = [
+            0.125 * qd[r][p] / a[p],
+            0.125 * qd[p][r] / a[r],
+            0.125 * (qd[r][r] / a[p] + qd[p][p] / a[r]),
+        ];
+    }
+    for i in 0..3 {
+        e[3][i] = 0.125 * qd[3][i] / a[i];
+    }
+    e
+}
+
+/// [`crate::hourglass::physical_forces`] in lanes. About 30 flops.
+#[inline(always)]
+fn forces(sig: &[V3; 4], a: &V3, vol: F4) -> [V3; 4] {
+    let w = 0.125 * vol / 3.0;
+    let mut h = [[F4::ZERO; 3]; 4];
+    for g in 0..3 {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        let [spp, srr, spr] = sig[g];
+        h[r][p] += w * spp / a[p];
+        h[p][r] += w * srr / a[r];
+        h[r][r] += w * spr / a[p];
+        h[p][p] += w * spr / a[r];
+    }
+    for i in 0..3 {
+        h[3][i] = 0.125 * vol / 9.0 * sig[3][i] / a[i];
+    }
+    h
+}
+
+/// The physical stress-amplitude rates (`physical_stress_rates`: plane stress per group with
+/// Ebar = 2 mu / (1 - nu), 2 mu on mode 3) for the lanes' moduli `mu`.
+#[inline(always)]
+fn stress_rates(e: &[V3; 4], mu: F4, nu: f64) -> [V3; 4] {
+    let ebar = 2.0 * mu / (1.0 - nu);
+    let mut r = [[F4::ZERO; 3]; 4];
+    for g in 0..3 {
+        let [epp, err, gpr] = e[g];
+        r[g] = [ebar * (epp + nu * err), ebar * (err + nu * epp), mu * gpr];
+    }
+    r[3] = [2.0 * mu * e[3][0], 2.0 * mu * e[3][1], 2.0 * mu * e[3][2]];
+    r
+}
+
+/// von Mises bilinear form 3/2 dev(a) : dev(b) (`mises_dot`), over the full 3 x 3 in the same
+/// order (an off-diagonal entry minus zero is itself). About 35 flops.
+#[inline(always)]
+fn mises_dot(a: &M3, b: &M3) -> F4 {
+    let ta = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let tb = (b[0][0] + b[1][1] + b[2][2]) / 3.0;
+    let mut s = F4::ZERO;
+    for i in 0..3 {
+        for j in 0..3 {
+            let (da, db) = if i == j {
+                (a[i][j] - ta, b[i][j] - tb)
+            } else {
+                (a[i][j], b[i][j])
+            };
+            s += da * db;
+        }
+    }
+    1.5 * s
+}
+
+/// The factor lambda of one group with amplitudes `tau` (a function, not a closure, so that it
+/// inlines into the AVX2 build): `a` the Mises form of the centre stress, `sy2` the squared
+/// yield stress.
+#[inline(always)]
+fn group_scale(centre: &M3, tau: &M3, a: F4, sy2: F4) -> F4 {
+    let b = mises_dot(centre, tau);
+    let c = mises_dot(tau, tau);
+    let f = ((-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c).min(F4::splat(1.0));
+    let f = F4::select(a.ge(sy2), F4::ZERO, f);
+    F4::select(c.le(F4::ZERO), F4::splat(1.0), f)
+}
+
+/// `yield_bound` in lanes: each group's amplitudes scaled by lambda in [0, 1] so that the fibre
+/// stresses sigma_c +- lambda tau stay inside the von Mises surface of radius `sy`; lambda = 1
+/// in a lane whose tau has no deviator, 0 in a lane whose centre is on or outside the surface.
+#[inline(always)]
+fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F4) {
+    let a = mises_dot(centre, centre);
+    let sy2 = sy * sy;
+    let scale_group = |tau: &M3| group_scale(centre, tau, a, sy2);
+    let z = F4::ZERO;
+    for g in 0..3 {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        let mut tau = [[z; 3]; 3];
+        tau[p][p] = sig[g][0];
+        tau[r][r] = sig[g][1];
+        tau[p][r] = sig[g][2];
+        tau[r][p] = sig[g][2];
+        let f = scale_group(&tau);
+        for v in sig[g].iter_mut() {
+            *v *= f;
+        }
+    }
+    let tau = [[sig[3][0], z, z], [z, sig[3][1], z], [z, z, sig[3][2]]];
+    let f = scale_group(&tau);
+    for v in sig[3].iter_mut() {
+        *v *= f;
+    }
+}
+
+/// The centre stress in the element frame, E sigma E^T. 162 flops.
+#[inline(always)]
+fn centre_stress(st: &[F4; 6], e: &M3) -> M3 {
+    let g = [
+        [st[0], st[3], st[5]],
+        [st[3], st[1], st[4]],
+        [st[5], st[4], st[2]],
+    ];
+    let mut m = [[F4::ZERO; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            for k in 0..3 {
+                for l in 0..3 {
+                    m[i][j] += e[i][k] * g[k][l] * e[j][l];
+                }
+            }
+        }
+    }
+    m
+}
+
+/// The physical kind's step on four elements ([`crate::hourglass`]'s `physical_step`): adds the
+/// hourglass forces to `force`, updates the stress amplitudes `sig` and returns the hourglass
+/// work of the step, J.
+///
+/// Cost per element: about 288 (vectors) + 120 (frame) + 4 x 51 (rates) + 24 + 2 x 30 + 60
+/// (amplitudes) + 162 + 4 x 110 (yield bound) + 4 x 120 (forces) = about 1,800 flops with the
+/// yield bound, on 18 + 12 state doubles (read and written) and the lanes' nodal values.
+#[inline(always)]
+pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -> F4 {
+    let gam = vectors(s.x, s.b);
+    let frame = Frame::new(s.x);
+    let mut qd = [[F4::ZERO; 3]; 4];
+    for al in 0..4 {
+        let mut q = [F4::ZERO; 3];
+        for k in 0..NODES {
+            for c in 0..3 {
+                q[c] += s.v[k][c] * gam[al][k];
+            }
+        }
+        qd[al] = frame.to_local(&q);
+    }
+    let e = strain_rates(&qd, &frame.a);
+    // Loading (positive power of the amplitudes) follows the tangent, unloading is elastic.
+    let power =
+        dot(&sig[0], &e[0]) + dot(&sig[1], &e[1]) + dot(&sig[2], &e[2]) + dot(&sig[3], &e[3]) / 3.0;
+    let loading: M4 = power.gt(F4::ZERO);
+    let s_eff = F4::select(loading, s.tangent_ratio, F4::splat(1.0));
+    let rate = stress_rates(&e, s.scale * s_eff * s.mu, s.nu);
+    let h_old = forces(sig, &frame.a, s.vol);
+    for al in 0..4 {
+        for i in 0..3 {
+            sig[al][i] += s.dt * rate[al][i];
+        }
+    }
+    if let Some(sy) = s.yield_stress {
+        yield_bound(sig, &centre_stress(&s.stress, &frame.e), sy);
+    }
+    let h = forces(sig, &frame.a, s.vol);
+    let mut work = F4::ZERO;
+    for al in 0..4 {
+        work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));
+    }
+    // f_iI -= sum_a H_ia gamma_aI with H turned to global axes.
+    for al in 0..4 {
+        let tg = frame.to_global(&h[al]);
+        for k in 0..NODES {
+            for c in 0..3 {
+                force[k][c] -= tg[c] * gam[al][k];
+            }
+        }
+    }
+    work
+}

@@ -1,0 +1,207 @@
+//! Four f64 lanes for the batched element kernel ([`crate::hex_lanes`]): one lane per element,
+//! the same operation in every lane, written on fixed-size arrays that the compiler turns into
+//! vector instructions (two SSE2 instructions per lane operation on the baseline x86-64 target,
+//! one with AVX).
+//!
+//! Every operation is the IEEE operation of `f64` lane by lane, in the order written: no fused
+//! multiply-add and no reassociation, so that a lane computes bit for bit what the scalar kernel
+//! computes for its element. (`f64::mul_add` without the `fma` target feature, which the baseline
+//! target lacks, is a library call, and a fused product would round differently from the scalar
+//! kernel that the remainder elements and the tests use.)
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
+
+/// Elements per group.
+pub const LANES: usize = 4;
+
+/// Four f64 lanes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub struct F4(pub [f64; LANES]);
+
+/// A per-lane condition.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct M4(pub [bool; LANES]);
+
+impl M4 {
+    /// Whether any lane holds.
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.0[0] | self.0[1] | self.0[2] | self.0[3]
+    }
+
+    /// Whether every lane holds.
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        self.0[0] & self.0[1] & self.0[2] & self.0[3]
+    }
+
+    /// Lane-wise or.
+    #[inline(always)]
+    pub fn or(self, o: M4) -> M4 {
+        let (a, b) = (self.0, o.0);
+        M4([a[0] | b[0], a[1] | b[1], a[2] | b[2], a[3] | b[3]])
+    }
+
+    /// Lane-wise and.
+    #[inline(always)]
+    pub fn and(self, o: M4) -> M4 {
+        let (a, b) = (self.0, o.0);
+        M4([a[0] & b[0], a[1] & b[1], a[2] & b[2], a[3] & b[3]])
+    }
+}
+
+impl Not for M4 {
+    type Output = M4;
+    /// Lane-wise not.
+    #[inline(always)]
+    fn not(self) -> M4 {
+        let a = self.0;
+        M4([!a[0], !a[1], !a[2], !a[3]])
+    }
+}
+
+impl F4 {
+    /// Zero in every lane.
+    pub const ZERO: F4 = F4([0.0; LANES]);
+
+    /// `v` in every lane.
+    #[inline(always)]
+    pub const fn splat(v: f64) -> F4 {
+        F4([v; LANES])
+    }
+
+    #[inline(always)]
+    fn map(self, f: impl Fn(f64) -> f64) -> F4 {
+        F4([f(self.0[0]), f(self.0[1]), f(self.0[2]), f(self.0[3])])
+    }
+
+    #[inline(always)]
+    fn zip(self, o: F4, f: impl Fn(f64, f64) -> f64) -> F4 {
+        let (a, b) = (self.0, o.0);
+        F4([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
+    }
+
+    #[inline(always)]
+    fn test(self, o: F4, f: impl Fn(f64, f64) -> bool) -> M4 {
+        let (a, b) = (self.0, o.0);
+        M4([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
+    }
+
+    /// Lane-wise square root.
+    #[inline(always)]
+    pub fn sqrt(self) -> F4 {
+        self.map(f64::sqrt)
+    }
+
+    /// Lane-wise absolute value.
+    #[inline(always)]
+    pub fn abs(self) -> F4 {
+        self.map(f64::abs)
+    }
+
+    /// Lane-wise `f64::min` (a NaN lane takes the other operand).
+    #[inline(always)]
+    pub fn min(self, o: F4) -> F4 {
+        self.zip(o, f64::min)
+    }
+
+    /// Lane-wise `f64::max` (a NaN lane takes the other operand).
+    #[inline(always)]
+    pub fn max(self, o: F4) -> F4 {
+        self.zip(o, f64::max)
+    }
+
+    /// Lane-wise `f64::clamp` to [lo, hi] (NaN stays NaN).
+    #[inline(always)]
+    pub fn clamp(self, lo: f64, hi: f64) -> F4 {
+        self.map(|x| x.clamp(lo, hi))
+    }
+
+    /// Lanes where `self < o`.
+    #[inline(always)]
+    pub fn lt(self, o: F4) -> M4 {
+        self.test(o, |a, b| a < b)
+    }
+
+    /// Lanes where `self <= o`.
+    #[inline(always)]
+    pub fn le(self, o: F4) -> M4 {
+        self.test(o, |a, b| a <= b)
+    }
+
+    /// Lanes where `self > o`.
+    #[inline(always)]
+    pub fn gt(self, o: F4) -> M4 {
+        self.test(o, |a, b| a > b)
+    }
+
+    /// Lanes where `self >= o`.
+    #[inline(always)]
+    pub fn ge(self, o: F4) -> M4 {
+        self.test(o, |a, b| a >= b)
+    }
+
+    /// Lanes where `self == o`.
+    #[inline(always)]
+    pub fn eq(self, o: F4) -> M4 {
+        self.test(o, |a, b| a == b)
+    }
+
+    /// Lanes that are finite.
+    #[inline(always)]
+    pub fn is_finite(self) -> M4 {
+        M4(self.0.map(f64::is_finite))
+    }
+
+    /// `a` in the lanes where `m` holds, `b` in the others.
+    #[inline(always)]
+    pub fn select(m: M4, a: F4, b: F4) -> F4 {
+        let pick = |l: usize| if m.0[l] { a.0[l] } else { b.0[l] };
+        F4([pick(0), pick(1), pick(2), pick(3)])
+    }
+}
+
+macro_rules! lane_op {
+    ($tr:ident, $f:ident, $op:tt, $tra:ident, $fa:ident) => {
+        impl $tr for F4 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: F4) -> F4 {
+                self.zip(o, |a, b| a $op b)
+            }
+        }
+        impl $tr<f64> for F4 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: f64) -> F4 {
+                self.map(|a| a $op o)
+            }
+        }
+        impl $tr<F4> for f64 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: F4) -> F4 {
+                o.map(|b| self $op b)
+            }
+        }
+        impl $tra for F4 {
+            #[inline(always)]
+            fn $fa(&mut self, o: F4) {
+                *self = *self $op o;
+            }
+        }
+    };
+}
+
+lane_op!(Add, add, +, AddAssign, add_assign);
+lane_op!(Sub, sub, -, SubAssign, sub_assign);
+lane_op!(Mul, mul, *, MulAssign, mul_assign);
+lane_op!(Div, div, /, DivAssign, div_assign);
+
+impl Neg for F4 {
+    type Output = F4;
+    #[inline(always)]
+    fn neg(self) -> F4 {
+        self.map(|a| -a)
+    }
+}
