@@ -215,7 +215,7 @@ fn node_volume_gradient<const I: usize>(x: &[[f64; 3]; 8]) -> [f64; 3] {
     s
 }
 
-/// Exact volume and the FB mean gradient b[I][i] = (1/V) integral of dN_I/dx_i over the element.
+/// Exact volume and the FB mean gradient `b[I][i]` = (1/V) integral of dN_I/dx_i over the element.
 pub fn gradient(x: &[[f64; 3]; 8]) -> ([[f64; 3]; 8], f64) {
     let (mut b, v) = volume_gradient(x);
     let iv = 1.0 / v;
