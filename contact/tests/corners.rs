@@ -524,3 +524,117 @@ fn a_node_pushed_out_of_one_body_into_another_is_found_by_the_recheck() {
     );
     assert!(recheck(&mut b, &params, &cands, &dx, &contacts).is_empty());
 }
+
+/// End position of box node `j` with the push-back's position correction.
+fn corrected(b: &ContactBox, pb: &contact::PushBack, j: usize) -> V3 {
+    let dx = pb.position_correction(b, j, DT);
+    [
+        b.nodes.x1[j][0] + dx[0],
+        b.nodes.x1[j][1] + dx[1],
+        b.nodes.x1[j][2] + dx[2],
+    ]
+}
+
+#[test]
+fn a_node_on_a_node_at_a_junction_is_two_constraints() {
+    // A junction of bodies in miniature (rod_wall's rod face on the corner where four bricks
+    // meet): a "rod" of 2 x 2 unit faces in the plane x = 0 (body 0, normal +x) whose centre
+    // node p (unit mass) slides from y = -1e-4 to 1e-4 in that plane, into a "brick" (body 1)
+    // whose corner s (unit mass) comes from x = 1e-3 to -2e-4, through the rod's face at p.
+    // Of the brick only the side face at s is in the box, in the plane y = 0 (normal -y; the
+    // brick at y > 0), s and three immovable corners. The two-pass search finds s 2e-4 behind
+    // the rod's face at p (normal +x) and p 1e-4 behind the brick's side face at s (normal
+    // -y): a node on a node found both ways, each contact point within `same_point_tol` of the
+    // other node, but two gaps at right angles, not one gap seen from both sides. Reference:
+    // the non-penetration constraints, re-measured after the push-back with the independent
+    // projection of `common`: s outside every face of the rod and p outside the brick's face
+    // to 1e-12 m (one row along the normals' mean closes only the sum of the two depths,
+    // (2e-4 + 1e-4) / sqrt 2 along it, and leaves each 5e-5 deep); momentum: the forces sum to
+    // zero (immovable corners take their reactions), to 1e-12 of the largest.
+    let mut nodes = vec![
+        record(1, 0, 1.0, [0.0, -1e-4, 0.0], [0.0, 1e-4, 0.0]),
+        record(2, 1, 1.0, [1e-3, 0.0, 0.0], [-2e-4, 0.0, 0.0]),
+    ];
+    // The rod's other nodes: grid points (y, z) in {-1, 0, 1}^2 but the centre, gids 10 + k.
+    let rod_gid = |i: usize, j: usize| {
+        if (i, j) == (1, 1) {
+            1
+        } else {
+            10 + (3 * j + i) as u64
+        }
+    };
+    for j in 0..3 {
+        for i in 0..3 {
+            if (i, j) != (1, 1) {
+                let x = [0.0, i as f64 - 1.0, j as f64 - 1.0];
+                nodes.push(record(rod_gid(i, j), 0, f64::INFINITY, x, x));
+            }
+        }
+    }
+    let brick = [[1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
+    for (k, x) in brick.iter().enumerate() {
+        nodes.push(record(30 + k as u64, 1, f64::INFINITY, *x, *x));
+    }
+    let mut faces = Vec::new();
+    for j in 0..2 {
+        for i in 0..2 {
+            // Counter-clockwise seen from +x: y then z.
+            let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            faces.push(FaceRecord {
+                gid: 100 + (2 * j + i) as u64,
+                nodes: c.map(|(a, b)| rod_gid(a, b)),
+                body: 0,
+                reserved: 0,
+            });
+        }
+    }
+    // Seen from -y (outside the brick), counter-clockwise: s, (1, 0, 0), (1, 0, 1), (0, 0, 1).
+    faces.push(FaceRecord {
+        gid: 200,
+        nodes: [2, 30, 31, 32],
+        body: 1,
+        reserved: 0,
+    });
+    let b = ContactBox::from_records(&nodes, 2, &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    let pairs: Vec<(u64, u64)> = contacts.iter().map(|c| (c.node_gid, c.face_gid)).collect();
+    assert_eq!(pairs.len(), 2, "contacts {contacts:?}");
+    assert!(
+        pairs[0].0 == 1 && pairs[0].1 == 200 && pairs[1].0 == 2 && pairs[1].1 < 200,
+        "contacts {pairs:?}: p on the brick's face, s on a rod face"
+    );
+    assert!(
+        dot(contacts[0].normal, contacts[1].normal).abs() < 1e-12,
+        "normals {:?}, {:?}: at right angles by construction",
+        contacts[0].normal,
+        contacts[1].normal
+    );
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let at = |gid: u64| {
+        let j = b.nodes.gid.iter().position(|&g| g == gid).unwrap();
+        corrected(&b, &pb, j)
+    };
+    let face_at = |f: &FaceRecord| f.nodes.map(at);
+    for f in &faces {
+        let (who, node) = if f.body == 0 { ("s", 2) } else { ("p", 1) };
+        let d = distance_to_face(face_at(f), at(node));
+        assert!(
+            d > -1e-12,
+            "{who} is {:.3e} m behind face {} after the push-back (1e-12)",
+            -d,
+            f.gid
+        );
+    }
+    let mut sum = [0.0; 3];
+    let mut largest = 0.0f64;
+    for f in &pb.force {
+        for k in 0..3 {
+            sum[k] += f[k];
+        }
+        largest = largest.max(dot(*f, *f).sqrt());
+    }
+    assert!(
+        dot(sum, sum).sqrt() <= 1e-12 * largest,
+        "forces sum to {sum:?} (largest {largest:.3e}): momentum not conserved"
+    );
+}
