@@ -536,6 +536,89 @@ fn corrected(b: &ContactBox, pb: &contact::PushBack, j: usize) -> V3 {
 }
 
 #[test]
+fn a_node_squeezed_between_two_bodies_stays_on_both() {
+    // A node of body 1 (unit mass, at rest) between two unit faces of two other bodies that
+    // close on it from both sides: face A of body 0 (normal +z, corner masses 0.5) rises from
+    // z = -0.01 to a = 0.003, face B of body 2 (normal -z, corner masses 0.25) falls from
+    // z = 0.01 to -b = -0.002, the node at both faces' centres. Behind either face the node is
+    // inside a body, so both are contacts (`search::apart`, whatever the angle: here the
+    // normals are opposite, |cos| = 1, which the search's one-surface rule alone reads as one
+    // contact, keeping A only and pushing the node 0.004 into B). Reference: the push-back
+    // closes both gaps, so the node and both faces' centres (flat faces pushed at their centres
+    // translate) end at one height; it conserves momentum, so that height is the mass-weighted
+    // mean z* = (M_A a - M_B b) / (m + M_A + M_B) = 0.001, with each face's mass seen at its
+    // centre M = 4 m_corner (M_A = 2, M_B = 1); the impulses are M_A (a - z*) = 0.004 and
+    // M_B (z* + b) = 0.003 (kg m). All to 1e-12.
+    let (a, b_end) = (0.003, 0.002);
+    let (m_a, m_b) = (0.5, 0.25);
+    let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let mut nodes = vec![record(1, 1, 1.0, [0.5, 0.5, 0.0], [0.5, 0.5, 0.0])];
+    for (k, c) in square.iter().enumerate() {
+        let at = |z: f64| [c[0], c[1], z];
+        nodes.push(record(10 + k as u64, 0, m_a, at(-0.01), at(a)));
+        nodes.push(record(20 + k as u64, 2, m_b, at(0.01), at(-b_end)));
+    }
+    let face = |gid: u64, nodes: [u64; 4], body: u32| FaceRecord {
+        gid,
+        nodes,
+        body,
+        reserved: 0,
+    };
+    // B faces down: the same corners the other way round.
+    let faces = [
+        face(100, [10, 11, 12, 13], 0),
+        face(200, [23, 22, 21, 20], 2),
+    ];
+    let b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    let found: Vec<(u64, f64)> = contacts.iter().map(|c| (c.face_gid, c.depth)).collect();
+    assert_eq!(
+        found.len(),
+        2,
+        "contacts {found:?}: the node is behind both bodies' faces (depths {a}, {b_end})"
+    );
+    assert!(
+        found[0].0 == 100
+            && (found[0].1 - a).abs() < 1e-12
+            && found[1].0 == 200
+            && (found[1].1 - b_end).abs() < 1e-12,
+        "contacts (face, depth) {found:?} (geometry: A {a}, B {b_end})"
+    );
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let (big_a, big_b) = (4.0 * m_a, 4.0 * m_b);
+    let z_star = (big_a * a - big_b * b_end) / (1.0 + big_a + big_b);
+    let z_of = |gid: u64| {
+        let j = b.nodes.gid.iter().position(|&g| g == gid).unwrap();
+        corrected(&b, &pb, j)
+    };
+    let centre = |first: u64| (first..first + 4).map(|g| z_of(g)[2]).sum::<f64>() / 4.0;
+    let node = z_of(1);
+    for (what, z) in [
+        ("the node", node[2]),
+        ("face A's centre", centre(10)),
+        ("face B's centre", centre(20)),
+    ] {
+        assert!(
+            (z - z_star).abs() < 1e-12,
+            "{what} ends at z = {z:.15e}, not at the mass-weighted mean z* = {z_star} (1e-12)"
+        );
+    }
+    assert!(
+        node[0] == 0.5 && node[1] == 0.5,
+        "the node moved sideways: {node:?}"
+    );
+    let impulse = [big_a * (a - z_star), big_b * (z_star + b_end)];
+    for (k, want) in impulse.iter().enumerate() {
+        let got = pb.normal_force[k] * DT * DT;
+        assert!(
+            (got - want).abs() < 1e-12,
+            "face {}: impulse times dt {got:.15e}, analytic {want} (1e-12)",
+            contacts[k].face_gid
+        );
+    }
+}
+
+#[test]
 fn a_node_on_a_node_at_a_junction_is_two_constraints() {
     // A junction of bodies in miniature (rod_wall's rod face on the corner where four bricks
     // meet): a "rod" of 2 x 2 unit faces in the plane x = 0 (body 0, normal +x) whose centre
