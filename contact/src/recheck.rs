@@ -19,13 +19,14 @@
 //! contact when it is not one of the contacts already solved, it is deeper than [`RECHECK_TOL`]
 //! times its face's diameter (shallower ones are left to the next step, well inside the
 //! capture tolerance), and it passes the search's rule between several contacts of one node
-//! against each contact the node already has: a mesh node takes a further face only across a
-//! valley (at a convex edge the node, back on one face, is outside the body; see
-//! `search::valley`), whatever the angle between the faces; a particle takes a further face of
-//! another normal. The caller solves the push-back again with the contacts found so far and the
-//! new ones together (the new ones linearised at the point and normal where the corrected node
-//! met the face, their depth measured on the uncorrected geometry), and repeats while rechecks
-//! find contacts.
+//! against each contact the node already has: a face of another body than the contact's is
+//! always taken (`search::apart`); on the same body, a mesh node takes a further face only
+//! across a valley (at a convex edge the node, back on one face, is outside the body; see
+//! `search::valley`), whatever the angle between the faces, and a particle takes a further
+//! face of another normal. The caller solves the push-back again with the contacts found so
+//! far and the new ones together (the new ones linearised at the point and normal where the
+//! corrected node met the face, their depth measured on the uncorrected geometry), and repeats
+//! while rechecks find contacts.
 
 use crate::data::{Config, ContactBox};
 use crate::pair;
@@ -134,11 +135,12 @@ fn new_contacts_of_node(
     let mut out = Vec::new();
     for (h, f) in hits {
         let fits = kept.iter().all(|&(k, g)| {
-            if particle {
-                dot(k.normal, h.normal).abs() < SAME_NORMAL_COS
-            } else {
-                apart(b, g, f) || valley(b, (&k, g), (&h, f))
-            }
+            apart(b, g, f)
+                || if particle {
+                    dot(k.normal, h.normal).abs() < SAME_NORMAL_COS
+                } else {
+                    valley(b, (&k, g), (&h, f))
+                }
         });
         if fits {
             kept.push((h, f));

@@ -524,3 +524,200 @@ fn a_node_pushed_out_of_one_body_into_another_is_found_by_the_recheck() {
     );
     assert!(recheck(&mut b, &params, &cands, &dx, &contacts).is_empty());
 }
+
+/// End position of box node `j` with the push-back's position correction.
+fn corrected(b: &ContactBox, pb: &contact::PushBack, j: usize) -> V3 {
+    let dx = pb.position_correction(b, j, DT);
+    [
+        b.nodes.x1[j][0] + dx[0],
+        b.nodes.x1[j][1] + dx[1],
+        b.nodes.x1[j][2] + dx[2],
+    ]
+}
+
+#[test]
+fn a_node_squeezed_between_two_bodies_stays_on_both() {
+    // A node of body 1 (unit mass, at rest) between two unit faces of two other bodies that
+    // close on it from both sides: face A of body 0 (normal +z, corner masses 0.5) rises from
+    // z = -0.01 to a = 0.003, face B of body 2 (normal -z, corner masses 0.25) falls from
+    // z = 0.01 to -b = -0.002, the node at both faces' centres. Behind either face the node is
+    // inside a body, so both are contacts (`search::apart`, whatever the angle: here the
+    // normals are opposite, |cos| = 1, which the search's one-surface rule alone reads as one
+    // contact, keeping A only and pushing the node 0.004 into B). Reference: the push-back
+    // closes both gaps, so the node and both faces' centres (flat faces pushed at their centres
+    // translate) end at one height; it conserves momentum, so that height is the mass-weighted
+    // mean z* = (M_A a - M_B b) / (m + M_A + M_B) = 0.001, with each face's mass seen at its
+    // centre M = 4 m_corner (M_A = 2, M_B = 1); the impulses are M_A (a - z*) = 0.004 and
+    // M_B (z* + b) = 0.003 (kg m). All to 1e-12.
+    let (a, b_end) = (0.003, 0.002);
+    let (m_a, m_b) = (0.5, 0.25);
+    let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let mut nodes = vec![record(1, 1, 1.0, [0.5, 0.5, 0.0], [0.5, 0.5, 0.0])];
+    for (k, c) in square.iter().enumerate() {
+        let at = |z: f64| [c[0], c[1], z];
+        nodes.push(record(10 + k as u64, 0, m_a, at(-0.01), at(a)));
+        nodes.push(record(20 + k as u64, 2, m_b, at(0.01), at(-b_end)));
+    }
+    let face = |gid: u64, nodes: [u64; 4], body: u32| FaceRecord {
+        gid,
+        nodes,
+        body,
+        reserved: 0,
+    };
+    // B faces down: the same corners the other way round.
+    let faces = [
+        face(100, [10, 11, 12, 13], 0),
+        face(200, [23, 22, 21, 20], 2),
+    ];
+    let b = ContactBox::from_records(&nodes, 1, &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    let found: Vec<(u64, f64)> = contacts.iter().map(|c| (c.face_gid, c.depth)).collect();
+    assert_eq!(
+        found.len(),
+        2,
+        "contacts {found:?}: the node is behind both bodies' faces (depths {a}, {b_end})"
+    );
+    assert!(
+        found[0].0 == 100
+            && (found[0].1 - a).abs() < 1e-12
+            && found[1].0 == 200
+            && (found[1].1 - b_end).abs() < 1e-12,
+        "contacts (face, depth) {found:?} (geometry: A {a}, B {b_end})"
+    );
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let (big_a, big_b) = (4.0 * m_a, 4.0 * m_b);
+    let z_star = (big_a * a - big_b * b_end) / (1.0 + big_a + big_b);
+    let z_of = |gid: u64| {
+        let j = b.nodes.gid.iter().position(|&g| g == gid).unwrap();
+        corrected(&b, &pb, j)
+    };
+    let centre = |first: u64| (first..first + 4).map(|g| z_of(g)[2]).sum::<f64>() / 4.0;
+    let node = z_of(1);
+    for (what, z) in [
+        ("the node", node[2]),
+        ("face A's centre", centre(10)),
+        ("face B's centre", centre(20)),
+    ] {
+        assert!(
+            (z - z_star).abs() < 1e-12,
+            "{what} ends at z = {z:.15e}, not at the mass-weighted mean z* = {z_star} (1e-12)"
+        );
+    }
+    assert!(
+        node[0] == 0.5 && node[1] == 0.5,
+        "the node moved sideways: {node:?}"
+    );
+    let impulse = [big_a * (a - z_star), big_b * (z_star + b_end)];
+    for (k, want) in impulse.iter().enumerate() {
+        let got = pb.normal_force[k] * DT * DT;
+        assert!(
+            (got - want).abs() < 1e-12,
+            "face {}: impulse times dt {got:.15e}, analytic {want} (1e-12)",
+            contacts[k].face_gid
+        );
+    }
+}
+
+#[test]
+fn a_node_on_a_node_at_a_junction_is_two_constraints() {
+    // A junction of bodies in miniature (rod_wall's rod face on the corner where four bricks
+    // meet): a "rod" of 2 x 2 unit faces in the plane x = 0 (body 0, normal +x) whose centre
+    // node p (unit mass) slides from y = -1e-4 to 1e-4 in that plane, into a "brick" (body 1)
+    // whose corner s (unit mass) comes from x = 1e-3 to -2e-4, through the rod's face at p.
+    // Of the brick only the side face at s is in the box, in the plane y = 0 (normal -y; the
+    // brick at y > 0), s and three immovable corners. The two-pass search finds s 2e-4 behind
+    // the rod's face at p (normal +x) and p 1e-4 behind the brick's side face at s (normal
+    // -y): a node on a node found both ways, each contact point within `same_point_tol` of the
+    // other node, but two gaps at right angles, not one gap seen from both sides. Reference:
+    // the non-penetration constraints, re-measured after the push-back with the independent
+    // projection of `common`: s outside every face of the rod and p outside the brick's face
+    // to 1e-12 m (one row along the normals' mean closes only the sum of the two depths,
+    // (2e-4 + 1e-4) / sqrt 2 along it, and leaves each 5e-5 deep); momentum: the forces sum to
+    // zero (immovable corners take their reactions), to 1e-12 of the largest.
+    let mut nodes = vec![
+        record(1, 0, 1.0, [0.0, -1e-4, 0.0], [0.0, 1e-4, 0.0]),
+        record(2, 1, 1.0, [1e-3, 0.0, 0.0], [-2e-4, 0.0, 0.0]),
+    ];
+    // The rod's other nodes: grid points (y, z) in {-1, 0, 1}^2 but the centre, gids 10 + k.
+    let rod_gid = |i: usize, j: usize| {
+        if (i, j) == (1, 1) {
+            1
+        } else {
+            10 + (3 * j + i) as u64
+        }
+    };
+    for j in 0..3 {
+        for i in 0..3 {
+            if (i, j) != (1, 1) {
+                let x = [0.0, i as f64 - 1.0, j as f64 - 1.0];
+                nodes.push(record(rod_gid(i, j), 0, f64::INFINITY, x, x));
+            }
+        }
+    }
+    let brick = [[1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
+    for (k, x) in brick.iter().enumerate() {
+        nodes.push(record(30 + k as u64, 1, f64::INFINITY, *x, *x));
+    }
+    let mut faces = Vec::new();
+    for j in 0..2 {
+        for i in 0..2 {
+            // Counter-clockwise seen from +x: y then z.
+            let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            faces.push(FaceRecord {
+                gid: 100 + (2 * j + i) as u64,
+                nodes: c.map(|(a, b)| rod_gid(a, b)),
+                body: 0,
+                reserved: 0,
+            });
+        }
+    }
+    // Seen from -y (outside the brick), counter-clockwise: s, (1, 0, 0), (1, 0, 1), (0, 0, 1).
+    faces.push(FaceRecord {
+        gid: 200,
+        nodes: [2, 30, 31, 32],
+        body: 1,
+        reserved: 0,
+    });
+    let b = ContactBox::from_records(&nodes, 2, &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    let pairs: Vec<(u64, u64)> = contacts.iter().map(|c| (c.node_gid, c.face_gid)).collect();
+    assert_eq!(pairs.len(), 2, "contacts {contacts:?}");
+    assert!(
+        pairs[0].0 == 1 && pairs[0].1 == 200 && pairs[1].0 == 2 && pairs[1].1 < 200,
+        "contacts {pairs:?}: p on the brick's face, s on a rod face"
+    );
+    assert!(
+        dot(contacts[0].normal, contacts[1].normal).abs() < 1e-12,
+        "normals {:?}, {:?}: at right angles by construction",
+        contacts[0].normal,
+        contacts[1].normal
+    );
+    let pb = push_back(&b, &contacts, &PushBackParams::new(DT));
+    let at = |gid: u64| {
+        let j = b.nodes.gid.iter().position(|&g| g == gid).unwrap();
+        corrected(&b, &pb, j)
+    };
+    let face_at = |f: &FaceRecord| f.nodes.map(at);
+    for f in &faces {
+        let (who, node) = if f.body == 0 { ("s", 2) } else { ("p", 1) };
+        let d = distance_to_face(face_at(f), at(node));
+        assert!(
+            d > -1e-12,
+            "{who} is {:.3e} m behind face {} after the push-back (1e-12)",
+            -d,
+            f.gid
+        );
+    }
+    let mut sum = [0.0; 3];
+    let mut largest = 0.0f64;
+    for f in &pb.force {
+        for k in 0..3 {
+            sum[k] += f[k];
+        }
+        largest = largest.max(dot(*f, *f).sqrt());
+    }
+    assert!(
+        dot(sum, sum).sqrt() <= 1e-12 * largest,
+        "forces sum to {sum:?} (largest {largest:.3e}): momentum not conserved"
+    );
+}

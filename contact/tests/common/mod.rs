@@ -358,11 +358,11 @@ pub fn random_scene(rng: &mut Rng, spec: &SceneSpec) -> Scene {
 
 /// Reference search over all pairs: per node, the deepest crossing (then lowest face gid) under
 /// the body rules. Returns, per node gid with a contact, `(face gid, hit, runner-up depth)`, the
-/// further contacts a node keeps (faces at an angle: each hit whose normal is more than 25
-/// degrees, |cos| < 0.9, from every kept one, deepest first, and, for a mesh node, whose face
-/// bounds another body than each kept one's or forms a valley with it) as (node gid, face
-/// gid), and the
-/// smallest margin met over all pairs (how close the configuration came to a threshold).
+/// further contacts a node keeps (deepest first, each hit that against every kept one is on a
+/// face of another body, at any angle, or has a normal more than 25 degrees, |cos| < 0.9, from
+/// the kept one's and, for a mesh node, a face forming a valley with it) as (node gid, face
+/// gid), and the smallest margin met over all pairs (how close the configuration came to a
+/// threshold).
 pub struct RefResult {
     pub contacts: std::collections::BTreeMap<u64, (u64, RefHit, f64)>,
     pub further: Vec<(u64, u64)>,
@@ -435,18 +435,18 @@ pub fn reference_search(
             let mut kept = vec![geometry(best)];
             for h in &hits[1..] {
                 let (normal, at, centre, body) = geometry(h);
-                // A mesh node: only faces of another body than a kept one's (the node must be
-                // outside both bodies) or forming a valley with it (each face's centre in front
-                // of the other's tangent plane at its contact point).
+                // A face of another body than a kept one's, at any angle (the node must be
+                // outside both bodies); on the kept one's body, a face of another normal and,
+                // for a mesh node, forming a valley with it (each face's centre in front of the
+                // other's tangent plane at its contact point).
                 let valley = |k: &(V3, V3, V3, u32)| {
                     particle
-                        || k.3 != body
                         || (dot(k.0, sub(centre, k.1)) > 0.0 && dot(normal, sub(k.2, at)) > 0.0)
                 };
-                if kept
-                    .iter()
-                    .all(|k| dot(k.0, normal).abs() < SAME_NORMAL_COS && valley(k))
-                {
+                let fits = |k: &(V3, V3, V3, u32)| {
+                    k.3 != body || (dot(k.0, normal).abs() < SAME_NORMAL_COS && valley(k))
+                };
+                if kept.iter().all(fits) {
                     kept.push((normal, at, centre, body));
                     further.push((n.gid, h.1));
                 }
