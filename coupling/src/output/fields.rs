@@ -154,6 +154,15 @@ pub fn redistribute_by_id(
     (out_ids, out_vals)
 }
 
+/// One column of a frame for [`FieldWriter::write_set`]: name, width, the values (made only when
+/// the column is written, so a frame holds one column's copies at a time), integer or not.
+type Column<'a> = (&'a str, usize, Box<dyn FnOnce() -> Vec<f64> + 'a>, bool);
+
+/// A column's values, made when written.
+fn lazy<'a>(f: impl FnOnce() -> Vec<f64> + 'a) -> Box<dyn FnOnce() -> Vec<f64> + 'a> {
+    Box::new(f)
+}
+
 /// One dataset of a frame as the XDMF index needs to know it.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Item {
@@ -314,14 +323,14 @@ impl FieldWriter {
         group: &hdf5::Group,
         n: u64,
         ids: &[u64],
-        cols: Vec<(&str, usize, Vec<f64>, bool)>,
+        cols: Vec<Column>,
     ) -> Result<Vec<Item>, OutputError> {
         let p = self.comm.size() as usize;
         let (lo, hi) = block(n, p, self.comm.rank() as usize);
         let has_id = cols.iter().any(|c| c.0 == "id");
         let mut items = Vec::new();
-        for (k, (name, cw, v, int)) in cols.into_iter().enumerate() {
-            let (bids, col) = redistribute_by_id(&self.comm, n, ids, v, cw);
+        for (k, (name, cw, make, int)) in cols.into_iter().enumerate() {
+            let (bids, col) = redistribute_by_id(&self.comm, n, ids, make(), cw);
             if k == 0 {
                 // Row r must hold id r: this rank's block must be exactly lo..hi, once each.
                 // Agreed on by all ranks before any dataset is created, so that a bad id set
@@ -389,61 +398,77 @@ impl FieldWriter {
         let flat3 = |v: &[[f64; 3]]| v.as_flattened().to_vec();
         let mut node_items = Vec::new();
         if let Some(nf) = nodes {
-            let mut cols = vec![("position", 3, flat3(nf.position), false)];
+            let mut cols = vec![("position", 3, lazy(move || flat3(nf.position)), false)];
             if let (true, Some(d)) = (self.wants("displacement"), nf.displacement) {
-                cols.push(("displacement", 3, flat3(d), false));
+                cols.push(("displacement", 3, lazy(move || flat3(d)), false));
             }
             if let (true, Some(v)) = (self.wants("velocity"), nf.velocity) {
-                cols.push(("velocity", 3, flat3(v), false));
+                cols.push(("velocity", 3, lazy(move || flat3(v)), false));
             }
             let gg = g.create_group("nodes")?;
             node_items = self.write_set(&gg, self.counts.nodes, nf.ids, cols)?;
         }
         let mut elem_items = Vec::new();
         if let Some(ef) = elements {
-            let conn: Vec<f64> = ef
-                .connectivity
-                .iter()
-                .flatten()
-                .map(|&c| c as f64)
-                .collect();
+            let conn = lazy(|| {
+                ef.connectivity
+                    .iter()
+                    .flatten()
+                    .map(|&c| c as f64)
+                    .collect()
+            });
             let mut cols = vec![("connectivity", 8, conn, true)];
             if let (true, Some(s)) = (self.wants("stress"), ef.stress) {
-                cols.push(("stress", 6, s.as_flattened().to_vec(), false));
+                cols.push(("stress", 6, lazy(move || s.as_flattened().to_vec()), false));
             }
             if let (true, Some(s)) = (self.wants("plastic_strain"), ef.plastic_strain) {
-                cols.push(("plastic_strain", 1, s.to_vec(), false));
+                cols.push(("plastic_strain", 1, lazy(move || s.to_vec()), false));
             }
             if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
-                cols.push(("pressure", 1, s.to_vec(), false));
+                cols.push(("pressure", 1, lazy(move || s.to_vec()), false));
             }
             if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
-                cols.push(("rank", 1, s.iter().map(|&r| r as f64).collect(), true));
+                cols.push((
+                    "rank",
+                    1,
+                    lazy(move || s.iter().map(|&r| r as f64).collect()),
+                    true,
+                ));
             }
             let gg = g.create_group("elements")?;
             elem_items = self.write_set(&gg, self.counts.elements, ef.ids, cols)?;
         }
         let mut particle_items = Vec::new();
         if let Some(pf) = particles {
-            let mut cols = vec![("position", 3, flat3(pf.position), false)];
+            let mut cols = vec![("position", 3, lazy(move || flat3(pf.position)), false)];
             if let Some(l) = pf.labels {
                 // ids < 2^53 are exact in f64.
-                cols.push(("id", 1, l.iter().map(|&i| i as f64).collect(), true));
+                cols.push((
+                    "id",
+                    1,
+                    lazy(move || l.iter().map(|&i| i as f64).collect()),
+                    true,
+                ));
             }
             if let (true, Some(v)) = (self.wants("velocity"), pf.velocity) {
-                cols.push(("velocity", 3, flat3(v), false));
+                cols.push(("velocity", 3, lazy(move || flat3(v)), false));
             }
             if let (true, Some(v)) = (self.wants("density"), pf.density) {
-                cols.push(("density", 1, v.to_vec(), false));
+                cols.push(("density", 1, lazy(move || v.to_vec()), false));
             }
             if let (true, Some(v)) = (self.wants("pressure"), pf.pressure) {
-                cols.push(("pressure", 1, v.to_vec(), false));
+                cols.push(("pressure", 1, lazy(move || v.to_vec()), false));
             }
             if let Some(v) = pf.h {
-                cols.push(("h", 1, v.to_vec(), false));
+                cols.push(("h", 1, lazy(move || v.to_vec()), false));
             }
             if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
-                cols.push(("rank", 1, v.iter().map(|&r| r as f64).collect(), true));
+                cols.push((
+                    "rank",
+                    1,
+                    lazy(move || v.iter().map(|&r| r as f64).collect()),
+                    true,
+                ));
             }
             let gg = g.create_group("particles")?;
             particle_items = self.write_set(&gg, self.counts.particles, pf.ids, cols)?;
