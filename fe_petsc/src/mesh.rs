@@ -4,9 +4,9 @@
 //! hexahedron, marks the vertices of each physical surface, and partitions the cells' dual graph
 //! with METIS; PETSc's shell partitioner applies that partition and `DMPlexDistribute` moves the
 //! mesh (no overlap). After distribution everything the time loop needs is extracted once into
-//! contiguous arrays ([`LocalMesh`]); the DM stays alive only for the ghost exchange
+//! contiguous arrays ([`LocalMesh`]); only the DM's star forest stays alive, for the ghost exchange
 //! ([`NodeExchange`]).
-use crate::objects::{Dm, Section, StarForest, Vector};
+use crate::objects::{Dm, Section, StarForest};
 use crate::petsc::{Petsc, PetscError};
 use crate::petsc_call;
 use mpi::topology::SimpleCommunicator;
@@ -72,13 +72,16 @@ pub struct DistributedMesh {
     pub exchange: NodeExchange,
 }
 
-/// Ghost exchange for 3 values per node, on PETSc's DM: local-to-global ADD (assembly), then
-/// global-to-local INSERT (refresh), over the caller's own flat array (no copy: `VecPlaceArray`).
+/// Ghost exchange for 3 values per node, on the star forest of PETSc's DM for a section of 3
+/// dofs per vertex (its local-to-global map): a reduction with a sum into the owners' values
+/// (what `DMLocalToGlobal` with `ADD_VALUES` does), then a broadcast back to every copy (what
+/// `DMGlobalToLocal` with `INSERT_VALUES` does), over the caller's own flat array. Only the star
+/// forest is kept: the DM, its sections and vectors are freed once the arrays are extracted
+/// (measured: about 260 bytes per element of a 110,592-element block's peak memory).
 pub struct NodeExchange {
-    local: Vector,
-    global: Vector,
-    _section: Section,
-    dm: Dm,
+    sf: StarForest,
+    /// The owners' values (roots): 3 per owned node.
+    roots: Vec<f64>,
     n_local_nodes: usize,
     /// Bytes this rank sent in ghost exchanges so far (estimate: 2 x 24 bytes per ghost node).
     pub bytes_sent: u64,
@@ -90,21 +93,36 @@ impl NodeExchange {
     /// every copy. `data` is `3 * n_local_nodes` long, node-major.
     pub fn sum_shared(&mut self, data: &mut [f64]) -> Result<(), PetscError> {
         assert_eq!(data.len(), 3 * self.n_local_nodes);
-        petsc_call!(VecPlaceArray(self.local.0, data.as_ptr()))?;
-        petsc_call!(VecZeroEntries(self.global.0))?;
-        petsc_call!(DMLocalToGlobal(
-            self.dm.0,
-            self.local.0,
-            sys::ADD_VALUES,
-            self.global.0
-        ))?;
-        petsc_call!(DMGlobalToLocal(
-            self.dm.0,
-            self.global.0,
-            sys::INSERT_VALUES,
-            self.local.0
-        ))?;
-        petsc_call!(VecResetArray(self.local.0))?;
+        self.roots.fill(0.0);
+        let (leaves, roots) = (data.as_mut_ptr(), self.roots.as_mut_ptr());
+        // SAFETY: reading MPI's predefined handles (constants after MPI_Init).
+        let (unit, sum) = unsafe { (mpi_sys::RSMPI_DOUBLE, mpi_sys::RSMPI_SUM) };
+        // SAFETY: FFI on the section's star forest: `data` holds its 3 n_local_nodes leaves,
+        // `roots` its roots (checked when it was built), both alive across Begin and End.
+        unsafe {
+            crate::petsc::check(
+                sys::PetscSFReduceBegin(self.sf.0, unit, leaves as *const _, roots as *mut _, sum),
+                "PetscSFReduceBegin",
+            )?;
+            crate::petsc::check(
+                sys::PetscSFReduceEnd(self.sf.0, unit, leaves as *const _, roots as *mut _, sum),
+                "PetscSFReduceEnd",
+            )?;
+        }
+        // Every copy takes its owner's sum: leaves zeroed, then root + 0 (a broadcast without
+        // MPI_REPLACE, which mpi-sys does not export; a -0.0 sum comes back as +0.0).
+        data.fill(0.0);
+        // SAFETY: as above.
+        unsafe {
+            crate::petsc::check(
+                sys::PetscSFBcastBegin(self.sf.0, unit, roots as *const _, leaves as *mut _, sum),
+                "PetscSFBcastBegin",
+            )?;
+            crate::petsc::check(
+                sys::PetscSFBcastEnd(self.sf.0, unit, roots as *const _, leaves as *mut _, sum),
+                "PetscSFBcastEnd",
+            )?;
+        }
         self.bytes_sent += (2 * 24 * self.ghosts) as u64;
         Ok(())
     }
@@ -570,16 +588,36 @@ fn node_exchange(
         petsc_call!(PetscSectionGetOffset(gsec, v, &mut off))?;
         local.owned.push(off >= 0);
     }
-    let mut lvec = Vector(std::ptr::null_mut());
-    let mut gvec = Vector(std::ptr::null_mut());
-    petsc_call!(DMCreateLocalVector(dm.0, &mut lvec.0))?;
-    petsc_call!(DMCreateGlobalVector(dm.0, &mut gvec.0))?;
-    let ghosts = local.owned.iter().filter(|o| !**o).count();
+    // The section's star forest (every local dof a leaf, every owned dof a root), kept by a
+    // reference of our own when the DM goes.
+    let mut sf_raw: sys::PetscSF = std::ptr::null_mut();
+    petsc_call!(DMGetSectionSF(dm.0, &mut sf_raw))?;
+    petsc_call!(PetscObjectReference(sf_raw as sys::PetscObject))?;
+    let sf = StarForest(sf_raw);
+    petsc_call!(PetscSFSetUp(sf.0))?;
+    let (mut nroots, mut nleaves) = (0, 0);
+    petsc_call!(PetscSFGetGraph(
+        sf.0,
+        &mut nroots,
+        &mut nleaves,
+        std::ptr::null_mut(),
+        std::ptr::null_mut()
+    ))?;
+    let n_owned = local.owned.iter().filter(|o| **o).count();
+    agree(
+        comm,
+        (nleaves as usize != 3 * nv || nroots as usize != 3 * n_owned).then(|| {
+            format!(
+                "unexpected ghost exchange layout: {nleaves} leaves for {nv} nodes, {nroots} roots for {n_owned} owned"
+            )
+        }),
+    )?;
+    let ghosts = nv - n_owned;
+    drop(sec);
+    drop(dm);
     Ok(NodeExchange {
-        local: lvec,
-        global: gvec,
-        _section: sec,
-        dm,
+        sf,
+        roots: vec![0.0; nroots as usize],
         n_local_nodes: nv,
         bytes_sent: 0,
         ghosts,
