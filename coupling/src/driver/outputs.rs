@@ -3,7 +3,7 @@
 use super::setup::Model;
 use crate::input::scene::Scene;
 use crate::output::{
-    write_particle_dump, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
+    write_particle_dump, Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
 };
 use crate::stages::StageEnergies;
 use mpi::topology::SimpleCommunicator;
@@ -51,12 +51,11 @@ pub fn block_history_columns(scene: &Scene) -> Vec<String> {
         .collect()
 }
 
-/// The mesh's output layout on this rank: owned nodes and their ids, element connectivity by
-/// node id (fixed for the run).
+/// The mesh's output layout on this rank: owned nodes and their ids (fixed for the run; the
+/// elements' connectivity by node id is made for each frame from the local one).
 struct MeshLayout {
     owned_nodes: Vec<usize>,
     node_ids: Vec<u64>,
-    conn_ids: Vec<[u64; 8]>,
     rank_field: Vec<i32>,
 }
 
@@ -104,11 +103,6 @@ impl Outputs {
             MeshLayout {
                 node_ids: owned_nodes.iter().map(|&n| l.node_id[n]).collect(),
                 owned_nodes,
-                conn_ids: st
-                    .elems
-                    .iter()
-                    .map(|c| std::array::from_fn(|k| l.node_id[c[k] as usize]))
-                    .collect(),
                 rank_field: vec![rank; st.elems.len()],
             }
         });
@@ -194,13 +188,14 @@ impl Outputs {
                 let vel: Vec<[f64; 3]> = m.owned_nodes.iter().map(|&n| st.v[n]).collect();
                 let stress: Vec<[f64; 6]> = st.state.iter().map(|s| s.stress).collect();
                 let eps: Vec<f64> = (0..st.elems.len()).map(|e| st.plastic_strain(e)).collect();
-                Some((m, st, pos, disp, vel, stress, eps))
+                let ids = &fe.mesh.local.node_id[..];
+                Some((m, st, ids, pos, disp, vel, stress, eps))
             }
             _ => None,
         };
         let nodes = mesh_data
             .as_ref()
-            .map(|(m, _, pos, disp, vel, _, _)| NodeFrame {
+            .map(|(m, _, _, pos, disp, vel, _, _)| NodeFrame {
                 ids: &m.node_ids,
                 position: pos,
                 displacement: Some(disp),
@@ -208,9 +203,12 @@ impl Outputs {
             });
         let elems = mesh_data
             .as_ref()
-            .map(|(m, st, _, _, _, stress, eps)| ElementFrame {
+            .map(|(m, st, local_ids, _, _, _, stress, eps)| ElementFrame {
                 ids: &st.elem_id,
-                connectivity: &m.conn_ids,
+                connectivity: Connectivity::Local {
+                    nodes: &st.elems,
+                    ids: local_ids,
+                },
                 stress: Some(stress),
                 plastic_strain: Some(eps),
                 pressure: Some(&st.pressure),

@@ -43,7 +43,7 @@ pub struct ElementFrame<'a> {
     /// Global ids.
     pub ids: &'a [u64],
     /// Node ids, gmsh/VTK hexahedron order.
-    pub connectivity: &'a [[u64; 8]],
+    pub connectivity: Connectivity<'a>,
     /// Stress xx,yy,zz,xy,yz,zx.
     pub stress: Option<&'a [[f64; 6]]>,
     /// Equivalent plastic strain.
@@ -52,6 +52,21 @@ pub struct ElementFrame<'a> {
     pub pressure: Option<&'a [f64]>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
+}
+
+/// The elements' nodes as global node ids: given, or each element's local nodes through a
+/// table of global ids (nothing element-sized kept between frames for it).
+#[derive(Clone, Copy)]
+pub enum Connectivity<'a> {
+    /// Global node ids per element.
+    Ids(&'a [[u64; 8]]),
+    /// Local node indices per element, and the global id of each local node.
+    Local {
+        /// Local node indices per element.
+        nodes: &'a [[u32; 8]],
+        /// Global id of each local node.
+        ids: &'a [u64],
+    },
 }
 
 /// This rank's particles for a frame.
@@ -410,12 +425,13 @@ impl FieldWriter {
         }
         let mut elem_items = Vec::new();
         if let Some(ef) = elements {
-            let conn = lazy(|| {
-                ef.connectivity
+            let conn = lazy(|| match ef.connectivity {
+                Connectivity::Ids(c) => c.iter().flatten().map(|&c| c as f64).collect(),
+                Connectivity::Local { nodes, ids } => nodes
                     .iter()
                     .flatten()
-                    .map(|&c| c as f64)
-                    .collect()
+                    .map(|&n| ids[n as usize] as f64)
+                    .collect(),
             });
             let mut cols = vec![("connectivity", 8, conn, true)];
             if let (true, Some(s)) = (self.wants("stress"), ef.stress) {

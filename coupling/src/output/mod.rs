@@ -8,7 +8,8 @@ pub mod state;
 
 pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{
-    redistribute_by_id, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame,
+    redistribute_by_id, Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame,
+    ParticleFrame,
 };
 pub use history::History;
 pub use report::{Report, StageStats};

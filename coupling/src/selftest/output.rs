@@ -4,8 +4,8 @@
 //! `time` attributes, that `fields.xmf` is balanced XML whose every data path exists in
 //! `fields.h5` with the dimensions it states, the history CSV round trip and `report.json`.
 use crate::output::{
-    ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame, OutputError, ParticleFrame,
-    Report, StageStats,
+    Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame, OutputError,
+    ParticleFrame, Report, StageStats,
 };
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -229,7 +229,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
         };
         let elements = ElementFrame {
             ids: &elem_ids,
-            connectivity: &conn,
+            connectivity: Connectivity::Ids(&conn),
             stress: first.then_some(&stress[..]),
             plastic_strain: Some(&eps),
             pressure: Some(&pe),
