@@ -4,6 +4,7 @@ use super::setup::Model;
 use crate::input::scene::Scene;
 use crate::output::{
     write_particle_dump, Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
+    Values,
 };
 use crate::stages::StageEnergies;
 use mpi::topology::SimpleCommunicator;
@@ -176,44 +177,52 @@ impl Outputs {
     /// Writes a frame of every stage at `time` (collective).
     pub fn frame(&mut self, time: f64, model: &Model) -> Result<(), String> {
         let t0 = Instant::now();
-        let mesh_data = match (&self.mesh, &model.fe) {
-            (Some(m), Some(fe)) => {
-                let st = fe.state();
-                let pos: Vec<[f64; 3]> = m.owned_nodes.iter().map(|&n| st.x[n]).collect();
-                let disp: Vec<[f64; 3]> = m
-                    .owned_nodes
-                    .iter()
-                    .map(|&n| std::array::from_fn(|c| st.x[n][c] - st.x0[n][c]))
-                    .collect();
-                let vel: Vec<[f64; 3]> = m.owned_nodes.iter().map(|&n| st.v[n]).collect();
-                let stress: Vec<[f64; 6]> = st.state.iter().map(|s| s.stress).collect();
-                let eps: Vec<f64> = (0..st.elems.len()).map(|e| st.plastic_strain(e)).collect();
-                let ids = &fe.mesh.local.node_id[..];
-                Some((m, st, ids, pos, disp, vel, stress, eps))
-            }
+        // The mesh's columns, each made only when the frame writes it.
+        let fe = match (&self.mesh, &model.fe) {
+            (Some(m), Some(fe)) => Some((m, fe.state(), &fe.mesh.local.node_id[..])),
             _ => None,
         };
-        let nodes = mesh_data
-            .as_ref()
-            .map(|(m, _, _, pos, disp, vel, _, _)| NodeFrame {
-                ids: &m.node_ids,
-                position: pos,
-                displacement: Some(disp),
-                velocity: Some(vel),
-            });
-        let elems = mesh_data
-            .as_ref()
-            .map(|(m, st, local_ids, _, _, _, stress, eps)| ElementFrame {
-                ids: &st.elem_id,
-                connectivity: Connectivity::Local {
-                    nodes: &st.elems,
-                    ids: local_ids,
-                },
-                stress: Some(stress),
-                plastic_strain: Some(eps),
-                pressure: Some(&st.pressure),
-                rank: Some(&m.rank_field),
-            });
+        let owned = |f: &dyn Fn(usize) -> [f64; 3]| -> Vec<[f64; 3]> {
+            fe.map_or_else(Vec::new, |(m, _, _)| {
+                m.owned_nodes.iter().map(|&n| f(n)).collect()
+            })
+        };
+        let pos = || owned(&|n| fe.map_or([0.0; 3], |(_, st, _)| st.x[n]));
+        let disp = || {
+            owned(&|n| {
+                fe.map_or([0.0; 3], |(_, st, _)| {
+                    std::array::from_fn(|c| st.x[n][c] - st.x0[n][c])
+                })
+            })
+        };
+        let vel = || owned(&|n| fe.map_or([0.0; 3], |(_, st, _)| st.v[n]));
+        let stress = || {
+            fe.map_or_else(Vec::new, |(_, st, _)| {
+                st.state.iter().map(|s| s.stress).collect()
+            })
+        };
+        let eps = || {
+            fe.map_or_else(Vec::new, |(_, st, _)| {
+                (0..st.elems.len()).map(|e| st.plastic_strain(e)).collect()
+            })
+        };
+        let nodes = fe.map(|(m, _, _)| NodeFrame {
+            ids: &m.node_ids,
+            position: Values::Made(&pos),
+            displacement: Some(Values::Made(&disp)),
+            velocity: Some(Values::Made(&vel)),
+        });
+        let elems = fe.map(|(m, st, local_ids)| ElementFrame {
+            ids: &st.elem_id,
+            connectivity: Connectivity::Local {
+                nodes: &st.elems,
+                ids: local_ids,
+            },
+            stress: Some(Values::Made(&stress)),
+            plastic_strain: Some(Values::Made(&eps)),
+            pressure: Some(&st.pressure),
+            rank: Some(&m.rank_field),
+        });
         let rank = self.rank;
         let parts = model
             .sph

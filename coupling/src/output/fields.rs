@@ -26,16 +26,35 @@ pub struct GlobalCounts {
     pub particles: u64,
 }
 
+/// A frame's column: values the caller holds, or a function that makes them when the column is
+/// written (so that a frame holds one column's copy at a time, not one of each).
+#[derive(Clone, Copy)]
+pub enum Values<'a, T> {
+    /// Held by the caller.
+    Held(&'a [T]),
+    /// Made when written.
+    Made(&'a dyn Fn() -> Vec<T>),
+}
+
+impl<T: Clone> Values<'_, T> {
+    fn get(&self) -> std::borrow::Cow<'_, [T]> {
+        match self {
+            Values::Held(s) => std::borrow::Cow::Borrowed(s),
+            Values::Made(f) => std::borrow::Cow::Owned(f()),
+        }
+    }
+}
+
 /// This rank's owned nodes for a frame.
 pub struct NodeFrame<'a> {
     /// Global ids.
     pub ids: &'a [u64],
     /// Current coordinates.
-    pub position: &'a [[f64; 3]],
+    pub position: Values<'a, [f64; 3]>,
     /// Displacements.
-    pub displacement: Option<&'a [[f64; 3]]>,
+    pub displacement: Option<Values<'a, [f64; 3]>>,
     /// Velocities.
-    pub velocity: Option<&'a [[f64; 3]]>,
+    pub velocity: Option<Values<'a, [f64; 3]>>,
 }
 
 /// This rank's elements for a frame.
@@ -45,9 +64,9 @@ pub struct ElementFrame<'a> {
     /// Node ids, gmsh/VTK hexahedron order.
     pub connectivity: Connectivity<'a>,
     /// Stress xx,yy,zz,xy,yz,zx.
-    pub stress: Option<&'a [[f64; 6]]>,
+    pub stress: Option<Values<'a, [f64; 6]>>,
     /// Equivalent plastic strain.
-    pub plastic_strain: Option<&'a [f64]>,
+    pub plastic_strain: Option<Values<'a, f64>>,
     /// Pressure.
     pub pressure: Option<&'a [f64]>,
     /// Owning rank.
@@ -413,12 +432,17 @@ impl FieldWriter {
         let flat3 = |v: &[[f64; 3]]| v.as_flattened().to_vec();
         let mut node_items = Vec::new();
         if let Some(nf) = nodes {
-            let mut cols = vec![("position", 3, lazy(move || flat3(nf.position)), false)];
+            let mut cols = vec![(
+                "position",
+                3,
+                lazy(move || flat3(&nf.position.get())),
+                false,
+            )];
             if let (true, Some(d)) = (self.wants("displacement"), nf.displacement) {
-                cols.push(("displacement", 3, lazy(move || flat3(d)), false));
+                cols.push(("displacement", 3, lazy(move || flat3(&d.get())), false));
             }
             if let (true, Some(v)) = (self.wants("velocity"), nf.velocity) {
-                cols.push(("velocity", 3, lazy(move || flat3(v)), false));
+                cols.push(("velocity", 3, lazy(move || flat3(&v.get())), false));
             }
             let gg = g.create_group("nodes")?;
             node_items = self.write_set(&gg, self.counts.nodes, nf.ids, cols)?;
@@ -435,10 +459,20 @@ impl FieldWriter {
             });
             let mut cols = vec![("connectivity", 8, conn, true)];
             if let (true, Some(s)) = (self.wants("stress"), ef.stress) {
-                cols.push(("stress", 6, lazy(move || s.as_flattened().to_vec()), false));
+                cols.push((
+                    "stress",
+                    6,
+                    lazy(move || s.get().as_flattened().to_vec()),
+                    false,
+                ));
             }
             if let (true, Some(s)) = (self.wants("plastic_strain"), ef.plastic_strain) {
-                cols.push(("plastic_strain", 1, lazy(move || s.to_vec()), false));
+                cols.push((
+                    "plastic_strain",
+                    1,
+                    lazy(move || s.get().into_owned()),
+                    false,
+                ));
             }
             if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
                 cols.push(("pressure", 1, lazy(move || s.to_vec()), false));

@@ -9,7 +9,7 @@ pub mod state;
 pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{
     redistribute_by_id, Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame,
-    ParticleFrame,
+    ParticleFrame, Values,
 };
 pub use history::History;
 pub use report::{Report, StageStats};

@@ -3,6 +3,7 @@
 //! frames; rank 0 then reads `fields.h5` back and checks every row by id (exact equality), the
 //! `time` attributes, that `fields.xmf` is balanced XML whose every data path exists in
 //! `fields.h5` with the dimensions it states, the history CSV round trip and `report.json`.
+use crate::output::Values;
 use crate::output::{
     Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame, OutputError,
     ParticleFrame, Report, StageStats,
@@ -223,15 +224,15 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
         let h = scalars(q, "h", frame, &part_ids, p);
         let nodes = NodeFrame {
             ids: &node_ids,
-            position: &pos,
-            displacement: Some(&disp),
-            velocity: first.then_some(&vel[..]),
+            position: Values::Held(&pos),
+            displacement: Some(Values::Held(&disp)),
+            velocity: first.then_some(Values::Held(&vel[..])),
         };
         let elements = ElementFrame {
             ids: &elem_ids,
             connectivity: Connectivity::Ids(&conn),
-            stress: first.then_some(&stress[..]),
-            plastic_strain: Some(&eps),
+            stress: first.then_some(Values::Held(&stress[..])),
+            plastic_strain: Some(Values::Held(&eps)),
             pressure: Some(&pe),
             rank: Some(&elem_rank),
         };
@@ -559,7 +560,7 @@ fn check_bad_input(comm: &SimpleCommunicator, dir: &Path) -> Result<(), String> 
     let pos = rows::<3>(Part::Nodes, "position", 0, &ids, p);
     let nodes = NodeFrame {
         ids: &ids,
-        position: &pos,
+        position: Values::Held(&pos),
         displacement: None,
         velocity: None,
     };
