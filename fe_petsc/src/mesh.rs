@@ -80,6 +80,9 @@ pub struct DistributedMesh {
 /// (measured: about 260 bytes per element of a 110,592-element block's peak memory).
 pub struct NodeExchange {
     sf: StarForest,
+    /// Three contiguous doubles, a node's values (committed; never freed: one small datatype,
+    /// and the exchange may outlive MPI's own tear-down).
+    unit: mpi_sys::MPI_Datatype,
     /// The owners' values (roots): 3 per owned node.
     roots: Vec<f64>,
     n_local_nodes: usize,
@@ -95,10 +98,11 @@ impl NodeExchange {
         assert_eq!(data.len(), 3 * self.n_local_nodes);
         self.roots.fill(0.0);
         let (leaves, roots) = (data.as_mut_ptr(), self.roots.as_mut_ptr());
-        // SAFETY: reading MPI's predefined handles (constants after MPI_Init).
-        let (unit, sum) = unsafe { (mpi_sys::RSMPI_DOUBLE, mpi_sys::RSMPI_SUM) };
-        // SAFETY: FFI on the section's star forest: `data` holds its 3 n_local_nodes leaves,
-        // `roots` its roots (checked when it was built), both alive across Begin and End.
+        // SAFETY: reading MPI's predefined handle (a constant after MPI_Init).
+        let (unit, sum) = (self.unit, unsafe { mpi_sys::RSMPI_SUM });
+        // SAFETY: FFI on the section's star forest: `data` holds its n_local_nodes leaves and
+        // `roots` its roots, three doubles each (checked when it was built), both alive
+        // across Begin and End.
         unsafe {
             crate::petsc::check(
                 sys::PetscSFReduceBegin(self.sf.0, unit, leaves as *const _, roots as *mut _, sum),
@@ -564,8 +568,11 @@ fn node_exchange(
     petsc_call!(PetscSectionCreate(comm.as_raw(), &mut sec.0))?;
     let (q0, q1) = dm.chart()?;
     petsc_call!(PetscSectionSetChart(sec.0, q0, q1))?;
+    // One dof per vertex: the star forest then has one leaf per node, and the exchange moves a
+    // node's three values as one unit of three doubles (a third of the graph a section of 3
+    // dofs would keep).
     for v in v0..v1 {
-        petsc_call!(PetscSectionSetDof(sec.0, v, 3))?;
+        petsc_call!(PetscSectionSetDof(sec.0, v, 1))?;
     }
     petsc_call!(PetscSectionSetUp(sec.0))?;
     petsc_call!(DMSetLocalSection(dm.0, sec.0))?;
@@ -573,7 +580,7 @@ fn node_exchange(
     for v in v0..v1 {
         let mut off = 0;
         petsc_call!(PetscSectionGetOffset(sec.0, v, &mut off))?;
-        contiguous &= off == 3 * (v - v0);
+        contiguous &= off == v - v0;
     }
     agree(
         comm,
@@ -588,7 +595,7 @@ fn node_exchange(
         petsc_call!(PetscSectionGetOffset(gsec, v, &mut off))?;
         local.owned.push(off >= 0);
     }
-    // The section's star forest (every local dof a leaf, every owned dof a root), kept by a
+    // The section's star forest (every local node a leaf, every owned node a root), kept by a
     // reference of our own when the DM goes.
     let mut sf_raw: sys::PetscSF = std::ptr::null_mut();
     petsc_call!(DMGetSectionSF(dm.0, &mut sf_raw))?;
@@ -606,7 +613,7 @@ fn node_exchange(
     let n_owned = local.owned.iter().filter(|o| **o).count();
     agree(
         comm,
-        (nleaves as usize != 3 * nv || nroots as usize != 3 * n_owned).then(|| {
+        (nleaves as usize != nv || nroots as usize != n_owned).then(|| {
             format!(
                 "unexpected ghost exchange layout: {nleaves} leaves for {nv} nodes, {nroots} roots for {n_owned} owned"
             )
@@ -617,11 +624,30 @@ fn node_exchange(
     drop(dm);
     Ok(NodeExchange {
         sf,
-        roots: vec![0.0; nroots as usize],
+        unit: three_doubles()?,
+        roots: vec![0.0; 3 * nroots as usize],
         n_local_nodes: nv,
         bytes_sent: 0,
         ghosts,
     })
+}
+
+/// The MPI datatype of three contiguous doubles (committed).
+fn three_doubles() -> Result<mpi_sys::MPI_Datatype, MeshError> {
+    // SAFETY: FFI; MPI is initialised (the mesh was just distributed over it), and the
+    // handle is written by MPI_Type_contiguous before it is committed.
+    unsafe {
+        let mut t: mpi_sys::MPI_Datatype = std::mem::zeroed();
+        let ok = mpi_sys::MPI_Type_contiguous(3, mpi_sys::RSMPI_DOUBLE, &mut t) == 0
+            && mpi_sys::MPI_Type_commit(&mut t) == 0;
+        if ok {
+            Ok(t)
+        } else {
+            Err(MeshError::Invalid(
+                "MPI_Type_contiguous for the ghost exchange failed".into(),
+            ))
+        }
+    }
 }
 
 /// Two face normals closer than this (1 - |cos|) count as parallel.
