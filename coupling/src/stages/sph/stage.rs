@@ -451,7 +451,13 @@ impl SphStage {
         let mut src = Vec::new();
         let mut ranks = Vec::new();
         let mut shifts = Vec::new();
-        for i in 0..self.parts.n_owned {
+        // One rank without a periodic box has no ghosts: every sphere reaches this rank only.
+        let n_sources = if self.comm.size() == 1 && per.is_none() {
+            0
+        } else {
+            self.parts.n_owned
+        };
+        for i in 0..n_sources {
             let x = self.parts.x_real[i];
             // A kept decomposition's ghosts also reach the pairs the particle may enter
             // before the next rebuild (it moves less than half the skin).
