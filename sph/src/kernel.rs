@@ -69,57 +69,40 @@ impl Kernel {
         self.with_profile(Profile::Standard).dw_dr(r, h)
     }
 
-    /// The dimensionless shape f(s) (zero for s >= 2).
+    /// The dimensionless shape f(s) (zero for s >= 2). Each piece is written with clamped
+    /// factors, max(2 - s, 0) and max(1 - s, 0), so that the sum of the pieces is the piecewise
+    /// form without a branch (a zero factor adds exactly nothing), the pair loops' kernel
+    /// costing no mispredicted jump where s falls on either side of 1 at random.
+    #[inline(always)]
     fn shape(self, s: f64) -> f64 {
         match self {
             Kernel::CubicSpline => {
-                if s < 1.0 {
-                    let a = 2.0 - s;
-                    let b = 1.0 - s;
-                    a * a * a - 4.0 * b * b * b
-                } else if s < 2.0 {
-                    let a = 2.0 - s;
-                    a * a * a
-                } else {
-                    0.0
-                }
+                let a = (2.0 - s).max(0.0);
+                let b = (1.0 - s).max(0.0);
+                a * a * a - 4.0 * b * b * b
             }
             Kernel::Wendland => {
-                if s < 2.0 {
-                    let a = 1.0 - 0.5 * s;
-                    let a2 = a * a;
-                    a2 * a2 * (2.0 * s + 1.0)
-                } else {
-                    0.0
-                }
+                let a = (1.0 - 0.5 * s).max(0.0);
+                let a2 = a * a;
+                a2 * a2 * (2.0 * s + 1.0)
             }
         }
     }
 
-    /// df/ds (zero for s >= 2).
+    /// df/ds (zero for s >= 2), branch-free as `shape`.
+    #[inline(always)]
     fn shape_derivative(self, s: f64) -> f64 {
         match self {
             // d/ds [(2-s)^3 - 4(1-s)^3] = -3(2-s)^2 + 12(1-s)^2
             Kernel::CubicSpline => {
-                if s < 1.0 {
-                    let a = 2.0 - s;
-                    let b = 1.0 - s;
-                    -3.0 * a * a + 12.0 * b * b
-                } else if s < 2.0 {
-                    let a = 2.0 - s;
-                    -3.0 * a * a
-                } else {
-                    0.0
-                }
+                let a = (2.0 - s).max(0.0);
+                let b = (1.0 - s).max(0.0);
+                -3.0 * a * a + 12.0 * b * b
             }
             // d/ds [(1-s/2)^4 (2s+1)] = -5 s (1-s/2)^3
             Kernel::Wendland => {
-                if s < 2.0 {
-                    let a = 1.0 - 0.5 * s;
-                    -5.0 * s * a * a * a
-                } else {
-                    0.0
-                }
+                let a = (1.0 - 0.5 * s).max(0.0);
+                -5.0 * s * a * a * a
             }
         }
     }

@@ -317,18 +317,27 @@ fn kernel_at(k: &crate::kernel::SmoothingKernel, h: f64, params: &Params) -> (Sc
     (sk, inv_w_dp)
 }
 
+/// Kept candidates tested per chunk before the chunk's overlapping pairs are computed: the
+/// test writes every candidate to a small buffer (in L1) and advances by one where it passes,
+/// so the ~30 % of candidates that fail cost no mispredicted jump each.
+const CANDIDATE_CHUNK: usize = 256;
+
 /// The pair loop of the force passes over packed slots (`buf`, from [`PassBuffers::pack`]).
 /// `KEPT`: `pairs` are kept candidates, of which only those whose spheres overlap now
 /// (r^2 < (h_a + h_b)^2, the search's test) are computed and counted in `buf.count`; else every
 /// pair is computed. `CONTINUITY`: also the continuity density rates. Coincident pairs (r = 0)
 /// are skipped. Returns the pair work rate and the number of overlapping pairs (`KEPT` only).
+/// The choices within a pair (viscosity only when approaching, the tensile correction's sign
+/// cases, the kernel's pieces) are arithmetic (min, max, 0/1 factors), not jumps: each goes
+/// either way at random from pair to pair. They give the textbook cases' values bit for bit
+/// (up to the sign of a zero term, which no sum here can see).
 ///
 /// Per computed pair (cubic spline, viscosity and tensile correction on, as the dam break):
-/// ~95 flops (geometry and overlap test 14, one sqrt and one division, kernel value and
-/// derivative 15, viscosity 12, tensile correction 8, pressure, force and energy 30, density
-/// rate 6, work 10) and 2 x 96 bytes of packed inputs read and 2 x 40 bytes of sums read and
-/// written, ~10 cache lines touched, mostly in L1/L2 when the slots follow the pairs' order;
-/// a rejected candidate costs the test alone (14 flops, 2 x 32 bytes).
+/// ~100 flops (geometry 8, one sqrt and three divisions, kernel value and derivative 20,
+/// viscosity 12, tensile correction 10, pressure, force and energy 30, density rate 6, work 10)
+/// and 2 x 96 bytes of packed inputs read and 2 x 40 bytes of sums read and written, in L1/L2
+/// when the slots follow the pairs' order (`KeptPairs`); a candidate's test costs 9 flops and
+/// 2 x 32 bytes.
 #[inline(always)]
 fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
     pairs: &[(u32, u32)],
@@ -350,24 +359,13 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = kernel_at(&k, f64::NAN, params);
     let mut work = PairWork::default();
-    let mut n_pairs = 0usize;
-    for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
+    let mut pair = |i: usize, j: usize| {
         let (a, b) = (&slots[i], &slots[j]);
         let d = sub(a.x, b.x);
         let r2 = dot(d, d);
-        if KEPT {
-            let reach = a.h + b.h;
-            if !(r2 < reach * reach) {
-                continue;
-            }
-            count[i] += 1;
-            count[j] += 1;
-            n_pairs += 1;
-        }
         let r = r2.sqrt();
         if r == 0.0 {
-            continue; // coincident: no direction
+            return; // coincident: no direction
         }
         let h = 0.5 * (a.h + b.h);
         if kern.0.h != h {
@@ -383,33 +381,30 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
             sums[j].drho += a.m * t;
         }
         let visc = match params.viscosity {
-            Some(av) if vr < 0.0 => {
-                let mu = h * vr / (r2 + av.eta_factor * h * h);
+            Some(av) => {
+                // mu = 0 (so Pi = 0) when receding: min(vr, 0) rather than a jump
+                let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
                 let c_mean = 0.5 * (a.c + b.c);
                 let rho_mean = 0.5 * (a.rho + b.rho);
                 (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
             }
-            _ => 0.0,
+            None => 0.0,
         };
         let (pa, pb) = (a.p_rho2, b.p_rho2);
         let tensile = match params.tensile {
             Some(tc) if kern.1 > 0.0 => {
                 let fab = kern.0.w(r) * kern.1;
+                // epsilon |x| in tension (x < 0), else 0; the cases as 0/1 factors, not jumps
+                let tension = |x: f64| tc.epsilon * x.abs() * mask(x < 0.0);
                 let r_ab = if liggghts {
-                    if a.p > 0.0 && b.p > 0.0 {
-                        POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb)
-                    } else {
-                        let neg = |x: f64| if x < 0.0 { tc.epsilon * x.abs() } else { 0.0 };
-                        neg(pa) + neg(pb)
-                    }
+                    // 0.01 (pa + pb) when both pressures are positive (the tension terms
+                    // are then zero), else the tension terms
+                    let both = mask((a.p > 0.0) & (b.p > 0.0));
+                    POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb) * both
+                        + (tension(pa) + tension(pb))
                 } else {
-                    let one = |x: f64| {
-                        if x < 0.0 {
-                            tc.epsilon * x.abs()
-                        } else {
-                            POSITIVE_PRESSURE_TENSILE_FACTOR * x
-                        }
-                    };
+                    let one =
+                        |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * x * mask(x >= 0.0);
                     one(pa) + one(pb)
                 };
                 r_ab * fab.powi(TENSILE_EXPONENT)
@@ -437,8 +432,41 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
             sums[i].de += b.m * q;
             sums[j].de -= a.m * q;
         }
+    };
+    let mut n_pairs = 0usize;
+    if KEPT {
+        let mut close = [(0u32, 0u32); CANDIDATE_CHUNK];
+        for chunk in pairs.chunks(CANDIDATE_CHUNK) {
+            let mut n = 0;
+            for &(i, j) in chunk {
+                let (a, b) = (&slots[i as usize], &slots[j as usize]);
+                let d = sub(a.x, b.x);
+                let reach = a.h + b.h;
+                close[n] = (i, j);
+                n += (dot(d, d) < reach * reach) as usize;
+            }
+            n_pairs += n;
+            for &(i, j) in &close[..n] {
+                let (i, j) = (i as usize, j as usize);
+                count[i] += 1;
+                count[j] += 1;
+                pair(i, j);
+            }
+        }
+    } else {
+        for &(i, j) in pairs {
+            pair(i as usize, j as usize);
+        }
     }
     (work, n_pairs)
+}
+
+/// 1.0 where `c` holds, else 0.0: a case of a pair's formula as a factor rather than a jump
+/// (`c` goes either way at random from pair to pair; a jump would be mispredicted often).
+/// Multiplying a finite term by it keeps the term bit for bit or makes it zero.
+#[inline(always)]
+fn mask(c: bool) -> f64 {
+    c as u8 as f64
 }
 
 /// [`continuity_and_force_pass`] over kept candidates packed in `order`
