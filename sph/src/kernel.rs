@@ -74,7 +74,7 @@ impl Kernel {
     /// form without a branch (a zero factor adds exactly nothing), the pair loops' kernel
     /// costing no mispredicted jump where s falls on either side of 1 at random.
     #[inline(always)]
-    fn shape(self, s: f64) -> f64 {
+    pub(crate) fn shape(self, s: f64) -> f64 {
         match self {
             Kernel::CubicSpline => {
                 let a = (2.0 - s).max(0.0);
@@ -91,7 +91,7 @@ impl Kernel {
 
     /// df/ds (zero for s >= 2), branch-free as `shape`.
     #[inline(always)]
-    fn shape_derivative(self, s: f64) -> f64 {
+    pub(crate) fn shape_derivative(self, s: f64) -> f64 {
         match self {
             // d/ds [(2-s)^3 - 4(1-s)^3] = -3(2-s)^2 + 12(1-s)^2
             Kernel::CubicSpline => {
@@ -170,6 +170,13 @@ pub struct ScaledKernel {
 }
 
 impl ScaledKernel {
+    /// 1/h, sigma/h^3 and grad_sigma/h^4: W = sigma/h^3 f(r/h), dW/dr = grad_sigma/h^4 f'(r/h)
+    /// with r/h taken as r x (1/h), for a caller that knows the shape at compile time.
+    #[inline(always)]
+    pub(crate) fn factors(&self) -> (f64, f64, f64) {
+        (self.inv_h, self.w_norm, self.dw_norm)
+    }
+
     /// W(r, h), 1/m^3.
     #[inline(always)]
     pub fn w(&self, r: f64) -> f64 {

@@ -15,7 +15,7 @@
 //! Notation: r_ab = x_a - x_b, r = |r_ab|, h = (h_a + h_b)/2, v^_ab = v^_a - v^_b,
 //! grad_a W_ab = dW/dr r_ab/r. Passes skip coincident pairs (r = 0: no direction).
 use crate::eos::Eos;
-use crate::kernel::ScaledKernel;
+use crate::kernel::{Kernel, ScaledKernel};
 use crate::params::{DensityMode, Params, Profile};
 use crate::particles::Particles;
 
@@ -344,8 +344,44 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
     buf: &mut PassBuffers,
     params: &Params,
 ) -> (PairWork, usize) {
-    let k = params.smoothing_kernel();
+    // the kernel's shape and the profile as constants of the loop (no test of them per pair)
     let liggghts = params.profile == Profile::Liggghts;
+    match (params.kernel, liggghts) {
+        (Kernel::CubicSpline, true) => {
+            pair_loop_for::<KEPT, CONTINUITY, true, true>(pairs, buf, params)
+        }
+        (Kernel::CubicSpline, false) => {
+            pair_loop_for::<KEPT, CONTINUITY, true, false>(pairs, buf, params)
+        }
+        (Kernel::Wendland, true) => {
+            pair_loop_for::<KEPT, CONTINUITY, false, true>(pairs, buf, params)
+        }
+        (Kernel::Wendland, false) => {
+            pair_loop_for::<KEPT, CONTINUITY, false, false>(pairs, buf, params)
+        }
+    }
+}
+
+/// `pair_loop` for one kernel shape (`CUBIC`: cubic spline, else Wendland) and profile
+/// (`LIGGGHTS`).
+#[inline(never)]
+fn pair_loop_for<
+    const KEPT: bool,
+    const CONTINUITY: bool,
+    const CUBIC: bool,
+    const LIGGGHTS: bool,
+>(
+    pairs: &[(u32, u32)],
+    buf: &mut PassBuffers,
+    params: &Params,
+) -> (PairWork, usize) {
+    let k = params.smoothing_kernel();
+    let kind = if CUBIC {
+        Kernel::CubicSpline
+    } else {
+        Kernel::Wendland
+    };
+    let liggghts = LIGGGHTS;
     let cond = conductivity(params);
     let PassBuffers {
         slots,
@@ -372,7 +408,10 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
             kern = kernel_at(&k, h, params);
         }
         let inv_r = 1.0 / r;
-        let dw = kern.0.dw_dr(r);
+        // kern.0.dw_dr(r) and kern.0.w(r) with the shape known here
+        let (inv_h, w_norm, dw_norm) = kern.0.factors();
+        let s = r * inv_h;
+        let dw = dw_norm * kind.shape_derivative(s);
         let vr = dot(sub(a.vhat, b.vhat), d);
         if CONTINUITY {
             // Monaghan 1992, eq. 2.16, as in density_pass
@@ -393,7 +432,7 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
         let (pa, pb) = (a.p_rho2, b.p_rho2);
         let tensile = match params.tensile {
             Some(tc) if kern.1 > 0.0 => {
-                let fab = kern.0.w(r) * kern.1;
+                let fab = w_norm * kind.shape(s) * kern.1;
                 // epsilon |x| in tension (x < 0), else 0; the cases as 0/1 factors, not jumps
                 let tension = |x: f64| tc.epsilon * x.abs() * mask(x < 0.0);
                 let r_ab = if liggghts {
