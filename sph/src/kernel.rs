@@ -2,6 +2,7 @@
 //! A pair uses h_ab = (h_a + h_b)/2 (the LIGGGHTS convention), so its support 2 h_ab = h_a + h_b
 //! is exactly the distance at which the two particles' spheres (radius h) touch.
 use crate::params::Profile;
+use crate::passes::pos_part;
 use std::f64::consts::PI;
 
 /// Cubic spline: sigma = 1/(4 pi) with f = (2-s)^3 - 4(1-s)^3 on [0,1), (2-s)^3 on [1,2)
@@ -77,12 +78,12 @@ impl Kernel {
     pub(crate) fn shape(self, s: f64) -> f64 {
         match self {
             Kernel::CubicSpline => {
-                let a = (2.0 - s).max(0.0);
-                let b = (1.0 - s).max(0.0);
+                let a = pos_part(2.0 - s);
+                let b = pos_part(1.0 - s);
                 a * a * a - 4.0 * b * b * b
             }
             Kernel::Wendland => {
-                let a = (1.0 - 0.5 * s).max(0.0);
+                let a = pos_part(1.0 - 0.5 * s);
                 let a2 = a * a;
                 a2 * a2 * (2.0 * s + 1.0)
             }
@@ -95,13 +96,13 @@ impl Kernel {
         match self {
             // d/ds [(2-s)^3 - 4(1-s)^3] = -3(2-s)^2 + 12(1-s)^2
             Kernel::CubicSpline => {
-                let a = (2.0 - s).max(0.0);
-                let b = (1.0 - s).max(0.0);
+                let a = pos_part(2.0 - s);
+                let b = pos_part(1.0 - s);
                 -3.0 * a * a + 12.0 * b * b
             }
             // d/ds [(1-s/2)^4 (2s+1)] = -5 s (1-s/2)^3
             Kernel::Wendland => {
-                let a = (1.0 - 0.5 * s).max(0.0);
+                let a = pos_part(1.0 - 0.5 * s);
                 -5.0 * s * a * a * a
             }
         }

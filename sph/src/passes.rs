@@ -422,7 +422,7 @@ fn pair_loop_for<
         let visc = match params.viscosity {
             Some(av) => {
                 // mu = 0 (so Pi = 0) when receding: min(vr, 0) rather than a jump
-                let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
+                let mu = h * neg_part(vr) / (r2 + av.eta_factor * h * h);
                 let c_mean = 0.5 * (a.c + b.c);
                 let rho_mean = 0.5 * (a.rho + b.rho);
                 (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
@@ -433,17 +433,16 @@ fn pair_loop_for<
         let tensile = match params.tensile {
             Some(tc) if kern.1 > 0.0 => {
                 let fab = w_norm * kind.shape(s) * kern.1;
-                // epsilon |x| in tension (x < 0), else 0; the cases as 0/1 factors, not jumps
-                let tension = |x: f64| tc.epsilon * x.abs() * mask(x < 0.0);
+                // epsilon |x| in tension (x < 0), else 0: epsilon max(-x, 0)
+                let tension = |x: f64| tc.epsilon * pos_part(-x);
                 let r_ab = if liggghts {
                     // 0.01 (pa + pb) when both pressures are positive (the tension terms
                     // are then zero), else the tension terms
-                    let both = mask((a.p > 0.0) & (b.p > 0.0));
-                    POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb) * both
-                        + (tension(pa) + tension(pb))
+                    let both = (a.p > 0.0) & (b.p > 0.0);
+                    let positive = POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb);
+                    select_or_zero(both, positive) + (tension(pa) + tension(pb))
                 } else {
-                    let one =
-                        |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * x * mask(x >= 0.0);
+                    let one = |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * pos_part(x);
                     one(pa) + one(pb)
                 };
                 r_ab * fab.powi(TENSILE_EXPONENT)
@@ -500,12 +499,35 @@ fn pair_loop_for<
     (work, n_pairs)
 }
 
-/// 1.0 where `c` holds, else 0.0: a case of a pair's formula as a factor rather than a jump
-/// (`c` goes either way at random from pair to pair; a jump would be mispredicted often).
-/// Multiplying a finite term by it keeps the term bit for bit or makes it zero.
+/// x where x > 0, else +0 (also for NaN): a clamp of a pair's formula, one `maxsd` rather than
+/// a jump (the cases go either way at random from pair to pair).
 #[inline(always)]
-fn mask(c: bool) -> f64 {
-    c as u8 as f64
+pub(crate) fn pos_part(x: f64) -> f64 {
+    if x > 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// x where x < 0, else +0 (also for NaN), as [`pos_part`] (one `minsd`).
+#[inline(always)]
+fn neg_part(x: f64) -> f64 {
+    if x < 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// x where `c` holds, else +0, for a cheap x (a compare and a mask, not a jump).
+#[inline(always)]
+fn select_or_zero(c: bool, x: f64) -> f64 {
+    if c {
+        x
+    } else {
+        0.0
+    }
 }
 
 /// [`continuity_and_force_pass`] over kept candidates packed in `order`
