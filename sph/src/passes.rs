@@ -114,12 +114,13 @@ pub fn density_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) {
 pub fn update_eos(p: &mut Particles, params: &Params) {
     for i in 0..p.n_owned {
         let eos = &params.eos[p.mat[i] as usize];
-        let (pr, c) = eos.pressure_and_sound_speed(p.rho[i], p.e[i]);
-        p.p[i] = pr;
-        p.c[i] = match (params.profile, liggghts_sound_speed(eos)) {
-            (Profile::Liggghts, Some(c0)) => c0,
-            _ => c,
+        let (pr, c) = match (params.profile, liggghts_sound_speed(eos)) {
+            // the EOS's own c is not used: not computed (a square root per particle)
+            (Profile::Liggghts, Some(c0)) => (eos.pressure(p.rho[i], p.e[i]), c0),
+            _ => eos.pressure_and_sound_speed(p.rho[i], p.e[i]),
         };
+        p.p[i] = pr;
+        p.c[i] = c;
     }
 }
 
