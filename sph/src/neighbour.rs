@@ -651,14 +651,23 @@ impl KeptPairs {
         )
     }
 
-    /// Whether the candidates still hold every overlapping pair of `parts`.
+    /// Whether the candidates still hold every overlapping pair of `parts`: the same entries
+    /// (ids) with the same h, none moved half the skin. One sweep over the entries with the
+    /// three tests and-ed, no early exit (a list is valid at almost every step, so every entry
+    /// is looked at anyway, and the sweep has no jump to mispredict).
     pub fn still_valid(&self, parts: &Particles) -> bool {
-        self.id_ref == parts.id
-            && self.h_ref == parts.h
-            && parts.x_real.iter().zip(&self.x_ref).all(|(a, b)| {
-                let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-                2.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < self.skin
-            })
+        let n = parts.len();
+        if self.id_ref.len() != n || self.h_ref.len() != n || self.x_ref.len() != n {
+            return false;
+        }
+        let (id, h, x) = (&parts.id[..n], &parts.h[..n], &parts.x_real[..n]);
+        let (id_ref, h_ref, x_ref) = (&self.id_ref[..n], &self.h_ref[..n], &self.x_ref[..n]);
+        (0..n).fold(true, |ok, i| {
+            let (a, b) = (x[i], x_ref[i]);
+            let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            let near = 2.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < self.skin;
+            ok & (id[i] == id_ref[i]) & (h[i] == h_ref[i]) & near
+        })
     }
 
     /// The overlapping pairs (the search's test for interior pairs: r^2 < (h_a + h_b)^2 on real

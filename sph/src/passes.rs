@@ -205,9 +205,10 @@ fn assert_continuity(params: &Params) {
 /// The inputs of the force pass of one entry, packed together (96 bytes) so that a pair reads
 /// two of these rather than ten scattered arrays: position and h (all the overlap test of kept
 /// candidates reads), predicted velocity and mass, p/rho^2 (computed once per entry rather than
-/// twice per pair), rho, c and p.
+/// twice per pair), rho, c and p. Aligned to 32 bytes, so that each group of four lies within
+/// one cache line.
 #[derive(Clone, Copy, Debug, Default)]
-#[repr(C)]
+#[repr(C, align(32))]
 struct Slot {
     x: [f64; 3],
     h: f64,
@@ -219,11 +220,12 @@ struct Slot {
     p: f64,
 }
 
-/// What a pass adds to one entry: force, density rate (continuity), energy rate.
+/// What a pass adds to one entry: force and energy rate (32 bytes, aligned: within one cache
+/// line); the density rate is beside them (`PassBuffers::drho`).
 #[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
 struct Sums {
     f: [f64; 3],
-    drho: f64,
     de: f64,
 }
 
@@ -238,6 +240,8 @@ pub struct PassBuffers {
     /// Specific internal energy of each slot (with artificial conductivity only).
     e: Vec<f64>,
     sums: Vec<Sums>,
+    /// Density rate of each slot (continuity).
+    drho: Vec<f64>,
     /// Pairs of each slot that passed the overlap test (kept candidates only).
     count: Vec<u32>,
 }
@@ -264,6 +268,8 @@ impl PassBuffers {
         }
         self.sums.clear();
         self.sums.resize(n, Sums::default());
+        self.drho.clear();
+        self.drho.resize(n, 0.0);
         self.count.clear();
         self.count.resize(n, 0);
     }
@@ -278,7 +284,7 @@ impl PassBuffers {
             }
             p.de[i] += s.de;
             if continuity {
-                p.drho[i] += s.drho;
+                p.drho[i] += self.drho[k];
             }
         }
     }
@@ -388,10 +394,12 @@ fn pair_loop_for<
         slots,
         e,
         sums,
+        drho,
         count,
     } = buf;
     let slots = &slots[..];
     let sums = &mut sums[..slots.len()];
+    let drho = &mut drho[..slots.len()];
     let count = &mut count[..slots.len()];
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = kernel_at(&k, f64::NAN, params);
@@ -417,8 +425,8 @@ fn pair_loop_for<
         if CONTINUITY {
             // Monaghan 1992, eq. 2.16, as in density_pass
             let t = dw * vr * inv_r;
-            sums[i].drho += b.m * t;
-            sums[j].drho += a.m * t;
+            drho[i] += b.m * t;
+            drho[j] += a.m * t;
         }
         let visc = match params.viscosity {
             Some(av) => {
