@@ -2,6 +2,7 @@
 //! A pair uses h_ab = (h_a + h_b)/2 (the LIGGGHTS convention), so its support 2 h_ab = h_a + h_b
 //! is exactly the distance at which the two particles' spheres (radius h) touch.
 use crate::params::Profile;
+use crate::passes::pos_part;
 use std::f64::consts::PI;
 
 /// Cubic spline: sigma = 1/(4 pi) with f = (2-s)^3 - 4(1-s)^3 on [0,1), (2-s)^3 on [1,2)
@@ -69,57 +70,40 @@ impl Kernel {
         self.with_profile(Profile::Standard).dw_dr(r, h)
     }
 
-    /// The dimensionless shape f(s) (zero for s >= 2).
-    fn shape(self, s: f64) -> f64 {
+    /// The dimensionless shape f(s) (zero for s >= 2). Each piece is written with clamped
+    /// factors, max(2 - s, 0) and max(1 - s, 0), so that the sum of the pieces is the piecewise
+    /// form without a branch (a zero factor adds exactly nothing), the pair loops' kernel
+    /// costing no mispredicted jump where s falls on either side of 1 at random.
+    #[inline(always)]
+    pub(crate) fn shape(self, s: f64) -> f64 {
         match self {
             Kernel::CubicSpline => {
-                if s < 1.0 {
-                    let a = 2.0 - s;
-                    let b = 1.0 - s;
-                    a * a * a - 4.0 * b * b * b
-                } else if s < 2.0 {
-                    let a = 2.0 - s;
-                    a * a * a
-                } else {
-                    0.0
-                }
+                let a = pos_part(2.0 - s);
+                let b = pos_part(1.0 - s);
+                a * a * a - 4.0 * b * b * b
             }
             Kernel::Wendland => {
-                if s < 2.0 {
-                    let a = 1.0 - 0.5 * s;
-                    let a2 = a * a;
-                    a2 * a2 * (2.0 * s + 1.0)
-                } else {
-                    0.0
-                }
+                let a = pos_part(1.0 - 0.5 * s);
+                let a2 = a * a;
+                a2 * a2 * (2.0 * s + 1.0)
             }
         }
     }
 
-    /// df/ds (zero for s >= 2).
-    fn shape_derivative(self, s: f64) -> f64 {
+    /// df/ds (zero for s >= 2), branch-free as `shape`.
+    #[inline(always)]
+    pub(crate) fn shape_derivative(self, s: f64) -> f64 {
         match self {
             // d/ds [(2-s)^3 - 4(1-s)^3] = -3(2-s)^2 + 12(1-s)^2
             Kernel::CubicSpline => {
-                if s < 1.0 {
-                    let a = 2.0 - s;
-                    let b = 1.0 - s;
-                    -3.0 * a * a + 12.0 * b * b
-                } else if s < 2.0 {
-                    let a = 2.0 - s;
-                    -3.0 * a * a
-                } else {
-                    0.0
-                }
+                let a = pos_part(2.0 - s);
+                let b = pos_part(1.0 - s);
+                -3.0 * a * a + 12.0 * b * b
             }
             // d/ds [(1-s/2)^4 (2s+1)] = -5 s (1-s/2)^3
             Kernel::Wendland => {
-                if s < 2.0 {
-                    let a = 1.0 - 0.5 * s;
-                    -5.0 * s * a * a * a
-                } else {
-                    0.0
-                }
+                let a = pos_part(1.0 - 0.5 * s);
+                -5.0 * s * a * a * a
             }
         }
     }
@@ -187,6 +171,13 @@ pub struct ScaledKernel {
 }
 
 impl ScaledKernel {
+    /// 1/h, sigma/h^3 and grad_sigma/h^4: W = sigma/h^3 f(r/h), dW/dr = grad_sigma/h^4 f'(r/h)
+    /// with r/h taken as r x (1/h), for a caller that knows the shape at compile time.
+    #[inline(always)]
+    pub(crate) fn factors(&self) -> (f64, f64, f64) {
+        (self.inv_h, self.w_norm, self.dw_norm)
+    }
+
     /// W(r, h), 1/m^3.
     #[inline(always)]
     pub fn w(&self, r: f64) -> f64 {

@@ -54,8 +54,8 @@ pub use neighbour::{
 pub use params::{ArtificialViscosity, DensityMode, Params, Profile, TensileCorrection};
 pub use particles::{EosState, NewParticle, PairSums, ParticleRecord, Particles};
 pub use passes::{
-    add_gravity, continuity_and_force_pass, density_pass, force_pass, reset_density_sums,
-    reset_force_sums, update_eos, PairWork,
+    add_gravity, continuity_and_force_pass, continuity_and_force_pass_with, density_pass,
+    force_pass, reset_density_sums, reset_force_sums, update_eos, PairWork, PassBuffers,
 };
 pub use periodic::{periodic_images, Periodic};
 pub use serial::SerialSim;

@@ -21,7 +21,9 @@
 //! with "a" the copy of smaller image index); folded back onto the owner, a pass adds both ends'
 //! contributions to the particle, i.e. the m and -m terms of its periodic sums. Two copies of
 //! one particle with the same image index are never a pair.
+use crate::params::Params;
 use crate::particles::Particles;
+use crate::passes::{kept_continuity_and_force_pass, PairWork, PassBuffers};
 use crate::periodic::Periodic;
 
 /// Options of the pair search.
@@ -530,24 +532,35 @@ pub const KEPT_PAIRS_SKIN_H: f64 = 0.2;
 /// each grown by half the skin, overlapped at the build. While no particle has moved half the
 /// skin since (and h and the particles are the same), every overlapping pair is among them
 /// (a pair's distance changes by at most the two motions), and [`KeptPairs::filter`] with the
-/// search's own overlap test gives the pairs a fresh [`pairs_in_box`] gives (in another order).
+/// search's own overlap test gives the pairs a fresh [`pairs_in_box`] gives (in another order);
+/// [`KeptPairs::continuity_and_force_pass`] applies the same test inside the pass.
+///
+/// The candidates are held as slots of a packing order: the entries in the order in which
+/// they first appear in the candidate list (the search's cell order), so that the pass reads
+/// its packed inputs nearly in sequence (a pair's ends are mostly a few slots from the last
+/// pair's). Entries without candidates are not packed.
 #[derive(Clone, Debug)]
 pub struct KeptPairs {
+    /// Candidates as slot indices, in the search's order.
     pairs: Vec<(u32, u32)>,
+    /// Entry of each slot.
+    order: Vec<u32>,
     x_ref: Vec<[f64; 3]>,
     h_ref: Vec<f64>,
     id_ref: Vec<u64>,
     skin: f64,
+    /// The fused pass's packed inputs and sums, reused.
+    buf: PassBuffers,
 }
 
 impl KeptPairs {
     /// The kept list as plain arrays (a restart continues with the very same list, so the
-    /// pairs are summed in the same order): pairs, reference positions, smoothing lengths and
-    /// ids, and the skin.
+    /// pairs are summed in the same order): pairs (entry indices), reference positions,
+    /// smoothing lengths and ids, and the skin.
     #[allow(clippy::type_complexity)]
     pub fn to_parts(&self) -> (Vec<[u32; 2]>, Vec<[f64; 3]>, Vec<f64>, Vec<u64>, f64) {
         (
-            self.pairs.iter().map(|&(a, b)| [a, b]).collect(),
+            self.entry_pairs().map(|(a, b)| [a, b]).collect(),
             self.x_ref.clone(),
             self.h_ref.clone(),
             self.id_ref.clone(),
@@ -563,13 +576,57 @@ impl KeptPairs {
         id_ref: Vec<u64>,
         skin: f64,
     ) -> Self {
-        KeptPairs {
-            pairs: pairs.into_iter().map(|[a, b]| (a, b)).collect(),
+        let n = id_ref.len();
+        Self::from_entry_pairs(
+            pairs.into_iter().map(|[a, b]| (a, b)).collect(),
+            n,
             x_ref,
             h_ref,
             id_ref,
             skin,
+        )
+    }
+
+    /// The candidates `pairs` (entry indices, `n` entries) as slots of their first-appearance
+    /// order.
+    fn from_entry_pairs(
+        mut pairs: Vec<(u32, u32)>,
+        n: usize,
+        x_ref: Vec<[f64; 3]>,
+        h_ref: Vec<f64>,
+        id_ref: Vec<u64>,
+        skin: f64,
+    ) -> Self {
+        let mut slot = vec![u32::MAX; n];
+        let mut order = Vec::new();
+        let mut slot_of = |e: u32| {
+            let s = &mut slot[e as usize];
+            if *s == u32::MAX {
+                *s = order.len() as u32;
+                order.push(e);
+            }
+            *s
+        };
+        for pr in pairs.iter_mut() {
+            *pr = (slot_of(pr.0), slot_of(pr.1));
         }
+        KeptPairs {
+            pairs,
+            order,
+            x_ref,
+            h_ref,
+            id_ref,
+            skin,
+            buf: PassBuffers::default(),
+        }
+    }
+
+    /// The candidates as entry indices, in their order.
+    fn entry_pairs(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let o = &self.order;
+        self.pairs
+            .iter()
+            .map(|&(a, b)| (o[a as usize], o[b as usize]))
     }
 
     /// Candidates of `parts` in the box `lo..hi` (which must hold every sphere: all of space).
@@ -584,23 +641,33 @@ impl KeptPairs {
         for h in grown.h.iter_mut() {
             *h += 0.5 * skin;
         }
-        KeptPairs {
-            pairs: pairs_in_box(&grown, opts, lo, hi),
-            x_ref: parts.x_real.clone(),
-            h_ref: parts.h.clone(),
-            id_ref: parts.id.clone(),
+        Self::from_entry_pairs(
+            pairs_in_box(&grown, opts, lo, hi),
+            parts.len(),
+            parts.x_real.clone(),
+            parts.h.clone(),
+            parts.id.clone(),
             skin,
-        }
+        )
     }
 
-    /// Whether the candidates still hold every overlapping pair of `parts`.
+    /// Whether the candidates still hold every overlapping pair of `parts`: the same entries
+    /// (ids) with the same h, none moved half the skin. One sweep over the entries with the
+    /// three tests and-ed, no early exit (a list is valid at almost every step, so every entry
+    /// is looked at anyway, and the sweep has no jump to mispredict).
     pub fn still_valid(&self, parts: &Particles) -> bool {
-        self.id_ref == parts.id
-            && self.h_ref == parts.h
-            && parts.x_real.iter().zip(&self.x_ref).all(|(a, b)| {
-                let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-                2.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < self.skin
-            })
+        let n = parts.len();
+        if self.id_ref.len() != n || self.h_ref.len() != n || self.x_ref.len() != n {
+            return false;
+        }
+        let (id, h, x) = (&parts.id[..n], &parts.h[..n], &parts.x_real[..n]);
+        let (id_ref, h_ref, x_ref) = (&self.id_ref[..n], &self.h_ref[..n], &self.x_ref[..n]);
+        (0..n).fold(true, |ok, i| {
+            let (a, b) = (x[i], x_ref[i]);
+            let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            let near = 2.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < self.skin;
+            ok & (id[i] == id_ref[i]) & (h[i] == h_ref[i]) & near
+        })
     }
 
     /// The overlapping pairs (the search's test for interior pairs: r^2 < (h_a + h_b)^2 on real
@@ -610,7 +677,7 @@ impl KeptPairs {
         count.clear();
         count.resize(parts.len(), 0);
         let mut list = Vec::with_capacity(self.pairs.len());
-        for &(i, j) in &self.pairs {
+        for (i, j) in self.entry_pairs() {
             let (a, b) = (x[i as usize], x[j as usize]);
             let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let reach = h[i as usize] + h[j as usize];
@@ -621,6 +688,26 @@ impl KeptPairs {
             }
         }
         list
+    }
+
+    /// `continuity_and_force_pass` over the pairs [`KeptPairs::filter`] gives, in its order
+    /// (the same sums, bit for bit), with the filter's test applied to each candidate inside
+    /// the pass (no filtered list is written), counting each pair's two entries in `count`
+    /// (zeroed first). Returns the pair work rate and the number of pairs.
+    pub fn continuity_and_force_pass(
+        &mut self,
+        parts: &mut Particles,
+        params: &Params,
+        count: &mut Vec<u32>,
+    ) -> (PairWork, usize) {
+        let out =
+            kept_continuity_and_force_pass(&self.pairs, &self.order, parts, params, &mut self.buf);
+        count.clear();
+        count.resize(parts.len(), 0);
+        for (&e, &c) in self.order.iter().zip(self.buf.counts()) {
+            count[e as usize] = c;
+        }
+        out
     }
 }
 

@@ -15,7 +15,7 @@
 //! Notation: r_ab = x_a - x_b, r = |r_ab|, h = (h_a + h_b)/2, v^_ab = v^_a - v^_b,
 //! grad_a W_ab = dW/dr r_ab/r. Passes skip coincident pairs (r = 0: no direction).
 use crate::eos::Eos;
-use crate::kernel::ScaledKernel;
+use crate::kernel::{Kernel, ScaledKernel};
 use crate::params::{DensityMode, Params, Profile};
 use crate::particles::Particles;
 
@@ -114,12 +114,13 @@ pub fn density_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) {
 pub fn update_eos(p: &mut Particles, params: &Params) {
     for i in 0..p.n_owned {
         let eos = &params.eos[p.mat[i] as usize];
-        let (pr, c) = eos.pressure_and_sound_speed(p.rho[i], p.e[i]);
-        p.p[i] = pr;
-        p.c[i] = match (params.profile, liggghts_sound_speed(eos)) {
-            (Profile::Liggghts, Some(c0)) => c0,
-            _ => c,
+        let (pr, c) = match (params.profile, liggghts_sound_speed(eos)) {
+            // the EOS's own c is not used: not computed (a square root per particle)
+            (Profile::Liggghts, Some(c0)) => (eos.pressure(p.rho[i], p.e[i]), c0),
+            _ => eos.pressure_and_sound_speed(p.rho[i], p.e[i]),
         };
+        p.p[i] = pr;
+        p.c[i] = c;
     }
 }
 
@@ -156,13 +157,10 @@ pub fn reset_force_sums(p: &mut Particles) {
 /// artificial conductivity to de (see there). Returns the pair work rate. Flops per pair ~80,
 /// bytes ~250.
 pub fn force_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) -> PairWork {
-    let ctx = ForceCtx::new(p, params);
-    let mut work = PairWork::default();
-    for &(i, j) in pairs {
-        if let Some(g) = PairGeom::new(p, &ctx, params, i, j) {
-            force_pair(p, params, &ctx, &g, &mut work);
-        }
-    }
+    let mut buf = PassBuffers::default();
+    buf.pack(p, params, None);
+    let (work, _) = pair_loop::<false, false>(pairs, &mut buf, params);
+    buf.unpack(p, None, false);
     work
 }
 
@@ -177,194 +175,393 @@ pub fn continuity_and_force_pass(
     p: &mut Particles,
     params: &Params,
 ) -> PairWork {
+    continuity_and_force_pass_with(pairs, p, params, &mut PassBuffers::default())
+}
+
+/// [`continuity_and_force_pass`] with buffers kept from pass to pass (no allocation once they
+/// have grown to the entries' count).
+pub fn continuity_and_force_pass_with(
+    pairs: &[(u32, u32)],
+    p: &mut Particles,
+    params: &Params,
+    buf: &mut PassBuffers,
+) -> PairWork {
+    assert_continuity(params);
+    buf.pack(p, params, None);
+    let (work, _) = pair_loop::<false, true>(pairs, buf, params);
+    buf.unpack(p, None, true);
+    work
+}
+
+#[inline]
+fn assert_continuity(params: &Params) {
     assert_eq!(
         params.density,
         DensityMode::Continuity,
         "the fused pass needs continuity density"
     );
-    let ctx = ForceCtx::new(p, params);
-    let mut work = PairWork::default();
-    for &(i, j) in pairs {
-        if let Some(g) = PairGeom::new(p, &ctx, params, i, j) {
-            // Monaghan 1992, eq. 2.16, as in density_pass
-            let t = g.dw * dot(g.d, sub(p.vhat[g.i], p.vhat[g.j])) * g.inv_r;
-            p.drho[g.i] += p.m[g.j] * t;
-            p.drho[g.j] += p.m[g.i] * t;
-            force_pair(p, params, &ctx, &g, &mut work);
-        }
-    }
-    work
 }
 
-/// What every pair of a force pass shares.
-struct ForceCtx {
-    k: crate::kernel::SmoothingKernel,
-    liggghts: bool,
-    conductivity: Option<f64>,
-    /// p / rho^2 of every entry (computed once per entry rather than twice per pair).
-    p_rho2: Vec<f64>,
-    /// The kernel at the last pair's h, with 1/W(delta_p, h) of the tensile correction (h is
-    /// mostly the same for every pair, and these depend on h only).
-    at_h: std::cell::Cell<(ScaledKernel, f64)>,
-}
-
-impl ForceCtx {
-    /// The kernel at h and 1/W(delta_p, h) (0 without tensile correction or when delta_p is
-    /// beyond the support).
-    #[inline(always)]
-    fn kernel_at(&self, h: f64, params: &Params) -> (ScaledKernel, f64) {
-        let cached = self.at_h.get();
-        if cached.0.h == h {
-            return cached;
-        }
-        let sk = self.k.at(h);
-        let inv_w_dp = match params.tensile {
-            Some(tc) => {
-                let w_dp = sk.w(tc.delta_p);
-                if w_dp > 0.0 {
-                    1.0 / w_dp
-                } else {
-                    0.0
-                }
-            }
-            None => 0.0,
-        };
-        self.at_h.set((sk, inv_w_dp));
-        (sk, inv_w_dp)
-    }
-}
-
-impl ForceCtx {
-    fn new(p: &Particles, params: &Params) -> Self {
-        ForceCtx {
-            p_rho2: (0..p.len())
-                .map(|i| p.p[i] / (p.rho[i] * p.rho[i]))
-                .collect(),
-            at_h: std::cell::Cell::new((params.smoothing_kernel().at(f64::NAN), 0.0)),
-            k: params.smoothing_kernel(),
-            liggghts: params.profile == Profile::Liggghts,
-            conductivity: if params.energy {
-                params.conductivity
-            } else {
-                None
-            },
-        }
-    }
-}
-
-/// One pair's geometry: entries, r_ab, r^2, r, mean h, dW/dr.
-struct PairGeom {
-    i: usize,
-    j: usize,
-    d: [f64; 3],
-    r2: f64,
-    r: f64,
-    /// 1/r.
-    inv_r: f64,
+/// The inputs of the force pass of one entry, packed together (96 bytes) so that a pair reads
+/// two of these rather than ten scattered arrays: position and h (all the overlap test of kept
+/// candidates reads), predicted velocity and mass, p/rho^2 (computed once per entry rather than
+/// twice per pair), rho, c and p. Aligned to 32 bytes, so that each group of four lies within
+/// one cache line.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Slot {
+    x: [f64; 3],
     h: f64,
-    dw: f64,
-    /// The kernel at h and 1/W(delta_p, h).
-    kernel: (ScaledKernel, f64),
+    vhat: [f64; 3],
+    m: f64,
+    p_rho2: f64,
+    rho: f64,
+    c: f64,
+    p: f64,
 }
 
-impl PairGeom {
-    /// None for coincident entries (r = 0: no direction).
-    #[inline(always)]
-    fn new(p: &Particles, ctx: &ForceCtx, params: &Params, i: u32, j: u32) -> Option<Self> {
-        let (i, j) = (i as usize, j as usize);
-        let d = sub(p.x[i], p.x[j]);
-        let r2 = dot(d, d);
-        let r = r2.sqrt();
-        if r == 0.0 {
-            return None;
+/// What a pass adds to one entry: force and energy rate (32 bytes, aligned: within one cache
+/// line); the density rate is beside them (`PassBuffers::drho`).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Sums {
+    f: [f64; 3],
+    de: f64,
+}
+
+/// The buffers of a pair pass, reused from pass to pass: each entry's inputs packed
+/// ([`Slot`]), in the order of the entries or in an order of the caller's (a kept pair list's,
+/// see `KeptPairs`), and the sums the pass adds, in the same order, added to the entries at the
+/// end. The sums of an entry are added up in the order of the pairs, whatever the packing
+/// order, so the results do not depend on it (bit for bit).
+#[derive(Clone, Debug, Default)]
+pub struct PassBuffers {
+    slots: Vec<Slot>,
+    /// Specific internal energy of each slot (with artificial conductivity only).
+    e: Vec<f64>,
+    sums: Vec<Sums>,
+    /// Density rate of each slot (continuity).
+    drho: Vec<f64>,
+    /// Pairs of each slot that passed the overlap test (kept candidates only).
+    count: Vec<u32>,
+}
+
+impl PassBuffers {
+    /// Packs entry `order[k]` (entry k without `order`) into slot k and zeroes the sums.
+    pub(crate) fn pack(&mut self, p: &Particles, params: &Params, order: Option<&[u32]>) {
+        let n = order.map_or(p.len(), |o| o.len());
+        let entry = |k: usize| order.map_or(k, |o| o[k] as usize);
+        self.slots.clear();
+        self.slots.extend((0..n).map(entry).map(|i| Slot {
+            x: p.x[i],
+            h: p.h[i],
+            vhat: p.vhat[i],
+            m: p.m[i],
+            p_rho2: p.p[i] / (p.rho[i] * p.rho[i]),
+            rho: p.rho[i],
+            c: p.c[i],
+            p: p.p[i],
+        }));
+        self.e.clear();
+        if conductivity(params).is_some() {
+            self.e.extend((0..n).map(entry).map(|i| p.e[i]));
         }
-        let h = 0.5 * (p.h[i] + p.h[j]);
-        let kernel = ctx.kernel_at(h, params);
-        Some(PairGeom {
-            i,
-            j,
-            d,
-            r2,
-            r,
-            inv_r: 1.0 / r,
-            h,
-            dw: kernel.0.dw_dr(r),
-            kernel,
-        })
+        self.sums.clear();
+        self.sums.resize(n, Sums::default());
+        self.drho.clear();
+        self.drho.resize(n, 0.0);
+        self.count.clear();
+        self.count.resize(n, 0);
+    }
+
+    /// Adds the sums of slot k to entry `order[k]` (entry k without `order`): f, de and, with
+    /// `continuity`, drho.
+    pub(crate) fn unpack(&self, p: &mut Particles, order: Option<&[u32]>, continuity: bool) {
+        for (k, s) in self.sums.iter().enumerate() {
+            let i = order.map_or(k, |o| o[k] as usize);
+            for c in 0..3 {
+                p.f[i][c] += s.f[c];
+            }
+            p.de[i] += s.de;
+            if continuity {
+                p.drho[i] += self.drho[k];
+            }
+        }
+    }
+
+    /// Pairs of each slot that passed the overlap test in the last pass over kept candidates.
+    pub(crate) fn counts(&self) -> &[u32] {
+        &self.count
     }
 }
 
-/// Adds one pair's force, energy rate and work (see `force_pass`). Flops ~80, bytes ~250.
-#[inline(always)]
-fn force_pair(
-    p: &mut Particles,
-    params: &Params,
-    ctx: &ForceCtx,
-    g: &PairGeom,
-    work: &mut PairWork,
-) {
-    let (i, j, d, r2, r, h, dw) = (g.i, g.j, g.d, g.r2, g.r, g.h, g.dw);
-    let (pa, pb) = (ctx.p_rho2[i], ctx.p_rho2[j]);
-    let vr = dot(sub(p.vhat[i], p.vhat[j]), d);
-    let visc = match params.viscosity {
-        Some(av) if vr < 0.0 => {
-            let mu = h * vr / (r2 + av.eta_factor * h * h);
-            let c_mean = 0.5 * (p.c[i] + p.c[j]);
-            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
-            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
-        }
-        _ => 0.0,
-    };
-    let tensile = match params.tensile {
+/// Price's (2008) artificial conductivity coefficient, when it applies (with the energy
+/// equation).
+#[inline]
+fn conductivity(params: &Params) -> Option<f64> {
+    if params.energy {
+        params.conductivity
+    } else {
+        None
+    }
+}
+
+/// The kernel at h and 1/W(delta_p, h) of the tensile correction (0 without tensile
+/// correction or when delta_p is beyond the support).
+fn kernel_at(k: &crate::kernel::SmoothingKernel, h: f64, params: &Params) -> (ScaledKernel, f64) {
+    let sk = k.at(h);
+    let inv_w_dp = match params.tensile {
         Some(tc) => {
-            let (sk, inv_w_dp) = g.kernel;
-            if inv_w_dp > 0.0 {
-                let fab = sk.w(r) * inv_w_dp;
-                let r_ab = if ctx.liggghts {
-                    if p.p[i] > 0.0 && p.p[j] > 0.0 {
-                        POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb)
-                    } else {
-                        let neg = |x: f64| if x < 0.0 { tc.epsilon * x.abs() } else { 0.0 };
-                        neg(pa) + neg(pb)
-                    }
-                } else {
-                    let one = |x: f64| {
-                        if x < 0.0 {
-                            tc.epsilon * x.abs()
-                        } else {
-                            POSITIVE_PRESSURE_TENSILE_FACTOR * x
-                        }
-                    };
-                    one(pa) + one(pb)
-                };
-                r_ab * fab.powi(TENSILE_EXPONENT)
+            let w_dp = sk.w(tc.delta_p);
+            if w_dp > 0.0 {
+                1.0 / w_dp
             } else {
                 0.0
             }
         }
         None => 0.0,
     };
-    let press = pa + pb + tensile;
-    let gr = dw * g.inv_r; // grad_a W_ab = gr r_ab
-    let mm = p.m[i] * p.m[j];
-    let fs = mm * (press + visc) * gr;
-    for (c, dc) in d.into_iter().enumerate() {
-        p.f[i][c] -= fs * dc;
-        p.f[j][c] += fs * dc;
+    (sk, inv_w_dp)
+}
+
+/// Kept candidates tested per chunk before the chunk's overlapping pairs are computed: the
+/// test writes every candidate to a small buffer (in L1) and advances by one where it passes,
+/// so the ~30 % of candidates that fail cost no mispredicted jump each.
+const CANDIDATE_CHUNK: usize = 256;
+
+/// The pair loop of the force passes over packed slots (`buf`, from [`PassBuffers::pack`]).
+/// `KEPT`: `pairs` are kept candidates, of which only those whose spheres overlap now
+/// (r^2 < (h_a + h_b)^2, the search's test) are computed and counted in `buf.count`; else every
+/// pair is computed. `CONTINUITY`: also the continuity density rates. Coincident pairs (r = 0)
+/// are skipped. Returns the pair work rate and the number of overlapping pairs (`KEPT` only).
+/// The choices within a pair (viscosity only when approaching, the tensile correction's sign
+/// cases, the kernel's pieces) are clamps and masks (one maxsd, minsd or compare each), not
+/// jumps: each goes either way at random from pair to pair. They give the textbook cases'
+/// values bit for bit (up to the sign of a zero term, which no sum here can see).
+///
+/// Per computed pair (cubic spline, viscosity and tensile correction on, as the dam break):
+/// ~100 flops (geometry 8, one sqrt and three divisions, kernel value and derivative 20,
+/// viscosity 12, tensile correction 10, pressure, force and energy 30, density rate 6, work 10)
+/// and 2 x 96 bytes of packed inputs read and 2 x 40 bytes of sums read and written, in L1/L2
+/// when the slots follow the pairs' order (`KeptPairs`); a candidate's test costs 9 flops and
+/// 2 x 32 bytes. Measured (dam break at np 1, 2,000 steps, callgrind): ~280 instructions per
+/// computed pair with its share of the rejected candidates (1.4 candidates per pair), ~17 ns
+/// per pair at 2.6 GHz: far from the memory's limit (the data are in cache) and from the
+/// divider's (4 square roots or divisions, ~5 cycles each): bound by instructions and by the
+/// latency of each pair's chain (square root, division, kernel, force, sums).
+/// A 4-lane form of the formula over fixed-size arrays (gather, compute, scatter in order)
+/// and a blocked form (gather into per-quantity arrays, formula, scatter) were both measured
+/// slower on the baseline x86-64 target (SSE2, 2 lanes): the gathers and scatters cost more than
+/// the halved arithmetic.
+#[inline(always)]
+fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
+    pairs: &[(u32, u32)],
+    buf: &mut PassBuffers,
+    params: &Params,
+) -> (PairWork, usize) {
+    // the kernel's shape and the profile as constants of the loop (no test of them per pair)
+    let liggghts = params.profile == Profile::Liggghts;
+    match (params.kernel, liggghts) {
+        (Kernel::CubicSpline, true) => {
+            pair_loop_for::<KEPT, CONTINUITY, true, true>(pairs, buf, params)
+        }
+        (Kernel::CubicSpline, false) => {
+            pair_loop_for::<KEPT, CONTINUITY, true, false>(pairs, buf, params)
+        }
+        (Kernel::Wendland, true) => {
+            pair_loop_for::<KEPT, CONTINUITY, false, true>(pairs, buf, params)
+        }
+        (Kernel::Wendland, false) => {
+            pair_loop_for::<KEPT, CONTINUITY, false, false>(pairs, buf, params)
+        }
     }
-    let de = (press + visc) * gr * vr;
-    p.de[i] += 0.5 * p.m[j] * de;
-    p.de[j] += 0.5 * p.m[i] * de;
-    work.pressure += mm * press * gr * vr;
-    work.viscosity += mm * visc * gr * vr;
-    if let Some(alpha_u) = ctx.conductivity {
-        // de_a += m_b alpha_u v_sig (e_a - e_b)/rho_mean dW/dr, v_sig = sqrt(|p_a - p_b|/rho_mean)
-        let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
-        let v_sig = ((p.p[i] - p.p[j]).abs() / rho_mean).sqrt();
-        let q = alpha_u * v_sig * (p.e[i] - p.e[j]) / rho_mean * dw;
-        p.de[i] += p.m[j] * q;
-        p.de[j] -= p.m[i] * q;
+}
+
+/// `pair_loop` for one kernel shape (`CUBIC`: cubic spline, else Wendland) and profile
+/// (`LIGGGHTS`).
+#[inline(never)]
+fn pair_loop_for<
+    const KEPT: bool,
+    const CONTINUITY: bool,
+    const CUBIC: bool,
+    const LIGGGHTS: bool,
+>(
+    pairs: &[(u32, u32)],
+    buf: &mut PassBuffers,
+    params: &Params,
+) -> (PairWork, usize) {
+    let k = params.smoothing_kernel();
+    let kind = if CUBIC {
+        Kernel::CubicSpline
+    } else {
+        Kernel::Wendland
+    };
+    let liggghts = LIGGGHTS;
+    let cond = conductivity(params);
+    let PassBuffers {
+        slots,
+        e,
+        sums,
+        drho,
+        count,
+    } = buf;
+    let slots = &slots[..];
+    let sums = &mut sums[..slots.len()];
+    let drho = &mut drho[..slots.len()];
+    let count = &mut count[..slots.len()];
+    // h is mostly the same for every pair: the kernel's factors are remade when it changes
+    let mut kern = kernel_at(&k, f64::NAN, params);
+    let mut work = PairWork::default();
+    let mut pair = |i: usize, j: usize| {
+        let (a, b) = (&slots[i], &slots[j]);
+        let d = sub(a.x, b.x);
+        let r2 = dot(d, d);
+        let r = r2.sqrt();
+        if r == 0.0 {
+            return; // coincident: no direction
+        }
+        let h = 0.5 * (a.h + b.h);
+        if kern.0.h != h {
+            kern = kernel_at(&k, h, params);
+        }
+        let inv_r = 1.0 / r;
+        // kern.0.dw_dr(r) and kern.0.w(r) with the shape known here
+        let (inv_h, w_norm, dw_norm) = kern.0.factors();
+        let s = r * inv_h;
+        let dw = dw_norm * kind.shape_derivative(s);
+        let vr = dot(sub(a.vhat, b.vhat), d);
+        if CONTINUITY {
+            // Monaghan 1992, eq. 2.16, as in density_pass
+            let t = dw * vr * inv_r;
+            drho[i] += b.m * t;
+            drho[j] += a.m * t;
+        }
+        let visc = match params.viscosity {
+            Some(av) => {
+                // mu = 0 (so Pi = 0) when receding: min(vr, 0) rather than a jump
+                let mu = h * neg_part(vr) / (r2 + av.eta_factor * h * h);
+                let c_mean = 0.5 * (a.c + b.c);
+                let rho_mean = 0.5 * (a.rho + b.rho);
+                (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+            }
+            None => 0.0,
+        };
+        let (pa, pb) = (a.p_rho2, b.p_rho2);
+        let tensile = match params.tensile {
+            Some(tc) if kern.1 > 0.0 => {
+                let fab = w_norm * kind.shape(s) * kern.1;
+                // epsilon |x| in tension (x < 0), else 0: epsilon max(-x, 0)
+                let tension = |x: f64| tc.epsilon * pos_part(-x);
+                let r_ab = if liggghts {
+                    // 0.01 (pa + pb) when both pressures are positive (the tension terms
+                    // are then zero), else the tension terms
+                    let both = (a.p > 0.0) & (b.p > 0.0);
+                    let positive = POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb);
+                    select_or_zero(both, positive) + (tension(pa) + tension(pb))
+                } else {
+                    let one = |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * pos_part(x);
+                    one(pa) + one(pb)
+                };
+                r_ab * fab.powi(TENSILE_EXPONENT)
+            }
+            _ => 0.0,
+        };
+        let press = pa + pb + tensile;
+        let gr = dw * inv_r; // grad_a W_ab = gr r_ab
+        let mm = a.m * b.m;
+        let fs = mm * (press + visc) * gr;
+        for (c, dc) in d.into_iter().enumerate() {
+            sums[i].f[c] -= fs * dc;
+            sums[j].f[c] += fs * dc;
+        }
+        let de = (press + visc) * gr * vr;
+        sums[i].de += 0.5 * b.m * de;
+        sums[j].de += 0.5 * a.m * de;
+        work.pressure += mm * press * gr * vr;
+        work.viscosity += mm * visc * gr * vr;
+        if let Some(alpha_u) = cond {
+            // de_a += m_b alpha_u v_sig (e_a - e_b)/rho_mean dW/dr, v_sig = sqrt(|p_a - p_b|/rho_mean)
+            let rho_mean = 0.5 * (a.rho + b.rho);
+            let v_sig = ((a.p - b.p).abs() / rho_mean).sqrt();
+            let q = alpha_u * v_sig * (e[i] - e[j]) / rho_mean * dw;
+            sums[i].de += b.m * q;
+            sums[j].de -= a.m * q;
+        }
+    };
+    let mut n_pairs = 0usize;
+    if KEPT {
+        let mut close = [(0u32, 0u32); CANDIDATE_CHUNK];
+        for chunk in pairs.chunks(CANDIDATE_CHUNK) {
+            let mut n = 0;
+            for &(i, j) in chunk {
+                let (a, b) = (&slots[i as usize], &slots[j as usize]);
+                let d = sub(a.x, b.x);
+                let reach = a.h + b.h;
+                close[n] = (i, j);
+                n += (dot(d, d) < reach * reach) as usize;
+            }
+            n_pairs += n;
+            for &(i, j) in &close[..n] {
+                let (i, j) = (i as usize, j as usize);
+                count[i] += 1;
+                count[j] += 1;
+                pair(i, j);
+            }
+        }
+    } else {
+        for &(i, j) in pairs {
+            pair(i as usize, j as usize);
+        }
     }
+    (work, n_pairs)
+}
+
+/// x where x > 0, else +0 (also for NaN): a clamp of a pair's formula, one `maxsd` rather than
+/// a jump (the cases go either way at random from pair to pair).
+#[inline(always)]
+pub(crate) fn pos_part(x: f64) -> f64 {
+    if x > 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// x where x < 0, else +0 (also for NaN), as [`pos_part`] (one `minsd`).
+#[inline(always)]
+fn neg_part(x: f64) -> f64 {
+    if x < 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// x where `c` holds, else +0, for a cheap x (a compare and a mask, not a jump).
+#[inline(always)]
+fn select_or_zero(c: bool, x: f64) -> f64 {
+    if c {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// [`continuity_and_force_pass`] over kept candidates packed in `order`
+/// (`KeptPairs`): candidates whose spheres do not overlap now are skipped inside the pass.
+/// Returns the work rate and the number of overlapping pairs; `buf.counts()` gives each slot's.
+pub(crate) fn kept_continuity_and_force_pass(
+    candidates: &[(u32, u32)],
+    order: &[u32],
+    p: &mut Particles,
+    params: &Params,
+    buf: &mut PassBuffers,
+) -> (PairWork, usize) {
+    assert_continuity(params);
+    buf.pack(p, params, Some(order));
+    let out = pair_loop::<true, true>(candidates, buf, params);
+    buf.unpack(p, Some(order), true);
+    out
 }
 
 /// Adds m g to the force of every owned entry that moves.

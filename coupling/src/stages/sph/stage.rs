@@ -20,9 +20,9 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::{
-    add_gravity, continuity_and_force_pass, density_pass, first_half, force_pass, pairs_in_box,
-    periodic_images, reset_density_sums, reset_force_sums, second_half, setup_state, update_eos,
-    DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles,
+    add_gravity, continuity_and_force_pass_with, density_pass, first_half, force_pass,
+    pairs_in_box, periodic_images, reset_density_sums, reset_force_sums, second_half, setup_state,
+    update_eos, DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles,
 };
 use std::time::Instant;
 
@@ -118,6 +118,8 @@ pub struct SphStage {
     build_weighted: bool,
     /// Pair searches run so far (fresh lists and candidate builds).
     pub pair_searches: u64,
+    /// The fused pass's packed inputs and sums, reused from step to step.
+    pass_buf: sph::PassBuffers,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -164,6 +166,7 @@ impl SphStage {
             ghost_dest: Vec::new(),
             build_weighted: false,
             pair_searches: 0,
+            pass_buf: sph::PassBuffers::default(),
         }
     }
 
@@ -448,7 +451,13 @@ impl SphStage {
         let mut src = Vec::new();
         let mut ranks = Vec::new();
         let mut shifts = Vec::new();
-        for i in 0..self.parts.n_owned {
+        // One rank without a periodic box has no ghosts: every sphere reaches this rank only.
+        let n_sources = if self.comm.size() == 1 && per.is_none() {
+            0
+        } else {
+            self.parts.n_owned
+        };
+        for i in 0..n_sources {
             let x = self.parts.x_real[i];
             // A kept decomposition's ghosts also reach the pairs the particle may enter
             // before the next rebuild (it moves less than half the skin).
@@ -510,15 +519,31 @@ impl SphStage {
     }
 
     /// 3-4 with continuity density: one fused pass (density rates and forces), its sums back
-    /// to the owners, gravity. The EOS was applied before the ghosts were made.
+    /// to the owners, gravity. The EOS was applied before the ghosts were made. On one rank
+    /// with a kept list the pass tests the candidates itself (see [`SphStage::one_rank_list`]).
     fn evaluate_fused(&mut self) {
-        let list = self.pair_list();
+        let one_rank = self.one_rank_list();
         reset_density_sums(&mut self.parts, &self.params);
         reset_force_sums(&mut self.parts);
-        self.work = continuity_and_force_pass(&list, &mut self.parts, &self.params);
+        let n_pairs = if one_rank {
+            let v = self.verlet.as_mut().expect("kept list made");
+            let (work, n) =
+                v.continuity_and_force_pass(&mut self.parts, &self.params, &mut self.pair_count);
+            self.work = work;
+            n
+        } else {
+            let list = self.pair_list();
+            self.work = continuity_and_force_pass_with(
+                &list,
+                &mut self.parts,
+                &self.params,
+                &mut self.pass_buf,
+            );
+            list.len()
+        };
         self.fold_back(false, true);
         add_gravity(&mut self.parts, &self.params);
-        self.stats.pairs = list.len() as u64;
+        self.stats.pairs = n_pairs as u64;
     }
 
     /// The pairs this box computes (COI in its box), counted per owned particle.
@@ -548,6 +573,24 @@ impl SphStage {
                 .pairs
                 .filter(&self.parts, self.box_lo, self.box_hi, &mut self.pair_count);
         }
+        if self.one_rank_list() {
+            let v = self.verlet.as_ref().expect("kept list made");
+            // every entry is owned here (no ghosts), so the counts are the owned particles'
+            return v.filter(&self.parts, &mut self.pair_count);
+        }
+        self.verlet = None;
+        self.pair_searches += 1;
+        let list = pairs_in_box(&self.parts, &opts, self.box_lo, self.box_hi);
+        self.count_pairs(&list);
+        list
+    }
+
+    /// Whether this evaluation uses the kept candidates of one rank ([`sph::KeptPairs`]): one
+    /// rank without a periodic box (no ghosts, no migration, every pair interior), lists not
+    /// refused; if so, the list is valid for the particles now (rebuilt if a particle has moved
+    /// half the skin).
+    fn one_rank_list(&mut self) -> bool {
+        let opts = self.params.search_options();
         let p = &self.parts;
         let keepable = self.verlet_enabled
             && self.comm.size() == 1
@@ -556,19 +599,13 @@ impl SphStage {
             && self.box_lo.iter().all(|c| *c == f64::NEG_INFINITY)
             && self.box_hi.iter().all(|c| *c == f64::INFINITY);
         if !keepable {
-            self.verlet = None;
-            self.pair_searches += 1;
-            let list = pairs_in_box(p, &opts, self.box_lo, self.box_hi);
-            self.count_pairs(&list);
-            return list;
+            return false;
         }
         if !self.verlet.as_ref().is_some_and(|v| v.still_valid(p)) {
             self.pair_searches += 1;
             self.verlet = Some(sph::KeptPairs::build(p, &opts, self.box_lo, self.box_hi));
         }
-        let v = self.verlet.as_ref().expect("just built");
-        // every entry is owned here (no ghosts), so the counts are the owned particles'
-        v.filter(p, &mut self.pair_count)
+        true
     }
 
     /// Pairs per owned particle in this evaluation (the next rebalance's weights).
