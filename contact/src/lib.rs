@@ -43,8 +43,8 @@ pub use data::{
 };
 pub use geometry::{shape, Projection, Quad};
 pub use pushback::{
-    anchor, push_back, push_back_in, reach, Alone, Cells, Exchange, PushBack, PushBackParams,
-    COLOURS,
+    anchor, cells_of, push_back, push_back_in, reach, Alone, Cells, Exchange, PushBack,
+    PushBackParams, COLOURS,
 };
 pub use recheck::{recheck, RECHECK_TOL};
 pub use search::{

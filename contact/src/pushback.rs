@@ -465,17 +465,21 @@ pub fn reach(b: &ContactBox, c: &Contact, a: usize) -> f64 {
 /// Computes the kinematic push-back of `contacts` (from [`crate::search()`] on the same box) over
 /// step `params.dt`, in one piece. See the module documentation for the method.
 pub fn push_back(b: &ContactBox, contacts: &[Contact], params: &PushBackParams) -> PushBack {
-    let anchors: Vec<usize> = contacts
-        .iter()
-        .map(|c| anchor(b, c, params.same_point_tol))
-        .collect();
+    let cell = cells_of(b, contacts, params.same_point_tol);
+    push_back_in(b, contacts, &cell, params, &mut Alone)
+}
+
+/// The cell of each of `contacts` for a solve of these contacts alone: the cells sized by their
+/// largest [`reach`], each contact's cell that of its [`anchor`] (`tol`:
+/// [`PushBackParams::same_point_tol`]).
+pub fn cells_of(b: &ContactBox, contacts: &[Contact], tol: f64) -> Vec<[i64; 3]> {
+    let anchors: Vec<usize> = contacts.iter().map(|c| anchor(b, c, tol)).collect();
     let r = contacts
         .iter()
         .zip(&anchors)
         .fold(0.0, |m: f64, (c, &a)| m.max(reach(b, c, a)));
     let cells = Cells::for_reach(r);
-    let cell: Vec<[i64; 3]> = anchors.iter().map(|&a| cells.cell(b.nodes.x1[a])).collect();
-    push_back_in(b, contacts, &cell, params, &mut Alone)
+    anchors.iter().map(|&a| cells.cell(b.nodes.x1[a])).collect()
 }
 
 /// The contacts in sweep order (colour, cell, node gid, face gid), and where each colour's run

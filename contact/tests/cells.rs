@@ -12,10 +12,10 @@
 
 mod common;
 
-use common::{random_scene, Rng, SceneSpec};
+use common::{crowded_box, Rng};
 use contact::{
-    anchor, push_back, push_back_in, reach, search, Cells, Contact, ContactBox, Exchange,
-    PushBackParams, SearchParams, COLOURS, V3,
+    cells_of, push_back, push_back_in, Cells, Contact, ContactBox, Exchange, PushBackParams,
+    COLOURS, V3,
 };
 use std::sync::{Arc, Barrier, Mutex};
 
@@ -84,16 +84,7 @@ fn solve_in_parts(
     parts: usize,
     deal: u64,
 ) -> Vec<(Vec<usize>, Vec<V3>, Vec<f64>)> {
-    let anchors: Vec<usize> = contacts
-        .iter()
-        .map(|c| anchor(b, c, params.same_point_tol))
-        .collect();
-    let r = contacts
-        .iter()
-        .zip(&anchors)
-        .fold(0.0, |m: f64, (c, &a)| m.max(reach(b, c, a)));
-    let cells = Cells::for_reach(r);
-    let cell: Vec<[i64; 3]> = anchors.iter().map(|&a| cells.cell(b.nodes.x1[a])).collect();
+    let cell = cells_of(b, contacts, params.same_point_tol);
     let part_of = |k: usize| {
         let h = cell[k]
             .iter()
@@ -161,25 +152,7 @@ fn a_push_back_in_parts_equals_the_whole_bit_for_bit() {
     let mut rng = Rng(57);
     let mut shared_nodes = 0;
     for friction in [0.0, 0.4] {
-        let scene = random_scene(
-            &mut rng,
-            &SceneSpec {
-                faces: 80,
-                free_nodes: 40,
-                crossing_nodes: 500,
-                bodies: 3,
-                particles: true,
-                size: 4.0,
-            },
-        );
-        let b = ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
-        let contacts = search(
-            &b,
-            &SearchParams {
-                self_contact: true,
-                ..SearchParams::default()
-            },
-        );
+        let (b, contacts) = crowded_box(&mut rng, 80, 40, 500);
         assert!(contacts.len() > 100, "a crowded scene: {}", contacts.len());
         let params = PushBackParams {
             friction,

@@ -15,7 +15,7 @@
 
 mod common;
 
-use common::{add, dot, norm, random_scene, scale, sub, Mono, Rng, SceneSpec, V3};
+use common::{add, crowded_box, dot, norm, scale, sub, Mono, Rng, V3};
 use contact::{
     push_back, search, shape, ContactBox, FaceRecord, NodeRecord, PushBackParams, SearchParams,
 };
@@ -75,25 +75,7 @@ fn momentum_is_conserved_on_random_contacts() {
     let mut shared_faces = 0;
     let mut contacts_total = 0;
     for _ in 0..4 {
-        let scene = random_scene(
-            &mut rng,
-            &SceneSpec {
-                faces: 60,
-                free_nodes: 50,
-                crossing_nodes: 600,
-                bodies: 3,
-                particles: true,
-                size: 4.0,
-            },
-        );
-        let b = ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
-        let contacts = search(
-            &b,
-            &SearchParams {
-                self_contact: true,
-                ..SearchParams::default()
-            },
-        );
+        let (b, contacts) = crowded_box(&mut rng, 60, 50, 600);
         let mut per_face = std::collections::HashMap::new();
         for c in &contacts {
             *per_face.entry(c.face).or_insert(0) += 1;

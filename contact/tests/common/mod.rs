@@ -459,3 +459,35 @@ pub fn reference_search(
         min_margin,
     }
 }
+
+/// A box of `random_scene` (3 bodies, particles, a cube of side 4) with `faces` faces, `free`
+/// free nodes and `crossing` nodes aimed through faces, all owned, and its contacts (the
+/// search with self-contact).
+pub fn crowded_box(
+    rng: &mut Rng,
+    faces: usize,
+    free: usize,
+    crossing: usize,
+) -> (contact::ContactBox, Vec<contact::Contact>) {
+    let scene = random_scene(
+        rng,
+        &SceneSpec {
+            faces,
+            free_nodes: free,
+            crossing_nodes: crossing,
+            bodies: 3,
+            particles: true,
+            size: 4.0,
+        },
+    );
+    let b =
+        contact::ContactBox::from_records(&scene.nodes, scene.nodes.len(), &scene.faces).unwrap();
+    let contacts = contact::search(
+        &b,
+        &contact::SearchParams {
+            self_contact: true,
+            ..contact::SearchParams::default()
+        },
+    );
+    (b, contacts)
+}
