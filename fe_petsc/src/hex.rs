@@ -526,6 +526,6 @@ pub fn update(
         hg_work,
         volume: vol,
         dt_stable,
-        pressure: -(stress[0] + stress[1] + stress[2]) / 3.0,
+        pressure: -(stress[0] + stress[1] + stress[2]) * crate::hourglass::THIRD,
     })
 }

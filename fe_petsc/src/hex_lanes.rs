@@ -492,6 +492,6 @@ fn update_inline(
     out.force = force;
     out.volume = k.vol;
     out.dt_stable = dt_stable;
-    out.pressure = -(stress[0] + stress[1] + stress[2]) / 3.0;
+    out.pressure = -(stress[0] + stress[1] + stress[2]) * crate::hourglass::THIRD;
     Ok(())
 }

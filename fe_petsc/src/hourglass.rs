@@ -126,6 +126,10 @@ pub struct Frame {
     pub e: [[f64; 3]; 3],
     /// Half-lengths along the natural axes, m.
     pub a: [f64; 3],
+    /// Their inverses 1 / a_j, 1/m: each divides several of the hourglass rates and forces,
+    /// so one division each and multiplications after (a division costs 8-16 multiplications'
+    /// throughput on x86-64).
+    pub ia: [f64; 3],
 }
 
 impl Frame {
@@ -141,7 +145,8 @@ impl Frame {
             }
         }
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
-        let e0 = scale(&j[0], 1.0 / a[0]);
+        let ia = [1.0 / a[0], 1.0 / a[1], 1.0 / a[2]];
+        let e0 = scale(&j[0], ia[0]);
         let d01 = dot(&j[1], &e0);
         let t = [
             j[1][0] - d01 * e0[0],
@@ -154,7 +159,11 @@ impl Frame {
             e0[2] * e1[0] - e0[0] * e1[2],
             e0[0] * e1[1] - e0[1] * e1[0],
         ];
-        Frame { e: [e0, e1, e2], a }
+        Frame {
+            e: [e0, e1, e2],
+            a,
+            ia,
+        }
     }
 
     /// Global components of `v` into this frame.
@@ -184,42 +193,49 @@ fn scale(a: &[f64; 3], s: f64) -> [f64; 3] {
 /// `qd[a][i]`: mode a, local direction i) give the element with half-lengths `a`, 1/s. Group g
 /// (strains linear in xi_g, (p, r) the other two axes): [eps_pp, eps_rr, gamma_pr]; mode 3
 /// (`[3]`): the normal strains [eps_00, eps_11, eps_22] (times eta zeta, zeta xi, xi eta). The
-/// nodal amplitudes are q = qd / 8.
-pub fn physical_strain_rates(qd: &[[f64; 3]; 4], a: &[f64; 3]) -> [[f64; 3]; 4] {
+/// nodal amplitudes are q = qd / 8. `ia`: the inverse half-lengths 1 / a_j ([`Frame::ia`]).
+pub fn physical_strain_rates(qd: &[[f64; 3]; 4], ia: &[f64; 3]) -> [[f64; 3]; 4] {
     let mut e = [[0.0; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         e[g] = [
-            0.125 * qd[r][p] / a[p],
-            0.125 * qd[p][r] / a[r],
-            0.125 * (qd[r][r] / a[p] + qd[p][p] / a[r]),
+            0.125 * qd[r][p] * ia[p],
+            0.125 * qd[p][r] * ia[r],
+            0.125 * (qd[r][r] * ia[p] + qd[p][p] * ia[r]),
         ];
     }
     for i in 0..3 {
-        e[3][i] = 0.125 * qd[3][i] / a[i];
+        e[3][i] = 0.125 * qd[3][i] * ia[i];
     }
     e
 }
 
 /// Physical kind: the generalised forces H (element frame) of the hourglass stress amplitudes
 /// `sig` (laid out as [`physical_strain_rates`], Pa): H = Q / 8 with Q = dEnergy/dq, the energy
-/// rate being (V/3) sum_g sig_g . e_g + (V/9) sig_3 . e_3. About 30 flops.
-pub fn physical_forces(sig: &[[f64; 3]; 4], a: &[f64; 3], vol: f64) -> [[f64; 3]; 4] {
-    let w = 0.125 * vol / 3.0;
+/// rate being (V/3) sum_g sig_g . e_g + (V/9) sig_3 . e_3; `ia` the inverse half-lengths.
+/// About 45 flops, no division.
+pub fn physical_forces(sig: &[[f64; 3]; 4], ia: &[f64; 3], vol: f64) -> [[f64; 3]; 4] {
+    let w = 0.125 * vol * THIRD;
     let mut h = [[0.0; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let [spp, srr, spr] = sig[g];
-        h[r][p] += w * spp / a[p];
-        h[p][r] += w * srr / a[r];
-        h[r][r] += w * spr / a[p];
-        h[p][p] += w * spr / a[r];
+        h[r][p] += w * spp * ia[p];
+        h[p][r] += w * srr * ia[r];
+        h[r][r] += w * spr * ia[p];
+        h[p][p] += w * spr * ia[r];
     }
+    let w3 = w * THIRD;
     for i in 0..3 {
-        h[3][i] = 0.125 * vol / 9.0 * sig[3][i] / a[i];
+        h[3][i] = w3 * sig[3][i] * ia[i];
     }
     h
 }
+
+/// 1/3 rounded: the kernels multiply by it where a mean of three or a third is taken (one
+/// multiplication instead of a division; the scalar and batched kernels alike, so they agree
+/// to the bit).
+pub(crate) const THIRD: f64 = 1.0 / 3.0;
 
 /// Physical kind: the rates of the stress amplitudes for strain-rate amplitudes `e`, with shear
 /// modulus `mu` and Poisson's ratio `nu`: plane stress in each group
@@ -237,8 +253,8 @@ fn physical_stress_rates(e: &[[f64; 3]; 4], mu: f64, nu: f64) -> [[f64; 3]; 4] {
 
 /// von Mises bilinear form 3/2 dev(a) : dev(b) of two symmetric tensors (full 3 x 3).
 fn mises_dot(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
-    let ta = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
-    let tb = (b[0][0] + b[1][1] + b[2][2]) / 3.0;
+    let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
+    let tb = (b[0][0] + b[1][1] + b[2][2]) * THIRD;
     let mut s = 0.0;
     for i in 0..3 {
         for j in 0..3 {
@@ -309,8 +325,8 @@ pub fn tangent_ratio(dsig: &[f64; 6], deps: &[f64; 6], mu: f64) -> f64 {
     if mu <= 0.0 {
         return 1.0;
     }
-    let es = (deps[0] + deps[1] + deps[2]) / 3.0;
-    let ss = (dsig[0] + dsig[1] + dsig[2]) / 3.0;
+    let es = (deps[0] + deps[1] + deps[2]) * THIRD;
+    let ss = (dsig[0] + dsig[1] + dsig[2]) * THIRD;
     let de = [deps[0] - es, deps[1] - es, deps[2] - es];
     let ds = [dsig[0] - ss, dsig[1] - ss, dsig[2] - ss];
     let ee = de[0] * de[0]
@@ -488,12 +504,12 @@ fn physical_step(
     sig: &mut [[f64; 3]; 4],
     force: &mut [[f64; 3]; 8],
 ) -> f64 {
-    let e = physical_strain_rates(qd, &frame.a);
+    let e = physical_strain_rates(qd, &frame.ia);
     // Energy-rate weights: V/3 for the groups, V/9 for mode 3 (only the sign matters here).
-    let power: f64 = (0..3).map(|g| dot(&sig[g], &e[g])).sum::<f64>() + dot(&sig[3], &e[3]) / 3.0;
+    let power: f64 = (0..3).map(|g| dot(&sig[g], &e[g])).sum::<f64>() + dot(&sig[3], &e[3]) * THIRD;
     let s_eff = if power > 0.0 { mat.tangent_ratio } else { 1.0 };
     let rate = physical_stress_rates(&e, scale * s_eff * mat.mu, mat.nu);
-    let h_old = physical_forces(sig, &frame.a, s.vol);
+    let h_old = physical_forces(sig, &frame.ia, s.vol);
     for al in 0..4 {
         for i in 0..3 {
             sig[al][i] += s.dt * rate[al][i];
@@ -521,7 +537,7 @@ fn physical_step(
         });
         yield_bound(sig, &centre, sy);
     }
-    let h = physical_forces(sig, &frame.a, s.vol);
+    let h = physical_forces(sig, &frame.ia, s.vol);
     let mut work = 0.0;
     for al in 0..4 {
         work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));

@@ -3,7 +3,7 @@
 //! the same order in each lane, the branches (loading or unloading, the yield bound's cases, the
 //! tangent ratio's round-off guard) as masked lane operations.
 use crate::hex::NODES;
-use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT};
+use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT, THIRD};
 use crate::lanes::{F4, M4};
 
 type V3 = [F4; 3];
@@ -45,8 +45,8 @@ fn dot(a: &V3, b: &V3) -> F4 {
 /// [`crate::hourglass::tangent_ratio`] in lanes, for a positive `mu`. About 40 flops.
 #[inline(always)]
 pub fn tangent_ratio(dsig: &[F4; 6], deps: &[F4; 6], mu: f64) -> F4 {
-    let es = (deps[0] + deps[1] + deps[2]) / 3.0;
-    let ss = (dsig[0] + dsig[1] + dsig[2]) / 3.0;
+    let es = (deps[0] + deps[1] + deps[2]) * THIRD;
+    let ss = (dsig[0] + dsig[1] + dsig[2]) * THIRD;
     let de = [deps[0] - es, deps[1] - es, deps[2] - es];
     let ds = [dsig[0] - ss, dsig[1] - ss, dsig[2] - ss];
     let ee = de[0] * de[0]
@@ -82,10 +82,10 @@ fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F4; NODES]; 4] {
     gam
 }
 
-/// [`crate::hourglass::Frame`] in lanes: rows e_j and half-lengths a_j.
+/// [`crate::hourglass::Frame`] in lanes: rows e_j and inverse half-lengths 1 / a_j.
 struct Frame {
     e: M3,
-    a: V3,
+    ia: V3,
 }
 
 impl Frame {
@@ -103,7 +103,8 @@ impl Frame {
         let norm = |v: &V3| dot(v, v).sqrt();
         let scale = |v: &V3, s: F4| [v[0] * s, v[1] * s, v[2] * s];
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
-        let e0 = scale(&j[0], 1.0 / a[0]);
+        let ia = [1.0 / a[0], 1.0 / a[1], 1.0 / a[2]];
+        let e0 = scale(&j[0], ia[0]);
         let d01 = dot(&j[1], &e0);
         let t = [
             j[1][0] - d01 * e0[0],
@@ -116,7 +117,10 @@ impl Frame {
             e0[2] * e1[0] - e0[0] * e1[2],
             e0[0] * e1[1] - e0[1] * e1[0],
         ];
-        Frame { e: [e0, e1, e2], a }
+        Frame {
+            e: [e0, e1, e2],
+            ia,
+        }
     }
 
     #[inline(always)]
@@ -135,39 +139,40 @@ impl Frame {
     }
 }
 
-/// [`crate::hourglass::physical_strain_rates`] in lanes. 24 flops.
+/// [`crate::hourglass::physical_strain_rates`] in lanes. 30 flops, no division.
 #[inline(always)]
-fn strain_rates(qd: &[V3; 4], a: &V3) -> [V3; 4] {
+fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
     let mut e = [[F4::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         e[g] = [
-            0.125 * qd[r][p] / a[p],
-            0.125 * qd[p][r] / a[r],
-            0.125 * (qd[r][r] / a[p] + qd[p][p] / a[r]),
+            0.125 * qd[r][p] * ia[p],
+            0.125 * qd[p][r] * ia[r],
+            0.125 * (qd[r][r] * ia[p] + qd[p][p] * ia[r]),
         ];
     }
     for i in 0..3 {
-        e[3][i] = 0.125 * qd[3][i] / a[i];
+        e[3][i] = 0.125 * qd[3][i] * ia[i];
     }
     e
 }
 
-/// [`crate::hourglass::physical_forces`] in lanes. About 30 flops.
+/// [`crate::hourglass::physical_forces`] in lanes. About 45 flops, no division.
 #[inline(always)]
-fn forces(sig: &[V3; 4], a: &V3, vol: F4) -> [V3; 4] {
-    let w = 0.125 * vol / 3.0;
+fn forces(sig: &[V3; 4], ia: &V3, vol: F4) -> [V3; 4] {
+    let w = 0.125 * vol * THIRD;
     let mut h = [[F4::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let [spp, srr, spr] = sig[g];
-        h[r][p] += w * spp / a[p];
-        h[p][r] += w * srr / a[r];
-        h[r][r] += w * spr / a[p];
-        h[p][p] += w * spr / a[r];
+        h[r][p] += w * spp * ia[p];
+        h[p][r] += w * srr * ia[r];
+        h[r][r] += w * spr * ia[p];
+        h[p][p] += w * spr * ia[r];
     }
+    let w3 = w * THIRD;
     for i in 0..3 {
-        h[3][i] = 0.125 * vol / 9.0 * sig[3][i] / a[i];
+        h[3][i] = w3 * sig[3][i] * ia[i];
     }
     h
 }
@@ -190,8 +195,8 @@ fn stress_rates(e: &[V3; 4], mu: F4, nu: f64) -> [V3; 4] {
 /// order (an off-diagonal entry minus zero is itself). About 35 flops.
 #[inline(always)]
 fn mises_dot(a: &M3, b: &M3) -> F4 {
-    let ta = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
-    let tb = (b[0][0] + b[1][1] + b[2][2]) / 3.0;
+    let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
+    let tb = (b[0][0] + b[1][1] + b[2][2]) * THIRD;
     let mut s = F4::ZERO;
     for i in 0..3 {
         for j in 0..3 {
@@ -288,14 +293,16 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
         }
         qd[al] = frame.to_local(&q);
     }
-    let e = strain_rates(&qd, &frame.a);
+    let e = strain_rates(&qd, &frame.ia);
     // Loading (positive power of the amplitudes) follows the tangent, unloading is elastic.
-    let power =
-        dot(&sig[0], &e[0]) + dot(&sig[1], &e[1]) + dot(&sig[2], &e[2]) + dot(&sig[3], &e[3]) / 3.0;
+    let power = dot(&sig[0], &e[0])
+        + dot(&sig[1], &e[1])
+        + dot(&sig[2], &e[2])
+        + dot(&sig[3], &e[3]) * THIRD;
     let loading: M4 = power.gt(F4::ZERO);
     let s_eff = F4::select(loading, s.tangent_ratio, F4::splat(1.0));
     let rate = stress_rates(&e, s.scale * s_eff * s.mu, s.nu);
-    let h_old = forces(sig, &frame.a, s.vol);
+    let h_old = forces(sig, &frame.ia, s.vol);
     for al in 0..4 {
         for i in 0..3 {
             sig[al][i] += s.dt * rate[al][i];
@@ -304,7 +311,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
     if let Some(sy) = s.yield_stress {
         yield_bound(sig, &centre_stress(&s.stress, &frame.e), sy);
     }
-    let h = forces(sig, &frame.a, s.vol);
+    let h = forces(sig, &frame.ia, s.vol);
     let mut work = F4::ZERO;
     for al in 0..4 {
         work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));

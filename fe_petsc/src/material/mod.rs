@@ -294,7 +294,7 @@ pub(crate) fn add_elastic_lanes(stress: &mut [F4; 6], deps: &[F4; 6], lambda: f6
 /// [`deviator`] in lanes.
 #[inline(always)]
 pub(crate) fn deviator_lanes(s: &[F4; 6]) -> ([F4; 6], F4, F4) {
-    let p = (s[0] + s[1] + s[2]) / 3.0;
+    let p = (s[0] + s[1] + s[2]) * crate::hourglass::THIRD;
     let d = [s[0] - p, s[1] - p, s[2] - p, s[3], s[4], s[5]];
     let j2 =
         0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
@@ -304,7 +304,7 @@ pub(crate) fn deviator_lanes(s: &[F4; 6]) -> ([F4; 6], F4, F4) {
 /// Deviator of a Voigt stress and the von Mises stress sqrt(3/2 s:s).
 #[inline]
 pub(crate) fn deviator(s: &[f64; 6]) -> ([f64; 6], f64, f64) {
-    let p = (s[0] + s[1] + s[2]) / 3.0;
+    let p = (s[0] + s[1] + s[2]) * crate::hourglass::THIRD;
     let d = [s[0] - p, s[1] - p, s[2] - p, s[3], s[4], s[5]];
     let j2 =
         0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
