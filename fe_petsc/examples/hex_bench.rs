@@ -1,9 +1,9 @@
 #![allow(clippy::needless_range_loop)]
 //! Times the element update in a tight loop (no mesh, no MPI), the scalar kernel and the batched
-//! one: `cargo run --release --example hex_bench -- [reps] [scalar|batched|both]`.
+//! one at every width this CPU runs: `cargo run --release --example hex_bench -- [reps]
+//! [scalar|batched|both]`.
+use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexState};
-use fe_petsc::hex_lanes::{self, LaneGroup, LaneMaterial, LaneState};
-use fe_petsc::lanes::{F4, LANES};
 use fe_petsc::material::{build_material, MaterialSpec};
 use std::time::Instant;
 
@@ -73,31 +73,58 @@ fn main() {
         println!("hex::update {ns:.1} ns/element (checksum {acc:e})");
     }
     if kernels != "scalar" {
-        // The same elements four at a time in lanes (gathered once: this times the kernel).
+        // The same elements in groups (loaded from the element arrays each time, as the
+        // explicit loop does): every width this CPU runs.
         let lm = LaneMaterial::new(&*mat, &ctl).unwrap();
-        let lane_nodes = |a: &[[[f64; 3]; 8]], g: usize| -> hex_lanes::LaneNodes {
-            std::array::from_fn(|k| {
-                std::array::from_fn(|c| F4(std::array::from_fn(|l| a[g + l][k][c])))
-            })
-        };
-        let groups: Vec<_> = (0..n / LANES)
-            .map(|g| (lane_nodes(&x, g * LANES), lane_nodes(&v, g * LANES)))
-            .collect();
-        let mut st = vec![LaneState::default(); groups.len()];
-        let mut group = LaneGroup {
-            vol0: F4::splat(vol0),
-            ..Default::default()
-        };
-        let t = Instant::now();
-        for _ in 0..reps {
-            for (g, (xg, vg)) in groups.iter().enumerate() {
-                (group.x, group.v, group.state) = (*xg, *vg, st[g]);
-                group.update(1e-7, &lm, &ctl).unwrap();
-                st[g] = group.state;
-                acc += group.out.force[0][0].0[0];
-            }
+        for w in batch::available() {
+            let ns = match w {
+                Width::W4 => {
+                    batched::<batch::w4::LaneGroup>(&x, &v, vol0, &lm, &ctl, reps, &mut acc)
+                }
+                #[cfg(target_arch = "x86_64")]
+                Width::W8 => {
+                    batched::<batch::w8::LaneGroup>(&x, &v, vol0, &lm, &ctl, reps, &mut acc)
+                }
+            };
+            println!("batch::{w:?} update {ns:.1} ns/element (checksum {acc:e})");
         }
-        let ns = t.elapsed().as_secs_f64() * 1e9 / (reps * groups.len() * LANES) as f64;
-        println!("hex_lanes::LaneGroup::update {ns:.1} ns/element (checksum {acc:e})");
     }
+}
+
+/// ns per element of `reps` updates of every element in groups of `B::LANES`.
+fn batched<B: Batch>(
+    x: &[[[f64; 3]; 8]],
+    v: &[[[f64; 3]; 8]],
+    vol0: f64,
+    lm: &LaneMaterial,
+    ctl: &HexControls,
+    reps: usize,
+    acc: &mut f64,
+) -> f64 {
+    // Each element's nodes numbered apart (element e: nodes 8e..8e+8).
+    let xs: Vec<[f64; 3]> = x.iter().flatten().copied().collect();
+    let vs: Vec<[f64; 3]> = v.iter().flatten().copied().collect();
+    let conn: Vec<[u32; 8]> = (0..x.len())
+        .map(|e| std::array::from_fn(|k| (8 * e + k) as u32))
+        .collect();
+    let n = x.len() / B::LANES * B::LANES;
+    let vol = vec![vol0; n];
+    let mut st = vec![HexState::default(); n];
+    let mut hist = vec![0.0; n];
+    let mut group = B::default();
+    let t = Instant::now();
+    for _ in 0..reps {
+        for g in (0..n).step_by(B::LANES) {
+            let e = g..g + B::LANES;
+            group.load(&xs, &vs, &conn[e.clone()], &vol[e.clone()], &st[e], |l| {
+                hist[g + l]
+            });
+            group.update(1e-7, lm, ctl).unwrap();
+            for l in 0..B::LANES {
+                (st[g + l], hist[g + l]) = group.lane_state(l);
+            }
+            *acc += group.lane_output(0).force[0][0];
+        }
+    }
+    t.elapsed().as_secs_f64() * 1e9 / (reps * n) as f64
 }

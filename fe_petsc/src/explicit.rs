@@ -16,10 +16,9 @@
 //! Energy bookkeeping uses the work of the nodal forces over each step's displacement,
 //! W += (f(n) + f(n+1))/2 . (x(n+1) - x(n)), which velocity Verlet balances against the kinetic
 //! energy to O(dt^2) without drift.
+use crate::batch::{self, Batch, LaneMaterial, Width};
 use crate::blocks::BlockWork;
 use crate::hex::{self, HexControls, HexState};
-use crate::hex_lanes::{self, LaneGroup, LaneMaterial};
-use crate::lanes::{F4, LANES};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
 use crate::petsc::PetscError;
@@ -221,6 +220,8 @@ pub struct ExplicitFe {
     pub timers: FeTimers,
     /// Which element kernel the element loop runs (default: batched).
     pub kernel: ElementKernel,
+    /// The batched kernel's group size: the widest this CPU runs ([`batch::widest`]).
+    pub width: Width,
     /// The lane form of each material, where it has one under the controls.
     lane_materials: Vec<Option<LaneMaterial>>,
 }
@@ -230,8 +231,8 @@ pub struct ExplicitFe {
 pub enum ElementKernel {
     /// [`hex::update`], one element at a time.
     Scalar,
-    /// [`hex_lanes::LaneGroup::update`] on groups of four consecutive elements of one material with a lane
-    /// form; the scalar kernel for the others.
+    /// [`Batch::update`] on groups of consecutive elements of one material with a lane form
+    /// (four or eight: [`ExplicitFe::width`]); the scalar kernel for the others.
     #[default]
     Batched,
 }
@@ -353,6 +354,7 @@ impl ExplicitFe {
             timers: FeTimers::default(),
             kernel: ElementKernel::default(),
             lane_materials: Vec::new(),
+            width: batch::widest(),
         };
         fe.lane_materials = fe
             .materials
@@ -500,10 +502,10 @@ impl ExplicitFe {
     /// Element loop at the new positions with the half-step velocities, then the ghost
     /// exchange. Returns the local hourglass work of this step; sets `dt_stable_local`.
     ///
-    /// With [`ElementKernel::Batched`] (the default), four consecutive elements of one material
-    /// with a lane form ([`LaneMaterial`]) are updated together by [`hex_lanes::LaneGroup::update`]; the
-    /// other elements, and a group with an inverted element, go through [`hex::update`] one
-    /// by one. Either way each element's forces are added to the nodes in element order, so
+    /// With [`ElementKernel::Batched`] (the default), groups of consecutive elements of one
+    /// material with a lane form ([`LaneMaterial`]) are updated together by [`Batch::update`]
+    /// (four or eight at once: [`ExplicitFe::width`]); the other elements, and a group with an
+    /// inverted element, go through [`hex::update`] one by one. Either way each element's forces are added to the nodes in element order, so
     /// the two kernels' sums are the same.
     pub fn element_forces(
         &mut self,
@@ -521,24 +523,10 @@ impl ExplicitFe {
             inverted: None,
         };
         self.blocks.begin();
-        let mut group = Box::<LaneGroup>::default();
-        let mut e = 0;
-        while e < self.elems.len() {
-            match self.lane_group(e) {
-                Some(m) => {
-                    if !self.group_update(e, &m, dt, &mut group, &mut sums) {
-                        // An inverted element in the group: the scalar kernel names it.
-                        for k in e..e + LANES {
-                            self.element_update(k, dt, &mut sums);
-                        }
-                    }
-                    e += LANES;
-                }
-                None => {
-                    self.element_update(e, dt, &mut sums);
-                    e += 1;
-                }
-            }
+        match self.width {
+            Width::W4 => self.element_loop::<batch::w4::LaneGroup>(dt, &mut sums),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => self.element_loop::<batch::w8::LaneGroup>(dt, &mut sums),
         }
         self.dt_stable_local = sums.dt_min;
         if sums.inverted.is_none() {
@@ -556,15 +544,39 @@ impl ExplicitFe {
         }
     }
 
-    /// The lane form of the material of elements `e..e + LANES` when the batched kernel is on
-    /// and the four exist and share a material that has one.
-    fn lane_group(&self, e: usize) -> Option<LaneMaterial> {
-        if self.kernel != ElementKernel::Batched || e + LANES > self.elems.len() {
+    /// Every element's update, in element order: groups of `B::LANES` by the batched kernel
+    /// where [`Self::lane_group`] allows, the scalar kernel for the rest.
+    fn element_loop<B: Batch>(&mut self, dt: f64, sums: &mut LoopSums) {
+        let mut group = Box::<B>::default();
+        let mut e = 0;
+        while e < self.elems.len() {
+            match self.lane_group(e, B::LANES) {
+                Some(m) => {
+                    if !self.group_update(e, &m, dt, &mut *group, sums) {
+                        // An inverted element in the group: the scalar kernel names it.
+                        for k in e..e + B::LANES {
+                            self.element_update(k, dt, sums);
+                        }
+                    }
+                    e += B::LANES;
+                }
+                None => {
+                    self.element_update(e, dt, sums);
+                    e += 1;
+                }
+            }
+        }
+    }
+
+    /// The lane form of the material of elements `e..e + lanes` when the batched kernel is on
+    /// and those elements exist and share a material that has one.
+    fn lane_group(&self, e: usize, lanes: usize) -> Option<LaneMaterial> {
+        if self.kernel != ElementKernel::Batched || e + lanes > self.elems.len() {
             return None;
         }
         let mi = self.elem_material[e];
         let m = self.lane_materials[mi]?;
-        (1..LANES)
+        (1..lanes)
             .all(|l| self.elem_material[e + l] == mi)
             .then_some(m)
     }
@@ -604,47 +616,44 @@ impl ExplicitFe {
         }
     }
 
-    /// Updates elements `e0..e0 + LANES` (material `m`) with the batched kernel in the buffer
-    /// `g` and adds their outputs in element order; `false`, with nothing changed, when one of
-    /// them is inverted.
+    /// Updates elements `e0..e0 + B::LANES` (material `m`) with the batched kernel in the
+    /// buffer `g` and adds their outputs in element order; `false`, with nothing changed, when
+    /// one of them is inverted.
     ///
     /// Cost per element beyond the kernel: the gather of 48 nodal doubles (384 B) and the
     /// scatter-add of 24 (192 B read and written) through the connectivity (32 B), 19 state
     /// doubles in and out (304 B), no flops.
-    fn group_update(
+    fn group_update<B: Batch>(
         &mut self,
         e0: usize,
         m: &LaneMaterial,
         dt: f64,
-        g: &mut LaneGroup,
+        g: &mut B,
         sums: &mut LoopSums,
     ) -> bool {
-        let conn: [&[u32; 8]; LANES] = std::array::from_fn(|l| &self.elems[e0 + l]);
-        hex_lanes::gather(&self.x, conn, &mut g.x);
-        hex_lanes::gather(&self.v, conn, &mut g.v);
-        g.vol0 = F4(std::array::from_fn(|l| self.vol0[e0 + l]));
+        let lanes = e0..e0 + B::LANES;
         let stride = self.mat_stride;
         let history = m.n_state() > 0;
-        for l in 0..LANES {
-            let e = e0 + l;
-            let h = if history {
-                self.mat_state[e * stride]
-            } else {
-                0.0
-            };
-            g.state.set_lane(l, &self.state[e], h);
-        }
+        let ms = &self.mat_state;
+        g.load(
+            &self.x,
+            &self.v,
+            &self.elems[lanes.clone()],
+            &self.vol0[lanes.clone()],
+            &self.state[lanes],
+            |l| if history { ms[(e0 + l) * stride] } else { 0.0 },
+        );
         if g.update(dt, m, &self.controls).is_err() {
             return false;
         }
-        for l in 0..LANES {
+        for l in 0..B::LANES {
             let e = e0 + l;
-            let (s, h) = g.state.lane(l);
+            let (s, h) = g.lane_state(l);
             self.state[e] = s;
             if history {
                 self.mat_state[e * stride] = h;
             }
-            self.add_output(e, &g.out.lane(l), sums);
+            self.add_output(e, &g.lane_output(l), sums);
         }
         true
     }

@@ -9,14 +9,12 @@
 #![allow(clippy::macro_metavars_in_unsafe)]
 
 pub mod agree;
+pub mod batch;
 pub mod blocks;
 pub mod explicit;
 pub mod hex;
-pub mod hex_lanes;
 pub mod hourglass;
-pub mod hourglass_lanes;
 pub mod implicit;
-pub mod lanes;
 pub mod material;
 pub mod mesh;
 pub mod objects;

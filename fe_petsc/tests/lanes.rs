@@ -1,10 +1,9 @@
-//! The batched element kernel (`hex_lanes::LaneGroup::update`, four elements in lanes) against the scalar
-//! kernel (`hex::update`), which is the reference: a randomly distorted block driven through
+//! The batched element kernel (`batch::Batch::update`, four or eight elements in lanes: every
+//! width this CPU runs) against the scalar kernel (`hex::update`), which is the reference: a randomly distorted block driven through
 //! steps of a velocity field with random nodal parts (hourglass modes), elastic and J2 plastic
 //! (yielding), the default physical hourglass control. No MPI, no PETSc.
+use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
-use fe_petsc::hex_lanes::{self, LaneGroup, LaneMaterial};
-use fe_petsc::lanes::{F4, LANES};
 use fe_petsc::material::{build_material, Material, MaterialSpec};
 
 /// Relative agreement required: the kernels do the same IEEE operations in the same order, so
@@ -84,6 +83,7 @@ impl Diff {
     }
     fn check(&self, what: &str, case: &str) {
         let rel = self.err / self.scale.max(f64::MIN_POSITIVE);
+        println!("{case}: {what} differ by {rel:e} relative (tolerance {TOL:e})");
         assert!(
             rel <= TOL,
             "{case}: batched {what} differs from the scalar kernel's (hex::update, the \
@@ -115,11 +115,13 @@ fn outputs(o: &HexOutput) -> [Vec<f64>; 5] {
 /// Runs `steps` steps of the block with both kernels, each on its own copy of the state, and
 /// compares every output and state; returns how many (element, step) pairs flowed plastically
 /// and in how many group-steps the lanes disagreed on flowing (masked lanes exercised).
-fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usize) {
+fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (usize, usize) {
+    let lanes = B::LANES;
+    let case = &format!("{case}, {lanes} lanes");
     let mut rng = Lcg(0x5eed_0017);
     let h = 0.01;
     let (mut x, elems) = distorted_block(4, 3, h, &mut rng);
-    assert_eq!(elems.len() % LANES, 0, "whole groups");
+    assert_eq!(elems.len() % lanes, 0, "whole groups");
     // A compression along x with shear (about 3e3 1/s: yield within a few steps) plus random
     // nodal velocities of the same size, which drive the hourglass modes.
     let rate = 3e3;
@@ -145,7 +147,7 @@ fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usiz
     let mut ms_s = vec![0.0; elems.len() * ns];
     let mut st_b = st_s.clone();
     // One buffer for every group, as the explicit loop uses it.
-    let mut group = LaneGroup::default();
+    let mut group = B::default();
     let mut ms_b = ms_s.clone();
     let dt = 2e-7;
     let (mut flowed, mut mixed) = (0, 0);
@@ -174,27 +176,22 @@ fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usiz
             );
             ref_out.push(o.expect("no inverted element"));
         }
-        for g in (0..elems.len()).step_by(LANES) {
-            let conn: [&[u32; 8]; LANES] = std::array::from_fn(|l| &elems[g + l]);
-            for l in 0..LANES {
-                group.state.set_lane(l, &st_b[g + l], ms_b[(g + l) * ns]);
-            }
-            hex_lanes::gather(&x, conn, &mut group.x);
-            hex_lanes::gather(&v, conn, &mut group.v);
-            group.vol0 = F4(std::array::from_fn(|l| vol0[g + l]));
-            let before = group.state.history;
+        for g in (0..elems.len()).step_by(lanes) {
+            let e = g..g + lanes;
+            group.load(&x, &v, &elems[e.clone()], &vol0[e.clone()], &st_b[e], |l| {
+                ms_b[(g + l) * ns]
+            });
             group.update(dt, &lm, &ctl).expect("no inverted element");
-            let (st, out) = (&group.state, &group.out);
-            let flows = (0..LANES)
-                .filter(|&l| st.history.0[l] > before.0[l])
+            let flows = (0..lanes)
+                .filter(|&l| group.lane_state(l).1 > ms_b[(g + l) * ns])
                 .count();
             flowed += flows;
-            mixed += usize::from(flows > 0 && flows < LANES);
-            for l in 0..LANES {
+            mixed += usize::from(flows > 0 && flows < lanes);
+            for l in 0..lanes {
                 let e = g + l;
-                let (s, hist) = st.lane(l);
+                let (s, hist) = group.lane_state(l);
                 (st_b[e], ms_b[e * ns]) = (s, hist);
-                let (r, b) = (outputs(&ref_out[e]), outputs(&out.lane(l)));
+                let (r, b) = (outputs(&ref_out[e]), outputs(&group.lane_output(l)));
                 for (d, (r, b)) in d_out.iter_mut().zip(r.iter().zip(&b)) {
                     d.add(r, b);
                 }
@@ -215,10 +212,29 @@ fn compare_kernels(mat: &dyn Material, case: &str, steps: usize) -> (usize, usiz
     (flowed, mixed)
 }
 
+/// `compare_kernels` for the group size `w`.
+fn compare_width(w: Width, mat: &dyn Material, case: &str, steps: usize) -> (usize, usize) {
+    match w {
+        Width::W4 => compare_kernels::<batch::w4::LaneGroup>(mat, case, steps),
+        #[cfg(target_arch = "x86_64")]
+        Width::W8 => compare_kernels::<batch::w8::LaneGroup>(mat, case, steps),
+    }
+}
+
+/// The widths this CPU runs, said on the test's output (a CPU without AVX-512 tests four
+/// lanes only).
+fn widths() -> Vec<Width> {
+    let w = batch::available();
+    println!("batched kernel widths on this CPU: {w:?}");
+    w
+}
+
 #[test]
 fn batched_kernel_equals_the_scalar_kernel_elastic() {
     let mat = material("elastic", &[]);
-    compare_kernels(&*mat, "elastic", 12);
+    for w in widths() {
+        compare_width(w, &*mat, "elastic", 12);
+    }
 }
 
 #[test]
@@ -227,20 +243,34 @@ fn batched_kernel_equals_the_scalar_kernel_j2_yielding() {
         "j2_plastic",
         &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
     );
-    let (flowed, mixed) = compare_kernels(&*mat, "j2_plastic", 12);
-    // The comparison means something only if the return and its mask were exercised.
-    assert!(
-        flowed > 100,
-        "j2_plastic: only {flowed} element-steps flowed"
-    );
-    assert!(
-        mixed > 0,
-        "j2_plastic: no group had flowing and elastic lanes in one step"
-    );
+    for w in widths() {
+        let (flowed, mixed) = compare_width(w, &*mat, "j2_plastic", 12);
+        // The comparison means something only if the return and its mask were exercised.
+        assert!(
+            flowed > 100,
+            "j2_plastic, {w:?}: only {flowed} element-steps flowed"
+        );
+        assert!(
+            mixed > 0,
+            "j2_plastic, {w:?}: no group had flowing and elastic lanes in one step"
+        );
+    }
 }
 
 #[test]
 fn a_group_with_an_inverted_element_is_left_to_the_scalar_kernel() {
+    for w in widths() {
+        match w {
+            Width::W4 => inverted_group_is_refused::<batch::w4::LaneGroup>(),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => inverted_group_is_refused::<batch::w8::LaneGroup>(),
+        }
+    }
+}
+
+/// A group whose third element is inside out is refused with nothing changed, and the scalar
+/// kernel names that element.
+fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
     let mat = material(
         "j2_plastic",
         &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
@@ -253,23 +283,36 @@ fn a_group_with_an_inverted_element_is_left_to_the_scalar_kernel() {
     inverted.swap(1, 5);
     inverted.swap(2, 6);
     inverted.swap(3, 7);
-    let xs: Vec<[f64; 3]> = [cube, cube, inverted, cube].concat();
-    let conn: Vec<[u32; 8]> = (0..4)
+    let n = B::LANES;
+    let xs: Vec<[f64; 3]> = (0..n)
+        .flat_map(|l| if l == 2 { inverted } else { cube })
+        .collect();
+    let conn: Vec<[u32; 8]> = (0..n)
         .map(|l| std::array::from_fn(|k| (8 * l + k) as u32))
         .collect();
-    let lanes: [&[u32; 8]; LANES] = std::array::from_fn(|l| &conn[l]);
-    let mut group = LaneGroup::default();
-    hex_lanes::gather(&xs, lanes, &mut group.x);
-    hex_lanes::gather(&vec![[1.0, 0.0, 0.0]; 32], lanes, &mut group.v);
-    group.vol0 = F4::splat(1.25e-7);
-    group.state.stress[0] = F4::splat(1e6);
+    let state = HexState {
+        stress: [1e6, 0.0, 0.0, 0.0, 0.0, 0.0],
+        ..HexState::default()
+    };
+    let mut group = B::default();
+    group.load(
+        &xs,
+        &vec![[1.0, 0.0, 0.0]; 8 * n],
+        &conn,
+        &vec![1.25e-7; n],
+        &vec![state; n],
+        |_| 0.0,
+    );
     let before = format!("{group:?}");
     let r = group.update(1e-7, &lm, &ctl);
-    assert!(r.is_err(), "lane 2 is inverted: the group must be refused");
+    assert!(
+        r.is_err(),
+        "{n} lanes: lane 2 is inverted: the group must be refused"
+    );
     assert_eq!(
         before,
         format!("{group:?}"),
-        "a refused group changes no state and no output"
+        "{n} lanes: a refused group changes no state and no output"
     );
     // The scalar kernel, which then runs the group's elements, names the inverted one.
     let mut s = HexState::default();

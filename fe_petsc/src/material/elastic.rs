@@ -1,15 +1,12 @@
 //! Linear elastic, hypo-elastic rate form: sigma_dot (objective) = lambda tr(D) I + 2 mu D.
-use super::{
-    add_elastic, add_elastic_lanes, lame, take, LaneLaw, Material, MaterialError, MaterialSpec,
-};
-use crate::lanes::F4;
+use super::{add_elastic, lame, take, LaneLaw, Material, MaterialError, MaterialSpec};
 
 /// Isotropic linear elasticity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Elastic {
-    rho: f64,
-    lambda: f64,
-    mu: f64,
+    pub(crate) rho: f64,
+    pub(crate) lambda: f64,
+    pub(crate) mu: f64,
 }
 
 impl Elastic {
@@ -22,12 +19,6 @@ impl Elastic {
             lambda,
             mu,
         }))
-    }
-
-    /// [`Material::update_stress`] in lanes (the batched element kernel).
-    #[inline(always)]
-    pub(crate) fn update_lanes(&self, stress: &mut [F4; 6], deps: &[F4; 6]) {
-        add_elastic_lanes(stress, deps, self.lambda, self.mu);
     }
 }
 

@@ -5,19 +5,17 @@
 //! deviator is scaled back to the yield surface: s = s_tr (1 - 3 mu dgamma / q_tr)
 //! (Simo & Hughes, Computational Inelasticity, 1998, Box 3.1). State: [ep].
 use super::{
-    add_elastic, add_elastic_lanes, bad, deviator, deviator_lanes, lame, take, LaneLaw, Material,
-    MaterialError, MaterialSpec,
+    add_elastic, bad, deviator, lame, take, LaneLaw, Material, MaterialError, MaterialSpec,
 };
-use crate::lanes::F4;
 
 /// Elastic-plastic J2 material with linear hardening.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct J2Plastic {
-    rho: f64,
-    lambda: f64,
-    mu: f64,
-    yield_stress: f64,
-    hardening: f64,
+    pub(crate) rho: f64,
+    pub(crate) lambda: f64,
+    pub(crate) mu: f64,
+    pub(crate) yield_stress: f64,
+    pub(crate) hardening: f64,
 }
 
 impl J2Plastic {
@@ -56,30 +54,6 @@ impl J2Plastic {
             yield_stress: v[2],
             hardening: v[3],
         }))
-    }
-
-    /// [`Material::update_stress`] in lanes (the batched element kernel): the same trial
-    /// stress and radial return, the return taken in the lanes that flow (f > 0) and the trial
-    /// stress kept in the others. `ep`: the plastic strain of each lane.
-    #[inline(always)]
-    pub(crate) fn update_lanes(&self, stress: &mut [F4; 6], ep: &mut F4, deps: &[F4; 6]) {
-        add_elastic_lanes(stress, deps, self.lambda, self.mu);
-        let (s, p, q) = deviator_lanes(stress);
-        let f = q - (self.yield_stress + self.hardening * *ep);
-        let flow = f.gt(F4::ZERO);
-        let dgamma = f / (3.0 * self.mu + self.hardening);
-        let scale = 1.0 - 3.0 * self.mu * dgamma / q;
-        for k in 0..3 {
-            stress[k] = F4::select(flow, s[k] * scale + p, stress[k]);
-            stress[k + 3] = F4::select(flow, s[k + 3] * scale, stress[k + 3]);
-        }
-        *ep = F4::select(flow, *ep + dgamma, *ep);
-    }
-
-    /// [`Material::yield_stress`] in lanes.
-    #[inline(always)]
-    pub(crate) fn yield_stress_lanes(&self, ep: F4) -> F4 {
-        self.yield_stress + self.hardening * ep
     }
 }
 

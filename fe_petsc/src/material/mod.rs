@@ -1,5 +1,4 @@
 //! Materials: one file per model, one trait, one name table (`MODELS`).
-use crate::lanes::F4;
 use std::collections::BTreeMap;
 
 /// A material as the scene file declares it (`[[material]]`), before a model is built from it.
@@ -109,26 +108,6 @@ impl LaneLaw {
         match self {
             LaneLaw::Elastic(_) => 0,
             LaneLaw::J2Plastic(_) => 1,
-        }
-    }
-
-    /// Writes into `stress` (lanes of Voigt stresses, already rotated) the stress after the
-    /// strain increments `deps`, and updates the history variable `history` (unused by models
-    /// without one), lane by lane as [`Material::update_stress`] does.
-    #[inline(always)]
-    pub fn update_stress(&self, stress: &mut [F4; 6], history: &mut F4, deps: &[F4; 6]) {
-        match self {
-            LaneLaw::Elastic(m) => m.update_lanes(stress, deps),
-            LaneLaw::J2Plastic(m) => m.update_lanes(stress, history, deps),
-        }
-    }
-
-    /// The current yield stress of each lane ([`Material::yield_stress`]).
-    #[inline(always)]
-    pub fn yield_stress(&self, history: F4) -> Option<F4> {
-        match self {
-            LaneLaw::Elastic(_) => None,
-            LaneLaw::J2Plastic(m) => Some(m.yield_stress_lanes(history)),
         }
     }
 }
@@ -282,25 +261,6 @@ pub(crate) fn add_elastic(stress: &mut [f64; 6], deps: &[f64; 6], lambda: f64, m
 }
 
 /// [`add_elastic`] in lanes.
-#[inline(always)]
-pub(crate) fn add_elastic_lanes(stress: &mut [F4; 6], deps: &[F4; 6], lambda: f64, mu: f64) {
-    let tr = deps[0] + deps[1] + deps[2];
-    for k in 0..3 {
-        stress[k] += lambda * tr + 2.0 * mu * deps[k];
-        stress[k + 3] += 2.0 * mu * deps[k + 3];
-    }
-}
-
-/// [`deviator`] in lanes.
-#[inline(always)]
-pub(crate) fn deviator_lanes(s: &[F4; 6]) -> ([F4; 6], F4, F4) {
-    let p = (s[0] + s[1] + s[2]) * crate::hourglass::THIRD;
-    let d = [s[0] - p, s[1] - p, s[2] - p, s[3], s[4], s[5]];
-    let j2 =
-        0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
-    (d, p, (3.0 * j2).sqrt())
-}
-
 /// Deviator of a Voigt stress and the von Mises stress sqrt(3/2 s:s).
 #[inline]
 pub(crate) fn deviator(s: &[f64; 6]) -> ([f64; 6], f64, f64) {

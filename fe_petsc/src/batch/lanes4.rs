@@ -1,4 +1,4 @@
-//! Four f64 lanes for the batched element kernel ([`crate::hex_lanes`]): one lane per element,
+//! Four f64 lanes for the batched element kernel (`batch::w4`): one lane per element,
 //! the same operation in every lane, written on fixed-size arrays that the compiler turns into
 //! vector instructions (two SSE2 instructions per lane operation on the baseline x86-64 target,
 //! one with AVX).

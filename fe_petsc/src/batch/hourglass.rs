@@ -1,15 +1,15 @@
 //! The physical hourglass control of [`crate::hourglass`] (whose module comment derives it) on
-//! four elements at once, for the batched kernel [`crate::hex_lanes`]: the same operations in
+//! a group of elements at once, for the batched kernel (`batch::hex`): the same operations in
 //! the same order in each lane, the branches (loading or unloading, the yield bound's cases, the
 //! tangent ratio's round-off guard) as masked lane operations.
+use super::{F, M};
 use crate::hex::NODES;
 use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT, THIRD};
-use crate::lanes::{F4, M4};
 
-type V3 = [F4; 3];
-type M3 = [[F4; 3]; 3];
+type V3 = [F; 3];
+type M3 = [[F; 3]; 3];
 
-/// One step of four elements' hourglass control (what [`crate::hourglass::HourglassStep`] and
+/// One step of a group's hourglass control (what [`crate::hourglass::HourglassStep`] and
 /// [`crate::hourglass::HourglassMaterial`] hold for one element; the shear modulus is positive:
 /// the physical kind).
 pub struct LaneHourglass<'a> {
@@ -20,7 +20,7 @@ pub struct LaneHourglass<'a> {
     /// Mean gradient b at the end of the step.
     pub b: &'a [V3; NODES],
     /// Current volumes, m^3.
-    pub vol: F4,
+    pub vol: F,
     /// The step, s.
     pub dt: f64,
     /// Elastic shear modulus (positive), Pa.
@@ -30,21 +30,21 @@ pub struct LaneHourglass<'a> {
     /// Multiplier of the physical stiffness.
     pub scale: f64,
     /// Tangent ratios in [0, 1].
-    pub tangent_ratio: F4,
+    pub tangent_ratio: F,
     /// Current yield stresses, for materials with a yield surface.
-    pub yield_stress: Option<F4>,
+    pub yield_stress: Option<F>,
     /// The elements' centre stresses (global axes, Voigt), Pa.
-    pub stress: [F4; 6],
+    pub stress: [F; 6],
 }
 
 #[inline(always)]
-fn dot(a: &V3, b: &V3) -> F4 {
+fn dot(a: &V3, b: &V3) -> F {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// [`crate::hourglass::tangent_ratio`] in lanes, for a positive `mu`. About 40 flops.
 #[inline(always)]
-pub fn tangent_ratio(dsig: &[F4; 6], deps: &[F4; 6], mu: f64) -> F4 {
+pub fn tangent_ratio(dsig: &[F; 6], deps: &[F; 6], mu: f64) -> F {
     let es = (deps[0] + deps[1] + deps[2]) * THIRD;
     let ss = (dsig[0] + dsig[1] + dsig[2]) * THIRD;
     let de = [deps[0] - es, deps[1] - es, deps[2] - es];
@@ -53,23 +53,23 @@ pub fn tangent_ratio(dsig: &[F4; 6], deps: &[F4; 6], mu: f64) -> F4 {
         + de[1] * de[1]
         + de[2] * de[2]
         + 2.0 * (deps[3] * deps[3] + deps[4] * deps[4] + deps[5] * deps[5]);
-    let round_off = ee.lt(F4::splat(MIN_STRAIN_INCREMENT * MIN_STRAIN_INCREMENT));
+    let round_off = ee.lt(F::splat(MIN_STRAIN_INCREMENT * MIN_STRAIN_INCREMENT));
     let se = ds[0] * de[0]
         + ds[1] * de[1]
         + ds[2] * de[2]
         + 2.0 * (dsig[3] * deps[3] + dsig[4] * deps[4] + dsig[5] * deps[5]);
     let ratio = (se / (2.0 * mu * ee)).clamp(0.0, 1.0);
-    F4::select(round_off, F4::splat(1.0), ratio)
+    F::select(round_off, F::splat(1.0), ratio)
 }
 
 /// [`crate::hourglass::vectors`] in lanes: gamma_aI = Gamma_aI - (Gamma_a . x) . b_I.
 /// 4 x (24 + 8 x 6) = 288 flops per element.
 #[inline(always)]
-fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F4; NODES]; 4] {
-    let mut gam = [[F4::ZERO; NODES]; 4];
+fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F; NODES]; 4] {
+    let mut gam = [[F::ZERO; NODES]; 4];
     for al in 0..4 {
         let g = &GAMMA[al];
-        let mut gx = [F4::ZERO; 3];
+        let mut gx = [F::ZERO; 3];
         for k in 0..NODES {
             for c in 0..3 {
                 gx[c] += g[k] * x[k][c];
@@ -92,7 +92,7 @@ impl Frame {
     /// Gram-Schmidt on the centre Jacobian's columns, as `Frame::new`. About 120 flops.
     #[inline(always)]
     fn new(x: &[V3; NODES]) -> Frame {
-        let mut j = [[F4::ZERO; 3]; 3];
+        let mut j = [[F::ZERO; 3]; 3];
         for (xi, xn) in crate::hex::NODE_XI.iter().zip(x.iter()) {
             for d in 0..3 {
                 for c in 0..3 {
@@ -101,7 +101,7 @@ impl Frame {
             }
         }
         let norm = |v: &V3| dot(v, v).sqrt();
-        let scale = |v: &V3, s: F4| [v[0] * s, v[1] * s, v[2] * s];
+        let scale = |v: &V3, s: F| [v[0] * s, v[1] * s, v[2] * s];
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
         let ia = [1.0 / a[0], 1.0 / a[1], 1.0 / a[2]];
         let e0 = scale(&j[0], ia[0]);
@@ -142,7 +142,7 @@ impl Frame {
 /// [`crate::hourglass::physical_strain_rates`] in lanes. 30 flops, no division.
 #[inline(always)]
 fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
-    let mut e = [[F4::ZERO; 3]; 4];
+    let mut e = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         e[g] = [
@@ -159,9 +159,9 @@ fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
 
 /// [`crate::hourglass::physical_forces`] in lanes. About 45 flops, no division.
 #[inline(always)]
-fn forces(sig: &[V3; 4], ia: &V3, vol: F4) -> [V3; 4] {
+fn forces(sig: &[V3; 4], ia: &V3, vol: F) -> [V3; 4] {
     let w = 0.125 * vol * THIRD;
-    let mut h = [[F4::ZERO; 3]; 4];
+    let mut h = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let [spp, srr, spr] = sig[g];
@@ -180,9 +180,9 @@ fn forces(sig: &[V3; 4], ia: &V3, vol: F4) -> [V3; 4] {
 /// The physical stress-amplitude rates (`physical_stress_rates`: plane stress per group with
 /// Ebar = 2 mu / (1 - nu), 2 mu on mode 3) for the lanes' moduli `mu`.
 #[inline(always)]
-fn stress_rates(e: &[V3; 4], mu: F4, nu: f64) -> [V3; 4] {
+fn stress_rates(e: &[V3; 4], mu: F, nu: f64) -> [V3; 4] {
     let ebar = 2.0 * mu / (1.0 - nu);
-    let mut r = [[F4::ZERO; 3]; 4];
+    let mut r = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let [epp, err, gpr] = e[g];
         r[g] = [ebar * (epp + nu * err), ebar * (err + nu * epp), mu * gpr];
@@ -194,10 +194,10 @@ fn stress_rates(e: &[V3; 4], mu: F4, nu: f64) -> [V3; 4] {
 /// von Mises bilinear form 3/2 dev(a) : dev(b) (`mises_dot`), over the full 3 x 3 in the same
 /// order (an off-diagonal entry minus zero is itself). About 35 flops.
 #[inline(always)]
-fn mises_dot(a: &M3, b: &M3) -> F4 {
+fn mises_dot(a: &M3, b: &M3) -> F {
     let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
     let tb = (b[0][0] + b[1][1] + b[2][2]) * THIRD;
-    let mut s = F4::ZERO;
+    let mut s = F::ZERO;
     for i in 0..3 {
         for j in 0..3 {
             let (da, db) = if i == j {
@@ -215,23 +215,23 @@ fn mises_dot(a: &M3, b: &M3) -> F4 {
 /// inlines into the AVX2 build): `a` the Mises form of the centre stress, `sy2` the squared
 /// yield stress.
 #[inline(always)]
-fn group_scale(centre: &M3, tau: &M3, a: F4, sy2: F4) -> F4 {
+fn group_scale(centre: &M3, tau: &M3, a: F, sy2: F) -> F {
     let b = mises_dot(centre, tau);
     let c = mises_dot(tau, tau);
-    let f = ((-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c).min(F4::splat(1.0));
-    let f = F4::select(a.ge(sy2), F4::ZERO, f);
-    F4::select(c.le(F4::ZERO), F4::splat(1.0), f)
+    let f = ((-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c).min(F::splat(1.0));
+    let f = F::select(a.ge(sy2), F::ZERO, f);
+    F::select(c.le(F::ZERO), F::splat(1.0), f)
 }
 
 /// `yield_bound` in lanes: each group's amplitudes scaled by lambda in [0, 1] so that the fibre
 /// stresses sigma_c +- lambda tau stay inside the von Mises surface of radius `sy`; lambda = 1
 /// in a lane whose tau has no deviator, 0 in a lane whose centre is on or outside the surface.
 #[inline(always)]
-fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F4) {
+fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F) {
     let a = mises_dot(centre, centre);
     let sy2 = sy * sy;
     let scale_group = |tau: &M3| group_scale(centre, tau, a, sy2);
-    let z = F4::ZERO;
+    let z = F::ZERO;
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let mut tau = [[z; 3]; 3];
@@ -253,13 +253,13 @@ fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F4) {
 
 /// The centre stress in the element frame, E sigma E^T. 162 flops.
 #[inline(always)]
-fn centre_stress(st: &[F4; 6], e: &M3) -> M3 {
+fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
     let g = [
         [st[0], st[3], st[5]],
         [st[3], st[1], st[4]],
         [st[5], st[4], st[2]],
     ];
-    let mut m = [[F4::ZERO; 3]; 3];
+    let mut m = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             for k in 0..3 {
@@ -272,7 +272,7 @@ fn centre_stress(st: &[F4; 6], e: &M3) -> M3 {
     m
 }
 
-/// The physical kind's step on four elements ([`crate::hourglass`]'s `physical_step`): adds the
+/// The physical kind's step on a group of elements ([`crate::hourglass`]'s `physical_step`): adds the
 /// hourglass forces to `force`, updates the stress amplitudes `sig` and returns the hourglass
 /// work of the step, J.
 ///
@@ -280,12 +280,12 @@ fn centre_stress(st: &[F4; 6], e: &M3) -> M3 {
 /// (amplitudes) + 162 + 4 x 110 (yield bound) + 4 x 120 (forces) = about 1,800 flops with the
 /// yield bound, on 18 + 12 state doubles (read and written) and the lanes' nodal values.
 #[inline(always)]
-pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -> F4 {
+pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -> F {
     let gam = vectors(s.x, s.b);
     let frame = Frame::new(s.x);
-    let mut qd = [[F4::ZERO; 3]; 4];
+    let mut qd = [[F::ZERO; 3]; 4];
     for al in 0..4 {
-        let mut q = [F4::ZERO; 3];
+        let mut q = [F::ZERO; 3];
         for k in 0..NODES {
             for c in 0..3 {
                 q[c] += s.v[k][c] * gam[al][k];
@@ -299,8 +299,8 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
         + dot(&sig[1], &e[1])
         + dot(&sig[2], &e[2])
         + dot(&sig[3], &e[3]) * THIRD;
-    let loading: M4 = power.gt(F4::ZERO);
-    let s_eff = F4::select(loading, s.tangent_ratio, F4::splat(1.0));
+    let loading: M = power.gt(F::ZERO);
+    let s_eff = F::select(loading, s.tangent_ratio, F::splat(1.0));
     let rate = stress_rates(&e, s.scale * s_eff * s.mu, s.nu);
     let h_old = forces(sig, &frame.ia, s.vol);
     for al in 0..4 {
@@ -312,7 +312,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
         yield_bound(sig, &centre_stress(&s.stress, &frame.e), sy);
     }
     let h = forces(sig, &frame.ia, s.vol);
-    let mut work = F4::ZERO;
+    let mut work = F::ZERO;
     for al in 0..4 {
         work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));
     }

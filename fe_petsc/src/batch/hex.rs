@@ -1,75 +1,37 @@
-//! The hexahedron of [`crate::hex`] on four elements at once, one element per lane
-//! ([`crate::lanes::F4`]): the same operations in every lane, the scalar kernel's branches as
+//! The hexahedron of [`crate::hex`] on a group of elements at once, one element per lane (the
+//! parent module's lane type `F`, four or eight lanes): the same operations in every lane, the scalar kernel's branches as
 //! masked lane operations, the nodal values gathered into lanes and the forces handed back per
 //! element. Each lane computes what [`crate::hex::update`] computes for its element, operation
 //! for operation in the same order (no fused or reassociated arithmetic), so the two kernels
 //! agree to the last bit in practice (the tests hold them to 1e-12 relative).
 //!
 //! Why: the scalar update is one serial dependency chain of about 4,500 instructions per
-//! element at about 1.5 flops per cycle (DESIGN.md section 7); four independent elements in
-//! lanes fill the vector units and hide the latencies.
+//! element at about 1.5 flops per cycle (DESIGN.md section 7); independent elements in lanes
+//! fill the vector units and hide the latencies.
 //!
 //! Scope: the materials with a lane form ([`crate::material::LaneLaw`]: elastic, J2 plastic)
 //! under the physical hourglass control. A group with an element whose volume (end of step or
 //! mid-step) is not positive and finite returns an error before it changes any state, so that the
-//! caller runs its four elements through the scalar kernel, which reports the error as it
+//! caller runs its elements through the scalar kernel, which reports the error as it
 //! always has.
+use super::hourglass::{self as hourglass_lanes, LaneHourglass};
+use super::law;
+use super::{F, LANES, M};
+use crate::batch::{GroupInverted, LaneMaterial};
 use crate::hex::{HexControls, HexOutput, HexState, MAX_PAIRS, NODES, VOLUME_TERMS};
-use crate::hourglass::{self, Hourglass};
-use crate::hourglass_lanes::{self, LaneHourglass};
-use crate::lanes::{F4, LANES, M4};
-use crate::material::{LaneLaw, Material};
 
-/// Nodal vectors of four elements in lanes: `[node][component]`.
-pub type LaneNodes = [[F4; 3]; NODES];
+/// Nodal vectors of a group's elements in lanes: `[node][component]`.
+pub type LaneNodes = [[F; 3]; NODES];
 
-/// A material the batched kernel can update, with the constants the scalar kernel asks the
-/// material for at each element (the same values: the same calls).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LaneMaterial {
-    law: LaneLaw,
-    rho0: f64,
-    dilatational: f64,
-    mu: f64,
-    nu: f64,
-    hourglass_scale: f64,
-}
-
-impl LaneMaterial {
-    /// The lane form of `mat` under the controls `ctl`; `None` when `mat` has none or the
-    /// hourglass control is not the physical kind (the FB stiffness and viscous forms take the
-    /// scalar kernel).
-    pub fn new(mat: &dyn Material, ctl: &HexControls) -> Option<LaneMaterial> {
-        let law = mat.lane_law()?;
-        let mu = mat.shear_modulus();
-        let Hourglass::Physical { scale } = ctl.hourglass.for_material(mu) else {
-            return None;
-        };
-        Some(LaneMaterial {
-            law,
-            rho0: mat.density(),
-            dilatational: mat.dilatational_modulus(),
-            mu,
-            nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
-            hourglass_scale: scale,
-        })
-    }
-
-    /// History variables per element of the material (0 or 1).
-    pub fn n_state(&self) -> usize {
-        self.law.n_state()
-    }
-}
-
-/// The state of four elements ([`HexState`] and the material's history variable) in lanes.
+/// The state of a group's elements ([`HexState`] and the material's history variable) in lanes.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneState {
     /// Cauchy stress (Voigt), Pa.
-    pub stress: [F4; 6],
+    pub stress: [F; 6],
     /// Hourglass stress amplitudes in each element's frame, Pa.
-    pub hg: [[F4; 3]; 4],
+    pub hg: [[F; 3]; 4],
     /// The material's history variable (the plastic strain of J2), 0 for elastic.
-    pub history: F4,
+    pub history: F,
 }
 
 impl LaneState {
@@ -98,19 +60,19 @@ impl LaneState {
     }
 }
 
-/// What one update of four elements produced ([`HexOutput`] in lanes).
+/// What one update of a group produced ([`HexOutput`] in lanes).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneOutput {
     /// Force on each node from each element, N.
     pub force: LaneNodes,
     /// Hourglass work of each element this step, J.
-    pub hg_work: F4,
+    pub hg_work: F,
     /// Current volumes, m^3.
-    pub volume: F4,
+    pub volume: F,
     /// Stable steps (no safety factor), s.
-    pub dt_stable: F4,
+    pub dt_stable: F,
     /// Pressures without bulk viscosity, Pa.
-    pub pressure: F4,
+    pub pressure: F,
 }
 
 impl LaneOutput {
@@ -127,7 +89,7 @@ impl LaneOutput {
     }
 }
 
-/// Writes the nodal vectors `xs` of the four elements `conn` into the lanes `out` (every entry:
+/// Writes the nodal vectors `xs` of the group's elements `conn` into the lanes `out` (every entry:
 /// a buffer can be reused from group to group without clearing).
 ///
 /// Cost: 24 doubles read per element from `xs` (192 B, scattered over the nodes' cache lines),
@@ -148,7 +110,7 @@ pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES], out: &mut LaneNodes
 /// lanes: the same table of (J, K, c) terms, node by node with the node a const parameter.
 /// About 450 flops per element.
 #[inline(always)]
-fn volume_gradient(x: &LaneNodes) -> (LaneNodes, F4) {
+fn volume_gradient(x: &LaneNodes) -> (LaneNodes, F) {
     let b = [
         node_volume_gradient::<0>(x),
         node_volume_gradient::<1>(x),
@@ -168,8 +130,8 @@ fn volume_gradient(x: &LaneNodes) -> (LaneNodes, F4) {
 
 /// dV/dx_I for node `I` in lanes.
 #[inline(always)]
-fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F4; 3] {
-    let mut s = [F4::ZERO; 3];
+fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F; 3] {
+    let mut s = [F::ZERO; 3];
     let mut n = 0;
     while n < MAX_PAIRS {
         let (j, k, c) = VOLUME_TERMS.pairs[I][n];
@@ -182,15 +144,10 @@ fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F4; 3] {
     s
 }
 
-/// A group with an element whose volume (end of step or mid-step) is not positive and finite:
-/// its elements are for the scalar kernel, which names the element.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct GroupInverted;
-
 /// Lanes whose volume is positive and finite.
 #[inline(always)]
-fn valid_volume(v: F4) -> M4 {
-    v.gt(F4::ZERO).and(v.is_finite())
+fn valid_volume(v: F) -> M {
+    v.gt(F::ZERO).and(v.is_finite())
 }
 
 /// The kinematics of one step in lanes: the end-of-step gradients, the rate of deformation and
@@ -201,13 +158,13 @@ struct Kinematics {
     /// b = B / V at t(n+1).
     b: LaneNodes,
     /// Sum of b^2.
-    bb: F4,
-    vol: F4,
-    iv: F4,
+    bb: F,
+    vol: F,
+    iv: F,
     /// Rate of deformation (Voigt, tensor shears), 1/s.
-    d: [F4; 6],
+    d: [F; 6],
     /// The incremental rotation R.
-    r: [[F4; 3]; 3],
+    r: [[F; 3]; 3],
 }
 
 /// The gradients at the end and the middle of the step, the velocity gradient at mid-step and
@@ -221,7 +178,7 @@ struct Kinematics {
 fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     let (bv, vol) = volume_gradient(x);
     // x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (see `hex::update`).
-    let mut xh = [[F4::ZERO; 3]; NODES];
+    let mut xh = [[F::ZERO; 3]; NODES];
     for i in 0..NODES {
         for a in 0..3 {
             xh[i][a] = x[i][a] - 0.5 * dt * v[i][a];
@@ -232,8 +189,8 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
         return None;
     }
     let iv = 1.0 / vol;
-    let mut b = [[F4::ZERO; 3]; NODES];
-    let mut bb = F4::ZERO;
+    let mut b = [[F::ZERO; 3]; NODES];
+    let mut bb = F::ZERO;
     for i in 0..NODES {
         for j in 0..3 {
             b[i][j] = bv[i][j] * iv;
@@ -241,7 +198,7 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
         }
     }
     let ivh = 1.0 / volh;
-    let mut l = [[F4::ZERO; 3]; 3];
+    let mut l = [[F::ZERO; 3]; 3];
     for i in 0..NODES {
         for a in 0..3 {
             for j in 0..3 {
@@ -276,9 +233,9 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
 /// cofactors, the identity in a lane whose determinant is zero or not finite (as the scalar
 /// kernel's `unwrap_or`). About 60 flops per element.
 #[inline(always)]
-fn hughes_winget(w01: F4, w12: F4, w20: F4, dt: f64) -> [[F4; 3]; 3] {
+fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
     let h = 0.5 * dt;
-    let one = F4::splat(1.0);
+    let one = F::splat(1.0);
     let m = [
         [one, -h * w01, h * w20],
         [h * w01, one, -h * w12],
@@ -307,16 +264,16 @@ fn hughes_winget(w01: F4, w12: F4, w20: F4, dt: f64) -> [[F4; 3]; 3] {
         ],
     ];
     let det = m[0][0] * c[0][0] + m[0][1] * c[1][0] + m[0][2] * c[2][0];
-    let singular = det.eq(F4::ZERO).or(!det.is_finite());
+    let singular = det.eq(F::ZERO).or(!det.is_finite());
     let id = 1.0 / det;
-    let mut ai = [[F4::ZERO; 3]; 3];
+    let mut ai = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            let eye = F4::splat(if i == j { 1.0 } else { 0.0 });
-            ai[i][j] = F4::select(singular, eye, c[i][j] * id);
+            let eye = F::splat(if i == j { 1.0 } else { 0.0 });
+            ai[i][j] = F::select(singular, eye, c[i][j] * id);
         }
     }
-    let mut r = [[F4::ZERO; 3]; 3];
+    let mut r = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             r[i][j] = ai[i][0] * p[0][j] + ai[i][1] * p[1][j] + ai[i][2] * p[2][j];
@@ -327,9 +284,9 @@ fn hughes_winget(w01: F4, w12: F4, w20: F4, dt: f64) -> [[F4; 3]; 3] {
 
 /// sigma <- R sigma R^T (Voigt in, Voigt out). 90 flops per element.
 #[inline(always)]
-fn rotate(r: &[[F4; 3]; 3], s: &[F4; 6]) -> [F4; 6] {
+fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
     let sm = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
-    let mut rs = [[F4::ZERO; 3]; 3];
+    let mut rs = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             rs[i][j] = r[i][0] * sm[0][j] + r[i][1] * sm[1][j] + r[i][2] * sm[2][j];
@@ -349,9 +306,9 @@ fn rotate(r: &[[F4; 3]; 3], s: &[F4; 6]) -> [F4; 6] {
 /// The bulk viscosity's pressure q and damping ratio xi ([`crate::hex`]'s `bulk_viscosity`, whose
 /// comment derives them) and the element's stable step (its `critical_dt`), in lanes.
 #[inline(always)]
-fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F4, rho: F4, c: F4, ev: F4) -> (F4, F4) {
+fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F) {
     let len = 3f64.sqrt() / (2.0 * bb).sqrt();
-    let comp = (-ev).max(F4::ZERO);
+    let comp = (-ev).max(F::ZERO);
     let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
     let q = rho * len * c * ev * lin_quad;
     let xi = lin_quad * len * (2.0 * bb).sqrt();
@@ -360,7 +317,7 @@ fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F4, rho: F4, c: F4, ev: F4) -> (
     (q, dt)
 }
 
-/// Four elements in lanes: their nodal values, reference volumes and state going in, their
+/// A group of elements in lanes: their nodal values, reference volumes and state going in, their
 /// output coming out. One buffer serves group after group without clearing: [`gather`] and
 /// [`LaneState::set_lane`] write every entry, and [`LaneGroup::update`] every output.
 #[derive(Clone, Copy, Debug, Default)]
@@ -370,56 +327,24 @@ pub struct LaneGroup {
     /// Nodal velocities at t(n+1/2), m/s.
     pub v: LaneNodes,
     /// Reference volumes, m^3.
-    pub vol0: F4,
+    pub vol0: F,
     /// The elements' state.
     pub state: LaneState,
     /// What the last update produced.
     pub out: LaneOutput,
 }
 
-impl LaneGroup {
-    /// One explicit update over the step `dt` of four elements of the material `m`: in each
-    /// lane what [`crate::hex::update`] computes for its element; writes `state` and `out`.
-    /// `Err`, with `state` and `out` untouched, when a lane's volume is not positive and
-    /// finite.
-    ///
-    /// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
-    /// branches (about 150: the radial return, the hourglass loading test and yield bound);
-    /// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written
-    /// (304 B), the 24 force doubles handed back (192 B): about 1 flop per 0.4 B from the
-    /// lanes, while the gather/scatter of the nodal arrays is the memory-bound part.
-    pub fn update(
-        &mut self,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { update_avx2(self, dt, m, ctl) };
-        }
-        update_inline(self, dt, m, ctl)
-    }
-}
-
-/// [`LaneGroup::update`] compiled for AVX2: one instruction per lane operation, and
-/// three-operand forms that spare the register copies of SSE2's two-operand ones. The same IEEE
-/// operations in the same order (no FMA), so the same bits as the baseline build.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn update_avx2(
-    g: &mut LaneGroup,
-    dt: f64,
-    m: &LaneMaterial,
-    ctl: &HexControls,
-) -> Result<(), GroupInverted> {
-    update_inline(g, dt, m, ctl)
-}
-
-/// The body of [`LaneGroup::update`], inlined into each of its builds.
+/// One explicit update over the step `dt` of the group's elements of the material `m`: in
+/// each lane what [`crate::hex::update`] computes for its element; writes `state` and `out`.
+/// `Err`, with `state` and `out` untouched, when a lane's volume is not positive and finite.
+/// Inlined into each build of the parent module (its entry has the target features).
+///
+/// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
+/// branches (about 150: the radial return, the hourglass loading test and yield bound);
+/// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written
+/// (304 B), the 24 force doubles handed back (192 B).
 #[inline(always)]
-fn update_inline(
+pub(super) fn update_inline(
     g: &mut LaneGroup,
     dt: f64,
     m: &LaneMaterial,
@@ -435,14 +360,14 @@ fn update_inline(
     let (x, v, vol0) = (&*x, &*v, *vol0);
     let k = kinematics(x, v, dt).ok_or(GroupInverted)?;
     let mut stress = rotate(&k.r, &st.stress);
-    let mut deps = [F4::ZERO; 6];
+    let mut deps = [F::ZERO; 6];
     for i in 0..6 {
         deps[i] = k.d[i] * dt;
     }
     // rho = m / V with the exact volume.
     let rho = m.rho0 * vol0 * k.iv;
     let rotated = stress;
-    m.law.update_stress(&mut stress, &mut st.history, &deps);
+    law::update_stress(&m.law, &mut stress, &mut st.history, &deps);
     st.stress = stress;
 
     // Bulk viscosity on the normal stresses for the force only; a material with a lane form has
@@ -461,7 +386,7 @@ fn update_inline(
     // f_I = -sigma . (V b_I): 8 x 15 flops.
     // A local array (writing through `out` kept every partial sum in memory: 30 % more
     // instructions), copied out at the end.
-    let mut force = [[F4::ZERO; 3]; NODES];
+    let mut force = [[F::ZERO; 3]; NODES];
     for i in 0..NODES {
         let bi = &k.bv[i];
         force[i] = [
@@ -471,7 +396,7 @@ fn update_inline(
         ];
     }
 
-    let mut dsig = [F4::ZERO; 6];
+    let mut dsig = [F::ZERO; 6];
     for i in 0..6 {
         dsig[i] = stress[i] - rotated[i];
     }
@@ -485,7 +410,7 @@ fn update_inline(
         nu: m.nu,
         scale: m.hourglass_scale,
         tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
-        yield_stress: m.law.yield_stress(st.history),
+        yield_stress: law::yield_stress(&m.law, st.history),
         stress,
     };
     out.hg_work = hourglass_lanes::physical(&hg, &mut st.hg, &mut force);
@@ -494,4 +419,47 @@ fn update_inline(
     out.dt_stable = dt_stable;
     out.pressure = -(stress[0] + stress[1] + stress[2]) * crate::hourglass::THIRD;
     Ok(())
+}
+
+impl crate::batch::Batch for LaneGroup {
+    const LANES: usize = LANES;
+
+    #[inline]
+    fn load(
+        &mut self,
+        xs: &[[f64; 3]],
+        vs: &[[f64; 3]],
+        conn: &[[u32; NODES]],
+        vol0: &[f64],
+        state: &[HexState],
+        history: impl Fn(usize) -> f64,
+    ) {
+        let lanes: [&[u32; NODES]; LANES] = std::array::from_fn(|l| &conn[l]);
+        gather(xs, lanes, &mut self.x);
+        gather(vs, lanes, &mut self.v);
+        self.vol0 = F(std::array::from_fn(|l| vol0[l]));
+        for (l, s) in state[..LANES].iter().enumerate() {
+            self.state.set_lane(l, s, history(l));
+        }
+    }
+
+    #[inline]
+    fn update(
+        &mut self,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        super::entry(self, dt, m, ctl)
+    }
+
+    #[inline]
+    fn lane_state(&self, l: usize) -> (HexState, f64) {
+        self.state.lane(l)
+    }
+
+    #[inline]
+    fn lane_output(&self, l: usize) -> HexOutput {
+        self.out.lane(l)
+    }
 }

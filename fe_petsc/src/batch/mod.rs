@@ -1,0 +1,224 @@
+//! The batched element kernel: the hexahedron of [`crate::hex`] on a group of consecutive
+//! elements of one material at once, one element per f64 lane, the same operations in every
+//! lane and the scalar kernel's branches as masked lane operations. Each lane computes what
+//! [`crate::hex::update`] computes for its element, operation for operation in the same order
+//! (no fused or reassociated arithmetic), so the batched and scalar kernels agree to the bit in
+//! practice; the scalar kernel stays the reference the tests hold the batched one to.
+//!
+//! The kernel is written once (`hex.rs`, `hourglass.rs`, `law.rs` in this folder, on a lane
+//! type `F`, its mask `M` and the group size `LANES` taken from the parent module) and compiled
+//! twice:
+//! - [`w4`]: four lanes on fixed-size arrays the compiler vectorises (`lanes4.rs`), built for
+//!   AVX2 when the CPU has it (chosen at run time) and for the baseline x86-64 (SSE2) otherwise;
+//! - [`w8`] (x86-64): eight lanes in one AVX-512 register (`lanes8.rs`, intrinsics), used when
+//!   the CPU has AVX-512F. Eight lanes halve the instructions per element and the 32 vector
+//!   registers of AVX-512 spill less than AVX2's 16.
+//!
+//! [`widest`] picks the width for this CPU; [`Batch`] is what the element loop and the tests
+//! see of either.
+// The kernel's files are compiled once per width on purpose (each width its own lane type):
+// clippy's duplicate-module lint is for files loaded twice by mistake.
+#![allow(clippy::duplicate_mod)]
+use crate::hex::{HexControls, HexOutput, HexState, NODES};
+use crate::hourglass::{self, Hourglass};
+use crate::material::{LaneLaw, Material};
+
+/// A group of elements in lanes, as the explicit element loop uses it: load the group's
+/// elements, update them, read each lane's state and output back.
+pub trait Batch: Default {
+    /// Elements per group.
+    const LANES: usize;
+
+    /// Loads the first `LANES` elements of `conn` (their nodal coordinates from `xs`, velocities
+    /// from `vs`, reference volumes, states and history values `history(l)`) into the lanes.
+    fn load(
+        &mut self,
+        xs: &[[f64; 3]],
+        vs: &[[f64; 3]],
+        conn: &[[u32; NODES]],
+        vol0: &[f64],
+        state: &[HexState],
+        history: impl Fn(usize) -> f64,
+    );
+
+    /// One explicit update over the step `dt` of the loaded elements of the material `m`: in
+    /// each lane what [`crate::hex::update`] computes for its element. `Err`, with the state
+    /// untouched, when a lane's volume (end of step or mid-step) is not positive and finite.
+    fn update(&mut self, dt: f64, m: &LaneMaterial, ctl: &HexControls)
+        -> Result<(), GroupInverted>;
+
+    /// Lane `l`'s element state and history value after the update.
+    fn lane_state(&self, l: usize) -> (HexState, f64);
+
+    /// Lane `l`'s output of the update.
+    fn lane_output(&self, l: usize) -> HexOutput;
+}
+
+/// The group sizes of the batched kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Width {
+    /// Four lanes ([`w4`]).
+    W4,
+    /// Eight lanes in AVX-512 registers ([`w8`]).
+    #[cfg(target_arch = "x86_64")]
+    W8,
+}
+
+/// The widest group this CPU runs: eight lanes with AVX-512F, four otherwise.
+pub fn widest() -> Width {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        return Width::W8;
+    }
+    Width::W4
+}
+
+/// The widths this CPU can run, narrowest first (the tests compare each with the scalar kernel).
+pub fn available() -> Vec<Width> {
+    let mut w = vec![Width::W4];
+    if widest() != Width::W4 {
+        w.push(widest());
+    }
+    w
+}
+
+/// A material the batched kernel can update, with the constants the scalar kernel asks the
+/// material for at each element (the same values: the same calls).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaneMaterial {
+    pub(crate) law: LaneLaw,
+    pub(crate) rho0: f64,
+    pub(crate) dilatational: f64,
+    pub(crate) mu: f64,
+    pub(crate) nu: f64,
+    pub(crate) hourglass_scale: f64,
+}
+
+impl LaneMaterial {
+    /// The lane form of `mat` under the controls `ctl`; `None` when `mat` has none or the
+    /// hourglass control is not the physical kind (the FB stiffness and viscous forms take the
+    /// scalar kernel).
+    pub fn new(mat: &dyn Material, ctl: &HexControls) -> Option<LaneMaterial> {
+        let law = mat.lane_law()?;
+        let mu = mat.shear_modulus();
+        let Hourglass::Physical { scale } = ctl.hourglass.for_material(mu) else {
+            return None;
+        };
+        Some(LaneMaterial {
+            law,
+            rho0: mat.density(),
+            dilatational: mat.dilatational_modulus(),
+            mu,
+            nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
+            hourglass_scale: scale,
+        })
+    }
+
+    /// History variables per element of the material (0 or 1).
+    pub fn n_state(&self) -> usize {
+        self.law.n_state()
+    }
+}
+
+/// A group with an element whose volume (end of step or mid-step) is not positive and finite:
+/// its elements are for the scalar kernel, which names the element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GroupInverted;
+
+mod lanes4;
+#[cfg(target_arch = "x86_64")]
+mod lanes8;
+
+/// The kernel on four lanes of fixed-size arrays ([`lanes4`]).
+#[path = "."]
+pub mod w4 {
+    pub use super::lanes4::{F4 as F, LANES, M4 as M};
+    use super::{GroupInverted, LaneMaterial};
+    use crate::hex::HexControls;
+
+    #[path = "hex.rs"]
+    pub mod hex;
+    #[path = "hourglass.rs"]
+    mod hourglass;
+    #[path = "law.rs"]
+    mod law;
+    pub use hex::LaneGroup;
+
+    /// [`super::Batch::update`] for four lanes: the AVX2 build when the CPU has AVX2, the
+    /// baseline build otherwise.
+    #[inline]
+    fn entry(
+        g: &mut LaneGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { update_avx2(g, dt, m, ctl) };
+        }
+        hex::update_inline(g, dt, m, ctl)
+    }
+
+    /// The four-lane kernel compiled for AVX2: one instruction per lane operation, and
+    /// three-operand forms that spare the register copies of SSE2's two-operand ones. The same
+    /// IEEE operations in the same order (no FMA), so the same bits as the baseline build.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn update_avx2(
+        g: &mut LaneGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_inline(g, dt, m, ctl)
+    }
+}
+
+/// The kernel on eight lanes in AVX-512 registers ([`lanes8`]); its update needs AVX-512F
+/// ([`widest`] says whether this CPU has it).
+#[cfg(target_arch = "x86_64")]
+#[path = "."]
+pub mod w8 {
+    pub use super::lanes8::{F8 as F, LANES, M8 as M};
+    use super::{GroupInverted, LaneMaterial};
+    use crate::hex::HexControls;
+
+    #[path = "hex.rs"]
+    pub mod hex;
+    #[path = "hourglass.rs"]
+    mod hourglass;
+    #[path = "law.rs"]
+    mod law;
+    pub use hex::LaneGroup;
+
+    /// [`super::Batch::update`] for eight lanes. Panics on a CPU without AVX-512F: the element
+    /// loop takes this width only where [`super::widest`] found it.
+    #[inline]
+    fn entry(
+        g: &mut LaneGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        assert!(
+            std::arch::is_x86_feature_detected!("avx512f"),
+            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe { update_avx512(g, dt, m, ctl) }
+    }
+
+    /// The eight-lane kernel compiled for AVX-512F: every lane operation one instruction on a
+    /// 512-bit register (`lanes8`), inlined here.
+    #[target_feature(enable = "avx512f")]
+    fn update_avx512(
+        g: &mut LaneGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_inline(g, dt, m, ctl)
+    }
+}
