@@ -251,29 +251,85 @@ fn physical_stress_rates(e: &[[f64; 3]; 4], mu: f64, nu: f64) -> [[f64; 3]; 4] {
     r
 }
 
-/// von Mises bilinear form 3/2 dev(a) : dev(b) of two symmetric tensors (full 3 x 3).
-fn mises_dot(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
-    let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
-    let tb = (b[0][0] + b[1][1] + b[2][2]) * THIRD;
-    let mut s = 0.0;
+/// The centre stress `st` (global axes, Voigt) in the element frame with rows `e`: E sigma E^T
+/// as T = E sigma (45 flops), then the upper triangle of T E^T (30 flops), mirrored.
+pub(crate) fn centre_stress(st: &[f64; 6], e: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let g = [
+        [st[0], st[3], st[5]],
+        [st[3], st[1], st[4]],
+        [st[5], st[4], st[2]],
+    ];
+    let mut t = [[0.0; 3]; 3];
     for i in 0..3 {
-        for j in 0..3 {
-            let da = a[i][j] - if i == j { ta } else { 0.0 };
-            let db = b[i][j] - if i == j { tb } else { 0.0 };
-            s += da * db;
+        for l in 0..3 {
+            t[i][l] = e[i][0] * g[0][l] + e[i][1] * g[1][l] + e[i][2] * g[2][l];
         }
     }
-    1.5 * s
+    let m = |i: usize, j: usize| t[i][0] * e[j][0] + t[i][1] * e[j][1] + t[i][2] * e[j][2];
+    let (m01, m02, m12) = (m(0, 1), m(0, 2), m(1, 2));
+    [
+        [m(0, 0), m01, m02],
+        [m01, m(1, 1), m12],
+        [m02, m12, m(2, 2)],
+    ]
+}
+
+/// The Mises forms of the yield bound, from the deviator: 3/2 dev(a) : dev(b) = 3/2 dev(a) : b,
+/// each written on the entries that are not zero (a group's amplitudes have four, mode 3's
+/// three) and on deviators, so that a large mean stress cancels exactly and not by
+/// subtraction of large squares.
+struct Centre {
+    /// The centre stress in the element frame.
+    a: [[f64; 3]; 3],
+    /// Its deviator's diagonal.
+    da: [f64; 3],
+    /// 3/2 dev(a) : dev(a).
+    mises_sq: f64,
+}
+
+impl Centre {
+    /// 25 flops.
+    fn new(a: &[[f64; 3]; 3]) -> Centre {
+        let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
+        let da = [a[0][0] - ta, a[1][1] - ta, a[2][2] - ta];
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let mises_sq = 1.5 * (da[0] * da[0] + da[1] * da[1] + da[2] * da[2] + 2.0 * off);
+        Centre {
+            a: *a,
+            da,
+            mises_sq,
+        }
+    }
+
+    /// (B, C) of group g's amplitudes [tau_pp, tau_rr, tau_pr] ((p, r) the axes after g):
+    /// B = 3/2 dev(a) : tau, C = 3/2 dev(tau) : dev(tau). 20 flops.
+    fn group(&self, g: usize, tau: &[f64; 3]) -> (f64, f64) {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        let [tpp, trr, tpr] = *tau;
+        let b = 1.5 * (self.da[p] * tpp + self.da[r] * trr + 2.0 * self.a[p][r] * tpr);
+        let tm = (tpp + trr) * THIRD;
+        let (dp, dr) = (tpp - tm, trr - tm);
+        let c = 1.5 * (dp * dp + dr * dr + tm * tm + 2.0 * tpr * tpr);
+        (b, c)
+    }
+
+    /// (B, C) of mode 3's amplitudes, the normal entries [tau_00, tau_11, tau_22]. 20 flops.
+    fn mode3(&self, tau: &[f64; 3]) -> (f64, f64) {
+        let b = 1.5 * (self.da[0] * tau[0] + self.da[1] * tau[1] + self.da[2] * tau[2]);
+        let tm = (tau[0] + tau[1] + tau[2]) * THIRD;
+        let d = [tau[0] - tm, tau[1] - tm, tau[2] - tm];
+        let c = 1.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        (b, c)
+    }
 }
 
 /// Bounds each group's hourglass stress amplitude `tau` so that the stresses at its fibres,
 /// sigma_c +- lambda tau, stay inside the von Mises surface of radius `sy`: lambda in [0, 1]
 /// from A + 2 lambda |B| + lambda^2 C <= sy^2 (A, B, C: the Mises forms of sigma_c and tau).
 fn yield_bound(sig: &mut [[f64; 3]; 4], centre: &[[f64; 3]; 3], sy: f64) {
-    let a = mises_dot(centre, centre);
-    let scale_group = |tau: [[f64; 3]; 3]| -> f64 {
-        let b = mises_dot(centre, &tau);
-        let c = mises_dot(&tau, &tau);
+    let centre = Centre::new(centre);
+    let a = centre.mises_sq;
+    let lambda = |(b, c): (f64, f64)| -> f64 {
         if c <= 0.0 {
             return 1.0;
         }
@@ -282,26 +338,15 @@ fn yield_bound(sig: &mut [[f64; 3]; 4], centre: &[[f64; 3]; 3], sy: f64) {
         }
         ((-b.abs() + (b * b + c * (sy * sy - a)).sqrt()) / c).min(1.0)
     };
-    for g in 0..3 {
-        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
-        let mut tau = [[0.0; 3]; 3];
-        tau[p][p] = sig[g][0];
-        tau[r][r] = sig[g][1];
-        tau[p][r] = sig[g][2];
-        tau[r][p] = sig[g][2];
-        let f = scale_group(tau);
+    for g in 0..4 {
+        let f = lambda(if g < 3 {
+            centre.group(g, &sig[g])
+        } else {
+            centre.mode3(&sig[3])
+        });
         for v in sig[g].iter_mut() {
             *v *= f;
         }
-    }
-    let tau = [
-        [sig[3][0], 0.0, 0.0],
-        [0.0, sig[3][1], 0.0],
-        [0.0, 0.0, sig[3][2]],
-    ];
-    let f = scale_group(tau);
-    for v in sig[3].iter_mut() {
-        *v *= f;
     }
 }
 
@@ -516,26 +561,7 @@ fn physical_step(
         }
     }
     if let Some(sy) = mat.yield_stress {
-        // The centre stress in the element frame: E sigma E^T.
-        let st = &mat.stress;
-        let g = [
-            [st[0], st[3], st[5]],
-            [st[3], st[1], st[4]],
-            [st[5], st[4], st[2]],
-        ];
-        let e = &frame.e;
-        let centre: [[f64; 3]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| {
-                let mut v = 0.0;
-                for k in 0..3 {
-                    for l in 0..3 {
-                        v += e[i][k] * g[k][l] * e[j][l];
-                    }
-                }
-                v
-            })
-        });
-        yield_bound(sig, &centre, sy);
+        yield_bound(sig, &centre_stress(&mat.stress, &frame.e), sy);
     }
     let h = physical_forces(sig, &frame.ia, s.vol);
     let mut work = 0.0;

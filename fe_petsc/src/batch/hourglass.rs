@@ -191,33 +191,56 @@ fn stress_rates(e: &[V3; 4], mu: F, nu: f64) -> [V3; 4] {
     r
 }
 
-/// von Mises bilinear form 3/2 dev(a) : dev(b) (`mises_dot`), over the full 3 x 3 in the same
-/// order (an off-diagonal entry minus zero is itself). About 35 flops.
-#[inline(always)]
-fn mises_dot(a: &M3, b: &M3) -> F {
-    let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
-    let tb = (b[0][0] + b[1][1] + b[2][2]) * THIRD;
-    let mut s = F::ZERO;
-    for i in 0..3 {
-        for j in 0..3 {
-            let (da, db) = if i == j {
-                (a[i][j] - ta, b[i][j] - tb)
-            } else {
-                (a[i][j], b[i][j])
-            };
-            s += da * db;
-        }
-    }
-    1.5 * s
+/// `crate::hourglass`'s `Centre` in lanes: the centre stress, its deviator's diagonal and its
+/// Mises form with itself. 25 flops.
+struct Centre {
+    a: M3,
+    da: V3,
+    mises_sq: F,
 }
 
-/// The factor lambda of one group with amplitudes `tau` (a function, not a closure, so that it
-/// inlines into the AVX2 build): `a` the Mises form of the centre stress, `sy2` the squared
-/// yield stress.
+impl Centre {
+    #[inline(always)]
+    fn new(a: &M3) -> Centre {
+        let ta = (a[0][0] + a[1][1] + a[2][2]) * THIRD;
+        let da = [a[0][0] - ta, a[1][1] - ta, a[2][2] - ta];
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let mises_sq = 1.5 * (da[0] * da[0] + da[1] * da[1] + da[2] * da[2] + 2.0 * off);
+        Centre {
+            a: *a,
+            da,
+            mises_sq,
+        }
+    }
+
+    /// (B, C) of group g's amplitudes (`Centre::group`). 20 flops.
+    #[inline(always)]
+    fn group(&self, g: usize, tau: &V3) -> (F, F) {
+        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+        let [tpp, trr, tpr] = *tau;
+        let b = 1.5 * (self.da[p] * tpp + self.da[r] * trr + 2.0 * self.a[p][r] * tpr);
+        let tm = (tpp + trr) * THIRD;
+        let (dp, dr) = (tpp - tm, trr - tm);
+        let c = 1.5 * (dp * dp + dr * dr + tm * tm + 2.0 * tpr * tpr);
+        (b, c)
+    }
+
+    /// (B, C) of mode 3's amplitudes (`Centre::mode3`). 20 flops.
+    #[inline(always)]
+    fn mode3(&self, tau: &V3) -> (F, F) {
+        let b = 1.5 * (self.da[0] * tau[0] + self.da[1] * tau[1] + self.da[2] * tau[2]);
+        let tm = (tau[0] + tau[1] + tau[2]) * THIRD;
+        let d = [tau[0] - tm, tau[1] - tm, tau[2] - tm];
+        let c = 1.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        (b, c)
+    }
+}
+
+/// The factor lambda of one group with the Mises forms `(b, c)` of its amplitudes (a function,
+/// not a closure, so that it inlines into the target-feature builds): `a` the Mises form of the
+/// centre stress, `sy2` the squared yield stress.
 #[inline(always)]
-fn group_scale(centre: &M3, tau: &M3, a: F, sy2: F) -> F {
-    let b = mises_dot(centre, tau);
-    let c = mises_dot(tau, tau);
+fn group_scale((b, c): (F, F), a: F, sy2: F) -> F {
     let f = ((-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c).min(F::splat(1.0));
     let f = F::select(a.ge(sy2), F::ZERO, f);
     F::select(c.le(F::ZERO), F::splat(1.0), f)
@@ -228,30 +251,24 @@ fn group_scale(centre: &M3, tau: &M3, a: F, sy2: F) -> F {
 /// in a lane whose tau has no deviator, 0 in a lane whose centre is on or outside the surface.
 #[inline(always)]
 fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F) {
-    let a = mises_dot(centre, centre);
+    let centre = Centre::new(centre);
+    let a = centre.mises_sq;
     let sy2 = sy * sy;
-    let scale_group = |tau: &M3| group_scale(centre, tau, a, sy2);
-    let z = F::ZERO;
-    for g in 0..3 {
-        let (p, r) = ((g + 1) % 3, (g + 2) % 3);
-        let mut tau = [[z; 3]; 3];
-        tau[p][p] = sig[g][0];
-        tau[r][r] = sig[g][1];
-        tau[p][r] = sig[g][2];
-        tau[r][p] = sig[g][2];
-        let f = scale_group(&tau);
+    for g in 0..4 {
+        let bc = if g < 3 {
+            centre.group(g, &sig[g])
+        } else {
+            centre.mode3(&sig[3])
+        };
+        let f = group_scale(bc, a, sy2);
         for v in sig[g].iter_mut() {
             *v *= f;
         }
     }
-    let tau = [[sig[3][0], z, z], [z, sig[3][1], z], [z, z, sig[3][2]]];
-    let f = scale_group(&tau);
-    for v in sig[3].iter_mut() {
-        *v *= f;
-    }
 }
 
-/// The centre stress in the element frame, E sigma E^T. 162 flops.
+/// The centre stress in the element frame, E sigma E^T (`crate::hourglass::centre_stress`:
+/// T = E sigma, then the upper triangle of T E^T, mirrored). 75 flops.
 #[inline(always)]
 fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
     let g = [
@@ -259,17 +276,19 @@ fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
         [st[3], st[1], st[4]],
         [st[5], st[4], st[2]],
     ];
-    let mut m = [[F::ZERO; 3]; 3];
+    let mut t = [[F::ZERO; 3]; 3];
     for i in 0..3 {
-        for j in 0..3 {
-            for k in 0..3 {
-                for l in 0..3 {
-                    m[i][j] += e[i][k] * g[k][l] * e[j][l];
-                }
-            }
+        for l in 0..3 {
+            t[i][l] = e[i][0] * g[0][l] + e[i][1] * g[1][l] + e[i][2] * g[2][l];
         }
     }
-    m
+    let m = |i: usize, j: usize| t[i][0] * e[j][0] + t[i][1] * e[j][1] + t[i][2] * e[j][2];
+    let (m01, m02, m12) = (m(0, 1), m(0, 2), m(1, 2));
+    [
+        [m(0, 0), m01, m02],
+        [m01, m(1, 1), m12],
+        [m02, m12, m(2, 2)],
+    ]
 }
 
 /// The physical kind's step on a group of elements ([`crate::hourglass`]'s `physical_step`): adds the
