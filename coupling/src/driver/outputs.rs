@@ -177,35 +177,23 @@ impl Outputs {
     /// Writes a frame of every stage at `time` (collective).
     pub fn frame(&mut self, time: f64, model: &Model) -> Result<(), String> {
         let t0 = Instant::now();
-        // The mesh's columns, each made only when the frame writes it.
+        // The mesh's columns, each row made only when the frame sends it.
         let fe = match (&self.mesh, &model.fe) {
             (Some(m), Some(fe)) => Some((m, fe.state(), &fe.mesh.local.node_id[..])),
             _ => None,
         };
-        let owned = |f: &dyn Fn(usize) -> [f64; 3]| -> Vec<[f64; 3]> {
-            fe.map_or_else(Vec::new, |(m, _, _)| {
-                m.owned_nodes.iter().map(|&n| f(n)).collect()
+        // Owned node i's local node.
+        let node = |i: usize| fe.map_or(0, |(m, _, _)| m.owned_nodes[i]);
+        let pos = |i| fe.map_or([0.0; 3], |(_, st, _)| st.x[node(i)]);
+        let disp = |i| {
+            fe.map_or([0.0; 3], |(_, st, _)| {
+                let n = node(i);
+                std::array::from_fn(|c| st.x[n][c] - st.x0[n][c])
             })
         };
-        let pos = || owned(&|n| fe.map_or([0.0; 3], |(_, st, _)| st.x[n]));
-        let disp = || {
-            owned(&|n| {
-                fe.map_or([0.0; 3], |(_, st, _)| {
-                    std::array::from_fn(|c| st.x[n][c] - st.x0[n][c])
-                })
-            })
-        };
-        let vel = || owned(&|n| fe.map_or([0.0; 3], |(_, st, _)| st.v[n]));
-        let stress = || {
-            fe.map_or_else(Vec::new, |(_, st, _)| {
-                st.state.iter().map(|s| s.stress).collect()
-            })
-        };
-        let eps = || {
-            fe.map_or_else(Vec::new, |(_, st, _)| {
-                (0..st.elems.len()).map(|e| st.plastic_strain(e)).collect()
-            })
-        };
+        let vel = |i| fe.map_or([0.0; 3], |(_, st, _)| st.v[node(i)]);
+        let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state[e].stress);
+        let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
         let nodes = fe.map(|(m, _, _)| NodeFrame {
             ids: &m.node_ids,
             position: Values::Made(&pos),

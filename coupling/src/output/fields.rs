@@ -4,11 +4,11 @@
 //! node ids, indexes `nodes/position` directly and ParaView draws the mesh from the `.xmf`.
 //! Particles are ordered by their dense index and `particles/id` holds the ids the user gave
 //! (`ParticleFrame::labels`: the particle file's, SCENE.md).
-//! Before writing, each field is moved to the rank that owns its id range
-//! ([`redistribute_by_id`]), which then writes one contiguous hyperslab.
+//! Before writing, each field is moved to the rank that owns its id range, which then writes
+//! its contiguous hyperslab, a bounded number of rows at a time ([`super::by_id`]).
+use super::by_id::{Plan, RowFn, CHUNK_ROWS};
 use super::OutputError;
 use mpi::collective::SystemOperation;
-use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use ndarray::{s, ArrayView1, ArrayView2};
@@ -26,21 +26,22 @@ pub struct GlobalCounts {
     pub particles: u64,
 }
 
-/// A frame's column: values the caller holds, or a function that makes them when the column is
-/// written (so that a frame holds one column's copy at a time, not one of each).
+/// A frame's column: values the caller holds, or a function that makes row i's value (the
+/// row of `ids[i]`) when the column is written, straight into the buffer that sends it (so that
+/// a frame makes no copy of a column).
 #[derive(Clone, Copy)]
 pub enum Values<'a, T> {
     /// Held by the caller.
     Held(&'a [T]),
-    /// Made when written.
-    Made(&'a dyn Fn() -> Vec<T>),
+    /// Row i's value, made when written.
+    Made(&'a dyn Fn(usize) -> T),
 }
 
-impl<T: Clone> Values<'_, T> {
-    fn get(&self) -> std::borrow::Cow<'_, [T]> {
+impl<T: Copy> Values<'_, T> {
+    fn at(&self, i: usize) -> T {
         match self {
-            Values::Held(s) => std::borrow::Cow::Borrowed(s),
-            Values::Made(f) => std::borrow::Cow::Owned(f()),
+            Values::Held(s) => s[i],
+            Values::Made(f) => f(i),
         }
     }
 }
@@ -109,92 +110,18 @@ pub struct ParticleFrame<'a> {
     pub rank: Option<&'a [i32]>,
 }
 
-/// The rows [lo, hi) of `n` ids that rank `r` of `p` writes.
-fn block(n: u64, p: usize, r: usize) -> (u64, u64) {
-    (n * r as u64 / p as u64, n * (r as u64 + 1) / p as u64)
+/// One column of a frame for [`FieldWriter::write_set`]: name, width, the function that writes
+/// a local row's values (called when the column is sent, chunk by chunk), integer or not.
+type Column<'a> = (&'a str, usize, Box<RowFn<'a>>, bool);
+
+/// A column whose row i is `f(i)`, `N` wide.
+fn rows<'a, const N: usize>(f: impl Fn(usize) -> [f64; N] + 'a) -> Box<RowFn<'a>> {
+    Box::new(move |i, out: &mut [f64]| out.copy_from_slice(&f(i)))
 }
 
-/// Moves rows (`ids[i]`, `values[i*w..(i+1)*w]`) to the rank whose id block holds them and
-/// returns this rank's block sorted by id: (ids, values). Collective. Every id in 0..n must
-/// appear exactly once over all ranks.
-///
-/// Takes `values` by value and frees each buffer as soon as the next holds its data (the send
-/// buffer after the exchange), so that at most two copies of the rows are alive at once: a
-/// frame's peak memory (measured on a 110,592-hexahedron block: the first frame raised the
-/// peak resident set by 94 MB with five copies alive).
-pub fn redistribute_by_id(
-    comm: &SimpleCommunicator,
-    n: u64,
-    ids: &[u64],
-    values: Vec<f64>,
-    w: usize,
-) -> (Vec<u64>, Vec<f64>) {
-    let p = comm.size() as usize;
-    let dest = |id: u64| -> usize {
-        // The block of id: the largest r with lo(r) <= id.
-        let mut r = ((id as u128 * p as u128) / n.max(1) as u128) as usize;
-        r = r.min(p - 1);
-        while r + 1 < p && block(n, p, r + 1).0 <= id {
-            r += 1;
-        }
-        while r > 0 && block(n, p, r).0 > id {
-            r -= 1;
-        }
-        r
-    };
-    let stride = w + 1;
-    let mut counts = vec![0i32; p];
-    for &id in ids {
-        counts[dest(id)] += stride as i32;
-    }
-    let mut displs = vec![0i32; p];
-    for r in 1..p {
-        displs[r] = displs[r - 1] + counts[r - 1];
-    }
-    let mut send = vec![0.0f64; ids.len() * stride];
-    let mut fill = displs.clone();
-    for (i, &id) in ids.iter().enumerate() {
-        let d = dest(id);
-        let o = fill[d] as usize;
-        // ids < 2^53 are exact in f64.
-        send[o] = id as f64;
-        send[o + 1..o + stride].copy_from_slice(&values[i * w..(i + 1) * w]);
-        fill[d] += stride as i32;
-    }
-    drop(values);
-    let mut rcounts = vec![0i32; p];
-    comm.all_to_all_into(&counts[..], &mut rcounts[..]);
-    let mut rdispls = vec![0i32; p];
-    for r in 1..p {
-        rdispls[r] = rdispls[r - 1] + rcounts[r - 1];
-    }
-    let total = rcounts.iter().sum::<i32>() as usize;
-    let mut recv = vec![0.0f64; total];
-    {
-        let sp = Partition::new(&send[..], &counts[..], &displs[..]);
-        let mut rp = PartitionMut::new(&mut recv[..], &rcounts[..], &rdispls[..]);
-        comm.all_to_all_varcount_into(&sp, &mut rp);
-    }
-    drop(send);
-    let m = total / stride;
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by_key(|&i| recv[i * stride] as u64);
-    let mut out_ids = Vec::with_capacity(m);
-    let mut out_vals = Vec::with_capacity(m * w);
-    for i in order {
-        out_ids.push(recv[i * stride] as u64);
-        out_vals.extend_from_slice(&recv[i * stride + 1..(i + 1) * stride]);
-    }
-    (out_ids, out_vals)
-}
-
-/// One column of a frame for [`FieldWriter::write_set`]: name, width, the values (made only when
-/// the column is written, so a frame holds one column's copies at a time), integer or not.
-type Column<'a> = (&'a str, usize, Box<dyn FnOnce() -> Vec<f64> + 'a>, bool);
-
-/// A column's values, made when written.
-fn lazy<'a>(f: impl FnOnce() -> Vec<f64> + 'a) -> Box<dyn FnOnce() -> Vec<f64> + 'a> {
-    Box::new(f)
+/// A column whose row i is the one value `f(i)`.
+fn scalar<'a>(f: impl Fn(usize) -> f64 + 'a) -> Box<RowFn<'a>> {
+    Box::new(move |i, out: &mut [f64]| out[0] = f(i))
 }
 
 /// One dataset of a frame as the XDMF index needs to know it.
@@ -225,6 +152,7 @@ pub struct FieldWriter {
     fields: Vec<String>,
     frames: Vec<FrameIndex>,
     bytes: u64,
+    chunk_rows: u64,
 }
 
 impl FieldWriter {
@@ -249,6 +177,7 @@ impl FieldWriter {
             fields: fields.to_vec(),
             frames: Vec::new(),
             bytes: 0,
+            chunk_rows: CHUNK_ROWS,
         })
     }
 
@@ -289,6 +218,7 @@ impl FieldWriter {
             fields: fields.to_vec(),
             frames,
             bytes: 0,
+            chunk_rows: CHUNK_ROWS,
         };
         if comm.rank() == 0 {
             w.write_xdmf()?;
@@ -305,53 +235,16 @@ impl FieldWriter {
         self.fields.iter().any(|x| x == f)
     }
 
-    /// Writes one dataset of `shape` = (n rows, w columns) from this rank's block starting at
-    /// row `lo` (collective create); returns the bytes written.
-    fn put(
-        group: &hdf5::Group,
-        name: &str,
-        shape: (u64, usize),
-        lo: u64,
-        vals: &[f64],
-        int: bool,
-    ) -> Result<u64, OutputError> {
-        let (n, w) = shape;
-        let rows = (vals.len() / w.max(1)) as u64;
-        let hi = lo + rows;
-        let n = n as usize;
-        if int {
-            let ints: Vec<i64> = vals.iter().map(|v| *v as i64).collect();
-            if w == 1 {
-                let ds = group.new_dataset::<i64>().shape([n]).create(name)?;
-                if rows > 0 {
-                    ds.write_slice(ArrayView1::from(&ints[..]), s![lo as usize..hi as usize])?;
-                }
-            } else {
-                let ds = group.new_dataset::<i64>().shape([n, w]).create(name)?;
-                if rows > 0 {
-                    let a = ArrayView2::from_shape((rows as usize, w), &ints[..]).unwrap();
-                    ds.write_slice(a, s![lo as usize..hi as usize, ..])?;
-                }
-            }
-        } else if w == 1 {
-            let ds = group.new_dataset::<f64>().shape([n]).create(name)?;
-            if rows > 0 {
-                ds.write_slice(ArrayView1::from(vals), s![lo as usize..hi as usize])?;
-            }
-        } else {
-            let ds = group.new_dataset::<f64>().shape([n, w]).create(name)?;
-            if rows > 0 {
-                let a = ArrayView2::from_shape((rows as usize, w), vals).unwrap();
-                ds.write_slice(a, s![lo as usize..hi as usize, ..])?;
-            }
-        }
-        Ok(8 * vals.len() as u64)
+    /// Sets the rows a rank receives and writes per chunk (default [`CHUNK_ROWS`]); the
+    /// output self-test sets a few, so that its small sets take several chunks.
+    pub fn set_chunk_rows(&mut self, rows: u64) {
+        self.chunk_rows = rows.max(1);
     }
 
-    /// Redistributes each column by id and writes it as a dataset, one column at a time (a
-    /// frame's memory: each column is freed once written, so the frame's transient is a few
-    /// copies of its widest column, not of the whole frame). `cols`: (name, width, values,
-    /// is_integer). A column named `id` replaces the row ids as the `id` dataset.
+    /// Moves each column to the ranks that write it and writes it as a dataset, one column
+    /// and within it one chunk of rows at a time ([`super::by_id`]: a frame's transient is a
+    /// chunk of its widest column). `cols`: (name, width, row function, is_integer). Row r of
+    /// every dataset holds id r; a column named `id` replaces the row ids as the `id` dataset.
     fn write_set(
         &mut self,
         group: &hdf5::Group,
@@ -359,47 +252,127 @@ impl FieldWriter {
         ids: &[u64],
         cols: Vec<Column>,
     ) -> Result<Vec<Item>, OutputError> {
-        let p = self.comm.size() as usize;
-        let (lo, hi) = block(n, p, self.comm.rank() as usize);
-        let has_id = cols.iter().any(|c| c.0 == "id");
-        let mut items = Vec::new();
-        for (k, (name, cw, make, int)) in cols.into_iter().enumerate() {
-            let (bids, col) = redistribute_by_id(&self.comm, n, ids, make(), cw);
-            if k == 0 {
-                // Row r must hold id r: this rank's block must be exactly lo..hi, once each.
-                // Agreed on by all ranks before any dataset is created, so that a bad id set
-                // fails everywhere instead of leaving some ranks inside a collective call.
-                let covered =
-                    bids.len() as u64 == hi - lo && bids.iter().zip(lo..hi).all(|(a, b)| *a == b);
-                let mut all_covered = false;
-                self.comm.all_reduce_into(
-                    &covered,
-                    &mut all_covered,
-                    SystemOperation::logical_and(),
-                );
-                if !all_covered {
-                    return Err(OutputError::Layout(format!(
-                        "{}: the ids over all ranks are not 0..{n} each exactly once",
-                        group.name()
-                    )));
-                }
-                if !has_id {
-                    let idf: Vec<f64> = bids.iter().map(|&i| i as f64).collect();
-                    self.bytes += Self::put(group, "id", (n, 1), lo, &idf, true)?;
-                }
-            }
-            self.bytes += Self::put(group, name, (n, cw), lo, &col, int)?;
-            if name == "id" {
-                continue;
-            }
-            items.push(Item {
-                path: format!("{}/{}", group.name(), name),
-                name: name.to_string(),
-                cols: cw,
-                int,
+        // Agreed on by all ranks before any dataset is created, so that a bad id set fails
+        // everywhere instead of leaving some ranks inside a collective call.
+        let Some(plan) = Plan::new(&self.comm, n, ids, self.chunk_rows) else {
+            return Err(OutputError::Layout(format!(
+                "{}: the ids over all ranks are not 0..{n} each exactly once",
+                group.name()
+            )));
+        };
+        if !cols.iter().any(|c| c.0 == "id") {
+            // Row r holds id r, so this rank's ids are its rows' numbers: nothing to move.
+            let put = put::<i64>(group, "id", n, 1, &plan, |k| {
+                let (a, b) = plan.range(k);
+                (a..b).map(|i| i as i64).collect()
             });
+            self.bytes += self.agree(put, group, "id")?;
+        }
+        let mut items = Vec::new();
+        for (name, w, row, int) in cols {
+            let comm = &self.comm;
+            let put = if int {
+                put::<i64>(group, name, n, w, &plan, |k| {
+                    plan.values(comm, ids, k, w, &*row, |v| v as i64)
+                })
+            } else {
+                put::<f64>(group, name, n, w, &plan, |k| {
+                    plan.values(comm, ids, k, w, &*row, |v| v)
+                })
+            };
+            self.bytes += self.agree(put, group, name)?;
+            if name != "id" {
+                items.push(Item {
+                    path: format!("{}/{}", group.name(), name),
+                    name: name.to_string(),
+                    cols: w,
+                    int,
+                });
+            }
         }
         Ok(items)
+    }
+
+    /// Every rank's verdict on a dataset written (collective), so that a failure on one rank
+    /// stops all of them before the next dataset's exchanges.
+    fn agree(
+        &self,
+        put: Result<u64, OutputError>,
+        group: &hdf5::Group,
+        name: &str,
+    ) -> Result<u64, OutputError> {
+        let mut all_ok = false;
+        self.comm
+            .all_reduce_into(&put.is_ok(), &mut all_ok, SystemOperation::logical_and());
+        match put {
+            Ok(_) if !all_ok => Err(OutputError::Layout(format!(
+                "{}/{name}: another rank could not write it",
+                group.name()
+            ))),
+            put => put,
+        }
+    }
+
+    /// The columns of a frame's nodes.
+    fn node_columns<'a>(&self, nf: &'a NodeFrame) -> Vec<Column<'a>> {
+        let mut cols: Vec<Column> = vec![("position", 3, rows(|i| nf.position.at(i)), false)];
+        if let (true, Some(d)) = (self.wants("displacement"), nf.displacement) {
+            cols.push(("displacement", 3, rows(move |i| d.at(i)), false));
+        }
+        if let (true, Some(v)) = (self.wants("velocity"), nf.velocity) {
+            cols.push(("velocity", 3, rows(move |i| v.at(i)), false));
+        }
+        cols
+    }
+
+    /// The columns of a frame's elements.
+    fn element_columns<'a>(&self, ef: &'a ElementFrame) -> Vec<Column<'a>> {
+        // ids < 2^53 are exact in f64.
+        let conn = match ef.connectivity {
+            Connectivity::Ids(c) => rows(move |e| c[e].map(|n| n as f64)),
+            Connectivity::Local { nodes, ids } => {
+                rows(move |e| nodes[e].map(|n| ids[n as usize] as f64))
+            }
+        };
+        let mut cols: Vec<Column> = vec![("connectivity", 8, conn, true)];
+        if let (true, Some(s)) = (self.wants("stress"), ef.stress) {
+            cols.push(("stress", 6, rows(move |e| s.at(e)), false));
+        }
+        if let (true, Some(s)) = (self.wants("plastic_strain"), ef.plastic_strain) {
+            cols.push(("plastic_strain", 1, scalar(move |e| s.at(e)), false));
+        }
+        if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
+            cols.push(("pressure", 1, scalar(move |e| s[e]), false));
+        }
+        if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
+            cols.push(("rank", 1, scalar(move |e| f64::from(s[e])), true));
+        }
+        cols
+    }
+
+    /// The columns of a frame's particles.
+    fn particle_columns<'a>(&self, pf: &'a ParticleFrame) -> Vec<Column<'a>> {
+        let mut cols: Vec<Column> = vec![("position", 3, rows(|i| pf.position[i]), false)];
+        if let Some(l) = pf.labels {
+            // ids < 2^53 are exact in f64.
+            cols.push(("id", 1, scalar(move |i| l[i] as f64), true));
+        }
+        if let (true, Some(v)) = (self.wants("velocity"), pf.velocity) {
+            cols.push(("velocity", 3, rows(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("density"), pf.density) {
+            cols.push(("density", 1, scalar(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("pressure"), pf.pressure) {
+            cols.push(("pressure", 1, scalar(move |i| v[i]), false));
+        }
+        if let Some(v) = pf.h {
+            cols.push(("h", 1, scalar(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
+            cols.push(("rank", 1, scalar(move |i| f64::from(v[i])), true));
+        }
+        cols
     }
 
     /// Writes a frame at `time` (collective).
@@ -429,98 +402,22 @@ impl FieldWriter {
         let name = format!("{:06}", self.frames.len());
         let g = self.file.group("frames")?.create_group(&name)?;
         g.new_attr::<f64>().create("time")?.write_scalar(&time)?;
-        let flat3 = |v: &[[f64; 3]]| v.as_flattened().to_vec();
         let mut node_items = Vec::new();
         if let Some(nf) = nodes {
-            let mut cols = vec![(
-                "position",
-                3,
-                lazy(move || flat3(&nf.position.get())),
-                false,
-            )];
-            if let (true, Some(d)) = (self.wants("displacement"), nf.displacement) {
-                cols.push(("displacement", 3, lazy(move || flat3(&d.get())), false));
-            }
-            if let (true, Some(v)) = (self.wants("velocity"), nf.velocity) {
-                cols.push(("velocity", 3, lazy(move || flat3(&v.get())), false));
-            }
             let gg = g.create_group("nodes")?;
+            let cols = self.node_columns(nf);
             node_items = self.write_set(&gg, self.counts.nodes, nf.ids, cols)?;
         }
         let mut elem_items = Vec::new();
         if let Some(ef) = elements {
-            let conn = lazy(|| match ef.connectivity {
-                Connectivity::Ids(c) => c.iter().flatten().map(|&c| c as f64).collect(),
-                Connectivity::Local { nodes, ids } => nodes
-                    .iter()
-                    .flatten()
-                    .map(|&n| ids[n as usize] as f64)
-                    .collect(),
-            });
-            let mut cols = vec![("connectivity", 8, conn, true)];
-            if let (true, Some(s)) = (self.wants("stress"), ef.stress) {
-                cols.push((
-                    "stress",
-                    6,
-                    lazy(move || s.get().as_flattened().to_vec()),
-                    false,
-                ));
-            }
-            if let (true, Some(s)) = (self.wants("plastic_strain"), ef.plastic_strain) {
-                cols.push((
-                    "plastic_strain",
-                    1,
-                    lazy(move || s.get().into_owned()),
-                    false,
-                ));
-            }
-            if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
-                cols.push(("pressure", 1, lazy(move || s.to_vec()), false));
-            }
-            if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
-                cols.push((
-                    "rank",
-                    1,
-                    lazy(move || s.iter().map(|&r| r as f64).collect()),
-                    true,
-                ));
-            }
             let gg = g.create_group("elements")?;
+            let cols = self.element_columns(ef);
             elem_items = self.write_set(&gg, self.counts.elements, ef.ids, cols)?;
         }
         let mut particle_items = Vec::new();
         if let Some(pf) = particles {
-            let mut cols = vec![("position", 3, lazy(move || flat3(pf.position)), false)];
-            if let Some(l) = pf.labels {
-                // ids < 2^53 are exact in f64.
-                cols.push((
-                    "id",
-                    1,
-                    lazy(move || l.iter().map(|&i| i as f64).collect()),
-                    true,
-                ));
-            }
-            if let (true, Some(v)) = (self.wants("velocity"), pf.velocity) {
-                cols.push(("velocity", 3, lazy(move || flat3(v)), false));
-            }
-            if let (true, Some(v)) = (self.wants("density"), pf.density) {
-                cols.push(("density", 1, lazy(move || v.to_vec()), false));
-            }
-            if let (true, Some(v)) = (self.wants("pressure"), pf.pressure) {
-                cols.push(("pressure", 1, lazy(move || v.to_vec()), false));
-            }
-            if let Some(v) = pf.h {
-                cols.push(("h", 1, lazy(move || v.to_vec()), false));
-            }
-            if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
-                cols.push((
-                    "rank",
-                    1,
-                    lazy(move || v.iter().map(|&r| r as f64).collect()),
-                    true,
-                ));
-            }
             let gg = g.create_group("particles")?;
+            let cols = self.particle_columns(pf);
             particle_items = self.write_set(&gg, self.counts.particles, pf.ids, cols)?;
         }
         self.file.flush()?;
@@ -593,6 +490,58 @@ impl FieldWriter {
         std::fs::write(&tmp, x)?;
         std::fs::rename(tmp, self.dir.join("fields.xmf"))?;
         Ok(())
+    }
+}
+
+/// Writes one dataset of `n` rows, `w` values each, chunk by chunk: `chunk(k)` gives this
+/// rank's rows of chunk k (collective: the create, and whatever exchange `chunk` makes; each
+/// rank writes its rows independently). Returns the bytes this rank wrote. Every chunk is
+/// asked for on every rank even after a failure here, so that no other rank waits in one.
+fn put<T: hdf5::H5Type>(
+    group: &hdf5::Group,
+    name: &str,
+    n: u64,
+    w: usize,
+    plan: &Plan,
+    mut chunk: impl FnMut(usize) -> Vec<T>,
+) -> Result<u64, OutputError> {
+    let n = n as usize;
+    let ds = if w == 1 {
+        group.new_dataset::<T>().shape([n]).create(name)
+    } else {
+        group.new_dataset::<T>().shape([n, w]).create(name)
+    };
+    let mut failed = None;
+    let mut bytes = 0;
+    for k in 0..plan.chunks {
+        let vals = chunk(k);
+        bytes += 8 * vals.len() as u64;
+        if let (Ok(ds), None) = (&ds, &failed) {
+            failed = write_rows(ds, plan.range(k), w, &vals).err();
+        }
+    }
+    match (ds, failed) {
+        (Err(e), _) | (_, Some(e)) => Err(e.into()),
+        _ => Ok(bytes),
+    }
+}
+
+/// Writes `vals` (rows [a, b), `w` values each) into `ds`.
+fn write_rows<T: hdf5::H5Type>(
+    ds: &hdf5::Dataset,
+    (a, b): (u64, u64),
+    w: usize,
+    vals: &[T],
+) -> hdf5::Result<()> {
+    let (a, b) = (a as usize, b as usize);
+    if b == a {
+        return Ok(());
+    }
+    if w == 1 {
+        ds.write_slice(ArrayView1::from(vals), s![a..b])
+    } else {
+        let v = ArrayView2::from_shape((b - a, w), vals).expect("a chunk holds rows x w values");
+        ds.write_slice(v, s![a..b, ..])
     }
 }
 

@@ -1,5 +1,6 @@
 //! The run's output (SCENE.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
 //! parallel, `history.csv` and `probes.csv` by rank 0, `report.json`.
+mod by_id;
 mod dump;
 mod fields;
 mod history;
@@ -8,8 +9,7 @@ pub mod state;
 
 pub use dump::{write_particle_dump, DUMP_COLUMNS};
 pub use fields::{
-    redistribute_by_id, Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame,
-    ParticleFrame, Values,
+    Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame, Values,
 };
 pub use history::History;
 pub use report::{Report, StageStats};

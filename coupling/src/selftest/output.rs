@@ -16,6 +16,10 @@ use std::path::Path;
 const CELLS: [u64; 3] = [3, 2, 2];
 /// SPH particles.
 const N_PARTICLES: u64 = 10;
+/// Rows a rank receives and writes per chunk (`FieldWriter::set_chunk_rows`): few, so that
+/// every set here takes several chunks: at 3 ranks 4 elements each (two chunks, the second of
+/// one row), particles 3, 3 and 4 (one rank two chunks, the others one and an empty one).
+const CHUNK_ROWS: u64 = 3;
 /// Frame times; not exactly representable in binary, so the attribute must round-trip bits.
 const FRAME_TIMES: [f64; 2] = [0.0, 1.0 / 3.0e4];
 /// Fields asked for: all but `plastic_strain`, which is given and must not be written.
@@ -199,6 +203,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
     };
     let fields: Vec<String> = REQUESTED.iter().map(|s| s.to_string()).collect();
     let mut writer = FieldWriter::create(comm, dir, counts, &fields)?;
+    writer.set_chunk_rows(CHUNK_ROWS);
     let node_ids = owned_ids(Part::Nodes, counts.nodes, me, p);
     let elem_ids = owned_ids(Part::Elements, counts.elements, me, p);
     let part_ids = owned_ids(Part::Particles, counts.particles, me, p);
@@ -225,7 +230,8 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
         let nodes = NodeFrame {
             ids: &node_ids,
             position: Values::Held(&pos),
-            displacement: Some(Values::Held(&disp)),
+            // Made row by row when written (as the run's nodal columns are).
+            displacement: Some(Values::Made(&|i| disp[i])),
             velocity: first.then_some(Values::Held(&vel[..])),
         };
         let elements = ElementFrame {
@@ -546,40 +552,51 @@ fn check_report(comm: &SimpleCommunicator, dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// A frame with a node id missing, or with nodes given on rank 0 only, must fail on every rank
-/// (no hang) with [`OutputError::Layout`].
+/// A frame with a node id missing or out of range, or with nodes given on rank 0 only, must
+/// fail on every rank (no hang) with [`OutputError::Layout`].
 fn check_bad_input(comm: &SimpleCommunicator, dir: &Path) -> Result<(), String> {
     let p = comm.size() as u64;
     let me = comm.rank() as u64;
+    let n = Grid::nodes();
+    let all = owned_ids(Part::Nodes, n, me, p);
+    let missing: Vec<u64> = all.iter().copied().filter(|&id| id != 0).collect();
+    expect_layout_error(comm, dir, &missing, true, "a missing node id")?;
+    // Node 0's row given an id out of range instead (left out of the exchange by the rank
+    // holding it, which must still take part in every chunk's).
+    let out: Vec<u64> = all.iter().map(|&id| if id == 0 { n } else { id }).collect();
+    expect_layout_error(comm, dir, &out, true, "a node id out of range")?;
+    if p > 1 {
+        expect_layout_error(comm, dir, &all, me == 0, "nodes given on rank 0 only")?;
+    }
+    Ok(())
+}
+
+/// Writes a frame of nodes `ids` (given on this rank or not) and expects
+/// [`OutputError::Layout`]; `what` names the fault in the message otherwise.
+fn expect_layout_error(
+    comm: &SimpleCommunicator,
+    dir: &Path,
+    ids: &[u64],
+    given: bool,
+    what: &str,
+) -> Result<(), String> {
     let counts = GlobalCounts {
         nodes: Grid::nodes(),
         ..GlobalCounts::default()
     };
-    let mut ids = owned_ids(Part::Nodes, counts.nodes, me, p);
-    ids.retain(|&id| id != 0);
-    let pos = rows::<3>(Part::Nodes, "position", 0, &ids, p);
+    let pos = rows::<3>(Part::Nodes, "position", 0, ids, comm.size() as u64);
     let nodes = NodeFrame {
-        ids: &ids,
+        ids,
         position: Values::Held(&pos),
         displacement: None,
         velocity: None,
     };
-    {
-        let mut w = FieldWriter::create(comm, dir, counts, &[]).map_err(|e| e.to_string())?;
-        match w.write_frame(0.0, Some(&nodes), None, None) {
-            Err(OutputError::Layout(_)) => {}
-            other => return Err(format!("a missing node id gave {other:?}")),
-        }
+    let mut w = FieldWriter::create(comm, dir, counts, &[]).map_err(|e| e.to_string())?;
+    w.set_chunk_rows(CHUNK_ROWS);
+    match w.write_frame(0.0, given.then_some(&nodes), None, None) {
+        Err(OutputError::Layout(_)) => Ok(()),
+        other => Err(format!("{what} gave {other:?}")),
     }
-    if p > 1 {
-        let mut w = FieldWriter::create(comm, dir, counts, &[]).map_err(|e| e.to_string())?;
-        let given = (me == 0).then_some(&nodes);
-        match w.write_frame(0.0, given, None, None) {
-            Err(OutputError::Layout(_)) => {}
-            other => return Err(format!("nodes given on rank 0 only gave {other:?}")),
-        }
-    }
-    Ok(())
 }
 
 /// Runs the output self-test in `dir` (created if missing) on every rank of `comm`
