@@ -6,8 +6,11 @@ use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
 use fe_petsc::material::{build_material, Material, MaterialSpec};
 
-/// Relative agreement required: the kernels do the same IEEE operations in the same order, so
-/// anything beyond a few ulps is a transcription error.
+/// Relative agreement required. Four lanes do the scalar kernel's IEEE operations in the same
+/// order (measured difference: 0). Eight lanes fuse each multiply-add into one rounding, so
+/// they differ at round-off (measured up to 1e-13 relative over the 12 yielding steps, in the
+/// hourglass amplitudes that the yield bound rescales). A transcription error shows at 1e-8 or
+/// more.
 const TOL: f64 = 1e-12;
 
 /// A small deterministic generator (LCG, Knuth's constants) so tests need no rand crate.

@@ -2,8 +2,8 @@
 //! parent module's lane type `F`, four or eight lanes): the same operations in every lane, the scalar kernel's branches as
 //! masked lane operations, the nodal values gathered into lanes and the forces handed back per
 //! element. Each lane computes what [`crate::hex::update`] computes for its element, operation
-//! for operation in the same order (no fused or reassociated arithmetic), so the two kernels
-//! agree to the last bit in practice (the tests hold them to 1e-12 relative).
+//! for operation in the same order (nothing reassociated; multiply-adds fused in the eight-lane
+//! build only), so the kernels agree to the bit (four lanes) or to round-off (eight).
 //!
 //! Why: the scalar update is one serial dependency chain of about 4,500 instructions per
 //! element at about 1.5 flops per cycle (DESIGN.md section 7); independent elements in lanes
@@ -159,9 +159,9 @@ fn group_term(x: &LaneNodes, g: &VolumeGroup) -> [F; 3] {
     let p = &x[g.j as usize];
     let (a, b) = if g.swap { (&w, p) } else { (p, &w) };
     [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
+        a[1].mul_sub(b[2], a[2] * b[1]),
+        a[2].mul_sub(b[0], a[0] * b[2]),
+        a[0].mul_sub(b[1], a[1] * b[0]),
     ]
 }
 
@@ -215,7 +215,7 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     for i in 0..NODES {
         for j in 0..3 {
             b[i][j] = bv[i][j] * iv;
-            bb += b[i][j] * b[i][j];
+            bb = b[i][j].mul_add(b[i][j], bb);
         }
     }
     let ivh = 1.0 / volh;
@@ -223,7 +223,7 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     for i in 0..NODES {
         for a in 0..3 {
             for j in 0..3 {
-                l[a][j] += v[i][a] * bvh[i][j] * ivh;
+                l[a][j] = (v[i][a] * bvh[i][j]).mul_add(ivh, l[a][j]);
             }
         }
     }
@@ -248,6 +248,13 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
         d,
         r,
     })
+}
+
+/// a0 b0 + a1 b1 + a2 b2 summed left to right, each product added by `F::mul_add` (fused in
+/// the eight-lane build, two roundings in the four-lane one, as the scalar kernel).
+#[inline(always)]
+pub(super) fn dot3(a0: F, b0: F, a1: F, b1: F, a2: F, b2: F) -> F {
+    a2.mul_add(b2, a1.mul_add(b1, a0 * b0))
 }
 
 /// Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective; the inverse by
@@ -297,7 +304,7 @@ fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
     let mut r = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            r[i][j] = ai[i][0] * p[0][j] + ai[i][1] * p[1][j] + ai[i][2] * p[2][j];
+            r[i][j] = dot3(ai[i][0], p[0][j], ai[i][1], p[1][j], ai[i][2], p[2][j]);
         }
     }
     r
@@ -310,10 +317,10 @@ fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
     let mut rs = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            rs[i][j] = r[i][0] * sm[0][j] + r[i][1] * sm[1][j] + r[i][2] * sm[2][j];
+            rs[i][j] = dot3(r[i][0], sm[0][j], r[i][1], sm[1][j], r[i][2], sm[2][j]);
         }
     }
-    let rot = |i: usize, j: usize| rs[i][0] * r[j][0] + rs[i][1] * r[j][1] + rs[i][2] * r[j][2];
+    let rot = |i: usize, j: usize| dot3(rs[i][0], r[j][0], rs[i][1], r[j][1], rs[i][2], r[j][2]);
     [
         rot(0, 0),
         rot(1, 1),
@@ -411,9 +418,9 @@ pub(super) fn update_inline(
     for i in 0..NODES {
         let bi = &k.bv[i];
         force[i] = [
-            -(st_tot[0] * bi[0] + st_tot[3] * bi[1] + st_tot[5] * bi[2]),
-            -(st_tot[3] * bi[0] + st_tot[1] * bi[1] + st_tot[4] * bi[2]),
-            -(st_tot[5] * bi[0] + st_tot[4] * bi[1] + st_tot[2] * bi[2]),
+            -st_tot[5].mul_add(bi[2], st_tot[3].mul_add(bi[1], st_tot[0] * bi[0])),
+            -st_tot[4].mul_add(bi[2], st_tot[1].mul_add(bi[1], st_tot[3] * bi[0])),
+            -st_tot[2].mul_add(bi[2], st_tot[4].mul_add(bi[1], st_tot[5] * bi[0])),
         ];
     }
 

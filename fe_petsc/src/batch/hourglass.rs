@@ -2,6 +2,7 @@
 //! a group of elements at once, for the batched kernel (`batch::hex`): the same operations in
 //! the same order in each lane, the branches (loading or unloading, the yield bound's cases, the
 //! tangent ratio's round-off guard) as masked lane operations.
+use super::hex::dot3;
 use super::{F, M};
 use crate::hex::NODES;
 use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT, THIRD};
@@ -39,7 +40,7 @@ pub struct LaneHourglass<'a> {
 
 #[inline(always)]
 fn dot(a: &V3, b: &V3) -> F {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    dot3(a[0], b[0], a[1], b[1], a[2], b[2])
 }
 
 /// [`crate::hourglass::tangent_ratio`] in lanes, for a positive `mu`. About 40 flops.
@@ -76,7 +77,7 @@ fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F; NODES]; 4] {
             }
         }
         for k in 0..NODES {
-            gam[al][k] = g[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2]);
+            gam[al][k] = g[k] - dot3(gx[0], b[k][0], gx[1], b[k][1], gx[2], b[k][2]);
         }
     }
     gam
@@ -132,9 +133,9 @@ impl Frame {
     fn to_global(&self, v: &V3) -> V3 {
         let e = &self.e;
         [
-            e[0][0] * v[0] + e[1][0] * v[1] + e[2][0] * v[2],
-            e[0][1] * v[0] + e[1][1] * v[1] + e[2][1] * v[2],
-            e[0][2] * v[0] + e[1][2] * v[1] + e[2][2] * v[2],
+            dot3(e[0][0], v[0], e[1][0], v[1], e[2][0], v[2]),
+            dot3(e[0][1], v[0], e[1][1], v[1], e[2][1], v[2]),
+            dot3(e[0][2], v[0], e[1][2], v[1], e[2][2], v[2]),
         ]
     }
 }
@@ -279,10 +280,10 @@ fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
     let mut t = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for l in 0..3 {
-            t[i][l] = e[i][0] * g[0][l] + e[i][1] * g[1][l] + e[i][2] * g[2][l];
+            t[i][l] = dot3(e[i][0], g[0][l], e[i][1], g[1][l], e[i][2], g[2][l]);
         }
     }
-    let m = |i: usize, j: usize| t[i][0] * e[j][0] + t[i][1] * e[j][1] + t[i][2] * e[j][2];
+    let m = |i: usize, j: usize| dot3(t[i][0], e[j][0], t[i][1], e[j][1], t[i][2], e[j][2]);
     let (m01, m02, m12) = (m(0, 1), m(0, 2), m(1, 2));
     [
         [m(0, 0), m01, m02],
@@ -307,7 +308,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
         let mut q = [F::ZERO; 3];
         for k in 0..NODES {
             for c in 0..3 {
-                q[c] += s.v[k][c] * gam[al][k];
+                q[c] = s.v[k][c].mul_add(gam[al][k], q[c]);
             }
         }
         qd[al] = frame.to_local(&q);
@@ -340,7 +341,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
         let tg = frame.to_global(&h[al]);
         for k in 0..NODES {
             for c in 0..3 {
-                force[k][c] -= tg[c] * gam[al][k];
+                force[k][c] = tg[c].neg_mul_add(gam[al][k], force[k][c]);
             }
         }
     }

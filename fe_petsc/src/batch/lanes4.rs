@@ -153,6 +153,25 @@ impl F4 {
         M4(self.0.map(f64::is_finite))
     }
 
+    /// `self * b + c`, rounded twice as the scalar kernel's `a * b + c` (the eight-lane build
+    /// fuses it: see `lanes8`).
+    #[inline(always)]
+    pub fn mul_add(self, b: F4, c: F4) -> F4 {
+        self * b + c
+    }
+
+    /// `self * b - c`, rounded twice.
+    #[inline(always)]
+    pub fn mul_sub(self, b: F4, c: F4) -> F4 {
+        self * b - c
+    }
+
+    /// `c - self * b`, rounded twice.
+    #[inline(always)]
+    pub fn neg_mul_add(self, b: F4, c: F4) -> F4 {
+        c - self * b
+    }
+
     /// `a` in the lanes where `m` holds, `b` in the others.
     #[inline(always)]
     pub fn select(m: M4, a: F4, b: F4) -> F4 {
