@@ -544,41 +544,49 @@ impl ExplicitFe {
         }
     }
 
-    /// Every element's update, in element order: groups of `B::LANES` by the batched kernel
-    /// where [`Self::lane_group`] allows, the scalar kernel for the rest.
+    /// Every element's update, in element order. Each run of consecutive elements of one
+    /// material with a lane form goes through the batched kernel in groups of `B::LANES`, the
+    /// run's last group padded (see [`Self::group_update`]); other elements, and a group with
+    /// an inverted element, through the scalar kernel.
+    ///
+    /// So every element of a lane material is updated by the same kernel however the elements
+    /// are dealt to ranks: the eight-lane kernel rounds its fused multiply-adds once where the
+    /// scalar kernel rounds twice, and an element's result must not depend on whether its
+    /// rank's share left it in a whole group (the rank-independence tests hold histories to
+    /// 1e-10 at np 1 to 4, and contact amplifies a last-bit difference past that).
     fn element_loop<B: Batch>(&mut self, dt: f64, sums: &mut LoopSums) {
         let mut group = Box::<B>::default();
         let mut e = 0;
         while e < self.elems.len() {
-            match self.lane_group(e, B::LANES) {
-                Some(m) => {
-                    if !self.group_update(e, &m, dt, &mut *group, sums) {
-                        // An inverted element in the group: the scalar kernel names it.
-                        for k in e..e + B::LANES {
-                            self.element_update(k, dt, sums);
-                        }
-                    }
-                    e += B::LANES;
-                }
-                None => {
-                    self.element_update(e, dt, sums);
-                    e += 1;
+            let n = self.lane_run(e, B::LANES);
+            if n == 0 {
+                self.element_update(e, dt, sums);
+                e += 1;
+                continue;
+            }
+            let m = self.lane_materials[self.elem_material[e]].expect("a lane run");
+            if !self.group_update(e, n, &m, dt, &mut *group, sums) {
+                // An inverted element in the group: the scalar kernel names it.
+                for k in e..e + n {
+                    self.element_update(k, dt, sums);
                 }
             }
+            e += n;
         }
     }
 
-    /// The lane form of the material of elements `e..e + lanes` when the batched kernel is on
-    /// and those elements exist and share a material that has one.
-    fn lane_group(&self, e: usize, lanes: usize) -> Option<LaneMaterial> {
-        if self.kernel != ElementKernel::Batched || e + lanes > self.elems.len() {
-            return None;
-        }
+    /// How many of the elements `e..e + lanes` go into one batched group: those that exist
+    /// and share `e`'s material, when the batched kernel is on and that material has a lane
+    /// form; 0 otherwise.
+    fn lane_run(&self, e: usize, lanes: usize) -> usize {
         let mi = self.elem_material[e];
-        let m = self.lane_materials[mi]?;
-        (1..lanes)
-            .all(|l| self.elem_material[e + l] == mi)
-            .then_some(m)
+        if self.kernel != ElementKernel::Batched || self.lane_materials[mi].is_none() {
+            return 0;
+        }
+        let end = (e + lanes).min(self.elems.len());
+        (e..end)
+            .take_while(|&k| self.elem_material[k] == mi)
+            .count()
     }
 
     /// Updates element `e` with the scalar kernel and adds its output (an inverted element is
@@ -616,9 +624,11 @@ impl ExplicitFe {
         }
     }
 
-    /// Updates elements `e0..e0 + B::LANES` (material `m`) with the batched kernel in the
-    /// buffer `g` and adds their outputs in element order; `false`, with nothing changed, when
-    /// one of them is inverted.
+    /// Updates elements `e0..e0 + n` (material `m`, `n` at most `B::LANES`) with the batched
+    /// kernel in the buffer `g` and adds their outputs in element order; `false`, with nothing
+    /// changed, when one of them is inverted. A group of fewer than `B::LANES` elements fills
+    /// its other lanes with copies of element `e0`, whose results are dropped (lanes are
+    /// independent: each computes its own element only).
     ///
     /// Cost per element beyond the kernel: the gather of 48 nodal doubles (384 B) and the
     /// scatter-add of 24 (192 B read and written) through the connectivity (32 B), 19 state
@@ -626,27 +636,37 @@ impl ExplicitFe {
     fn group_update<B: Batch>(
         &mut self,
         e0: usize,
+        n: usize,
         m: &LaneMaterial,
         dt: f64,
         g: &mut B,
         sums: &mut LoopSums,
     ) -> bool {
-        let lanes = e0..e0 + B::LANES;
         let stride = self.mat_stride;
         let history = m.n_state() > 0;
+        let elem = |l: usize| e0 + if l < n { l } else { 0 };
         let ms = &self.mat_state;
-        g.load(
-            &self.x,
-            &self.v,
-            &self.elems[lanes.clone()],
-            &self.vol0[lanes.clone()],
-            &self.state[lanes],
-            |l| if history { ms[(e0 + l) * stride] } else { 0.0 },
-        );
+        let hist = |l: usize| if history { ms[elem(l) * stride] } else { 0.0 };
+        if n == B::LANES {
+            let lanes = e0..e0 + n;
+            g.load(
+                &self.x,
+                &self.v,
+                &self.elems[lanes.clone()],
+                &self.vol0[lanes.clone()],
+                &self.state[lanes],
+                hist,
+            );
+        } else {
+            let conn: Vec<[u32; 8]> = (0..B::LANES).map(|l| self.elems[elem(l)]).collect();
+            let vol0: Vec<f64> = (0..B::LANES).map(|l| self.vol0[elem(l)]).collect();
+            let state: Vec<HexState> = (0..B::LANES).map(|l| self.state[elem(l)]).collect();
+            g.load(&self.x, &self.v, &conn, &vol0, &state, hist);
+        }
         if g.update(dt, m, &self.controls).is_err() {
             return false;
         }
-        for l in 0..B::LANES {
+        for l in 0..n {
             let e = e0 + l;
             let (s, h) = g.lane_state(l);
             self.state[e] = s;
