@@ -427,20 +427,34 @@ fn inverse3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
     }))
 }
 
-/// FB maximum-frequency bound: omega_max = 2 c sqrt(2 sum_Ii b_Ii^2); with damping ratio xi the
-/// stable step is (2/omega_max)(sqrt(1 + xi^2) - xi). For a cube of side h, 2/omega_max = h/(c sqrt 3).
-#[inline]
-fn critical_dt(bb: f64, c: f64, xi: f64) -> f64 {
-    let omega = 2.0 * c * (2.0 * bb).sqrt();
-    (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi)
+/// The element's wave terms: s = sqrt(2 sum_Ii b_Ii^2) and 1 / (c s), the one division that
+/// the bulk viscosity's length, its quadratic term and the stable step share (below).
+#[derive(Clone, Copy)]
+struct Wave {
+    s: f64,
+    ics: f64,
 }
 
-/// The bulk viscosity's length, l = sqrt(3) / sqrt(2 sum b^2): h for a cube of side h (as
-/// V^(1/3) is), close to the thinnest side of a flat brick (V^(1/3) damped an 8:1 brick 2.4 times
-/// more than its step allowed: bar_wave at N = 160, M = 1 blew up).
+impl Wave {
+    #[inline]
+    fn new(bb: f64, c: f64) -> Wave {
+        let s = (2.0 * bb).sqrt();
+        Wave {
+            s,
+            ics: 1.0 / (c * s),
+        }
+    }
+}
+
+/// sqrt(3) rounded.
+pub(crate) const SQRT_3: f64 = 1.732_050_807_568_877_2;
+
+/// FB maximum-frequency bound: omega_max = 2 c s with s = sqrt(2 sum_Ii b_Ii^2); with damping
+/// ratio xi the stable step is (2/omega_max)(sqrt(1 + xi^2) - xi), 2/omega_max = 1/(c s). For a
+/// cube of side h, 2/omega_max = h/(c sqrt 3).
 #[inline]
-fn bulk_viscosity_length(bb: f64) -> f64 {
-    3f64.sqrt() / (2.0 * bb).sqrt()
+fn critical_dt(w: Wave, xi: f64) -> f64 {
+    w.ics * ((1.0 + xi * xi).sqrt() - xi)
 }
 
 /// The bulk viscosity: the pressure q it adds to the normal stresses and the damping ratio it
@@ -453,13 +467,18 @@ fn bulk_viscosity_length(bb: f64) -> f64 {
 /// = (b1 + b2^2 l |eps_v| / c) l sqrt(2 b.b) = sqrt(3) (b1 + b2^2 l |eps_v| / c): sqrt(3) times
 /// what the bare coefficients say (the stable step once assumed b1 alone, and bar_wave with
 /// 8:1 bricks and b1 = 0.3 blew up at dt_safety 0.86).
+///
+/// The length is l = sqrt(3) / s (s = sqrt(2 b.b)): h for a cube of side h (as V^(1/3) is),
+/// close to the thinnest side of a flat brick (V^(1/3) damped an 8:1 brick 2.4 times more than
+/// its step allowed: bar_wave at N = 160, M = 1 blew up). With 1/(c s) known, l = sqrt(3) c
+/// (1/(c s)) and 1/c = s (1/(c s)): no division here.
 #[inline]
-fn bulk_viscosity(ctl: &HexControls, bb: f64, rho: f64, c: f64, ev: f64) -> (f64, f64) {
-    let len = bulk_viscosity_length(bb);
+fn bulk_viscosity(ctl: &HexControls, w: Wave, rho: f64, c: f64, ev: f64) -> (f64, f64) {
+    let len = SQRT_3 * (c * w.ics);
     let comp = (-ev).max(0.0);
-    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
+    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp * (w.s * w.ics);
     let q = rho * len * c * ev * lin_quad;
-    let xi = lin_quad * len * (2.0 * bb).sqrt();
+    let xi = lin_quad * len * w.s;
     (q, xi)
 }
 
@@ -474,8 +493,9 @@ pub fn stable_dt(
     let (b, _) = gradient(x);
     let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
     let c = (mat.dilatational_modulus() / rho).sqrt();
-    let (_, xi) = bulk_viscosity(ctl, bb, rho, c, div_v);
-    critical_dt(bb, c, xi)
+    let w = Wave::new(bb, c);
+    let (_, xi) = bulk_viscosity(ctl, w, rho, c, div_v);
+    critical_dt(w, xi)
 }
 
 /// One explicit update of one element.
@@ -503,16 +523,6 @@ pub fn update(
     if !(vol > 0.0) || !vol.is_finite() {
         return Err(ElementError::Inverted { volume: vol });
     }
-    let iv = 1.0 / vol;
-    // Mean gradient b = B / V at t(n+1) (forces, hourglass, stable step).
-    let mut b = [[0.0; 3]; 8];
-    let mut bb = 0.0;
-    for i in 0..8 {
-        for j in 0..3 {
-            b[i][j] = bv[i][j] * iv;
-            bb += b[i][j] * b[i][j];
-        }
-    }
     // The velocity gradient L_ij = sum_I v_iI bh_Ij at the mid-step geometry
     // x(n+1/2) = x(n+1) - dt/2 v(n+1/2), where v(n+1/2) is the exact rate (PRONTO-3D): a rigid
     // rotation then gives a skew L and no strain.
@@ -522,7 +532,18 @@ pub fn update(
     if !(volh > 0.0) || !volh.is_finite() {
         return Err(ElementError::Inverted { volume: volh });
     }
-    let ivh = 1.0 / volh;
+    // 1/V and 1/V(n+1/2) from one division.
+    let inv = 1.0 / (vol * volh);
+    let (iv, ivh) = (volh * inv, vol * inv);
+    // Mean gradient b = B / V at t(n+1) (forces, hourglass, stable step).
+    let mut b = [[0.0; 3]; 8];
+    let mut bb = 0.0;
+    for i in 0..8 {
+        for j in 0..3 {
+            b[i][j] = bv[i][j] * iv;
+            bb += b[i][j] * b[i][j];
+        }
+    }
     let mut l = [[0.0; 3]; 3];
     for i in 0..8 {
         for a in 0..3 {
@@ -588,8 +609,9 @@ pub fn update(
     let modulus = mat.wave_modulus(rho, mat_state);
     let c = (modulus / rho).sqrt();
     let ev = d[0] + d[1] + d[2];
-    let (q, xi) = bulk_viscosity(ctl, bb, rho, c, ev);
-    let dt_stable = critical_dt(bb, c, xi);
+    let w = Wave::new(bb, c);
+    let (q, xi) = bulk_viscosity(ctl, w, rho, c, ev);
+    let dt_stable = critical_dt(w, xi);
     // Its work heats the material (q eps_v >= 0, J/m^3/s): a fluid's EOS keeps it.
     if q != 0.0 {
         mat.add_heat(mat_state, q * ev * dt / rho, rho);

@@ -145,7 +145,9 @@ impl Frame {
             }
         }
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
-        let ia = [1.0 / a[0], 1.0 / a[1], 1.0 / a[2]];
+        // 1 / a_j from one division.
+        let (a01, inv) = (a[0] * a[1], 1.0 / (a[0] * a[1] * a[2]));
+        let ia = [a[1] * a[2] * inv, a[0] * a[2] * inv, a01 * inv];
         let e0 = scale(&j[0], ia[0]);
         let d01 = dot(&j[1], &e0);
         let t = [

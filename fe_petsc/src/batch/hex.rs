@@ -18,7 +18,9 @@ use super::hourglass::{self as hourglass_lanes, LaneHourglass};
 use super::law;
 use super::{F, LANES, M};
 use crate::batch::{GroupInverted, LaneMaterial};
-use crate::hex::{HexControls, HexOutput, HexState, VolumeGroup, NODES, TWELFTH, VOLUME_GROUPS};
+use crate::hex::{
+    HexControls, HexOutput, HexState, VolumeGroup, NODES, SQRT_3, TWELFTH, VOLUME_GROUPS,
+};
 
 /// Nodal vectors of a group's elements in lanes: `[node][component]`.
 pub type LaneNodes = [[F; 3]; NODES];
@@ -209,7 +211,9 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
         return None;
     }
-    let iv = 1.0 / vol;
+    // 1/V and 1/V(n+1/2) from one division (as `hex::update`).
+    let inv = 1.0 / (vol * volh);
+    let (iv, ivh) = (volh * inv, vol * inv);
     let mut b = [[F::ZERO; 3]; NODES];
     let mut bb = F::ZERO;
     for i in 0..NODES {
@@ -218,7 +222,6 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
             bb = b[i][j].mul_add(b[i][j], bb);
         }
     }
-    let ivh = 1.0 / volh;
     let mut l = [[F::ZERO; 3]; 3];
     for i in 0..NODES {
         for a in 0..3 {
@@ -335,13 +338,14 @@ fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
 /// comment derives them) and the element's stable step (its `critical_dt`), in lanes.
 #[inline(always)]
 fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F) {
-    let len = 3f64.sqrt() / (2.0 * bb).sqrt();
+    let s = (2.0 * bb).sqrt();
+    let ics = 1.0 / (c * s);
+    let len = SQRT_3 * (c * ics);
     let comp = (-ev).max(F::ZERO);
-    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp / c;
+    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp * (s * ics);
     let q = rho * len * c * ev * lin_quad;
-    let xi = lin_quad * len * (2.0 * bb).sqrt();
-    let omega = 2.0 * c * (2.0 * bb).sqrt();
-    let dt = (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi);
+    let xi = lin_quad * len * s;
+    let dt = ics * ((1.0 + xi * xi).sqrt() - xi);
     (q, dt)
 }
 

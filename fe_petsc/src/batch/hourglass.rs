@@ -104,7 +104,9 @@ impl Frame {
         let norm = |v: &V3| dot(v, v).sqrt();
         let scale = |v: &V3, s: F| [v[0] * s, v[1] * s, v[2] * s];
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
-        let ia = [1.0 / a[0], 1.0 / a[1], 1.0 / a[2]];
+        // 1 / a_j from one division.
+        let (a01, inv) = (a[0] * a[1], 1.0 / (a[0] * a[1] * a[2]));
+        let ia = [a[1] * a[2] * inv, a[0] * a[2] * inv, a01 * inv];
         let e0 = scale(&j[0], ia[0]);
         let d01 = dot(&j[1], &e0);
         let t = [

@@ -18,7 +18,7 @@ pub(super) fn update_stress(law: &LaneLaw, stress: &mut [F; 6], history: &mut F,
             let (s, p, q) = deviator(stress);
             let f = q - (m.yield_stress + m.hardening * *history);
             let flow = f.gt(F::ZERO);
-            let dgamma = f / (3.0 * m.mu + m.hardening);
+            let dgamma = f * m.inv_return;
             let scale = 1.0 - 3.0 * m.mu * dgamma / q;
             for k in 0..3 {
                 stress[k] = F::select(flow, s[k] * scale + p, stress[k]);

@@ -16,6 +16,9 @@ pub struct J2Plastic {
     pub(crate) mu: f64,
     pub(crate) yield_stress: f64,
     pub(crate) hardening: f64,
+    /// 1 / (3 mu + H): the radial return multiplies by it (the scalar and batched kernels
+    /// alike) instead of dividing at every yielding element.
+    pub(crate) inv_return: f64,
 }
 
 impl J2Plastic {
@@ -53,6 +56,7 @@ impl J2Plastic {
             mu,
             yield_stress: v[2],
             hardening: v[3],
+            inv_return: 1.0 / (3.0 * mu + v[3]),
         }))
     }
 }
@@ -82,7 +86,7 @@ impl Material for J2Plastic {
         let (s, p, q) = deviator(stress);
         let f = q - (self.yield_stress + self.hardening * state[0]);
         if f > 0.0 {
-            let dgamma = f / (3.0 * self.mu + self.hardening);
+            let dgamma = f * self.inv_return;
             let scale = 1.0 - 3.0 * self.mu * dgamma / q;
             for k in 0..3 {
                 stress[k] = s[k] * scale + p;
