@@ -5,9 +5,10 @@
 //!
 //! Every operation is the IEEE operation of `f64` lane by lane, in the order written: no fused
 //! multiply-add and no reassociation, so that a lane computes bit for bit what the scalar kernel
-//! computes for its element. (`f64::mul_add` without the `fma` target feature, which the baseline
-//! target lacks, is a library call, and a fused product would round differently from the scalar
-//! kernel that the remainder elements and the tests use.)
+//! computes for its element: `mul_add` here rounds twice, as the scalar kernel's `a * b + c`.
+//! (`f64::mul_add` without the `fma` target feature, which the baseline target lacks, is a
+//! library call, and a fused product would round differently from the scalar kernel that other
+//! materials and the tests use.)
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
 /// Elements per group.
