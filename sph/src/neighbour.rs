@@ -23,7 +23,7 @@
 //! one particle with the same image index are never a pair.
 use crate::params::Params;
 use crate::particles::Particles;
-use crate::passes::{kept_continuity_and_force_pass, PairWork, PassBuffers};
+use crate::passes::{kept_continuity_and_force_pass, pos_part, PairWork, PassBuffers};
 use crate::periodic::Periodic;
 
 /// Options of the pair search.
@@ -830,11 +830,14 @@ fn kept_pairs_skin(parts: &Particles) -> f64 {
 /// Every pair is interior, so the search's tests reduce to the overlap r^2 < (h_a + h_b)^2
 /// (the pre-filter with slack accepts a superset); the cells are filled by one counting sort
 /// on (cell, not primary), which gives the slot order of `CellList::new` then
-/// `CellList::with_primary`; each slot's position and radius are packed in 32 bytes; and each
-/// run of candidates is tested without a jump per candidate (the index written to a small
-/// buffer, the count advanced by the test), the ~85 % that fail costing no mispredicted
-/// jump. Per candidate ~14 instructions (32 bytes loaded, in L1: the cell's slots are
-/// contiguous); per listed pair ~10 more (the id test, min/max, push).
+/// `CellList::with_primary`; each slot's position and radius are packed in 32 bytes; a slot
+/// skips a neighbour cell whose slots' bounding box lies beyond its reach (see below); and
+/// each run of candidates is tested without a jump per candidate (the index written to a small
+/// buffer, the count advanced by the test), the ~70 % that fail costing no mispredicted jump.
+/// Per candidate ~16 instructions and 32 bytes (in L1: a cell's slots are contiguous); per
+/// listed pair ~10 more (the id test, min/max, push). Measured on the dam break's last state
+/// (18,568 particles, 169,000 candidates listed, one core of this machine): 2.6 ms against
+/// 5.2 ms for the general search, 580,000 candidates tested against 1.26 million.
 fn one_box_candidates(x: &[[f64; 3]], h: &[f64], id: &[u64], primary: &[bool]) -> Vec<(u32, u32)> {
     let n = x.len();
     let grid = Grid::new(x, h);
@@ -868,7 +871,38 @@ fn one_box_candidates(x: &[[f64; 3]], h: &[f64], id: &[u64], primary: &[bool]) -
         let c = k as usize / 2;
         cell_hmax[c] = cell_hmax[c].max(h[i]);
     }
-    // cell c: slots start[2c]..start[2c + 2], the primary ones start[2c]..start[2c + 1]
+    // cell c: slots start[2c]..start[2c + 2], the primary ones start[2c]..start[2c + 1];
+    // bounds[2c]: the box of its primary slots' positions (lower corner, upper corner),
+    // bounds[2c + 1]: of all its slots' (empty: lower +inf, upper -inf)
+    let mut bounds = vec![
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY
+        ];
+        2 * ncell
+    ];
+    for c in 0..ncell {
+        let (s0, p1, s1) = (
+            start[2 * c] as usize,
+            start[2 * c + 1] as usize,
+            start[2 * c + 2] as usize,
+        );
+        let mut b = bounds[2 * c];
+        for (s, a) in (s0..s1).zip(&slots[s0..s1]) {
+            for k in 0..3 {
+                b[k] = b[k].min(a[k]);
+                b[k + 3] = b[k + 3].max(a[k]);
+            }
+            if s + 1 == p1 {
+                bounds[2 * c] = b;
+            }
+        }
+        bounds[2 * c + 1] = b;
+    }
     let most = (0..ncell)
         .map(|c| start[2 * c + 2] - start[2 * c])
         .max()
@@ -942,7 +976,27 @@ fn one_box_candidates(x: &[[f64; 3]], h: &[f64], id: &[u64], primary: &[bool]) -
                             continue;
                         }
                         // a non-primary slot meets the other cell's primary prefix only
-                        let t_end = if si < p1 { t1 } else { q1 };
+                        let (t_end, b) = if si < p1 {
+                            (t1, &bounds[2 * o + 1])
+                        } else {
+                            (q1, &bounds[2 * o])
+                        };
+                        // None of them when the slot is at least its radius plus the cell's
+                        // largest from the box of their positions: fl(x - y) is monotone in x
+                        // and in y, so each candidate's |d_k| is at least the box's gap g_k
+                        // computed below, and the overlap test, made of the same operations,
+                        // fails for all. ~25 instructions per slot and cell; on the dam break
+                        // it drops half the candidates (57 % of the slot-cell visits, most
+                        // near the thin boxes of the walls' cells), for ~16 each.
+                        let g = [
+                            pos_part(b[0] - a[0]) + pos_part(a[0] - b[3]),
+                            pos_part(b[1] - a[1]) + pos_part(a[1] - b[4]),
+                            pos_part(b[2] - a[2]) + pos_part(a[2] - b[5]),
+                        ];
+                        let reach = a[3] + ho;
+                        if g[0] * g[0] + g[1] * g[1] + g[2] * g[2] >= reach * reach {
+                            continue;
+                        }
                         scan(si, t0..t_end, &mut out);
                     }
                 }

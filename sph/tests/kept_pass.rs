@@ -255,8 +255,17 @@ fn one_box_build_equals_the_general_search() {
             let mut params = params(Profile::Liggghts, false);
             params.density = density;
             let opts: SearchOptions = params.search_options();
-            let got = KeptPairs::build(p, &opts, lo, hi).to_parts();
-            let want = KeptPairs::build_by_search(p, &opts, lo, hi).to_parts();
+            let (got, want) = (
+                KeptPairs::build(p, &opts, lo, hi),
+                KeptPairs::build_by_search(p, &opts, lo, hi),
+            );
+            // everything, the packing order included (shortest round-trip floats)
+            assert_eq!(
+                format!("{got:?}"),
+                format!("{want:?}"),
+                "{name}, {density:?}"
+            );
+            let (got, want) = (got.to_parts(), want.to_parts());
             assert_eq!(
                 got.0, want.0,
                 "{name}, {density:?}: candidates (and their order)"
