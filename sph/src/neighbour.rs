@@ -725,7 +725,7 @@ impl KeptPairs {
     /// is looked at anyway, and the sweep has no jump to mispredict). "Moved half the skin" is
     /// 2 |d| >= skin, tested as |d|^2 >= the smallest |d|^2 for which the rounded
     /// 2 sqrt(|d|^2) reaches the skin (found once per call): the same answer, bit for bit,
-    /// without a square root per entry (~12 instructions and 64 bytes per entry).
+    /// without a square root per entry (~17 instructions and 80 bytes per entry).
     pub fn still_valid(&self, parts: &Particles) -> bool {
         let n = parts.len();
         if self.id_ref.len() != n || self.h_ref.len() != n || self.x_ref.len() != n {
