@@ -73,12 +73,23 @@ pub fn canonical<'e>(p: &'e PairEnd, q: &'e PairEnd) -> (&'e PairEnd, &'e PairEn
     }
 }
 
+/// [f(0), f(1), f(2)], written out (`[0, 1, 2].map(f)` is not always inlined, and `coi` runs
+/// for every candidate at every step on several ranks).
+#[inline(always)]
+fn each_axis(f: impl Fn(usize) -> f64) -> [f64; 3] {
+    [f(0), f(1), f(2)]
+}
+
 /// The centre of interaction of the pair of copies `p`, `q` (in either order: see `canonical`).
-/// Bit-identical for every copy of the same physical pair.
+/// Bit-identical for every copy of the same physical pair. Inlined always: it is the body of
+/// `KeptBoxPairs::filter`'s loop over every candidate at every step on several ranks (a call
+/// there made the dam break at np 2 1.5x slower when the module grew and LLVM stopped
+/// inlining it).
+#[inline(always)]
 pub fn coi(p: &PairEnd, q: &PairEnd, periodic: Option<&Periodic>) -> Coi {
     let (a, b) = canonical(p, q);
     // d = x_b - x_a with the relative image of the copies
-    let d = [0, 1, 2].map(|k| {
+    let d = each_axis(|k| {
         let mut dk = b.x_real[k] - a.x_real[k];
         if let Some(per) = periodic {
             let m = b.image[k] - a.image[k];
@@ -102,7 +113,7 @@ pub fn coi(p: &PairEnd, q: &PairEnd, periodic: Option<&Periodic>) -> Coi {
         (a.h.min(r) - b.h.min(r)) / r
     };
     let s = 0.5 * (1.0 + t);
-    let c = [0, 1, 2].map(|k| a.x_real[k] + s * d[k]);
+    let c = each_axis(|k| a.x_real[k] + s * d[k]);
     let (point, a_image) = match periodic {
         Some(per) => {
             let (w, n) = per.wrap_with_index(c);
