@@ -23,7 +23,7 @@
 //! one particle with the same image index are never a pair.
 use crate::params::Params;
 use crate::particles::Particles;
-use crate::passes::{kept_continuity_and_force_pass, PairWork, PassBuffers};
+use crate::passes::{kept_continuity_and_force_pass, pos_part, PairWork, PassBuffers};
 use crate::periodic::Periodic;
 
 /// Options of the pair search.
@@ -73,12 +73,23 @@ pub fn canonical<'e>(p: &'e PairEnd, q: &'e PairEnd) -> (&'e PairEnd, &'e PairEn
     }
 }
 
+/// [f(0), f(1), f(2)], written out (`[0, 1, 2].map(f)` is not always inlined, and `coi` runs
+/// for every candidate at every step on several ranks).
+#[inline(always)]
+fn each_axis(f: impl Fn(usize) -> f64) -> [f64; 3] {
+    [f(0), f(1), f(2)]
+}
+
 /// The centre of interaction of the pair of copies `p`, `q` (in either order: see `canonical`).
-/// Bit-identical for every copy of the same physical pair.
+/// Bit-identical for every copy of the same physical pair. Inlined always: it is the body of
+/// `KeptBoxPairs::filter`'s loop over every candidate at every step on several ranks (a call
+/// there made the dam break at np 2 1.5x slower when the module grew and LLVM stopped
+/// inlining it).
+#[inline(always)]
 pub fn coi(p: &PairEnd, q: &PairEnd, periodic: Option<&Periodic>) -> Coi {
     let (a, b) = canonical(p, q);
     // d = x_b - x_a with the relative image of the copies
-    let d = [0, 1, 2].map(|k| {
+    let d = each_axis(|k| {
         let mut dk = b.x_real[k] - a.x_real[k];
         if let Some(per) = periodic {
             let m = b.image[k] - a.image[k];
@@ -102,7 +113,7 @@ pub fn coi(p: &PairEnd, q: &PairEnd, periodic: Option<&Periodic>) -> Coi {
         (a.h.min(r) - b.h.min(r)) / r
     };
     let s = 0.5 * (1.0 + t);
-    let c = [0, 1, 2].map(|k| a.x_real[k] + s * d[k]);
+    let c = each_axis(|k| a.x_real[k] + s * d[k]);
     let (point, a_image) = match periodic {
         Some(per) => {
             let (w, n) = per.wrap_with_index(c);
@@ -193,13 +204,24 @@ fn half_stencil(r: i64) -> Vec<([i64; 3], f64)> {
     out
 }
 
-impl CellList {
-    /// Bins every entry (owned and ghost) of `parts` by its position `x`.
-    pub fn new(parts: &Particles) -> Self {
-        let n = parts.len();
+/// The geometry of a cell list: the grid over the bounding box of the positions, its cell
+/// width and stencil depth (see [`CellList`]).
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    lo: [f64; 3],
+    dims: [usize; 3],
+    size: f64,
+    inv: f64,
+    reach: i64,
+}
+
+impl Grid {
+    /// The grid of the positions `x` with smoothing lengths `h`.
+    fn new(x: &[[f64; 3]], h: &[f64]) -> Self {
+        let n = x.len();
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
-        for x in &parts.x {
+        for x in x {
             for k in 0..3 {
                 lo[k] = lo[k].min(x[k]);
                 hi[k] = hi[k].max(x[k]);
@@ -209,8 +231,8 @@ impl CellList {
             lo = [0.0; 3];
             hi = [0.0; 3];
         }
-        let h_max = parts.max_h();
-        let h_min = parts.h.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let h_max = h.iter().fold(0.0, |a: f64, &b| a.max(b));
+        let h_min = h.iter().fold(f64::INFINITY, |a, &b| a.min(b));
         let reach = if h_max > FINE_CELLS_H_RATIO * h_min {
             2
         } else {
@@ -228,16 +250,40 @@ impl CellList {
             size *= 1.5;
             dims = dims_for(size);
         }
-        let inv = 1.0 / size;
-        let ncell = dims[0] * dims[1] * dims[2];
-        let cell_of = |x: &[f64; 3]| {
-            let mut c = [0usize; 3];
-            for k in 0..3 {
-                c[k] = (((x[k] - lo[k]) * inv) as usize).min(dims[k] - 1);
-            }
-            (c[2] * dims[1] + c[1]) * dims[0] + c[0]
-        };
-        let cells: Vec<usize> = parts.x.iter().map(cell_of).collect();
+        Grid {
+            lo,
+            dims,
+            size,
+            inv: 1.0 / size,
+            reach,
+        }
+    }
+
+    fn n_cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// The cell of position `x` (the edge cells hold what lies beyond).
+    #[inline(always)]
+    fn cell_of(&self, x: &[f64; 3]) -> usize {
+        let mut c = [0usize; 3];
+        for k in 0..3 {
+            c[k] = (((x[k] - self.lo[k]) * self.inv) as usize).min(self.dims[k] - 1);
+        }
+        (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
+    }
+}
+
+impl CellList {
+    /// Bins every entry (owned and ghost) of `parts` by its position `x`.
+    pub fn new(parts: &Particles) -> Self {
+        let n = parts.len();
+        let grid = Grid::new(&parts.x, &parts.h);
+        let Grid {
+            dims, size, reach, ..
+        } = grid;
+        let ncell = grid.n_cells();
+        let cells: Vec<usize> = parts.x.iter().map(|x| grid.cell_of(x)).collect();
         let mut start = vec![0usize; ncell + 1];
         let mut cell_hmax = vec![0.0f64; ncell];
         for (i, &c) in cells.iter().enumerate() {
@@ -630,13 +676,46 @@ impl KeptPairs {
     }
 
     /// Candidates of `parts` in the box `lo..hi` (which must hold every sphere: all of space).
+    /// One box of all of space with no periodic box and no ghosts (the one-rank case) takes
+    /// [`one_box_candidates`], else the general search ([`KeptPairs::build_by_search`]): the
+    /// same candidates in the same order.
     pub fn build(parts: &Particles, opts: &SearchOptions, lo: [f64; 3], hi: [f64; 3]) -> Self {
-        let h_min = parts.h.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-        let skin = if h_min.is_finite() {
-            KEPT_PAIRS_SKIN_H * h_min
+        let all_space =
+            lo.iter().all(|c| *c == f64::NEG_INFINITY) && hi.iter().all(|c| *c == f64::INFINITY);
+        // every pair interior (no COI), positions as the search bins them
+        let one_box = all_space
+            && opts.periodic.is_none()
+            && parts.n_owned == parts.len()
+            && parts.x == parts.x_real;
+        if !one_box {
+            return Self::build_by_search(parts, opts, lo, hi);
+        }
+        let skin = kept_pairs_skin(parts);
+        let grown: Vec<f64> = parts.h.iter().map(|h| h + 0.5 * skin).collect();
+        let primary: Vec<bool> = if opts.skip_fixed_pairs {
+            parts.fixed.iter().map(|f| !f).collect()
         } else {
-            0.0
+            Vec::new()
         };
+        Self::from_entry_pairs(
+            one_box_candidates(&parts.x, &grown, &parts.id, &primary),
+            parts.len(),
+            parts.x_real.clone(),
+            parts.h.clone(),
+            parts.id.clone(),
+            skin,
+        )
+    }
+
+    /// [`KeptPairs::build`] through the general search ([`pairs_in_box`] on the particles
+    /// with grown spheres), whatever the box.
+    pub fn build_by_search(
+        parts: &Particles,
+        opts: &SearchOptions,
+        lo: [f64; 3],
+        hi: [f64; 3],
+    ) -> Self {
+        let skin = kept_pairs_skin(parts);
         let mut grown = parts.clone();
         for h in grown.h.iter_mut() {
             *h += 0.5 * skin;
@@ -654,7 +733,10 @@ impl KeptPairs {
     /// Whether the candidates still hold every overlapping pair of `parts`: the same entries
     /// (ids) with the same h, none moved half the skin. One sweep over the entries with the
     /// three tests and-ed, no early exit (a list is valid at almost every step, so every entry
-    /// is looked at anyway, and the sweep has no jump to mispredict).
+    /// is looked at anyway, and the sweep has no jump to mispredict). "Moved half the skin" is
+    /// 2 |d| >= skin, tested as |d|^2 >= the smallest |d|^2 for which the rounded
+    /// 2 sqrt(|d|^2) reaches the skin (found once per call): the same answer, bit for bit,
+    /// without a square root per entry (~17 instructions and 80 bytes per entry).
     pub fn still_valid(&self, parts: &Particles) -> bool {
         let n = parts.len();
         if self.id_ref.len() != n || self.h_ref.len() != n || self.x_ref.len() != n {
@@ -662,10 +744,11 @@ impl KeptPairs {
         }
         let (id, h, x) = (&parts.id[..n], &parts.h[..n], &parts.x_real[..n]);
         let (id_ref, h_ref, x_ref) = (&self.id_ref[..n], &self.h_ref[..n], &self.x_ref[..n]);
+        let limit = moved_limit(self.skin);
         (0..n).fold(true, |ok, i| {
             let (a, b) = (x[i], x_ref[i]);
             let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            let near = 2.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < self.skin;
+            let near = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < limit;
             ok & (id[i] == id_ref[i]) & (h[i] == h_ref[i]) & near
         })
     }
@@ -709,6 +792,229 @@ impl KeptPairs {
         }
         out
     }
+}
+
+/// The smallest q >= 0 with 2 sqrt(q) >= `skin` in floating point (sqrt correctly rounded,
+/// so monotone): for every q, including NaN, `q < moved_limit(skin)` is `2 sqrt(q) < skin`.
+fn moved_limit(skin: f64) -> f64 {
+    let near = |q: f64| 2.0 * q.sqrt() < skin;
+    if skin.is_nan() || skin <= 0.0 || skin.is_infinite() {
+        // no q is near (skin 0 or NaN; q < 0 never holds for a sum of squares) or every
+        // finite q is (2 sqrt(inf) = inf is not below an infinite skin)
+        return if skin == f64::INFINITY {
+            f64::INFINITY
+        } else {
+            0.0
+        };
+    }
+    let step = |q: f64, up: bool| {
+        let b = q.to_bits();
+        f64::from_bits(if up { b + 1 } else { b - 1 })
+    };
+    let mut t = 0.25 * skin * skin;
+    if t == f64::INFINITY {
+        t = f64::MAX;
+    }
+    while t > 0.0 && !near(step(t, false)) {
+        t = step(t, false);
+    }
+    while near(t) {
+        t = step(t, true);
+    }
+    t
+}
+
+/// The skin of a kept list for `parts`, m: `KEPT_PAIRS_SKIN_H` times the smallest h.
+fn kept_pairs_skin(parts: &Particles) -> f64 {
+    let h_min = parts.h.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    if h_min.is_finite() {
+        KEPT_PAIRS_SKIN_H * h_min
+    } else {
+        0.0
+    }
+}
+
+/// The pairs [`pairs_in_box`] gives for one box of all of space without a periodic box, the
+/// particles at `x` (real positions: no ghosts, no images) with radii `h`, ids `id` and, when
+/// `primary` is not empty, at least one primary entry per pair: the same pairs in the same
+/// order, found by the same cell list visited in the same order, without its general parts.
+/// Every pair is interior, so the search's tests reduce to the overlap r^2 < (h_a + h_b)^2
+/// (the pre-filter with slack accepts a superset); the cells are filled by one counting sort
+/// on (cell, not primary), which gives the slot order of `CellList::new` then
+/// `CellList::with_primary`; each slot's position and radius are packed in 32 bytes; a slot
+/// skips a neighbour cell whose slots' bounding box lies beyond its reach (see below); and
+/// each run of candidates is tested without a jump per candidate (the index written to a small
+/// buffer, the count advanced by the test), the ~70 % that fail costing no mispredicted jump.
+/// Per candidate ~16 instructions and 32 bytes (in L1: a cell's slots are contiguous); per
+/// listed pair ~10 more (the id test, min/max, push). Measured on the dam break's last state
+/// (18,568 particles, 169,000 candidates listed, one core of this machine): 2.6 ms against
+/// 5.2 ms for the general search, 580,000 candidates tested against 1.26 million.
+fn one_box_candidates(x: &[[f64; 3]], h: &[f64], id: &[u64], primary: &[bool]) -> Vec<(u32, u32)> {
+    let n = x.len();
+    let grid = Grid::new(x, h);
+    let ncell = grid.n_cells();
+    // key 2 c for a primary entry of cell c, 2 c + 1 for another: primary slots first in
+    // each cell, each group in entry order (a stable counting sort)
+    let keys: Vec<u32> = x
+        .iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let late = !primary.is_empty() && !primary[i];
+            (2 * grid.cell_of(x) + late as usize) as u32
+        })
+        .collect();
+    let mut start = vec![0u32; 2 * ncell + 1];
+    for &k in &keys {
+        start[k as usize + 1] += 1;
+    }
+    for k in 0..2 * ncell {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut order = vec![0u32; n];
+    let mut slots = vec![[0.0f64; 4]; n];
+    let mut cell_hmax = vec![0.0f64; ncell];
+    for (i, &k) in keys.iter().enumerate() {
+        let s = fill[k as usize] as usize;
+        fill[k as usize] += 1;
+        order[s] = i as u32;
+        slots[s] = [x[i][0], x[i][1], x[i][2], h[i]];
+        let c = k as usize / 2;
+        cell_hmax[c] = cell_hmax[c].max(h[i]);
+    }
+    // cell c: slots start[2c]..start[2c + 2], the primary ones start[2c]..start[2c + 1];
+    // bounds[2c]: the box of its primary slots' positions (lower corner, upper corner),
+    // bounds[2c + 1]: of all its slots' (empty: lower +inf, upper -inf)
+    let mut bounds = vec![
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY
+        ];
+        2 * ncell
+    ];
+    for c in 0..ncell {
+        let (s0, p1, s1) = (
+            start[2 * c] as usize,
+            start[2 * c + 1] as usize,
+            start[2 * c + 2] as usize,
+        );
+        let mut b = bounds[2 * c];
+        for (s, a) in (s0..s1).zip(&slots[s0..s1]) {
+            for k in 0..3 {
+                b[k] = b[k].min(a[k]);
+                b[k + 3] = b[k + 3].max(a[k]);
+            }
+            if s + 1 == p1 {
+                bounds[2 * c] = b;
+            }
+        }
+        bounds[2 * c + 1] = b;
+    }
+    let most = (0..ncell)
+        .map(|c| start[2 * c + 2] - start[2 * c])
+        .max()
+        .unwrap_or(0) as usize;
+    let mut hit = vec![0u32; most];
+    let mut out = Vec::with_capacity(PAIRS_PER_ENTRY_HINT * n);
+    // the candidates sj of slot si that overlap it, listed as entry pairs (i < j)
+    let mut scan = |si: usize, sj: std::ops::Range<usize>, out: &mut Vec<(u32, u32)>| {
+        let a = slots[si];
+        let mut m = 0;
+        for (k, b) in slots[sj.clone()].iter().enumerate() {
+            let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let reach = a[3] + b[3];
+            hit[m] = (sj.start + k) as u32;
+            m += (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach) as usize;
+        }
+        let i = order[si];
+        for &s in &hit[..m] {
+            let j = order[s as usize];
+            if id[i as usize] != id[j as usize] {
+                out.push((i.min(j), i.max(j)));
+            }
+        }
+    };
+    let [nx, ny, nz] = grid.dims;
+    let stencil = half_stencil(grid.reach);
+    for cz in 0..nz {
+        for cy in 0..ny {
+            for cx in 0..nx {
+                let c = (cz * ny + cy) * nx + cx;
+                let (s0, p1, s1) = (
+                    start[2 * c] as usize,
+                    start[2 * c + 1] as usize,
+                    start[2 * c + 2] as usize,
+                );
+                if s0 == s1 {
+                    continue;
+                }
+                for si in s0..p1 {
+                    scan(si, si + 1..s1, &mut out);
+                }
+                let hc = cell_hmax[c];
+                for &([dx, dy, dz], gap) in &stencil {
+                    let (ox, oy, oz) = (cx as i64 + dx, cy as i64 + dy, cz as i64 + dz);
+                    if ox < 0
+                        || oy < 0
+                        || oz < 0
+                        || ox >= nx as i64
+                        || oy >= ny as i64
+                        || oz >= nz as i64
+                    {
+                        continue;
+                    }
+                    let o = (oz as usize * ny + oy as usize) * nx + ox as usize;
+                    let (t0, q1, t1) = (
+                        start[2 * o] as usize,
+                        start[2 * o + 1] as usize,
+                        start[2 * o + 2] as usize,
+                    );
+                    let ho = cell_hmax[o];
+                    // the general search's skips (`CellList::for_each_close_pair`)
+                    let dist = gap * grid.size;
+                    if t0 == t1
+                        || (p1 == s0 && q1 == t0)
+                        || dist >= (hc + ho) * (1.0 + PREFILTER_SLACK)
+                    {
+                        continue;
+                    }
+                    for (si, a) in (s0..s1).zip(&slots[s0..s1]) {
+                        if dist >= (a[3] + ho) * (1.0 + PREFILTER_SLACK) {
+                            continue;
+                        }
+                        // a non-primary slot meets the other cell's primary prefix only
+                        let (t_end, b) = if si < p1 {
+                            (t1, &bounds[2 * o + 1])
+                        } else {
+                            (q1, &bounds[2 * o])
+                        };
+                        // None of them when the slot is at least its radius plus the cell's
+                        // largest from the box of their positions: fl(x - y) is monotone in x
+                        // and in y, so each candidate's |d_k| is at least the box's gap g_k
+                        // computed below, and the overlap test, made of the same operations,
+                        // fails for all. ~25 instructions per slot and cell; on the dam break
+                        // it drops half the candidates (57 % of the slot-cell visits, most
+                        // near the thin boxes of the walls' cells), for ~16 each.
+                        let g = [
+                            pos_part(b[0] - a[0]) + pos_part(a[0] - b[3]),
+                            pos_part(b[1] - a[1]) + pos_part(a[1] - b[4]),
+                            pos_part(b[2] - a[2]) + pos_part(a[2] - b[5]),
+                        ];
+                        let reach = a[3] + ho;
+                        if g[0] * g[0] + g[1] * g[1] + g[2] * g[2] >= reach * reach {
+                            continue;
+                        }
+                        scan(si, t0..t_end, &mut out);
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Pair candidates kept over several steps by one box of a decomposition (a Verlet list for
@@ -813,5 +1119,46 @@ impl KeptBoxPairs {
             }
         }
         list
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::moved_limit;
+
+    /// `q < moved_limit(skin)` is `2 sqrt(q) < skin` for q at and around the limit (each side
+    /// a few hundred ulps), for skins across the range, and at the edges (0, NaN, infinity).
+    #[test]
+    fn moved_limit_is_the_square_root_test() {
+        let skins = [
+            0.0024,
+            1.0,
+            0.1,
+            3.0e-7,
+            7.3e5,
+            1e-300,
+            5e-324,
+            1e300,
+            f64::MAX,
+            0.0,
+            f64::NAN,
+            f64::INFINITY,
+        ];
+        for skin in skins {
+            let t = moved_limit(skin);
+            let near = |q: f64| 2.0 * q.sqrt() < skin;
+            let mut qs = vec![0.0, -0.0, f64::NAN, f64::INFINITY, f64::MAX, 5e-324, 1.0];
+            for base in [t, 0.25 * skin * skin] {
+                if base.is_finite() && base > 0.0 {
+                    for k in 0..400u64 {
+                        qs.push(f64::from_bits(base.to_bits() + k));
+                        qs.push(f64::from_bits(base.to_bits().saturating_sub(k)));
+                    }
+                }
+            }
+            for q in qs {
+                assert_eq!(q < t, near(q), "skin {skin:e}, q {q:e}, limit {t:e}");
+            }
+        }
     }
 }

@@ -11,8 +11,9 @@ mod common;
 
 use common::{jittered_lattice, Rng};
 use sph::{
-    continuity_and_force_pass, pairs_in_box, setup_state, update_eos, ArtificialViscosity, Eos,
-    KeptPairs, NewParticle, Params, Particles, Profile, TensileCorrection,
+    continuity_and_force_pass, pairs_in_box, setup_state, update_eos, ArtificialViscosity,
+    DensityMode, Eos, KeptPairs, NewParticle, Params, Particles, Profile, SearchOptions,
+    TensileCorrection,
 };
 
 /// Spacing, m.
@@ -171,4 +172,123 @@ fn kept_pass_equals_the_filtered_list_and_a_fresh_search() {
             "{profile:?}: the pair count must change from step to step: {counts:?}"
         );
     }
+}
+
+/// A splash over a floor: a jittered block of 8 x 8 x 6 moving particles over three layers of
+/// 14 x 14 fixed ones (wall pairs are skipped under continuity), some moving particles thrown
+/// well clear (sparse cells), the entries in a scrambled order; h 1.2 dx, or with `varied`
+/// 0.6 ... 1.8 dx (ratio 3: cells h_max wide, a two-cell stencil).
+fn splash(seed: u64, varied: bool) -> Particles {
+    let mut rng = Rng(seed);
+    let mut pts: Vec<([f64; 3], bool)> = Vec::new();
+    for k in 0..3 {
+        for j in 0..14 {
+            for i in 0..14 {
+                let x = [i, j, k].map(|q| (q as f64 - 3.0) * DX);
+                pts.push((x, true));
+            }
+        }
+    }
+    for (k, x) in jittered_lattice(&mut rng, 8, DX, [0.0, 0.0, 0.03], 0.3)
+        .into_iter()
+        .enumerate()
+    {
+        if k % 61 == 0 {
+            let far = [x[0] + 0.1, x[1] - 0.05, x[2] + 0.2];
+            pts.push((far, false));
+        } else if k % 8 < 6 {
+            pts.push((x, false));
+        }
+    }
+    for k in (1..pts.len()).rev() {
+        let j = (rng.next_u64() % (k as u64 + 1)) as usize;
+        pts.swap(k, j);
+    }
+    let mut p = Particles::new();
+    for (k, (x, fixed)) in pts.into_iter().enumerate() {
+        let h = if varied {
+            rng.range(0.6, 1.8) * DX
+        } else {
+            1.2 * DX
+        };
+        p.push(NewParticle {
+            id: 1000 + 3 * k as u64,
+            x,
+            v: [0.0; 3],
+            m: 1000.0 * DX * DX * DX,
+            rho: 1000.0,
+            e: 0.0,
+            h,
+            mat: 0,
+            fixed,
+        });
+    }
+    p
+}
+
+#[test]
+fn one_box_build_equals_the_general_search() {
+    let (lo, hi) = ([f64::NEG_INFINITY; 3], [f64::INFINITY; 3]);
+    let mut cases: Vec<(String, Particles)> = vec![
+        ("blob".into(), water_blob(3, false)),
+        ("shuffled blob".into(), water_blob(5, true)),
+        ("splash".into(), splash(11, false)),
+        ("splash, varied h".into(), splash(13, true)),
+        ("empty".into(), Particles::new()),
+    ];
+    let mut single = Particles::new();
+    single.push(NewParticle {
+        id: 7,
+        x: [0.1, 0.2, 0.3],
+        v: [0.0; 3],
+        m: 1.0,
+        rho: 1000.0,
+        e: 0.0,
+        h: 1.2 * DX,
+        mat: 0,
+        fixed: false,
+    });
+    cases.push(("one particle".into(), single));
+    let mut nonempty = 0;
+    for (name, p) in &cases {
+        for density in [DensityMode::Continuity, DensityMode::Summation] {
+            let mut params = params(Profile::Liggghts, false);
+            params.density = density;
+            let opts: SearchOptions = params.search_options();
+            let (got, want) = (
+                KeptPairs::build(p, &opts, lo, hi),
+                KeptPairs::build_by_search(p, &opts, lo, hi),
+            );
+            // everything, the packing order included (shortest round-trip floats)
+            assert_eq!(
+                format!("{got:?}"),
+                format!("{want:?}"),
+                "{name}, {density:?}"
+            );
+            let (got, want) = (got.to_parts(), want.to_parts());
+            assert_eq!(
+                got.0, want.0,
+                "{name}, {density:?}: candidates (and their order)"
+            );
+            assert_eq!(got.1, want.1, "{name}, {density:?}: reference positions");
+            assert_eq!(got.2, want.2, "{name}, {density:?}: reference h");
+            assert_eq!(got.3, want.3, "{name}, {density:?}: ids");
+            assert_eq!(got.4, want.4, "{name}, {density:?}: skin");
+            let walls = got
+                .0
+                .iter()
+                .filter(|[a, b]| p.fixed[*a as usize] && p.fixed[*b as usize])
+                .count();
+            if density == DensityMode::Continuity {
+                assert_eq!(walls, 0, "{name}: wall-wall candidates under continuity");
+            } else if p.fixed.iter().any(|f| *f) {
+                assert!(walls > 0, "{name}: wall-wall candidates under summation");
+            }
+            nonempty += usize::from(!got.0.is_empty());
+        }
+    }
+    assert_eq!(
+        nonempty, 8,
+        "every case but the empty and one-particle ones has candidates"
+    );
 }
