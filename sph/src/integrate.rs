@@ -46,7 +46,9 @@ pub fn stable_dt(p: &Particles) -> f64 {
     let mut dt = f64::INFINITY;
     for i in 0..p.n_owned {
         let v = p.v[i];
-        let speed = p.c[i] + (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        // sqrt(0) = 0: a particle at rest (a fixed wall's) skips the square root.
+        let speed = p.c[i] + if vv == 0.0 { 0.0 } else { vv.sqrt() };
         if speed > 0.0 {
             dt = dt.min(CFL_FACTOR * p.h[i] / speed);
         }
