@@ -40,9 +40,11 @@ for np_ in (1, 2):
                       open(f"{d}/liggghts/liggghts.out").read())
         t, p, n, a = float(m[1]), int(m[2]), int(m[3]), int(m[4])
         lig.append(t * p / (n * a) * 1e6)
-    ratio = statistics.median(o / l for o, l in zip(ours, lig))
+    ratios = [o / l for o, l in zip(ours, lig)]
+    ratio = statistics.median(ratios)
     print(f"np {np_}: ours {statistics.median(ours):.3f} us/particle-step, LIGGGHTS "
-          f"{statistics.median(lig):.3f}, ratio ours/LIGGGHTS {ratio:.2f} (median of {rep}; "
+          f"{statistics.median(lig):.3f}, ratio ours/LIGGGHTS {ratio:.3f} (median of {rep}; "
+          f"ratios {', '.join(f'{x:.3f}' for x in ratios)}; "
           f"ours {', '.join(f'{x:.3f}' for x in ours)}; LIGGGHTS {', '.join(f'{x:.3f}' for x in lig)})")
 for np_ in (2, 4):
     r = json.load(open(f"out/bench_sph/alone_np{np_}/report.json"))
