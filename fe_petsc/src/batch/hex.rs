@@ -351,7 +351,7 @@ fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F
 
 /// A group of elements in lanes: their nodal values, reference volumes and state going in, their
 /// output coming out. One buffer serves group after group without clearing: [`gather`] and
-/// [`LaneState::set_lane`] write every entry, and [`LaneGroup::update`] every output.
+/// [`LaneState::set_lane`] write every entry, and [`crate::batch::Batch::update`] every output.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneGroup {
     /// Nodal coordinates at t(n+1), m.

@@ -134,7 +134,7 @@ mod lanes4;
 #[cfg(target_arch = "x86_64")]
 mod lanes8;
 
-/// The kernel on four lanes of fixed-size arrays ([`lanes4`]).
+/// The kernel on four lanes of fixed-size arrays (`lanes4.rs`).
 #[path = "."]
 pub mod w4 {
     pub use super::lanes4::{F4 as F, LANES, M4 as M};
@@ -181,7 +181,7 @@ pub mod w4 {
     }
 }
 
-/// The kernel on eight lanes in AVX-512 registers ([`lanes8`]); its update needs AVX-512F
+/// The kernel on eight lanes in AVX-512 registers (`lanes8.rs`); its update needs AVX-512F
 /// ([`widest`] says whether this CPU has it).
 #[cfg(target_arch = "x86_64")]
 #[path = "."]

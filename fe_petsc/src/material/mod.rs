@@ -83,7 +83,7 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
     }
-    /// The model's lane form for the batched element kernel ([`crate::hex_lanes`]), or `None`
+    /// The model's lane form for the batched element kernel ([`crate::batch`]), or `None`
     /// (the default) when the elements of this material take the scalar kernel. A model with a
     /// lane form keeps the default `wave_modulus` and `add_heat`, has at most one history
     /// variable, and its lane update computes in each lane what `update_stress` computes.
