@@ -167,7 +167,7 @@ pub fn selftest(np: usize, kernel: &str, seed: u64, timeout_s: u32) {
     );
 }
 
-/// A case's reference.toml (validation/<case>/), parsed.
+/// A case's reference.toml (`validation/<case>/`), parsed.
 pub fn reference_case(case: &str) -> toml::Table {
     let path = root().join("validation").join(case).join("reference.toml");
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -175,7 +175,7 @@ pub fn reference_case(case: &str) -> toml::Table {
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// The reference value of the measure named `measure` in validation/<case>/reference.toml (its
+/// The reference value of the measure named `measure` in `validation/<case>/reference.toml` (its
 /// `reference`, or the midpoint of its `range`): the one copy of a published or analytic
 /// number that the validation suite and the tests share.
 pub fn reference_value(case: &str, measure: &str) -> f64 {

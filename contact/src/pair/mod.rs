@@ -93,7 +93,7 @@ pub fn test(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> Option
 }
 
 /// Whether the pair rules exclude node `j` against face `f` whatever the geometry (particles are
-/// tested against every face). A pair excluded here is never a contact of [`test`].
+/// tested against every face). A pair excluded here is never a contact of [`test()`].
 pub fn excluded(b: &ContactBox, j: usize, f: usize, params: &SearchParams) -> bool {
     !b.nodes.particle[j] && node_face::excluded(b, j, f, params)
 }
