@@ -184,6 +184,17 @@ const PREFILTER_SLACK: f64 = 1e-12;
 /// break example).
 const FINE_CELLS_H_RATIO: f64 = 1.5;
 
+/// The index of the cell at offset `d` from cell `c` in a grid of `n` cells per axis (x
+/// fastest), or `None` outside the grid. Always inlined: it sits in the searches' inner loops.
+#[inline(always)]
+fn neighbour_cell(c: [usize; 3], d: [i64; 3], n: [usize; 3]) -> Option<usize> {
+    let o: [i64; 3] = std::array::from_fn(|a| c[a] as i64 + d[a]);
+    if (0..3).any(|a| o[a] < 0 || o[a] >= n[a] as i64) {
+        return None;
+    }
+    Some((o[2] as usize * n[1] + o[1] as usize) * n[0] + o[0] as usize)
+}
+
 /// The offsets of the half stencil: those in -reach..=reach per axis that come after (0, 0, 0)
 /// in (z, y, x) lexicographic order, so that each pair of distinct cells is visited once; with
 /// the smallest distance between two cells at that offset, in cell widths.
@@ -373,17 +384,10 @@ impl CellList {
                     }
                     let hc = self.cell_hmax[c];
                     for &([dx, dy, dz], gap) in &stencil {
-                        let (ox, oy, oz) = (cx as i64 + dx, cy as i64 + dy, cz as i64 + dz);
-                        if ox < 0
-                            || oy < 0
-                            || oz < 0
-                            || ox >= nx as i64
-                            || oy >= ny as i64
-                            || oz >= nz as i64
-                        {
+                        let Some(o) = neighbour_cell([cx, cy, cz], [dx, dy, dz], [nx, ny, nz])
+                        else {
                             continue;
-                        }
-                        let o = (oz as usize * ny + oy as usize) * nx + ox as usize;
+                        };
                         let (t0, t1) = (self.start[o], self.start[o + 1]);
                         let ho = self.cell_hmax[o];
                         // cells farther apart than any pair of their spheres can reach
@@ -957,17 +961,9 @@ fn one_box_candidates(x: &[[f64; 3]], h: &[f64], id: &[u64], primary: &[bool]) -
                 }
                 let hc = cell_hmax[c];
                 for &([dx, dy, dz], gap) in &stencil {
-                    let (ox, oy, oz) = (cx as i64 + dx, cy as i64 + dy, cz as i64 + dz);
-                    if ox < 0
-                        || oy < 0
-                        || oz < 0
-                        || ox >= nx as i64
-                        || oy >= ny as i64
-                        || oz >= nz as i64
-                    {
+                    let Some(o) = neighbour_cell([cx, cy, cz], [dx, dy, dz], [nx, ny, nz]) else {
                         continue;
-                    }
-                    let o = (oz as usize * ny + oy as usize) * nx + ox as usize;
+                    };
                     let (t0, q1, t1) = (
                         start[2 * o] as usize,
                         start[2 * o + 1] as usize,
