@@ -22,6 +22,7 @@ use crate::hex::{self, HexControls, HexState};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
 use crate::petsc::PetscError;
+use crate::states::HexStates;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -185,8 +186,8 @@ pub struct ExplicitFe {
     x_old: Vec<[f64; 3]>,
     /// Whether this rank owns each node.
     pub owned: Vec<bool>,
-    /// Element state (stress, hourglass forces).
-    pub state: Vec<HexState>,
+    /// Element state (stress, hourglass forces), in the batched kernel's lane layout.
+    pub state: HexStates,
     /// Material history variables, `mat_stride` per element.
     pub mat_state: Vec<f64>,
     mat_stride: usize,
@@ -335,7 +336,7 @@ impl ExplicitFe {
             reaction_old: vec![[0.0; 3]; nn],
             x_old: m.coords.clone(),
             owned: m.owned.clone(),
-            state: vec![HexState::default(); ne],
+            state: HexStates::new(ne),
             mat_state,
             mat_stride,
             vol: vol0.clone(),
@@ -585,15 +586,16 @@ impl ExplicitFe {
         }
     }
 
-    /// How many of the elements `e..e + lanes` go into one batched group: those that exist
-    /// and share `e`'s material, when the batched kernel is on and that material has a lane
-    /// form; 0 otherwise.
+    /// How many of the elements `e..` go into one batched group: those that exist, lie before
+    /// the next multiple of `lanes` and share `e`'s material, when the batched kernel is on and
+    /// that material has a lane form; 0 otherwise. (Groups end at multiples of `lanes` so that
+    /// a whole group finds its state as whole vectors in [`HexStates`].)
     fn lane_run(&self, e: usize, lanes: usize) -> usize {
         let mi = self.elem_material[e];
         if self.kernel != ElementKernel::Batched || self.lane_materials[mi].is_none() {
             return 0;
         }
-        let end = (e + lanes).min(self.elems.len());
+        let end = ((e / lanes + 1) * lanes).min(self.elems.len());
         (e..end)
             .take_while(|&k| self.elem_material[k] == mi)
             .count()
@@ -609,7 +611,7 @@ impl ExplicitFe {
         let mat = &*self.materials[self.elem_material[e]];
         let stride = self.mat_stride;
         let ms = &mut self.mat_state[e * stride..(e + 1) * stride];
-        let st = &mut self.state[e];
+        let mut st = self.state.get(e);
         match hex::update(
             &xe,
             &ve,
@@ -618,10 +620,13 @@ impl ExplicitFe {
             self.vol0[e],
             mat,
             &self.controls,
-            st,
+            &mut st,
             ms,
         ) {
-            Ok(out) => self.add_output(e, &out, sums),
+            Ok(out) => {
+                self.state.set(e, &st);
+                self.add_output(e, &out, sums)
+            }
             Err(hex::ElementError::Inverted { volume }) => {
                 sums.inverted.get_or_insert(StepError::Inverted {
                     elem: self.elem_id[e],
@@ -634,15 +639,13 @@ impl ExplicitFe {
         }
     }
 
-    /// Updates elements `e0..e0 + n` (material `m`, `n` at most `B::LANES`) with the batched
-    /// kernel in the buffer `g` and adds their outputs in element order; `false`, with nothing
-    /// changed, when one of them is inverted. A group of fewer than `B::LANES` elements fills
-    /// its other lanes with copies of element `e0`, whose results are dropped (lanes are
-    /// independent: each computes its own element only).
-    ///
-    /// Cost per element beyond the kernel: the gather of 48 nodal doubles (384 B) and the
-    /// scatter-add of 24 (192 B read and written) through the connectivity (32 B), 19 state
-    /// doubles in and out (304 B), no flops.
+    /// Updates elements `e0..e0 + n` (material `m`, `n` at most `B::LANES`, the group not
+    /// crossing a multiple of `B::LANES`) with the batched kernel in the buffer `g` and adds
+    /// their outputs in element order; `false`, with nothing changed, when one of them is
+    /// inverted. A whole group moves its state as whole vectors ([`Batch::update_lanes`]); a
+    /// group of fewer than `B::LANES` elements fills its other lanes with copies of element
+    /// `e0`, whose results are dropped (lanes are independent: each computes its own element
+    /// only).
     fn group_update<B: Batch>(
         &mut self,
         e0: usize,
@@ -654,38 +657,90 @@ impl ExplicitFe {
     ) -> bool {
         let stride = self.mat_stride;
         let history = m.n_state() > 0;
+        let ok = if n == B::LANES && (stride == 1 || !history) {
+            let lanes = e0..e0 + n;
+            let mut io = batch::GroupLanes {
+                xs: &self.x,
+                vs: &self.v,
+                conn: &self.elems[lanes.clone()],
+                vol0: &self.vol0[lanes.clone()],
+                state: self.state.lanes_mut(e0),
+                history: history.then(|| &mut self.mat_state[lanes]),
+            };
+            g.update_lanes(&mut io, dt, m, &self.controls).is_ok()
+        } else {
+            self.group_update_by_lane(e0, n, m, dt, g)
+        };
+        if !ok {
+            return false;
+        }
+        self.add_group_output(e0, n, g, sums);
+        true
+    }
+
+    /// [`ExplicitFe::group_update`]'s path for a part group or materials with several
+    /// history values per element: the lanes loaded and stored one element at a time.
+    fn group_update_by_lane<B: Batch>(
+        &mut self,
+        e0: usize,
+        n: usize,
+        m: &LaneMaterial,
+        dt: f64,
+        g: &mut B,
+    ) -> bool {
+        let stride = self.mat_stride;
+        let history = m.n_state() > 0;
         let elem = |l: usize| e0 + if l < n { l } else { 0 };
         let ms = &self.mat_state;
         let hist = |l: usize| if history { ms[elem(l) * stride] } else { 0.0 };
-        if n == B::LANES {
-            let lanes = e0..e0 + n;
-            g.load(
-                &self.x,
-                &self.v,
-                &self.elems[lanes.clone()],
-                &self.vol0[lanes.clone()],
-                &self.state[lanes],
-                hist,
-            );
-        } else {
-            let conn: Vec<[u32; 8]> = (0..B::LANES).map(|l| self.elems[elem(l)]).collect();
-            let vol0: Vec<f64> = (0..B::LANES).map(|l| self.vol0[elem(l)]).collect();
-            let state: Vec<HexState> = (0..B::LANES).map(|l| self.state[elem(l)]).collect();
-            g.load(&self.x, &self.v, &conn, &vol0, &state, hist);
-        }
+        let conn: Vec<[u32; 8]> = (0..B::LANES).map(|l| self.elems[elem(l)]).collect();
+        let vol0: Vec<f64> = (0..B::LANES).map(|l| self.vol0[elem(l)]).collect();
+        let state: Vec<HexState> = (0..B::LANES).map(|l| self.state.get(elem(l))).collect();
+        g.load(&self.x, &self.v, &conn, &vol0, &state, hist);
         if g.update(dt, m, &self.controls).is_err() {
             return false;
         }
         for l in 0..n {
             let e = e0 + l;
             let (s, h) = g.lane_state(l);
-            self.state[e] = s;
+            self.state.set(e, &s);
             if history {
                 self.mat_state[e * stride] = h;
             }
-            self.add_output(e, &g.lane_output(l), sums);
         }
         true
+    }
+
+    /// Adds the outputs of a group's first `n` lanes (elements `e0..e0 + n`), as
+    /// [`ExplicitFe::add_output`] for each, read straight from the lanes.
+    ///
+    /// Cost per element: the scatter-add of 24 force doubles (192 B read and written) through
+    /// the connectivity (32 B), volume and pressure written (16 B); 26 flops.
+    #[inline]
+    fn add_group_output<B: Batch>(&mut self, e0: usize, n: usize, g: &B, sums: &mut LoopSums) {
+        for l in 0..n {
+            let e = e0 + l;
+            for (k, &node) in self.elems[e].iter().enumerate() {
+                let f = &mut self.force[node as usize];
+                let fe = g.force(l, k);
+                f[0] += fe[0];
+                f[1] += fe[1];
+                f[2] += fe[2];
+            }
+        }
+        let [hg_work, volume, dt_stable, pressure] = g.scalars();
+        if self.blocks.active() {
+            for l in 0..n {
+                let out = g.lane_output(l);
+                self.blocks.add(e0 + l, &out.force, out.hg_work);
+            }
+        }
+        for l in 0..n {
+            sums.hg_work += hg_work[l];
+            sums.dt_min = sums.dt_min.min(dt_stable[l]);
+        }
+        self.vol[e0..e0 + n].copy_from_slice(&volume[..n]);
+        self.pressure[e0..e0 + n].copy_from_slice(&pressure[..n]);
     }
 
     /// Adds element `e`'s output: its forces to its nodes and its block, its hourglass work and
@@ -850,11 +905,7 @@ impl ExplicitFe {
     /// clock.
     pub fn restart_state(&self) -> Vec<(&'static str, Vec<f64>)> {
         let flat = |v: &Vec<[f64; 3]>| v.as_flattened().to_vec();
-        let hex: Vec<f64> = self
-            .state
-            .iter()
-            .flat_map(|s| s.stress.iter().chain(s.hg.as_flattened()).copied())
-            .collect();
+        let hex = self.state.to_flat();
         let e = &self.energies;
         let scalars = vec![
             e.kinetic,
@@ -925,11 +976,7 @@ impl ExplicitFe {
         self.force_old = unflat(take("fe.force_old", n3)?);
         self.reaction = unflat(take("fe.reaction", n3)?);
         self.reaction_old = unflat(take("fe.reaction_old", n3)?);
-        let hex = take("fe.hex_state", 18 * ne)?;
-        for (s, c) in self.state.iter_mut().zip(hex.chunks_exact(18)) {
-            s.stress.copy_from_slice(&c[..6]);
-            s.hg.as_flattened_mut().copy_from_slice(&c[6..]);
-        }
+        self.state.set_flat(&take("fe.hex_state", 18 * ne)?);
         self.mat_state = take("fe.mat_state", self.mat_state.len())?;
         self.vol = take("fe.vol", ne)?;
         self.pressure = take("fe.pressure", ne)?;

@@ -51,13 +51,14 @@
 //! own identity du = dt (v(n) + v(n+1))/2 makes kinetic energy + that work balance exactly for
 //! any force law, so the energy error measures how well Newton and KSP converged.
 use crate::explicit::{centroid, Constraint, ExplicitFe, ExplicitSetup, StepError};
-use crate::hex::{self, HexControls, HexState};
+use crate::hex::{self, HexControls};
 use crate::hourglass::{self, HourglassMaterial, HourglassStep};
 use crate::material::Material;
 use crate::mesh::NodeExchange;
 use crate::objects::Vector;
 use crate::petsc::PetscError;
 use crate::solver::{self, BlockMatrix, SolveError, Solver};
+use crate::states::HexStates;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -247,7 +248,7 @@ pub struct ImplicitFe {
     residual: Vec<[f64; 3]>,
     reaction: Vec<[f64; 3]>,
     reaction_n: Vec<[f64; 3]>,
-    state_trial: Vec<HexState>,
+    state_trial: HexStates,
     mat_trial: Vec<f64>,
     vol_trial: Vec<f64>,
     pressure_trial: Vec<f64>,
@@ -499,7 +500,7 @@ impl ImplicitFe {
             let xe = gather(&self.x_trial, conn);
             let ve = gather(&self.v_mean, conn);
             let mat = &*self.fe.materials[self.fe.elem_material[e]];
-            let mut st = self.fe.state[e];
+            let mut st = self.fe.state.get(e);
             let ms = &mut self.mat_trial[e * stride..(e + 1) * stride];
             ms.copy_from_slice(&self.fe.mat_state[e * stride..(e + 1) * stride]);
             match hex::update(
@@ -522,7 +523,7 @@ impl ImplicitFe {
                     }
                     hg_work += out.hg_work;
                     self.fe.blocks.add(e, &out.force, out.hg_work);
-                    self.state_trial[e] = st;
+                    self.state_trial.set(e, &st);
                     self.vol_trial[e] = out.volume;
                     self.pressure_trial[e] = out.pressure;
                 }
@@ -615,7 +616,7 @@ impl ImplicitFe {
             }
             let c = material_tangent(
                 mat,
-                &self.fe.state[e].stress,
+                &self.fe.state.stress(e),
                 &self.fe.mat_state[e * stride..(e + 1) * stride],
                 &deps,
                 dt,

@@ -20,5 +20,6 @@ pub mod mesh;
 pub mod objects;
 pub mod petsc;
 pub mod solver;
+pub mod states;
 
 pub use petsc_sys as sys;

@@ -5,6 +5,7 @@
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
 use fe_petsc::material::{build_material, Material, MaterialSpec};
+use fe_petsc::states::HexStates;
 
 /// Relative agreement required. Four lanes do the scalar kernel's IEEE operations in the same
 /// order (measured difference: 0). Eight lanes fuse each multiply-add into one rounding, so
@@ -152,6 +153,11 @@ fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (u
     // One buffer for every group, as the explicit loop uses it.
     let mut group = B::default();
     let mut ms_b = ms_s.clone();
+    // The same groups again through the whole-group path (state in lanes), as the explicit
+    // loop runs a whole group: it must give the same bits as loading lane by lane.
+    let mut group_l = B::default();
+    let mut st_l = HexStates::new(elems.len());
+    let mut ms_l: Vec<f64> = vec![0.0; elems.len()];
     let dt = 2e-7;
     let (mut flowed, mut mixed) = (0, 0);
     let mut d_out: [Diff; 5] = Default::default();
@@ -181,10 +187,26 @@ fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (u
         }
         for g in (0..elems.len()).step_by(lanes) {
             let e = g..g + lanes;
-            group.load(&x, &v, &elems[e.clone()], &vol0[e.clone()], &st_b[e], |l| {
-                ms_b[(g + l) * ns]
-            });
+            group.load(
+                &x,
+                &v,
+                &elems[e.clone()],
+                &vol0[e.clone()],
+                &st_b[e.clone()],
+                |l| ms_b[(g + l) * ns],
+            );
             group.update(dt, &lm, &ctl).expect("no inverted element");
+            let mut io = batch::GroupLanes {
+                xs: &x,
+                vs: &v,
+                conn: &elems[e.clone()],
+                vol0: &vol0[e.clone()],
+                state: st_l.lanes_mut(g),
+                history: (mat.n_state() > 0).then(|| &mut ms_l[e.clone()]),
+            };
+            group_l
+                .update_lanes(&mut io, dt, &lm, &ctl)
+                .expect("no inverted element");
             let flows = (0..lanes)
                 .filter(|&l| group.lane_state(l).1 > ms_b[(g + l) * ns])
                 .count();
@@ -201,6 +223,20 @@ fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (u
                 d_stress.add(&st_s[e].stress, &s.stress);
                 d_hg.add(st_s[e].hg.as_flattened(), s.hg.as_flattened());
                 d_ep.add(&ms_s[e * ns..e * ns + 1], &[hist]);
+                let by_lane = format!("{:?} {:?} {:?}", s, hist, group.lane_output(l));
+                let whole = format!(
+                    "{:?} {:?} {:?}",
+                    st_l.get(e),
+                    ms_l[e],
+                    group_l.lane_output(l)
+                );
+                assert_eq!(
+                    whole, by_lane,
+                    "{case}: element {e}: the whole-group path differs from lane-by-lane loading"
+                );
+                for k in 0..8 {
+                    assert_eq!(group_l.force(l, k), group.lane_output(l).force[k]);
+                }
             }
         }
     }
@@ -316,6 +352,36 @@ fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
         before,
         format!("{group:?}"),
         "{n} lanes: a refused group changes no state and no output"
+    );
+    // The whole-group path refuses it too and leaves the stored state and history as they were.
+    let mut st = HexStates::new(n);
+    for e in 0..n {
+        st.set(e, &state);
+    }
+    let mut hist = vec![0.5; n];
+    let vs = vec![[1.0, 0.0, 0.0]; 8 * n];
+    let vol0 = vec![1.25e-7; n];
+    let stored = st.clone();
+    let mut io = batch::GroupLanes {
+        xs: &xs,
+        vs: &vs,
+        conn: &conn,
+        vol0: &vol0,
+        state: st.lanes_mut(0),
+        history: Some(&mut hist),
+    };
+    assert!(
+        B::default().update_lanes(&mut io, 1e-7, &lm, &ctl).is_err(),
+        "{n} lanes: the whole-group path must refuse the group with lane 2 inverted"
+    );
+    assert_eq!(
+        st, stored,
+        "{n} lanes: a refused group's stored state changed"
+    );
+    assert_eq!(
+        hist,
+        vec![0.5; n],
+        "{n} lanes: a refused group's history changed"
     );
     // The scalar kernel, which then runs the group's elements, names the inverted one.
     let mut s = HexState::default();

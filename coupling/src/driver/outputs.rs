@@ -192,7 +192,7 @@ impl Outputs {
             })
         };
         let vel = |i| fe.map_or([0.0; 3], |(_, st, _)| st.v[node(i)]);
-        let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state[e].stress);
+        let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state.stress(e));
         let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
         let nodes = fe.map(|(m, _, _)| NodeFrame {
             ids: &m.node_ids,

@@ -141,7 +141,7 @@ fn value(fe: &ExplicitFe, e: usize, xi: [f64; 3], f: &ProbeField) -> f64 {
         let n = hex::shape(xi);
         (0..8).map(|k| n[k] * get(conn[k] as usize)).sum()
     };
-    let s = &fe.state[e].stress;
+    let s = &fe.state.stress(e);
     use ProbeField::*;
     match f {
         DisplacementX => nodal(&|n| fe.x[n][0] - fe.x0[n][0]),

@@ -453,6 +453,61 @@ pub(super) fn update_inline(
     Ok(())
 }
 
+/// [`crate::batch::Batch::update_lanes`]: the group's nodal values gathered, its state and
+/// reference volumes loaded as whole vectors, [`update_inline`], the state stored back as
+/// whole vectors. Inlined into each build's entry (its target features).
+///
+/// Cost per element beyond [`update_inline`]: the gather of 48 nodal doubles (384 B through
+/// 32 B of connectivity), 19 state doubles and the reference volume loaded (160 B), 19 stored
+/// (152 B); no flops.
+#[inline(always)]
+pub(super) fn update_lanes_inline(
+    g: &mut LaneGroup,
+    io: &mut crate::batch::GroupLanes<'_>,
+    dt: f64,
+    m: &LaneMaterial,
+    ctl: &HexControls,
+) -> Result<(), GroupInverted> {
+    use crate::states::BLOCK;
+    let conn = &io.conn[..LANES];
+    for k in 0..NODES {
+        let mut nodes = [0; LANES];
+        for l in 0..LANES {
+            nodes[l] = conn[l][k];
+        }
+        g.x[k] = F::gather3(io.xs, &nodes);
+        g.v[k] = F::gather3(io.vs, &nodes);
+    }
+    g.vol0 = F::load(io.vol0);
+    let src = &*io.state;
+    for k in 0..6 {
+        g.state.stress[k] = F::load(&src[k * BLOCK..]);
+    }
+    for a in 0..4 {
+        for i in 0..3 {
+            g.state.hg[a][i] = F::load(&src[(6 + 3 * a + i) * BLOCK..]);
+        }
+    }
+    g.state.history = match &io.history {
+        Some(h) => F::load(h),
+        None => F::ZERO,
+    };
+    update_inline(g, dt, m, ctl)?;
+    let dst = &mut *io.state;
+    for k in 0..6 {
+        g.state.stress[k].store(&mut dst[k * BLOCK..]);
+    }
+    for a in 0..4 {
+        for i in 0..3 {
+            g.state.hg[a][i].store(&mut dst[(6 + 3 * a + i) * BLOCK..]);
+        }
+    }
+    if let Some(h) = &mut io.history {
+        g.state.history.store(h);
+    }
+    Ok(())
+}
+
 impl crate::batch::Batch for LaneGroup {
     const LANES: usize = LANES;
 
@@ -493,5 +548,28 @@ impl crate::batch::Batch for LaneGroup {
     #[inline]
     fn lane_output(&self, l: usize) -> HexOutput {
         self.out.lane(l)
+    }
+
+    #[inline]
+    fn update_lanes(
+        &mut self,
+        io: &mut crate::batch::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        super::entry_lanes(self, io, dt, m, ctl)
+    }
+
+    #[inline(always)]
+    fn force(&self, l: usize, k: usize) -> [f64; 3] {
+        let f = &self.out.force[k];
+        [f[0].0[l], f[1].0[l], f[2].0[l]]
+    }
+
+    #[inline(always)]
+    fn scalars(&self) -> [&[f64]; 4] {
+        let o = &self.out;
+        [&o.hg_work.0, &o.volume.0, &o.dt_stable.0, &o.pressure.0]
     }
 }

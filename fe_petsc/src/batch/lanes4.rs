@@ -71,6 +71,39 @@ impl F4 {
         F4([v; LANES])
     }
 
+    /// The first `LANES` doubles of `s`, lane `l` from `s[l]` (one unaligned vector load in
+    /// the kernel's build). Panics when `s` is shorter.
+    #[inline(always)]
+    pub fn load(s: &[f64]) -> F4 {
+        let mut a = [0.0; LANES];
+        a.copy_from_slice(&s[..LANES]);
+        F4(a)
+    }
+
+    /// The three components of the points `xs[nodes[l]]`, lane `l` from `nodes[l]`. Panics
+    /// when a node is not in `xs`.
+    #[inline(always)]
+    pub fn gather3(xs: &[[f64; 3]], nodes: &[u32; LANES]) -> [F4; 3] {
+        let p = [
+            xs[nodes[0] as usize],
+            xs[nodes[1] as usize],
+            xs[nodes[2] as usize],
+            xs[nodes[3] as usize],
+        ];
+        [
+            F4([p[0][0], p[1][0], p[2][0], p[3][0]]),
+            F4([p[0][1], p[1][1], p[2][1], p[3][1]]),
+            F4([p[0][2], p[1][2], p[2][2], p[3][2]]),
+        ]
+    }
+
+    /// Writes lane `l` to `s[l]` for the first `LANES` doubles of `s`. Panics when `s` is
+    /// shorter.
+    #[inline(always)]
+    pub fn store(self, s: &mut [f64]) {
+        s[..LANES].copy_from_slice(&self.0);
+    }
+
     #[inline(always)]
     fn map(self, f: impl Fn(f64) -> f64) -> F4 {
         F4([f(self.0[0]), f(self.0[1]), f(self.0[2]), f(self.0[3])])

@@ -20,11 +20,11 @@
 //! `is_x86_feature_detected!("avx512f")` (see `batch::w8::LaneGroup::update`); the operations
 //! are inlined into that entry, which is compiled with the feature.
 use std::arch::x86_64::{
-    __m512d, __m512i, _mm512_abs_pd, _mm512_add_pd, _mm512_castpd_si512, _mm512_castsi512_pd,
-    _mm512_cmp_pd_mask, _mm512_div_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd,
-    _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd, _mm512_mul_pd, _mm512_set1_epi64,
-    _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ,
-    _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
+    __m256i, __m512d, __m512i, _mm256_loadu_si256, _mm512_abs_pd, _mm512_add_pd,
+    _mm512_castpd_si512, _mm512_castsi512_pd, _mm512_cmp_pd_mask, _mm512_div_pd, _mm512_fmadd_pd,
+    _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_i32gather_pd, _mm512_mask_blend_pd, _mm512_max_pd,
+    _mm512_min_pd, _mm512_mul_pd, _mm512_set1_epi64, _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd,
+    _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
 };
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
@@ -104,6 +104,52 @@ impl F8 {
     #[inline(always)]
     pub const fn splat(v: f64) -> F8 {
         F8([v; LANES])
+    }
+
+    /// The first `LANES` doubles of `s`, lane `l` from `s[l]` (one unaligned vector load in
+    /// the kernel's build). Panics when `s` is shorter.
+    #[inline(always)]
+    pub fn load(s: &[f64]) -> F8 {
+        let mut a = [0.0; LANES];
+        a.copy_from_slice(&s[..LANES]);
+        F8(a)
+    }
+
+    /// The three components of the points `xs[nodes[l]]`, lane `l` from `nodes[l]`: three
+    /// AVX-512 gathers with the same indices (one per component). Panics when a node is not in
+    /// `xs` or `xs` has 2^31 / 3 points or more (the gather's indices are 32-bit).
+    #[inline(always)]
+    pub fn gather3(xs: &[[f64; 3]], nodes: &[u32; LANES]) -> [F8; 3] {
+        assert!(
+            xs.len() <= i32::MAX as usize / 3,
+            "too many points for 32-bit indices"
+        );
+        let mut idx = [0i32; LANES];
+        let mut inside = true;
+        for l in 0..LANES {
+            inside &= (nodes[l] as usize) < xs.len();
+            idx[l] = 3 * nodes[l] as i32;
+        }
+        assert!(inside, "a node index beyond the points");
+        let base = xs.as_flattened().as_ptr();
+        // SAFETY: AVX-512F as in `avx512!`; every index is 3 n with n < xs.len(), so the
+        // gathered doubles 3 n + c (c < 3) lie inside `xs`; the index array is 32 bytes read
+        // as one 256-bit vector (unaligned load).
+        unsafe {
+            let vi = _mm256_loadu_si256(idx.as_ptr().cast::<__m256i>());
+            [
+                val(_mm512_i32gather_pd::<8>(vi, base)),
+                val(_mm512_i32gather_pd::<8>(vi, base.add(1))),
+                val(_mm512_i32gather_pd::<8>(vi, base.add(2))),
+            ]
+        }
+    }
+
+    /// Writes lane `l` to `s[l]` for the first `LANES` doubles of `s`. Panics when `s` is
+    /// shorter.
+    #[inline(always)]
+    pub fn store(self, s: &mut [f64]) {
+        s[..LANES].copy_from_slice(&self.0);
     }
 
     #[inline(always)]

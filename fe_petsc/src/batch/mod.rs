@@ -57,6 +57,42 @@ pub trait Batch: Default {
 
     /// Lane `l`'s output of the update.
     fn lane_output(&self, l: usize) -> HexOutput;
+
+    /// Loads, updates and stores a whole group whose state lies in lanes (the elements
+    /// `e0..e0 + LANES` of a [`crate::states::HexStates`], `e0` a multiple of `LANES`): what
+    /// [`Batch::load`], [`Batch::update`] and storing each [`Batch::lane_state`] do, with the
+    /// state moved as whole vectors. `Err`, with `io.state` and `io.history` untouched, as
+    /// [`Batch::update`]. The outputs are read as after [`Batch::update`].
+    fn update_lanes(
+        &mut self,
+        io: &mut GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted>;
+
+    /// The force of lane `l`'s element on its node `k` from the last update, N.
+    fn force(&self, l: usize, k: usize) -> [f64; 3];
+
+    /// The last update's hourglass work, volume, stable step and pressure of each lane, in
+    /// lane order (`LANES` values each).
+    fn scalars(&self) -> [&[f64]; 4];
+}
+
+/// A whole group's inputs and state in the element arrays, for [`Batch::update_lanes`].
+pub struct GroupLanes<'a> {
+    /// Nodal coordinates at t(n+1), m.
+    pub xs: &'a [[f64; 3]],
+    /// Nodal velocities at t(n+1/2), m/s.
+    pub vs: &'a [[f64; 3]],
+    /// The group's elements' nodes (`LANES` elements).
+    pub conn: &'a [[u32; NODES]],
+    /// Their reference volumes, m^3 (`LANES` values).
+    pub vol0: &'a [f64],
+    /// Their state: [`crate::states::HexStates::lanes_mut`] at the group's first element.
+    pub state: &'a mut [f64],
+    /// Their history values (`LANES`, consecutive), `None` for a material without one.
+    pub history: Option<&'a mut [f64]>,
 }
 
 /// The group sizes of the batched kernel.
@@ -166,6 +202,36 @@ pub mod w4 {
         hex::update_inline(g, dt, m, ctl)
     }
 
+    /// [`super::Batch::update_lanes`] for four lanes, built as [`entry`].
+    #[inline]
+    fn entry_lanes(
+        g: &mut LaneGroup,
+        io: &mut super::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { update_lanes_avx2(g, io, dt, m, ctl) };
+        }
+        hex::update_lanes_inline(g, io, dt, m, ctl)
+    }
+
+    /// [`update_avx2`] with the group's loads and stores.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn update_lanes_avx2(
+        g: &mut LaneGroup,
+        io: &mut super::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_lanes_inline(g, io, dt, m, ctl)
+    }
+
     /// The four-lane kernel compiled for AVX2: one instruction per lane operation, and
     /// three-operand forms that spare the register copies of SSE2's two-operand ones. The same
     /// IEEE operations in the same order (no FMA), so the same bits as the baseline build.
@@ -213,6 +279,35 @@ pub mod w8 {
         );
         // SAFETY: the CPU has AVX-512F, checked just above.
         unsafe { update_avx512(g, dt, m, ctl) }
+    }
+
+    /// [`super::Batch::update_lanes`] for eight lanes, built as [`entry`].
+    #[inline]
+    fn entry_lanes(
+        g: &mut LaneGroup,
+        io: &mut super::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        assert!(
+            std::arch::is_x86_feature_detected!("avx512f"),
+            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe { update_lanes_avx512(g, io, dt, m, ctl) }
+    }
+
+    /// [`update_avx512`] with the group's loads and stores.
+    #[target_feature(enable = "avx512f")]
+    fn update_lanes_avx512(
+        g: &mut LaneGroup,
+        io: &mut super::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_lanes_inline(g, io, dt, m, ctl)
     }
 
     /// The eight-lane kernel compiled for AVX-512F: every lane operation one instruction on a
