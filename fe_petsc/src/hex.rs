@@ -544,12 +544,18 @@ pub fn update(
             bb += b[i][j] * b[i][j];
         }
     }
+    // L = (sum_I v_I (x) V bh_I) / V(n+1/2): the division by the volume once per entry.
     let mut l = [[0.0; 3]; 3];
     for i in 0..8 {
         for a in 0..3 {
             for j in 0..3 {
-                l[a][j] += v[i][a] * bvh[i][j] * ivh;
+                l[a][j] += v[i][a] * bvh[i][j];
             }
+        }
+    }
+    for row in l.iter_mut() {
+        for lj in row.iter_mut() {
+            *lj *= ivh;
         }
     }
     let d = [

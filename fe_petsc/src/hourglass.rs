@@ -217,19 +217,20 @@ pub fn physical_strain_rates(qd: &[[f64; 3]; 4], ia: &[f64; 3]) -> [[f64; 3]; 4]
 /// rate being (V/3) sum_g sig_g . e_g + (V/9) sig_3 . e_3; `ia` the inverse half-lengths.
 /// About 45 flops, no division.
 pub fn physical_forces(sig: &[[f64; 3]; 4], ia: &[f64; 3], vol: f64) -> [[f64; 3]; 4] {
+    // The weights w / a_j (and w / (3 a_j) for mode 3) once per element, one product per term.
     let w = 0.125 * vol * THIRD;
+    let wia = [w * ia[0], w * ia[1], w * ia[2]];
     let mut h = [[0.0; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let [spp, srr, spr] = sig[g];
-        h[r][p] += w * spp * ia[p];
-        h[p][r] += w * srr * ia[r];
-        h[r][r] += w * spr * ia[p];
-        h[p][p] += w * spr * ia[r];
+        h[r][p] += spp * wia[p];
+        h[p][r] += srr * wia[r];
+        h[r][r] += spr * wia[p];
+        h[p][p] += spr * wia[r];
     }
-    let w3 = w * THIRD;
     for i in 0..3 {
-        h[3][i] = w3 * sig[3][i] * ia[i];
+        h[3][i] = sig[3][i] * (wia[i] * THIRD);
     }
     h
 }

@@ -201,10 +201,11 @@ struct Kinematics {
 fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     let (bv, vol) = volume_gradient(x);
     // x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (see `hex::update`).
+    let hdt = F::splat(0.5 * dt);
     let mut xh = [[F::ZERO; 3]; NODES];
     for i in 0..NODES {
         for a in 0..3 {
-            xh[i][a] = x[i][a] - 0.5 * dt * v[i][a];
+            xh[i][a] = hdt.neg_mul_add(v[i][a], x[i][a]);
         }
     }
     let (bvh, volh) = volume_gradient(&xh);
@@ -226,8 +227,13 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     for i in 0..NODES {
         for a in 0..3 {
             for j in 0..3 {
-                l[a][j] = (v[i][a] * bvh[i][j]).mul_add(ivh, l[a][j]);
+                l[a][j] = v[i][a].mul_add(bvh[i][j], l[a][j]);
             }
+        }
+    }
+    for a in 0..3 {
+        for j in 0..3 {
+            l[a][j] *= ivh;
         }
     }
     let d = [
@@ -277,24 +283,26 @@ fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
         [-h * w01, one, h * w12],
         [h * w20, -h * w12, one],
     ];
+    // a b - c d as `mul_sub` (the scalar kernel's two roundings in four lanes).
+    let cof = |a: F, b: F, c: F, d: F| a.mul_sub(b, c * d);
     let c = [
         [
-            m[1][1] * m[2][2] - m[1][2] * m[2][1],
-            m[0][2] * m[2][1] - m[0][1] * m[2][2],
-            m[0][1] * m[1][2] - m[0][2] * m[1][1],
+            cof(m[1][1], m[2][2], m[1][2], m[2][1]),
+            cof(m[0][2], m[2][1], m[0][1], m[2][2]),
+            cof(m[0][1], m[1][2], m[0][2], m[1][1]),
         ],
         [
-            m[1][2] * m[2][0] - m[1][0] * m[2][2],
-            m[0][0] * m[2][2] - m[0][2] * m[2][0],
-            m[0][2] * m[1][0] - m[0][0] * m[1][2],
+            cof(m[1][2], m[2][0], m[1][0], m[2][2]),
+            cof(m[0][0], m[2][2], m[0][2], m[2][0]),
+            cof(m[0][2], m[1][0], m[0][0], m[1][2]),
         ],
         [
-            m[1][0] * m[2][1] - m[1][1] * m[2][0],
-            m[0][1] * m[2][0] - m[0][0] * m[2][1],
-            m[0][0] * m[1][1] - m[0][1] * m[1][0],
+            cof(m[1][0], m[2][1], m[1][1], m[2][0]),
+            cof(m[0][1], m[2][0], m[0][0], m[2][1]),
+            cof(m[0][0], m[1][1], m[0][1], m[1][0]),
         ],
     ];
-    let det = m[0][0] * c[0][0] + m[0][1] * c[1][0] + m[0][2] * c[2][0];
+    let det = m[0][2].mul_add(c[2][0], m[0][1].mul_add(c[1][0], m[0][0] * c[0][0]));
     let singular = det.eq(F::ZERO).or(!det.is_finite());
     let id = 1.0 / det;
     let mut ai = [[F::ZERO; 3]; 3];

@@ -93,12 +93,24 @@ impl Frame {
     /// Gram-Schmidt on the centre Jacobian's columns, as `Frame::new`. About 120 flops.
     #[inline(always)]
     fn new(x: &[V3; NODES]) -> Frame {
+        // J = 1/8 sum_n xi_n (x) x_n with xi = +-1: the signed sum, then one product by 1/8,
+        // which scales exactly (a power of two), so every partial sum is the scalar kernel's
+        // sum of 0.125 xi x terms to the bit.
         let mut j = [[F::ZERO; 3]; 3];
         for (xi, xn) in crate::hex::NODE_XI.iter().zip(x.iter()) {
             for d in 0..3 {
                 for c in 0..3 {
-                    j[d][c] += 0.125 * xi[d] * xn[c];
+                    j[d][c] = if xi[d] > 0.0 {
+                        j[d][c] + xn[c]
+                    } else {
+                        j[d][c] - xn[c]
+                    };
                 }
+            }
+        }
+        for d in 0..3 {
+            for c in 0..3 {
+                j[d][c] = j[d][c] * 0.125;
             }
         }
         let norm = |v: &V3| dot(v, v).sqrt();
@@ -145,17 +157,20 @@ impl Frame {
 /// [`crate::hourglass::physical_strain_rates`] in lanes. 30 flops, no division.
 #[inline(always)]
 fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
+    // 1/8 taken into 1/a_j: a power of two scales exactly, so each product and sum has the
+    // scalar kernel's bits.
+    let ia8 = [0.125 * ia[0], 0.125 * ia[1], 0.125 * ia[2]];
     let mut e = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         e[g] = [
-            0.125 * qd[r][p] * ia[p],
-            0.125 * qd[p][r] * ia[r],
-            0.125 * (qd[r][r] * ia[p] + qd[p][p] * ia[r]),
+            qd[r][p] * ia8[p],
+            qd[p][r] * ia8[r],
+            qd[r][r].mul_add(ia8[p], qd[p][p] * ia8[r]),
         ];
     }
     for i in 0..3 {
-        e[3][i] = 0.125 * qd[3][i] * ia[i];
+        e[3][i] = qd[3][i] * ia8[i];
     }
     e
 }
@@ -164,18 +179,18 @@ fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
 #[inline(always)]
 fn forces(sig: &[V3; 4], ia: &V3, vol: F) -> [V3; 4] {
     let w = 0.125 * vol * THIRD;
+    let wia = [w * ia[0], w * ia[1], w * ia[2]];
     let mut h = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
         let [spp, srr, spr] = sig[g];
-        h[r][p] += w * spp * ia[p];
-        h[p][r] += w * srr * ia[r];
-        h[r][r] += w * spr * ia[p];
-        h[p][p] += w * spr * ia[r];
+        h[r][p] = spp.mul_add(wia[p], h[r][p]);
+        h[p][r] = srr.mul_add(wia[r], h[p][r]);
+        h[r][r] = spr.mul_add(wia[p], h[r][r]);
+        h[p][p] = spr.mul_add(wia[r], h[p][p]);
     }
-    let w3 = w * THIRD;
     for i in 0..3 {
-        h[3][i] = w3 * sig[3][i] * ia[i];
+        h[3][i] = sig[3][i] * (wia[i] * THIRD);
     }
     h
 }
@@ -327,7 +342,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
     let h_old = forces(sig, &frame.ia, s.vol);
     for al in 0..4 {
         for i in 0..3 {
-            sig[al][i] += s.dt * rate[al][i];
+            sig[al][i] = rate[al][i].mul_add(F::splat(s.dt), sig[al][i]);
         }
     }
     if let Some(sy) = s.yield_stress {
