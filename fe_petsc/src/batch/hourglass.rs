@@ -67,20 +67,27 @@ pub fn tangent_ratio(dsig: &[F; 6], deps: &[F; 6], mu: f64) -> F {
 /// 4 x (24 + 8 x 6) = 288 flops per element.
 #[inline(always)]
 fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F; NODES]; 4] {
-    let mut gam = [[F::ZERO; NODES]; 4];
-    for al in 0..4 {
-        let g = &GAMMA[al];
-        let mut gx = [F::ZERO; 3];
-        for k in 0..NODES {
-            for c in 0..3 {
-                gx[c] += g[k] * x[k][c];
-            }
-        }
-        for k in 0..NODES {
-            gam[al][k] = g[k] - dot3(gx[0], b[k][0], gx[1], b[k][1], gx[2], b[k][2]);
+    // Each array built whole, not zeroed then filled: LLVM zeroed the 2 KB of a zero-filled
+    // array with a call to memset, and every live vector register was spilled around it.
+    [
+        mode_vector(&GAMMA[0], x, b),
+        mode_vector(&GAMMA[1], x, b),
+        mode_vector(&GAMMA[2], x, b),
+        mode_vector(&GAMMA[3], x, b),
+    ]
+}
+
+/// gamma_aI of one mode `g` = Gamma_a (see [`vectors`]).
+#[inline(always)]
+fn mode_vector(g: &[f64; NODES], x: &[V3; NODES], b: &[V3; NODES]) -> [F; NODES] {
+    let mut gx = [F::ZERO; 3];
+    for k in 0..NODES {
+        for c in 0..3 {
+            gx[c] += g[k] * x[k][c];
         }
     }
-    gam
+    let t = |k: usize| g[k] - dot3(gx[0], b[k][0], gx[1], b[k][1], gx[2], b[k][2]);
+    [t(0), t(1), t(2), t(3), t(4), t(5), t(6), t(7)]
 }
 
 /// [`crate::hourglass::Frame`] in lanes: rows e_j and inverse half-lengths 1 / a_j.
