@@ -1,10 +1,12 @@
 #![allow(clippy::needless_range_loop)]
 //! Times the element update in a tight loop (no mesh, no MPI), the scalar kernel and the batched
 //! one at every width this CPU runs: `cargo run --release --example hex_bench -- [reps]
-//! [scalar|batched|both]`.
+//! [scalar|batched|both] [file|shuffled|reordered]` (the last: the elements' order).
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexState};
+use fe_petsc::locality;
 use fe_petsc::material::{build_material, MaterialSpec};
+use fe_petsc::mesh::LocalMesh;
 use fe_petsc::states::HexStates;
 use std::time::Instant;
 
@@ -55,6 +57,35 @@ fn main() {
             })
         })
         .collect();
+    // The element order (third argument): `file` as built (lexicographic), `shuffled` in a
+    // random order, `reordered` shuffled then put in order by `locality::order_elements`.
+    let order = std::env::args().nth(3).unwrap_or_else(|| "file".into());
+    let conn = if order == "file" {
+        conn
+    } else {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut conn = conn;
+        for i in (1..conn.len()).rev() {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            conn.swap(i, (s % (i as u64 + 1)) as usize);
+        }
+        if order == "reordered" {
+            let mut mesh = LocalMesh {
+                coords: xs.clone(),
+                elem_id: (0..conn.len() as u64).collect(),
+                elem_block: vec![1; conn.len()],
+                elems: conn,
+                ..Default::default()
+            };
+            assert!(locality::order_elements(&mut mesh));
+            mesh.elems
+        } else {
+            assert_eq!(order, "shuffled", "order: file, shuffled or reordered");
+            conn
+        }
+    };
     let n = conn.len();
     let x: Vec<[[f64; 3]; 8]> = conn
         .iter()

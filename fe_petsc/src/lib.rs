@@ -15,6 +15,7 @@ pub mod explicit;
 pub mod hex;
 pub mod hourglass;
 pub mod implicit;
+pub mod locality;
 pub mod material;
 pub mod mesh;
 pub mod objects;

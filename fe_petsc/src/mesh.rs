@@ -214,6 +214,7 @@ impl DistributedMesh {
         };
         let extracted = extract_local(&dm, &orig, &mask, &mut local);
         agree(comm, extracted.err())?;
+        crate::locality::order_elements(&mut local);
         let exchange = node_exchange(comm, dm, &mut local)?;
         Ok(DistributedMesh { local, exchange })
     }

@@ -1,0 +1,227 @@
+//! The local elements put in an order that keeps the element loop's nodal reads and writes
+//! close in memory: by block, then along a Morton (Z-order) curve of their centroids.
+//!
+//! Why: the element loop gathers each element's 8 nodes and adds its forces back to them; in
+//! a good order consecutive elements share nodes, so most of those accesses hit lines already
+//! in cache. A mesh file can list its elements in any order (an unstructured mesher's, or one
+//! renumbered by another tool), and the distribution keeps each rank's part in file order.
+//! Measured with `examples/hex_bench` on the 47^3 block (eight lanes, this machine; its third
+//! argument picks the order): elements in random order 197-209 ns per element update, in file
+//! (lexicographic) order 125-128, in random order put back by [`order_elements`] 125-128.
+//!
+//! Blocks stay contiguous (the batched kernel takes runs of one material). The order is
+//! deterministic (exact integer keys on the rank's own bounding box, ties by global id): the
+//! same mesh on the same ranks gives the same order, so restarts continue bit for bit; on
+//! other rank counts the sums of element forces at a node come in another order, as they do
+//! anyway (results agree to round-off). A file whose order is already about as local is kept
+//! ([`KEEP_FACTOR`]). Nodes keep the file's numbering (the ghost exchange's star forest is
+//! built on it).
+use crate::mesh::LocalMesh;
+
+/// Bits per axis of the curve's grid (3 x 21 = 63 bits of key).
+const BITS: u32 = 21;
+
+/// The Morton key of the cell `(i, j, k)` of a 2^21 grid: the bits of the three indices
+/// interleaved, i's lowest first.
+fn morton(i: u64, j: u64, k: u64) -> u64 {
+    // Spreads the 21 low bits of v to every third bit (the usual mask sequence for 64 bits).
+    fn spread(v: u64) -> u64 {
+        let mut x = v & 0x1f_ffff;
+        x = (x | x << 32) & 0x001f_0000_0000_ffff;
+        x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        x = (x | x << 2) & 0x1249_2492_4924_9249;
+        x
+    }
+    spread(i) | spread(j) << 1 | spread(k) << 2
+}
+
+/// A file order is kept unless its mean distance between consecutive centroids is more than
+/// this many times the curve's: a structured mesh's lexicographic order (mean step about 2
+/// element widths on the 47^3 block, the curve's about 1.5) ran 3-10 % faster than the curve's
+/// in the benchmark, and only a poor order gains from the curve.
+const KEEP_FACTOR: f64 = 2.0;
+
+/// Reorders `mesh`'s elements (connectivity, ids and blocks together) by block, then by the
+/// Morton key of the centroid on the local bounding box, then by global id, unless the file's
+/// order is already about as local ([`KEEP_FACTOR`]). Returns whether it reordered.
+pub fn order_elements(mesh: &mut LocalMesh) -> bool {
+    let n = mesh.elems.len();
+    if n < 2 {
+        return false;
+    }
+    let centroid = |c: &[u32; 8]| {
+        let mut s = [0.0; 3];
+        for &v in c {
+            for d in 0..3 {
+                s[d] += mesh.coords[v as usize][d];
+            }
+        }
+        s.map(|x| x / 8.0)
+    };
+    let cents: Vec<[f64; 3]> = mesh.elems.iter().map(centroid).collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for c in &cents {
+        for d in 0..3 {
+            lo[d] = lo[d].min(c[d]);
+            hi[d] = hi[d].max(c[d]);
+        }
+    }
+    let top = ((1u64 << BITS) - 1) as f64;
+    let cell = |x: f64, d: usize| {
+        let span = hi[d] - lo[d];
+        if span > 0.0 {
+            (((x - lo[d]) / span) * top).clamp(0.0, top) as u64
+        } else {
+            0
+        }
+    };
+    let key = |e: usize| {
+        let c = cents[e];
+        let m = morton(cell(c[0], 0), cell(c[1], 1), cell(c[2], 2));
+        (mesh.elem_block[e], m, mesh.elem_id[e])
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_unstable_by_key(|&e| key(e));
+    let mean_step = |seq: &mut dyn Iterator<Item = usize>| {
+        let mut prev: Option<[f64; 3]> = None;
+        let mut sum = 0.0;
+        for e in seq {
+            let c = cents[e];
+            if let Some(p) = prev {
+                sum +=
+                    ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2) + (c[2] - p[2]).powi(2)).sqrt();
+            }
+            prev = Some(c);
+        }
+        sum / (n - 1) as f64
+    };
+    let (file, curve) = (
+        mean_step(&mut (0..n)),
+        mean_step(&mut order.iter().copied()),
+    );
+    if !(file > KEEP_FACTOR * curve) {
+        return false;
+    }
+    mesh.elems = order.iter().map(|&e| mesh.elems[e]).collect();
+    mesh.elem_id = order.iter().map(|&e| mesh.elem_id[e]).collect();
+    mesh.elem_block = order.iter().map(|&e| mesh.elem_block[e]).collect();
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The key interleaves the bits: (1,0,0) -> 1, (0,1,0) -> 2, (0,0,1) -> 4, and the top bit
+    /// of each index lands at bits 60, 61, 62 (the definition of the Z-order curve).
+    #[test]
+    fn morton_interleaves_the_bits() {
+        assert_eq!(morton(1, 0, 0), 1);
+        assert_eq!(morton(0, 1, 0), 2);
+        assert_eq!(morton(0, 0, 1), 4);
+        assert_eq!(morton(3, 0, 0), 0b1001);
+        let t = 1 << (BITS - 1);
+        assert_eq!(morton(t, t, t), 0b111 << 60);
+    }
+
+    /// A grid of 12^3 unit cubes in two blocks: in lexicographic order it is kept; shuffled, it
+    /// is reordered, and after ordering each
+    /// element keeps its id, nodes and block; the blocks are contiguous; and consecutive
+    /// elements lie close: mean centroid distance at most 2 cube widths, about what the
+    /// grid's own lexicographic order gives (1.86: steps of 1 along rows, 11.0 between rows,
+    /// 15.6 between planes), against 7.94 for a random order (the mean distance of two random
+    /// points in a cube of side 12, 0.6617 x 12).
+    #[test]
+    fn shuffled_grid_is_ordered_along_the_curve() {
+        let m = 12;
+        let node = |i: usize, j: usize, k: usize| (i + (m + 1) * (j + (m + 1) * k)) as u32;
+        let mut mesh = LocalMesh::default();
+        for k in 0..=m {
+            for j in 0..=m {
+                for i in 0..=m {
+                    mesh.coords.push([i as f64, j as f64, k as f64]);
+                }
+            }
+        }
+        let mut cells = Vec::new();
+        for k in 0..m {
+            for j in 0..m {
+                for i in 0..m {
+                    let c = [
+                        node(i, j, k),
+                        node(i + 1, j, k),
+                        node(i + 1, j + 1, k),
+                        node(i, j + 1, k),
+                        node(i, j, k + 1),
+                        node(i + 1, j, k + 1),
+                        node(i + 1, j + 1, k + 1),
+                        node(i, j + 1, k + 1),
+                    ];
+                    cells.push((c, cells.len() as u64, if k < m / 2 { 1 } else { 2 }));
+                }
+            }
+        }
+        // In lexicographic order (mean step 1.86) the grid is left as it is.
+        let mut lex = LocalMesh {
+            coords: mesh.coords.clone(),
+            elems: cells.iter().map(|t| t.0).collect(),
+            elem_id: cells.iter().map(|t| t.1).collect(),
+            elem_block: cells.iter().map(|t| t.2).collect(),
+            ..Default::default()
+        };
+        let kept = lex.clone();
+        assert!(
+            !order_elements(&mut lex),
+            "a lexicographic grid was reordered"
+        );
+        assert_eq!(lex.elem_id, kept.elem_id);
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for i in (1..cells.len()).rev() {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            cells.swap(i, (s % (i as u64 + 1)) as usize);
+        }
+        for (c, id, b) in &cells {
+            mesh.elems.push(*c);
+            mesh.elem_id.push(*id);
+            mesh.elem_block.push(*b);
+        }
+        let mean_step = |mesh: &LocalMesh| {
+            let cent = |c: &[u32; 8]| {
+                let p = mesh.coords[c[0] as usize];
+                [p[0] + 0.5, p[1] + 0.5, p[2] + 0.5]
+            };
+            let d: f64 = mesh
+                .elems
+                .windows(2)
+                .map(|w| {
+                    let (a, b) = (cent(&w[0]), cent(&w[1]));
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+                })
+                .sum();
+            d / (mesh.elems.len() - 1) as f64
+        };
+        let before = mean_step(&mesh);
+        assert!(
+            order_elements(&mut mesh),
+            "a shuffled grid must be reordered"
+        );
+        let after = mean_step(&mesh);
+        println!(
+            "mean step between consecutive elements: shuffled {before:.2}, ordered {after:.2}"
+        );
+        assert!(before > 7.0, "the shuffle left the grid ordered ({before})");
+        assert!(after <= 2.0, "ordered mean step {after} > 2 cube widths");
+        let mut got: Vec<([u32; 8], u64, i32)> = (0..mesh.elems.len())
+            .map(|e| (mesh.elems[e], mesh.elem_id[e], mesh.elem_block[e]))
+            .collect();
+        let switches = got.windows(2).filter(|w| w[0].2 != w[1].2).count();
+        assert_eq!(switches, 1, "blocks not contiguous");
+        got.sort_by_key(|t| t.1);
+        cells.sort_by_key(|t| t.1);
+        assert_eq!(got, cells, "an element lost its nodes or block");
+    }
+}
