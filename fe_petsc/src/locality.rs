@@ -110,6 +110,75 @@ pub fn order_elements(mesh: &mut LocalMesh) -> bool {
     true
 }
 
+/// A node numbering that follows the element order: nodes numbered as the elements first
+/// touch them (nodes in no element after, in file order), as `new_of_old`; `None` when the
+/// file's numbering is already about as local: its mean span of node numbers within an element
+/// at most [`KEEP_FACTOR`] times the first-touch numbering's. Measured with
+/// `examples/hex_bench` on the 47^3 block: nodes numbered at random 190 ns per element update
+/// against 128 in the file's (lexicographic) numbering.
+pub fn node_order(mesh: &LocalMesh) -> Option<Vec<u32>> {
+    let nn = mesh.coords.len();
+    let mut new_of_old = vec![u32::MAX; nn];
+    let mut next = 0u32;
+    for c in &mesh.elems {
+        for &v in c {
+            if new_of_old[v as usize] == u32::MAX {
+                new_of_old[v as usize] = next;
+                next += 1;
+            }
+        }
+    }
+    for n in new_of_old.iter_mut().filter(|n| **n == u32::MAX) {
+        *n = next;
+        next += 1;
+    }
+    if mesh.elems.is_empty() {
+        return None;
+    }
+    let span = |f: &dyn Fn(u32) -> u32| {
+        let total: f64 = mesh
+            .elems
+            .iter()
+            .map(|c| {
+                let (lo, hi) = c.iter().fold((u32::MAX, 0), |(lo, hi), &v| {
+                    let n = f(v);
+                    (lo.min(n), hi.max(n))
+                });
+                (hi - lo) as f64
+            })
+            .sum();
+        total / mesh.elems.len() as f64
+    };
+    let (file, touch) = (span(&|v| v), span(&|v| new_of_old[v as usize]));
+    (file > KEEP_FACTOR * touch).then_some(new_of_old)
+}
+
+/// `v` with entry `o` moved to `new_of_old[o]`.
+pub fn permute<T: Copy>(v: &mut Vec<T>, new_of_old: &[u32]) {
+    assert_eq!(v.len(), new_of_old.len(), "one new number per entry");
+    let mut out = v.clone();
+    for (o, x) in v.iter().enumerate() {
+        out[new_of_old[o] as usize] = *x;
+    }
+    *v = out;
+}
+
+/// Renumbers `mesh`'s nodes by `new_of_old` ([`node_order`]): the node arrays (coordinates,
+/// ids, surfaces; ownership once known) moved, the connectivity rewritten.
+pub fn renumber_nodes(mesh: &mut LocalMesh, new_of_old: &[u32]) {
+    permute(&mut mesh.coords, new_of_old);
+    permute(&mut mesh.node_id, new_of_old);
+    permute(&mut mesh.node_surfaces, new_of_old);
+    if !mesh.owned.is_empty() {
+        permute(&mut mesh.owned, new_of_old);
+    }
+    for c in mesh.elems.iter_mut() {
+        for v in c.iter_mut() {
+            *v = new_of_old[*v as usize];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -62,6 +62,9 @@ pub struct LocalMesh {
     pub global_nodes: u64,
     /// Elements in the whole mesh.
     pub global_elems: u64,
+    /// Whether this rank put its elements in a new order and renumbered its nodes for memory
+    /// locality (`crate::locality`: only where the file's order is poor).
+    pub reordered: [bool; 2],
 }
 
 /// The distributed mesh: its flat arrays and the DM that keeps ghost nodes in sync.
@@ -214,8 +217,15 @@ impl DistributedMesh {
         };
         let extracted = extract_local(&dm, &orig, &mask, &mut local);
         agree(comm, extracted.err())?;
-        crate::locality::order_elements(&mut local);
-        let exchange = node_exchange(comm, dm, &mut local)?;
+        // Elements along a space-filling curve, nodes in the order the elements first touch
+        // them, each where the file's order is poor (`locality`).
+        let elements = crate::locality::order_elements(&mut local);
+        let renumbered = crate::locality::node_order(&local);
+        if let Some(p) = &renumbered {
+            crate::locality::renumber_nodes(&mut local, p);
+        }
+        local.reordered = [elements, renumbered.is_some()];
+        let exchange = node_exchange(comm, dm, &mut local, renumbered.as_deref())?;
         Ok(DistributedMesh { local, exchange })
     }
 }
@@ -567,11 +577,13 @@ fn extract_local(dm: &Dm, orig: &[i32], mask: &[i32], local: &mut LocalMesh) -> 
 }
 
 /// The nodal layout (3 dofs per vertex, offsets contiguous), which nodes this rank owns, and
-/// the ghost exchange over it (collective).
+/// the ghost exchange over it (collective). `renumbered`: the local nodes' new numbers
+/// (`new_of_old`, by the DM's vertex order) when `local`'s nodes were renumbered.
 fn node_exchange(
     comm: &SimpleCommunicator,
     dm: Dm,
     local: &mut LocalMesh,
+    renumbered: Option<&[u32]>,
 ) -> Result<NodeExchange, MeshError> {
     let (v0, v1) = dm.depth_stratum(0)?;
     let nv = (v1 - v0) as usize;
@@ -606,6 +618,9 @@ fn node_exchange(
         petsc_call!(PetscSectionGetOffset(gsec, v, &mut off))?;
         local.owned.push(off >= 0);
     }
+    if let Some(p) = renumbered {
+        crate::locality::permute(&mut local.owned, p);
+    }
     // The section's star forest (every local node a leaf, every owned node a root), kept by a
     // reference of our own when the DM goes.
     let mut sf_raw: sys::PetscSF = std::ptr::null_mut();
@@ -633,7 +648,7 @@ fn node_exchange(
     let ghosts = nv - n_owned;
     drop(sec);
     drop(dm);
-    let shared = shared_forest(&sf, comm.rank())?;
+    let shared = shared_forest(&sf, comm.rank(), renumbered)?;
     Ok(NodeExchange {
         sf: shared.sf,
         unit: three_doubles()?,
@@ -659,8 +674,13 @@ struct SharedForest {
 /// own value, and sending it to its own root and back copied every node twice a step (7 ns per
 /// element-cycle of the 103,823-element block at np 1, 5 % of the loop). A leaf stays when its
 /// root is on another rank (a ghost) or its root has more than one leaf (an owned node that
-/// other ranks hold too).
-fn shared_forest(sf: &StarForest, rank: i32) -> Result<SharedForest, PetscError> {
+/// other ranks hold too). The kept leaves' local indices go through `renumbered`
+/// (`new_of_old`) when the nodes were renumbered.
+fn shared_forest(
+    sf: &StarForest,
+    rank: i32,
+    renumbered: Option<&[u32]>,
+) -> Result<SharedForest, PetscError> {
     let (mut nroots, mut nleaves) = (0, 0);
     let mut ilocal: *const sys::PetscInt = std::ptr::null();
     let mut iremote: *const sys::PetscSFNode = std::ptr::null();
@@ -684,30 +704,39 @@ fn shared_forest(sf: &StarForest, rank: i32) -> Result<SharedForest, PetscError>
             slice_or_empty(ilocal, nleaves),
         )
     };
-    let mut selected = Vec::new();
+    let mut remotes = Vec::new();
     let mut leaves = Vec::new();
     for (i, r) in remote.iter().enumerate() {
         if r.rank != rank as sys::PetscInt || deg[r.index as usize] > 1 {
-            selected.push(i as sys::PetscInt);
-            leaves.push(if local.is_empty() {
+            remotes.push(*r);
+            let old = if local.is_empty() {
                 i
             } else {
                 local[i] as usize
-            } as u32);
+            };
+            leaves.push(renumbered.map_or(old as u32, |p| p[old]));
         }
     }
     let roots = (0..nroots)
         .filter(|&r| deg[r] > 1)
         .map(|r| r as u32)
         .collect();
+    // The cut forest: the kept leaves at their (new) local indices, each with its root.
+    let mut ilocal: Vec<sys::PetscInt> = leaves.iter().map(|&l| l as sys::PetscInt).collect();
     let mut cut: sys::PetscSF = std::ptr::null_mut();
-    petsc_call!(PetscSFCreateEmbeddedLeafSF(
-        sf.0,
-        selected.len() as sys::PetscInt,
-        selected.as_ptr(),
-        &mut cut
-    ))?;
+    // SAFETY: reading the communicator of a live PETSc object.
+    let comm = unsafe { sys::PetscObjectComm(sf.0 as sys::PetscObject) };
+    petsc_call!(PetscSFCreate(comm, &mut cut))?;
     let cut = StarForest(cut);
+    petsc_call!(PetscSFSetGraph(
+        cut.0,
+        nroots as sys::PetscInt,
+        ilocal.len() as sys::PetscInt,
+        ilocal.as_mut_ptr(),
+        sys::PETSC_COPY_VALUES,
+        remotes.as_mut_ptr(),
+        sys::PETSC_COPY_VALUES
+    ))?;
     petsc_call!(PetscSFSetUp(cut.0))?;
     Ok(SharedForest {
         sf: cut,

@@ -356,3 +356,149 @@ fn two_meshes_with_a_translation_run_as_two_bodies() {
         0.5 / c
     );
 }
+
+/// `msh` (gmsh format 2.2) with its node tags permuted and its element lines shuffled, the
+/// element ids renumbered in the new order (a mesh file in a poor order, as another tool might
+/// write it).
+fn shuffled_msh(msh: &str, seed: u64) -> String {
+    let mut s = seed;
+    let mut rand = move |n: usize| {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s % n as u64) as usize
+    };
+    let lines: Vec<&str> = msh.lines().collect();
+    let at = |tag: &str| lines.iter().position(|l| *l == tag).unwrap();
+    let (n0, e0) = (at("$Nodes"), at("$Elements"));
+    let nn: usize = lines[n0 + 1].trim().parse().unwrap();
+    let ne: usize = lines[e0 + 1].trim().parse().unwrap();
+    // New tag of old tag t (1-based): a random permutation.
+    let mut new_tag: Vec<usize> = (1..=nn).collect();
+    for i in (1..nn).rev() {
+        new_tag.swap(i, rand(i + 1));
+    }
+    let mut nodes: Vec<String> = lines[n0 + 2..n0 + 2 + nn]
+        .iter()
+        .map(|l| {
+            let mut f = l.split_whitespace();
+            let t: usize = f.next().unwrap().parse().unwrap();
+            format!("{} {}", new_tag[t - 1], f.collect::<Vec<_>>().join(" "))
+        })
+        .collect();
+    for i in (1..nn).rev() {
+        nodes.swap(i, rand(i + 1));
+    }
+    let mut elems: Vec<Vec<usize>> = lines[e0 + 2..e0 + 2 + ne]
+        .iter()
+        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    for e in elems.iter_mut() {
+        let first_node = 3 + e[2];
+        for v in e[first_node..].iter_mut() {
+            *v = new_tag[*v - 1];
+        }
+    }
+    for i in (1..ne).rev() {
+        elems.swap(i, rand(i + 1));
+    }
+    let mut out: Vec<String> = lines[..n0 + 2].iter().map(|l| l.to_string()).collect();
+    out.extend(nodes);
+    out.extend(lines[n0 + 2 + nn..e0 + 2].iter().map(|l| l.to_string()));
+    for (i, e) in elems.iter().enumerate() {
+        let rest: Vec<String> = e[1..].iter().map(|x| x.to_string()).collect();
+        out.push(format!("{} {}", i + 1, rest.join(" ")));
+    }
+    out.extend(lines[e0 + 2 + ne..].iter().map(|l| l.to_string()));
+    out.join("\n") + "\n"
+}
+
+#[test]
+fn a_mesh_file_in_random_order_gives_the_same_history() {
+    // The bar meshed by gmsh (its order kept) and the same mesh with its node numbers and
+    // element lines shuffled: the run puts the shuffled file's elements and nodes in a local
+    // order (report.json's fe_reordered_ranks says so on every rank) and both histories agree
+    // to 1e-10 of each column's largest value (the element forces summed at the nodes in
+    // another order: round-off), at np 1 and 2.
+    let mesh = std::process::Command::new(tdyn())
+        .current_dir(root())
+        .args(["mesh", "meshes/bar.geo", "-p", "L=1.0", "-p", "A=0.05"])
+        .args(["-p", "N=24", "-p", "M=3"])
+        .output()
+        .unwrap();
+    assert!(mesh.status.success(), "tdyn mesh failed");
+    let path = root().join(String::from_utf8(mesh.stdout).unwrap().trim());
+    let text = std::fs::read_to_string(&path).unwrap();
+    for np in [1, 2] {
+        let mut runs = Vec::new();
+        for (name, msh) in [
+            ("file", text.clone()),
+            ("shuffled", shuffled_msh(&text, 0x5eed)),
+        ] {
+            let dir = workdir(&format!("order_{name}_np{np}"));
+            let file = dir.join("bar.msh");
+            std::fs::write(&file, msh).unwrap();
+            let scene = bar_scene(
+                &dir,
+                24,
+                "end_time = 6.0e-5\nmax_energy_error = 0.5",
+                "[[boundary]]\ngroup = \"left\"\nkind = \"velocity\"\nvelocity = [1.0, 0.0, 0.0]\n",
+            );
+            let s = std::fs::read_to_string(&scene).unwrap();
+            let start = s.find("file = ").unwrap();
+            let end = start + s[start..].find("}\n").unwrap() + 2;
+            let s = format!(
+                "{}file = \"{}\"\n{}",
+                &s[..start],
+                file.display(),
+                &s[end..]
+            );
+            std::fs::write(&scene, s).unwrap();
+            run_ok(np, &scene, &dir.join("out"));
+            let report: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.join("out/report.json")).unwrap(),
+            )
+            .unwrap();
+            let r = &report["fe_reordered_ranks"];
+            let want = if name == "file" { 0 } else { np as u64 };
+            assert_eq!(
+                (r["elements"].as_u64(), r["nodes"].as_u64()),
+                (Some(want), Some(want)),
+                "np {np}, {name} order: ranks that reordered elements and nodes"
+            );
+            runs.push(read_csv(&dir.join("out/history.csv")));
+        }
+        let ((h, a), (_, b)) = (&runs[0], &runs[1]);
+        assert_eq!(a.len(), b.len(), "np {np}: a different number of steps");
+        // An energy is compared on the scale of the run's energies, a momentum component on
+        // that of the momentum (this uniaxial bar's hourglass energy, about 1e-30 J, and its
+        // y and z momentum, about 1e-18 kg m/s, are round-off).
+        let largest = |k: usize| a.iter().map(|row| row[k].abs()).fold(0.0, f64::max);
+        let kind_scale = |pick: &dyn Fn(&str) -> bool| {
+            (0..h.len())
+                .filter(|&k| pick(&h[k]))
+                .map(largest)
+                .fold(0.0, f64::max)
+        };
+        let energy_scale = kind_scale(&|n| n.contains("energy") && !n.contains("error"));
+        let momentum_scale = kind_scale(&|n| n.starts_with("momentum"));
+        for (k, name) in h.iter().enumerate() {
+            let floor = if name.contains("energy") && !name.contains("error") {
+                energy_scale
+            } else if name.starts_with("momentum") {
+                momentum_scale
+            } else {
+                0.0
+            };
+            let scale = largest(k).max(floor);
+            for (x, y) in a.iter().zip(b) {
+                assert!(
+                    (x[k] - y[k]).abs() <= 1e-10 * scale,
+                    "np {np}: column {name}: file order {} vs shuffled {} (scale {scale:e}, tolerance 1e-10)",
+                    x[k],
+                    y[k]
+                );
+            }
+        }
+    }
+}

@@ -125,6 +125,13 @@ pub fn write(
     );
     if let Some(fe) = &model.fe {
         ex.insert("blocks".into(), f.hourglass.report(fe.state()));
+        // How many ranks put their elements and nodes in a new order (a poor file order).
+        let r = fe.mesh.local.reordered;
+        let ranks = |b: bool| collective::sum(world, f64::from(u8::from(b))) as u64;
+        ex.insert(
+            "fe_reordered_ranks".into(),
+            serde_json::json!({ "elements": ranks(r[0]), "nodes": ranks(r[1]) }),
+        );
     }
     ex.insert("title".into(), scene.title.clone().into());
     ex.insert(
