@@ -4,6 +4,7 @@
 //! (yielding), the default physical hourglass control. No MPI, no PETSc.
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
+use fe_petsc::hourglass::Hourglass;
 use fe_petsc::material::{build_material, Material, MaterialSpec};
 use fe_petsc::states::HexStates;
 
@@ -119,7 +120,13 @@ fn outputs(o: &HexOutput) -> [Vec<f64>; 5] {
 /// Runs `steps` steps of the block with both kernels, each on its own copy of the state, and
 /// compares every output and state; returns how many (element, step) pairs flowed plastically
 /// and in how many group-steps the lanes disagreed on flowing (masked lanes exercised).
-fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (usize, usize) {
+fn compare_kernels<B: Batch>(
+    mat: &dyn Material,
+    ctl: &HexControls,
+    case: &str,
+    steps: usize,
+) -> (usize, usize) {
+    let ctl = *ctl;
     let lanes = B::LANES;
     let case = &format!("{case}, {lanes} lanes");
     let mut rng = Lcg(0x5eed_0017);
@@ -140,7 +147,6 @@ fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (u
             ]
         })
         .collect();
-    let ctl = HexControls::default();
     let lm = LaneMaterial::new(mat, &ctl).expect("the material has a lane form");
     let ns = mat.n_state().max(1);
     let vol0: Vec<f64> = elems
@@ -252,11 +258,17 @@ fn compare_kernels<B: Batch>(mat: &dyn Material, case: &str, steps: usize) -> (u
 }
 
 /// `compare_kernels` for the group size `w`.
-fn compare_width(w: Width, mat: &dyn Material, case: &str, steps: usize) -> (usize, usize) {
+fn compare_width(
+    w: Width,
+    mat: &dyn Material,
+    ctl: &HexControls,
+    case: &str,
+    steps: usize,
+) -> (usize, usize) {
     match w {
-        Width::W4 => compare_kernels::<batch::w4::LaneGroup>(mat, case, steps),
+        Width::W4 => compare_kernels::<batch::w4::LaneGroup>(mat, ctl, case, steps),
         #[cfg(target_arch = "x86_64")]
-        Width::W8 => compare_kernels::<batch::w8::LaneGroup>(mat, case, steps),
+        Width::W8 => compare_kernels::<batch::w8::LaneGroup>(mat, ctl, case, steps),
     }
 }
 
@@ -272,7 +284,7 @@ fn widths() -> Vec<Width> {
 fn batched_kernel_equals_the_scalar_kernel_elastic() {
     let mat = material("elastic", &[]);
     for w in widths() {
-        compare_width(w, &*mat, "elastic", 12);
+        compare_width(w, &*mat, &HexControls::default(), "elastic", 12);
     }
 }
 
@@ -283,7 +295,7 @@ fn batched_kernel_equals_the_scalar_kernel_j2_yielding() {
         &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
     );
     for w in widths() {
-        let (flowed, mixed) = compare_width(w, &*mat, "j2_plastic", 12);
+        let (flowed, mixed) = compare_width(w, &*mat, &HexControls::default(), "j2_plastic", 12);
         // The comparison means something only if the return and its mask were exercised.
         assert!(
             flowed > 100,
@@ -292,6 +304,27 @@ fn batched_kernel_equals_the_scalar_kernel_j2_yielding() {
         assert!(
             mixed > 0,
             "j2_plastic, {w:?}: no group had flowing and elastic lanes in one step"
+        );
+    }
+}
+
+#[test]
+fn batched_kernel_equals_the_scalar_kernel_fb_stiffness_hourglass() {
+    // The FB/PRONTO stiffness form (as tube_crush.toml sets it) on the yielding block: its
+    // generalised forces, their work and their nodal forces in lanes against the scalar kernel.
+    let mat = material(
+        "j2_plastic",
+        &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
+    );
+    let ctl = HexControls {
+        hourglass: Hourglass::Stiffness { coefficient: 0.05 },
+        ..HexControls::default()
+    };
+    for w in widths() {
+        let (flowed, _) = compare_width(w, &*mat, &ctl, "j2_plastic, FB stiffness", 12);
+        assert!(
+            flowed > 100,
+            "FB stiffness, {w:?}: only {flowed} element-steps flowed"
         );
     }
 }

@@ -17,7 +17,7 @@
 use super::hourglass::{self as hourglass_lanes, LaneHourglass};
 use super::law;
 use super::{F, LANES, M};
-use crate::batch::{GroupInverted, LaneMaterial};
+use crate::batch::{GroupInverted, LaneHourglassKind, LaneMaterial};
 use crate::hex::{
     HexControls, HexOutput, HexState, VolumeGroup, NODES, SQRT_3, TWELFTH, VOLUME_GROUPS,
 };
@@ -440,20 +440,29 @@ pub(super) fn update_inline(
     for i in 0..6 {
         dsig[i] = stress[i] - rotated[i];
     }
-    let hg = LaneHourglass {
-        x,
-        v,
-        b: &k.b,
-        vol: k.vol,
-        dt,
-        mu: m.mu,
-        nu: m.nu,
-        scale: m.hourglass_scale,
-        tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
-        yield_stress: law::yield_stress(&m.law, st.history),
-        stress,
+    out.hg_work = match m.hourglass {
+        LaneHourglassKind::Physical { scale } => {
+            let hg = LaneHourglass {
+                x,
+                v,
+                b: &k.b,
+                vol: k.vol,
+                dt,
+                mu: m.mu,
+                nu: m.nu,
+                scale,
+                tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
+                yield_stress: law::yield_stress(&m.law, st.history),
+                stress,
+            };
+            hourglass_lanes::physical(&hg, &mut st.hg, &mut force)
+        }
+        LaneHourglassKind::Stiffness { coefficient } => {
+            // The scalar kernel's rate, kappa 2 mu V sum(b^2) / 8, in its order of operations.
+            let rate = coefficient * 2.0 * m.mu * k.vol * k.bb * 0.125;
+            hourglass_lanes::stiffness(x, v, &k.b, rate, dt, &mut st.hg, &mut force)
+        }
     };
-    out.hg_work = hourglass_lanes::physical(&hg, &mut st.hg, &mut force);
     out.force = force;
     out.volume = k.vol;
     out.dt_stable = dt_stable;

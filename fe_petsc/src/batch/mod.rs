@@ -132,18 +132,35 @@ pub struct LaneMaterial {
     pub(crate) dilatational: f64,
     pub(crate) mu: f64,
     pub(crate) nu: f64,
-    pub(crate) hourglass_scale: f64,
+    pub(crate) hourglass: LaneHourglassKind,
+}
+
+/// The hourglass controls the batched kernel runs (the others take the scalar kernel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum LaneHourglassKind {
+    /// The physical kind, its stiffness multiplied by `scale`.
+    Physical {
+        /// Multiplier of the physical stiffness.
+        scale: f64,
+    },
+    /// The FB/PRONTO stiffness form with coefficient kappa.
+    Stiffness {
+        /// kappa.
+        coefficient: f64,
+    },
 }
 
 impl LaneMaterial {
     /// The lane form of `mat` under the controls `ctl`; `None` when `mat` has none or the
-    /// hourglass control is not the physical kind (the FB stiffness and viscous forms take the
-    /// scalar kernel).
+    /// hourglass control is the FB viscous form (it takes the scalar kernel: its coefficient
+    /// needs a cube root per element).
     pub fn new(mat: &dyn Material, ctl: &HexControls) -> Option<LaneMaterial> {
         let law = mat.lane_law()?;
         let mu = mat.shear_modulus();
-        let Hourglass::Physical { scale } = ctl.hourglass.for_material(mu) else {
-            return None;
+        let hourglass = match ctl.hourglass.for_material(mu) {
+            Hourglass::Physical { scale } => LaneHourglassKind::Physical { scale },
+            Hourglass::Stiffness { coefficient } => LaneHourglassKind::Stiffness { coefficient },
+            Hourglass::Viscous { .. } => return None,
         };
         Some(LaneMaterial {
             law,
@@ -151,7 +168,7 @@ impl LaneMaterial {
             dilatational: mat.dilatational_modulus(),
             mu,
             nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
-            hourglass_scale: scale,
+            hourglass,
         })
     }
 
