@@ -1,21 +1,25 @@
-//! The local elements put in an order that keeps the element loop's nodal reads and writes
-//! close in memory: by block, then along a Morton (Z-order) curve of their centroids.
+//! The local elements and nodes put in an order that keeps the element loop's nodal reads and
+//! writes close in memory: the elements by block, then along a Morton (Z-order) curve of their
+//! centroids; the nodes in the order the elements first touch them.
 //!
 //! Why: the element loop gathers each element's 8 nodes and adds its forces back to them; in
-//! a good order consecutive elements share nodes, so most of those accesses hit lines already
-//! in cache. A mesh file can list its elements in any order (an unstructured mesher's, or one
-//! renumbered by another tool), and the distribution keeps each rank's part in file order.
-//! Measured with `examples/hex_bench` on the 47^3 block (eight lanes, this machine; its third
-//! argument picks the order): elements in random order 197-209 ns per element update, in file
-//! (lexicographic) order 125-128, in random order put back by [`order_elements`] 125-128.
+//! a good order consecutive elements share nodes and neighbouring nodes share cache lines, so
+//! most of those accesses hit lines already in cache. A mesh file can list its elements and
+//! number its nodes in any order (an unstructured mesher's, or one renumbered by another tool),
+//! and the distribution keeps each rank's part in file order. Measured with
+//! `examples/hex_bench` on the 47^3 block (eight lanes, this machine; its third argument picks
+//! the element order): elements in random order 197-209 ns per element update, in file
+//! (lexicographic) order 125-128, in random order put back by [`order_elements`] 125-128; nodes
+//! numbered at random 190 against 128. The whole benchmark from a shuffled mesh file: 237-263
+//! ns per element-cycle, 149-154 with both orders applied (`docs/benchmarks.md`).
 //!
-//! Blocks stay contiguous (the batched kernel takes runs of one material). The order is
-//! deterministic (exact integer keys on the rank's own bounding box, ties by global id): the
-//! same mesh on the same ranks gives the same order, so restarts continue bit for bit; on
-//! other rank counts the sums of element forces at a node come in another order, as they do
-//! anyway (results agree to round-off). A file whose order is already about as local is kept
-//! ([`KEEP_FACTOR`]). Nodes keep the file's numbering (the ghost exchange's star forest is
-//! built on it).
+//! Blocks stay contiguous (the batched kernel takes runs of one material). The orders are
+//! deterministic (exact integer keys on the rank's own bounding box, ties by global id; first
+//! touch in that element order): the same mesh on the same ranks gives the same order, so
+//! restarts continue bit for bit; on other rank counts the sums of element forces at a node
+//! come in another order, as they do anyway (results agree to round-off). A file whose order is
+//! already about as local is kept ([`KEEP_FACTOR`]). The mesh module renumbers the ghost
+//! exchange's leaves with the nodes (`mesh::DistributedMesh::load`).
 use crate::mesh::LocalMesh;
 
 /// Bits per axis of the curve's grid (3 x 21 = 63 bits of key).
@@ -37,11 +41,12 @@ fn morton(i: u64, j: u64, k: u64) -> u64 {
     spread(i) | spread(j) << 1 | spread(k) << 2
 }
 
-/// A file order is kept unless its mean distance between consecutive centroids is more than
-/// this many times the curve's: a structured mesh's lexicographic order (mean step about 2
+/// A file order is kept unless its mean distance between consecutive centroids (for the
+/// nodes: its mean span of node numbers within an element) is more than this many times the
+/// curve's (first touch's): a structured mesh's lexicographic order (mean step about 2
 /// element widths on the 47^3 block, the curve's about 1.5) ran 3-10 % faster than the curve's
 /// in the benchmark, and only a poor order gains from the curve.
-const KEEP_FACTOR: f64 = 2.0;
+pub const KEEP_FACTOR: f64 = 2.0;
 
 /// Reorders `mesh`'s elements (connectivity, ids and blocks together) by block, then by the
 /// Morton key of the centroid on the local bounding box, then by global id, unless the file's
