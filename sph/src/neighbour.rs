@@ -681,7 +681,7 @@ impl KeptPairs {
 
     /// Candidates of `parts` in the box `lo..hi` (which must hold every sphere: all of space).
     /// One box of all of space with no periodic box and no ghosts (the one-rank case) takes
-    /// [`one_box_candidates`], else the general search ([`KeptPairs::build_by_search`]): the
+    /// `one_box_candidates`, else the general search ([`KeptPairs::build_by_search`]): the
     /// same candidates in the same order.
     pub fn build(parts: &Particles, opts: &SearchOptions, lo: [f64; 3], hi: [f64; 3]) -> Self {
         let all_space =

@@ -230,7 +230,7 @@ struct Sums {
 }
 
 /// The buffers of a pair pass, reused from pass to pass: each entry's inputs packed
-/// ([`Slot`]), in the order of the entries or in an order of the caller's (a kept pair list's,
+/// (`Slot`), in the order of the entries or in an order of the caller's (a kept pair list's,
 /// see `KeptPairs`), and the sums the pass adds, in the same order, added to the entries at the
 /// end. The sums of an entry are added up in the order of the pairs, whatever the packing
 /// order, so the results do not depend on it (bit for bit).

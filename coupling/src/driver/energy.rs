@@ -41,7 +41,7 @@ const HOURGLASS_WARN_RATIO: f64 = 0.10;
 const HOURGLASS_NEGLIGIBLE: f64 = 1e-6;
 
 /// Each block's hourglass share of its internal energy, watched every step: one warning line
-/// per block the first time it passes [`HOURGLASS_WARN_RATIO`], and the largest ratio for the
+/// per block the first time it passes `HOURGLASS_WARN_RATIO`, and the largest ratio for the
 /// report. Every rank holds the same global energies, so every rank agrees; rank 0 prints.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct HourglassWatch {

@@ -954,7 +954,7 @@ fn work_bounds(cx: &Ctx, r: &Run, dt: Option<f64>) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// The work bounds of [`work_bounds`] at the step the run starts with (`dt`: the fixed step,
+/// The work bounds of `work_bounds` at the step the run starts with (`dt`: the fixed step,
 /// or the safety factor times the stable step), once it is known.
 pub fn check_work(scene: &Scene, dt: f64) -> Result<(), SceneError> {
     let cx = Ctx {

@@ -235,7 +235,7 @@ impl FieldWriter {
         self.fields.iter().any(|x| x == f)
     }
 
-    /// Sets the rows a rank receives and writes per chunk (default [`CHUNK_ROWS`]); the
+    /// Sets the rows a rank receives and writes per chunk (default `CHUNK_ROWS`); the
     /// output self-test sets a few, so that its small sets take several chunks.
     pub fn set_chunk_rows(&mut self, rows: u64) {
         self.chunk_rows = rows.max(1);

@@ -137,7 +137,7 @@ pub struct TransferStats {
     pub wall_s: f64,
 }
 
-/// Most push-back solves in one step (see [`solve_rechecked`]). Measured on `rod_wall` (np 2,
+/// Most push-back solves in one step (see `solve_rechecked`). Measured on `rod_wall` (np 2,
 /// 4,666 steps): the rechecks added 529 contacts in all, 0.62 solves per step on average over
 /// all steps (none in steps without contact), and this limit was reached in some steps (what
 /// the last solve leaves is the next step's, within its capture tolerance); `tube_crush` (np 1)

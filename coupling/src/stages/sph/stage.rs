@@ -360,7 +360,7 @@ impl SphStage {
     /// passes, second half (collective).
     ///
     /// On several ranks (no periodic box) the decomposition, the ghosts and the pair
-    /// candidates are kept between rebuilds while [`SphStage::kept_box_valid`] holds: the
+    /// candidates are kept between rebuilds while `SphStage::kept_box_valid` holds: the
     /// ghosts then go to the same ranks as at the build through its plan, and the candidates
     /// are filtered with the search's own tests, so every step computes the pairs a rebuild
     /// would (each once, by the box holding its COI), summed in another order.
