@@ -488,12 +488,7 @@ pub(super) fn update_lanes_inline(
     use crate::states::BLOCK;
     let conn = &io.conn[..LANES];
     for k in 0..NODES {
-        let mut nodes = [0; LANES];
-        for l in 0..LANES {
-            nodes[l] = conn[l][k];
-        }
-        g.x[k] = F::gather3(io.xs, &nodes);
-        g.v[k] = F::gather3(io.vs, &nodes);
+        (g.x[k], g.v[k]) = F::gather_corner(io.xs, io.vs, conn, k);
     }
     g.vol0 = F::load(io.vol0);
     let src = &*io.state;

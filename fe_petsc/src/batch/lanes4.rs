@@ -80,21 +80,26 @@ impl F4 {
         F4(a)
     }
 
-    /// The three components of the points `xs[nodes[l]]`, lane `l` from `nodes[l]`. Panics
-    /// when a node is not in `xs`.
+    /// The coordinates and velocities of corner `c` of the elements `conn[..4]`, lane `l` from
+    /// node `conn[l][c]` of `xs` and `vs`. Panics when an index is out of range.
     #[inline(always)]
-    pub fn gather3(xs: &[[f64; 3]], nodes: &[u32; LANES]) -> [F4; 3] {
-        let p = [
-            xs[nodes[0] as usize],
-            xs[nodes[1] as usize],
-            xs[nodes[2] as usize],
-            xs[nodes[3] as usize],
+    pub fn gather_corner(
+        xs: &[[f64; 3]],
+        vs: &[[f64; 3]],
+        conn: &[[u32; 8]],
+        c: usize,
+    ) -> ([F4; 3], [F4; 3]) {
+        let n = [
+            conn[0][c] as usize,
+            conn[1][c] as usize,
+            conn[2][c] as usize,
+            conn[3][c] as usize,
         ];
-        [
-            F4([p[0][0], p[1][0], p[2][0], p[3][0]]),
-            F4([p[0][1], p[1][1], p[2][1], p[3][1]]),
-            F4([p[0][2], p[1][2], p[2][2], p[3][2]]),
-        ]
+        let lanes = |a: &[[f64; 3]], k: usize| F4([a[n[0]][k], a[n[1]][k], a[n[2]][k], a[n[3]][k]]);
+        (
+            [lanes(xs, 0), lanes(xs, 1), lanes(xs, 2)],
+            [lanes(vs, 0), lanes(vs, 1), lanes(vs, 2)],
+        )
     }
 
     /// Writes lane `l` to `s[l]` for the first `LANES` doubles of `s`. Panics when `s` is

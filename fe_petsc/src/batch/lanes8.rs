@@ -20,11 +20,13 @@
 //! `is_x86_feature_detected!("avx512f")` (see `batch::w8::LaneGroup::update`); the operations
 //! are inlined into that entry, which is compiled with the feature.
 use std::arch::x86_64::{
-    __m256i, __m512d, __m512i, _mm256_loadu_si256, _mm512_abs_pd, _mm512_add_pd,
-    _mm512_castpd_si512, _mm512_castsi512_pd, _mm512_cmp_pd_mask, _mm512_div_pd, _mm512_fmadd_pd,
-    _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_i32gather_pd, _mm512_mask_blend_pd, _mm512_max_pd,
-    _mm512_min_pd, _mm512_mul_pd, _mm512_set1_epi64, _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd,
-    _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
+    __m512d, __m512i, _mm256_add_epi32, _mm256_and_si256, _mm256_cmpgt_epi32,
+    _mm256_i32gather_epi32, _mm256_movemask_epi8, _mm256_set1_epi32, _mm256_setr_epi32,
+    _mm512_abs_pd, _mm512_add_pd, _mm512_castpd_si512, _mm512_castsi512_pd, _mm512_cmp_pd_mask,
+    _mm512_div_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_i32gather_pd,
+    _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd, _mm512_mul_pd, _mm512_set1_epi64,
+    _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ,
+    _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
 };
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
@@ -115,33 +117,51 @@ impl F8 {
         F8(a)
     }
 
-    /// The three components of the points `xs[nodes[l]]`, lane `l` from `nodes[l]`: three
-    /// AVX-512 gathers with the same indices (one per component). Panics when a node is not in
-    /// `xs` or `xs` has 2^31 / 3 points or more (the gather's indices are 32-bit).
+    /// The coordinates and velocities of corner `c` of the elements `conn[..8]`, lane `l`
+    /// from node `conn[l][c]` of `xs` and `vs`: the eight node numbers by one 32-bit gather
+    /// (the connectivity rows are 32 bytes apart), then three AVX-512 gathers from each array
+    /// with the same indices. (Building the index vector from eight scalar writes stalled each
+    /// time on the store forwarding of the vector read: about 40 % of a group's load.) Panics
+    /// when `conn` has fewer than eight elements, `c` is not a corner, `xs` and `vs` differ in
+    /// length, a node is not in them, or they hold 2^31 / 3 points or more (32-bit indices).
     #[inline(always)]
-    pub fn gather3(xs: &[[f64; 3]], nodes: &[u32; LANES]) -> [F8; 3] {
+    pub fn gather_corner(
+        xs: &[[f64; 3]],
+        vs: &[[f64; 3]],
+        conn: &[[u32; 8]],
+        c: usize,
+    ) -> ([F8; 3], [F8; 3]) {
+        assert!(conn.len() >= LANES && c < 8, "eight elements, corner 0..8");
         assert!(
-            xs.len() <= i32::MAX as usize / 3,
-            "too many points for 32-bit indices"
+            xs.len() == vs.len() && xs.len() <= i32::MAX as usize / 3,
+            "one velocity per point, and fewer than 2^31 / 3 points"
         );
-        let mut idx = [0i32; LANES];
-        let mut inside = true;
-        for l in 0..LANES {
-            inside &= (nodes[l] as usize) < xs.len();
-            idx[l] = 3 * nodes[l] as i32;
-        }
-        assert!(inside, "a node index beyond the points");
-        let base = xs.as_flattened().as_ptr();
-        // SAFETY: AVX-512F as in `avx512!`; every index is 3 n with n < xs.len(), so the
-        // gathered doubles 3 n + c (c < 3) lie inside `xs`; the index array is 32 bytes read
-        // as one 256-bit vector (unaligned load).
+        // SAFETY: AVX-512F (and the AVX2 it implies) as in `avx512!`. The index gather reads
+        // conn[l][c], l < 8, inside `conn` (checked above: rows of eight u32, 32 bytes apart).
+        // The node numbers are checked in range before any point is read, so the doubles
+        // 3 n + k (k < 3) lie inside `xs` and `vs`.
         unsafe {
-            let vi = _mm256_loadu_si256(idx.as_ptr().cast::<__m256i>());
-            [
-                val(_mm512_i32gather_pd::<8>(vi, base)),
-                val(_mm512_i32gather_pd::<8>(vi, base.add(1))),
-                val(_mm512_i32gather_pd::<8>(vi, base.add(2))),
-            ]
+            let rows = _mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56);
+            let nodes = _mm256_i32gather_epi32::<4>(conn.as_ptr().cast::<i32>().add(c), rows);
+            let len = _mm256_set1_epi32(xs.len() as i32);
+            let below = _mm256_cmpgt_epi32(len, nodes);
+            let nonneg = _mm256_cmpgt_epi32(nodes, _mm256_set1_epi32(-1));
+            let ok = _mm256_movemask_epi8(_mm256_and_si256(below, nonneg));
+            assert!(ok == -1, "a node index beyond the points");
+            let vi = _mm256_add_epi32(nodes, _mm256_add_epi32(nodes, nodes));
+            let (x, v) = (xs.as_flattened().as_ptr(), vs.as_flattened().as_ptr());
+            (
+                [
+                    val(_mm512_i32gather_pd::<8>(vi, x)),
+                    val(_mm512_i32gather_pd::<8>(vi, x.add(1))),
+                    val(_mm512_i32gather_pd::<8>(vi, x.add(2))),
+                ],
+                [
+                    val(_mm512_i32gather_pd::<8>(vi, v)),
+                    val(_mm512_i32gather_pd::<8>(vi, v.add(1))),
+                    val(_mm512_i32gather_pd::<8>(vi, v.add(2))),
+                ],
+            )
         }
     }
 
