@@ -1,9 +1,11 @@
 //! The hexahedron of [`crate::hex`] on a group of elements at once, one element per lane (the
 //! parent module's lane type `F`, four or eight lanes): the same operations in every lane, the scalar kernel's branches as
 //! masked lane operations, the nodal values gathered into lanes and the forces handed back per
-//! element. Each lane computes what [`crate::hex::update`] computes for its element, operation
-//! for operation in the same order (nothing reassociated; multiply-adds fused in the eight-lane
-//! build only), so the kernels agree to the bit (four lanes) or to round-off (eight).
+//! element. Each lane computes what [`crate::hex::update`] computes for its element: the same
+//! material law, hourglass control and stable step in the same order, but the geometry (volume,
+//! gradients, hourglass rates, nodal forces) in mode space (`modes.rs`), about 700 fewer
+//! operations per element than the scalar kernel's node-by-node forms, so the kernels agree to
+//! round-off (`tests/lanes.rs`: 1e-12 relative required, 2e-13 measured).
 //!
 //! Why: the scalar update is one serial dependency chain of about 4,500 instructions per
 //! element at about 1.5 flops per cycle (DESIGN.md section 7); independent elements in lanes
@@ -16,11 +18,12 @@
 //! always has.
 use super::hourglass::{self as hourglass_lanes, LaneHourglass};
 use super::law;
+use super::modes;
 use super::{F, LANES, M};
 use crate::batch::{GroupInverted, LaneHourglassKind, LaneMaterial};
-use crate::hex::{
-    HexControls, HexOutput, HexState, VolumeGroup, NODES, SQRT_3, TWELFTH, VOLUME_GROUPS,
-};
+use crate::hex::{HexControls, HexOutput, HexState, NODES, SQRT_3};
+
+type V3 = [F; 3];
 
 /// Nodal vectors of a group's elements in lanes: `[node][component]`.
 pub type LaneNodes = [[F; 3]; NODES];
@@ -108,79 +111,27 @@ pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES], out: &mut LaneNodes
     }
 }
 
-/// [`crate::hex`]'s volume gradient B[I] = dV/dx_I (not divided by V) and the volume, in
-/// lanes: the same table of (J, K, c) terms, node by node with the node a const parameter.
-/// About 450 flops per element.
-#[inline(always)]
-fn volume_gradient(x: &LaneNodes) -> (LaneNodes, F) {
-    let b = [
-        node_volume_gradient::<0>(x),
-        node_volume_gradient::<1>(x),
-        node_volume_gradient::<2>(x),
-        node_volume_gradient::<3>(x),
-        node_volume_gradient::<4>(x),
-        node_volume_gradient::<5>(x),
-        node_volume_gradient::<6>(x),
-        node_volume_gradient::<7>(x),
-    ];
-    let mut v = x[0][0] * b[0][0];
-    for i in 1..NODES {
-        v += x[i][0] * b[i][0];
-    }
-    (b, v)
-}
-
-/// dV/dx_I for node `I` in lanes: `crate::hex`'s three grouped cross products, times 1/12
-/// (54 flops per element).
-#[inline(always)]
-fn node_volume_gradient<const I: usize>(x: &LaneNodes) -> [F; 3] {
-    let s0 = group_term(x, &VOLUME_GROUPS.groups[I][0]);
-    let s1 = group_term(x, &VOLUME_GROUPS.groups[I][1]);
-    let s2 = group_term(x, &VOLUME_GROUPS.groups[I][2]);
-    [
-        (s0[0] + s1[0] + s2[0]) * TWELFTH,
-        (s0[1] + s1[1] + s2[1]) * TWELFTH,
-        (s0[2] + s1[2] + s2[2]) * TWELFTH,
-    ]
-}
-
-/// One group's cross product in lanes (`crate::hex`'s `group_term`).
-#[inline(always)]
-fn group_term(x: &LaneNodes, g: &VolumeGroup) -> [F; 3] {
-    let mut w = x[g.k[0] as usize];
-    let mut t = 1;
-    while t < g.n as usize {
-        let q = &x[g.k[t] as usize];
-        if g.minus[t] {
-            w = [w[0] - q[0], w[1] - q[1], w[2] - q[2]];
-        } else {
-            w = [w[0] + q[0], w[1] + q[1], w[2] + q[2]];
-        }
-        t += 1;
-    }
-    let p = &x[g.j as usize];
-    let (a, b) = if g.swap { (&w, p) } else { (p, &w) };
-    [
-        a[1].mul_sub(b[2], a[2] * b[1]),
-        a[2].mul_sub(b[0], a[0] * b[2]),
-        a[0].mul_sub(b[1], a[1] * b[0]),
-    ]
-}
-
 /// Lanes whose volume is positive and finite.
 #[inline(always)]
 fn valid_volume(v: F) -> M {
     v.gt(F::ZERO).and(v.is_finite())
 }
 
-/// The kinematics of one step in lanes: the end-of-step gradients, the rate of deformation and
-/// the Hughes-Winget rotation of the step.
+/// The kinematics of one step in lanes, in mode space (`modes.rs`): the coordinates' and
+/// velocities' modes, the end-of-step volume gradient, the rate of deformation and the
+/// Hughes-Winget rotation of the step.
 struct Kinematics {
-    /// V b at t(n+1).
-    bv: LaneNodes,
-    /// b = B / V at t(n+1).
-    b: LaneNodes,
-    /// Sum of b^2.
+    /// Modes of the coordinates at t(n+1) over 8, a_k = X_k / 8 (xi .. xi eta); their first
+    /// three are the rows of the Jacobian at the centre.
+    a: [V3; 6],
+    /// The xi eta zeta mode of the coordinates over 8.
+    a7: V3,
+    /// Modes of the velocities U_k (xi .. xi eta), and the xi eta zeta one.
+    u: [V3; 6],
+    u7: V3,
+    /// dV/dX_k at t(n+1): the mean gradient B_I = sum_k phi_k(I) G_k.
+    g: [V3; 6],
+    /// Sum over the nodes of |b_I|^2, b = B / V.
     bb: F,
     vol: F,
     iv: F,
@@ -191,49 +142,57 @@ struct Kinematics {
 }
 
 /// The gradients at the end and the middle of the step, the velocity gradient at mid-step and
-/// its split, as [`crate::hex::update`] computes them; `None` when a lane's volume (end or
-/// middle) is not positive and finite.
+/// its split, as [`crate::hex::update`] defines them, computed in mode space; `None` when a
+/// lane's volume (end or middle) is not positive and finite.
 ///
-/// Cost per element: about 2 x 450 flops (two volume gradients) + 24 x 3 (mid-step geometry) +
-/// 3 x 72 + 24 (L and b) + 60 (the rotation); 48 doubles read from the lanes, none written
-/// outside.
+/// The mid-step coordinates are x(n+1/2) = x(n+1) - dt/2 v(n+1/2); the transform is linear, so
+/// their modes are a_k - dt/16 U_k. The velocity gradient L = sum_I v_I (x) B_I(n+1/2) / V(n+1/2)
+/// = sum_k U_k (x) G_k(n+1/2) / V(n+1/2).
+///
+/// Cost per element: 2 x 69 (modes of x and v) + 18 (a) + 18 (mid-step modes) + 2 x 100
+/// (volume gradients) + 54 + 9 (L) + 20 (sum b^2) + 60 (the rotation) = about 520 operations;
+/// 48 doubles read from the lanes, none written outside.
 #[inline(always)]
 fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
-    let (bv, vol) = volume_gradient(x);
-    // x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (see `hex::update`).
-    let hdt = F::splat(0.5 * dt);
-    let mut xh = [[F::ZERO; 3]; NODES];
-    for i in 0..NODES {
-        for a in 0..3 {
-            xh[i][a] = hdt.neg_mul_add(v[i][a], x[i][a]);
+    let (xm, xm7) = modes::modes(x);
+    let (u, u7) = modes::modes(v);
+    let eighth = F::splat(0.125);
+    let mut a = [[F::ZERO; 3]; 6];
+    let mut ah = [[F::ZERO; 3]; 6];
+    let h16 = F::splat(0.5 * dt * 0.125);
+    for m in 0..6 {
+        for c in 0..3 {
+            a[m][c] = xm[m][c] * eighth;
+            ah[m][c] = h16.neg_mul_add(u[m][c], a[m][c]);
         }
     }
-    let (bvh, volh) = volume_gradient(&xh);
+    let a7 = [xm7[0] * eighth, xm7[1] * eighth, xm7[2] * eighth];
+    let (g, vol) = modes::volume_gradient(&a);
+    let (gh, volh) = modes::volume_gradient(&ah);
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
         return None;
     }
     // 1/V and 1/V(n+1/2) from one division (as `hex::update`).
     let inv = 1.0 / (vol * volh);
     let (iv, ivh) = (volh * inv, vol * inv);
-    let mut b = [[F::ZERO; 3]; NODES];
-    let mut bb = F::ZERO;
-    for i in 0..NODES {
-        for j in 0..3 {
-            b[i][j] = bv[i][j] * iv;
-            bb = b[i][j].mul_add(b[i][j], bb);
-        }
-    }
-    let mut l = [[F::ZERO; 3]; 3];
-    for i in 0..NODES {
-        for a in 0..3 {
-            for j in 0..3 {
-                l[a][j] = v[i][a].mul_add(bvh[i][j], l[a][j]);
+    // sum_I |B_I|^2 = 8 sum_k |G_k|^2 (the modes are orthogonal over the nodes).
+    let mut gg = g[0][0] * g[0][0];
+    for m in 0..6 {
+        for c in 0..3 {
+            if m + c > 0 {
+                gg = g[m][c].mul_add(g[m][c], gg);
             }
         }
     }
-    for a in 0..3 {
-        for j in 0..3 {
-            l[a][j] *= ivh;
+    let bb = 8.0 * gg * (iv * iv);
+    let mut l = [[F::ZERO; 3]; 3];
+    for (i, row) in l.iter_mut().enumerate() {
+        for (j, e) in row.iter_mut().enumerate() {
+            let mut s = u[0][i] * gh[0][j];
+            for m in 1..6 {
+                s = u[m][i].mul_add(gh[m][j], s);
+            }
+            *e = s * ivh;
         }
     }
     let d = [
@@ -249,8 +208,11 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     let w20 = 0.5 * (l[2][0] - l[0][2]);
     let r = hughes_winget(w01, w12, w20, dt);
     Some(Kinematics {
-        bv,
-        b,
+        a,
+        a7,
+        u,
+        u7,
+        g,
         bb,
         vol,
         iv,
@@ -378,11 +340,6 @@ pub struct LaneGroup {
 /// each lane what [`crate::hex::update`] computes for its element; writes `state` and `out`.
 /// `Err`, with `state` and `out` untouched, when a lane's volume is not positive and finite.
 /// Inlined into each build of the parent module (its entry has the target features).
-///
-/// Cost per element: about 2,100 flops as the scalar kernel plus both sides of the masked
-/// branches (about 150: the radial return, the hourglass loading test and yield bound);
-/// memory: the 48 gathered nodal doubles (384 B), 19 state doubles read and written
-/// (304 B), the 24 force doubles handed back (192 B).
 #[inline(always)]
 pub(super) fn update_inline(
     g: &mut LaneGroup,
@@ -394,10 +351,32 @@ pub(super) fn update_inline(
         x,
         v,
         vol0,
-        state: st,
+        state,
         out,
     } = g;
-    let (x, v, vol0) = (&*x, &*v, *vol0);
+    update_core(x, v, *vol0, state, out, dt, m, ctl)
+}
+
+/// The update of [`update_inline`] on nodal values `x`, `v`, reference volumes `vol0` and the
+/// state `st`, its output in `out`.
+///
+/// Cost per element: about 520 operations of kinematics in mode space (`kinematics`), 200 for
+/// the stress (rotation, Hooke, the radial return's both sides), 40 for the bulk viscosity and
+/// stable step, 400-1,100 for the hourglass control (FB stiffness form, physical with the
+/// yield bound) and 200 for the nodal forces; memory: the 48 gathered nodal doubles (384 B),
+/// 19 state doubles read and written (304 B), the 24 force doubles handed back (192 B).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn update_core(
+    x: &LaneNodes,
+    v: &LaneNodes,
+    vol0: F,
+    st: &mut LaneState,
+    out: &mut LaneOutput,
+    dt: f64,
+    m: &LaneMaterial,
+    ctl: &HexControls,
+) -> Result<(), GroupInverted> {
     let k = kinematics(x, v, dt).ok_or(GroupInverted)?;
     let mut stress = rotate(&k.r, &st.stress);
     let mut deps = [F::ZERO; 6];
@@ -415,37 +394,30 @@ pub(super) fn update_inline(
     let c = (m.dilatational / rho).sqrt();
     let ev = k.d[0] + k.d[1] + k.d[2];
     let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, c, ev);
-    let st_tot = [
-        stress[0] + q,
-        stress[1] + q,
-        stress[2] + q,
-        stress[3],
-        stress[4],
-        stress[5],
-    ];
-    // f_I = -sigma . (V b_I): 8 x 15 flops.
-    // A local array (writing through `out` kept every partial sum in memory: 30 % more
-    // instructions), copied out at the end.
-    let mut force = [[F::ZERO; 3]; NODES];
-    for i in 0..NODES {
-        let bi = &k.bv[i];
-        force[i] = [
-            -st_tot[5].mul_add(bi[2], st_tot[3].mul_add(bi[1], st_tot[0] * bi[0])),
-            -st_tot[4].mul_add(bi[2], st_tot[1].mul_add(bi[1], st_tot[3] * bi[0])),
-            -st_tot[2].mul_add(bi[2], st_tot[4].mul_add(bi[1], st_tot[5] * bi[0])),
-        ];
-    }
 
     let mut dsig = [F::ZERO; 6];
     for i in 0..6 {
         dsig[i] = stress[i] - rotated[i];
     }
-    out.hg_work = match m.hourglass {
+    // The hourglass modes of the coordinates (over 8) and velocities, and
+    // sum_k U_k (x) G_k (V times the velocity gradient at the end of the step).
+    let a_hg = [k.a[3], k.a[4], k.a[5], k.a7];
+    let u_hg = [k.u[3], k.u[4], k.u[5], k.u7];
+    let mut lg = [[F::ZERO; 3]; 3];
+    for (i, row) in lg.iter_mut().enumerate() {
+        for (j, e) in row.iter_mut().enumerate() {
+            let mut s = k.u[0][i] * k.g[0][j];
+            for mm in 1..6 {
+                s = k.u[mm][i].mul_add(k.g[mm][j], s);
+            }
+            *e = s;
+        }
+    }
+    let geo = hourglass_lanes::ModeGeometry::new(&a_hg, &u_hg, &lg, k.iv, [k.a[0], k.a[1], k.a[2]]);
+    let (hg_work, tg) = match m.hourglass {
         LaneHourglassKind::Physical { scale } => {
             let hg = LaneHourglass {
-                x,
-                v,
-                b: &k.b,
+                geo: &geo,
                 vol: k.vol,
                 dt,
                 mu: m.mu,
@@ -455,19 +427,63 @@ pub(super) fn update_inline(
                 yield_stress: law::yield_stress(&m.law, st.history),
                 stress,
             };
-            hourglass_lanes::physical(&hg, &mut st.hg, &mut force)
+            hourglass_lanes::physical(&hg, &mut st.hg)
         }
         LaneHourglassKind::Stiffness { coefficient } => {
             // The scalar kernel's rate, kappa 2 mu V sum(b^2) / 8, in its order of operations.
             let rate = coefficient * 2.0 * m.mu * k.vol * k.bb * 0.125;
-            hourglass_lanes::stiffness(x, v, &k.b, rate, dt, &mut st.hg, &mut force)
+            hourglass_lanes::stiffness(&geo, rate, dt, &mut st.hg)
         }
     };
-    out.force = force;
+    out.force = nodal_forces(&k, &stress, q, &tg);
+    out.hg_work = hg_work;
     out.volume = k.vol;
     out.dt_stable = dt_stable;
     out.pressure = -(stress[0] + stress[1] + stress[2]) * crate::hourglass::THIRD;
     Ok(())
+}
+
+/// The nodal forces f_I = -sigma_tot . B_I - sum_a H_a gamma_aI of the stress with bulk
+/// viscosity `q` on its normal components and of the hourglass control's generalised forces
+/// `tg` (global axes), in mode space (`modes.rs`): B_I = sum_k phi_k(I) G_k and
+/// gamma_aI = Gamma_aI - (1/V) sum_k phi_k(I) (X_a . G_k), so f_I = sum_k phi_k(I) F_k with
+/// F_k = (N - sigma_tot) G_k for k = xi .. xi eta, less H_a on the hourglass modes, and
+/// N = (1/V) sum_a H_a (x) X_a. 9 x 8 + 9 + 6 x 9 + 12 + 69 = about 220 operations per element
+/// (node by node: 8 x 15 for the stress, 4 x 24 for the hourglass, and the 4 x 56 of the
+/// gamma vectors).
+#[inline(always)]
+fn nodal_forces(k: &Kinematics, stress: &[F; 6], q: F, tg: &[V3; 4]) -> LaneNodes {
+    let sig = [
+        [stress[0] + q, stress[3], stress[5]],
+        [stress[3], stress[1] + q, stress[4]],
+        [stress[5], stress[4], stress[2] + q],
+    ];
+    let a_hg = [&k.a[3], &k.a[4], &k.a[5], &k.a7];
+    let s8 = 8.0 * k.iv;
+    let mut nm = [[F::ZERO; 3]; 3];
+    for c in 0..3 {
+        for j in 0..3 {
+            let mut n = tg[0][c] * a_hg[0][j];
+            for al in 1..4 {
+                n = tg[al][c].mul_add(a_hg[al][j], n);
+            }
+            // N - sigma_tot.
+            nm[c][j] = s8.mul_sub(n, sig[c][j]);
+        }
+    }
+    let mut fm = [[F::ZERO; 3]; 6];
+    for (f, g) in fm.iter_mut().zip(&k.g) {
+        for c in 0..3 {
+            f[c] = dot3(nm[c][0], g[0], nm[c][1], g[1], nm[c][2], g[2]);
+        }
+    }
+    for al in 0..3 {
+        for c in 0..3 {
+            fm[3 + al][c] -= tg[al][c];
+        }
+    }
+    let f7 = [-tg[3][0], -tg[3][1], -tg[3][2]];
+    modes::nodal(&fm, &f7)
 }
 
 /// [`crate::batch::Batch::update_lanes`]: the group's nodal values gathered, its state and
@@ -487,35 +503,41 @@ pub(super) fn update_lanes_inline(
 ) -> Result<(), GroupInverted> {
     use crate::states::BLOCK;
     let conn = &io.conn[..LANES];
+    // Local arrays, not the group's `x` and `v` (which this path leaves as they were): the
+    // gathered values are dead once their modes are formed, and stores through `g` would
+    // have to be kept.
+    let mut x = [[F::ZERO; 3]; NODES];
+    let mut v = [[F::ZERO; 3]; NODES];
     for k in 0..NODES {
-        (g.x[k], g.v[k]) = F::gather_corner(io.xs, io.vs, conn, k);
+        (x[k], v[k]) = F::gather_corner(io.xs, io.vs, conn, k);
     }
-    g.vol0 = F::load(io.vol0);
+    let vol0 = F::load(io.vol0);
     let src = &*io.state;
+    let mut st = LaneState::default();
     for k in 0..6 {
-        g.state.stress[k] = F::load(&src[k * BLOCK..]);
+        st.stress[k] = F::load(&src[k * BLOCK..]);
     }
     for a in 0..4 {
         for i in 0..3 {
-            g.state.hg[a][i] = F::load(&src[(6 + 3 * a + i) * BLOCK..]);
+            st.hg[a][i] = F::load(&src[(6 + 3 * a + i) * BLOCK..]);
         }
     }
-    g.state.history = match &io.history {
+    st.history = match &io.history {
         Some(h) => F::load(h),
         None => F::ZERO,
     };
-    update_inline(g, dt, m, ctl)?;
+    update_core(&x, &v, vol0, &mut st, &mut g.out, dt, m, ctl)?;
     let dst = &mut *io.state;
     for k in 0..6 {
-        g.state.stress[k].store(&mut dst[k * BLOCK..]);
+        st.stress[k].store(&mut dst[k * BLOCK..]);
     }
     for a in 0..4 {
         for i in 0..3 {
-            g.state.hg[a][i].store(&mut dst[(6 + 3 * a + i) * BLOCK..]);
+            st.hg[a][i].store(&mut dst[(6 + 3 * a + i) * BLOCK..]);
         }
     }
     if let Some(h) = &mut io.history {
-        g.state.history.store(h);
+        st.history.store(h);
     }
     Ok(())
 }

@@ -4,22 +4,17 @@
 //! tangent ratio's round-off guard) as masked lane operations.
 use super::hex::dot3;
 use super::{F, M};
-use crate::hex::NODES;
-use crate::hourglass::{GAMMA, MIN_STRAIN_INCREMENT, THIRD};
+use crate::hourglass::{MIN_STRAIN_INCREMENT, THIRD};
 
 type V3 = [F; 3];
 type M3 = [[F; 3]; 3];
 
 /// One step of a group's hourglass control (what [`crate::hourglass::HourglassStep`] and
 /// [`crate::hourglass::HourglassMaterial`] hold for one element; the shear modulus is positive:
-/// the physical kind).
+/// the physical kind), its geometry in mode space (`modes.rs`).
 pub struct LaneHourglass<'a> {
-    /// Nodal coordinates at the end of the step.
-    pub x: &'a [V3; NODES],
-    /// Nodal velocities over the step.
-    pub v: &'a [V3; NODES],
-    /// Mean gradient b at the end of the step.
-    pub b: &'a [V3; NODES],
+    /// The element's hourglass rates and frame ([`ModeGeometry`]).
+    pub geo: &'a ModeGeometry,
     /// Current volumes, m^3.
     pub vol: F,
     /// The step, s.
@@ -36,6 +31,38 @@ pub struct LaneHourglass<'a> {
     pub yield_stress: Option<F>,
     /// The elements' centre stresses (global axes, Voigt), Pa.
     pub stress: [F; 6],
+}
+
+/// What the hourglass control needs of the element's geometry and motion, in mode space: the
+/// hourglass rates q_a and the Jacobian at the centre (for the element frame).
+pub struct ModeGeometry {
+    /// q_a = sum_I v_I gamma_aI (global axes), m/s.
+    pub q: [V3; 4],
+    /// The Jacobian's rows dx/dxi, dx/deta, dx/dzeta at the centre.
+    pub jac: M3,
+}
+
+impl ModeGeometry {
+    /// The hourglass rates from the modes (over 8) `a` of the coordinates and `u` of the
+    /// velocities for the hourglass modes (eta zeta, zeta xi, xi eta, xi eta zeta), the matrix
+    /// `lg` = sum_k U_k (x) G_k (V times the end-of-step velocity gradient) and 1/V `iv`.
+    ///
+    /// `crate::hourglass::vectors` forms gamma_aI = Gamma_aI - (Gamma_a . x) . b_I node by node;
+    /// in mode space sum_I v_I Gamma_aI = U_a and sum_I v_I ((Gamma_a . x) . b_I)
+    /// = (1/V) sum_k U_k (G_k . X_a) = (8/V) lg a_a, so q_a = U_a - (8/V) lg a_a.
+    /// 4 x 12 operations per element (the node-by-node form: 4 x 120).
+    #[inline(always)]
+    pub fn new(a: &[V3; 4], u: &[V3; 4], lg: &M3, iv: F, jac: M3) -> ModeGeometry {
+        let s8 = 8.0 * iv;
+        let mut q = [[F::ZERO; 3]; 4];
+        for al in 0..4 {
+            for c in 0..3 {
+                let t = dot3(lg[c][0], a[al][0], lg[c][1], a[al][1], lg[c][2], a[al][2]);
+                q[al][c] = s8.neg_mul_add(t, u[al][c]);
+            }
+        }
+        ModeGeometry { q, jac }
+    }
 }
 
 #[inline(always)]
@@ -63,33 +90,6 @@ pub fn tangent_ratio(dsig: &[F; 6], deps: &[F; 6], mu: f64) -> F {
     F::select(round_off, F::splat(1.0), ratio)
 }
 
-/// [`crate::hourglass::vectors`] in lanes: gamma_aI = Gamma_aI - (Gamma_a . x) . b_I.
-/// 4 x (24 + 8 x 6) = 288 flops per element.
-#[inline(always)]
-fn vectors(x: &[V3; NODES], b: &[V3; NODES]) -> [[F; NODES]; 4] {
-    // Each array built whole, not zeroed then filled: LLVM zeroed the 2 KB of a zero-filled
-    // array with a call to memset, and every live vector register was spilled around it.
-    [
-        mode_vector(&GAMMA[0], x, b),
-        mode_vector(&GAMMA[1], x, b),
-        mode_vector(&GAMMA[2], x, b),
-        mode_vector(&GAMMA[3], x, b),
-    ]
-}
-
-/// gamma_aI of one mode `g` = Gamma_a (see [`vectors`]).
-#[inline(always)]
-fn mode_vector(g: &[f64; NODES], x: &[V3; NODES], b: &[V3; NODES]) -> [F; NODES] {
-    let mut gx = [F::ZERO; 3];
-    for k in 0..NODES {
-        for c in 0..3 {
-            gx[c] += g[k] * x[k][c];
-        }
-    }
-    let t = |k: usize| g[k] - dot3(gx[0], b[k][0], gx[1], b[k][1], gx[2], b[k][2]);
-    [t(0), t(1), t(2), t(3), t(4), t(5), t(6), t(7)]
-}
-
 /// [`crate::hourglass::Frame`] in lanes: rows e_j and inverse half-lengths 1 / a_j.
 struct Frame {
     e: M3,
@@ -97,29 +97,10 @@ struct Frame {
 }
 
 impl Frame {
-    /// Gram-Schmidt on the centre Jacobian's columns, as `Frame::new`. About 120 flops.
+    /// Gram-Schmidt on the centre Jacobian's rows `j` (j[d] = dx/dxi_d), as `Frame::new`.
+    /// About 50 flops.
     #[inline(always)]
-    fn new(x: &[V3; NODES]) -> Frame {
-        // J = 1/8 sum_n xi_n (x) x_n with xi = +-1: the signed sum, then one product by 1/8,
-        // which scales exactly (a power of two), so every partial sum is the scalar kernel's
-        // sum of 0.125 xi x terms to the bit.
-        let mut j = [[F::ZERO; 3]; 3];
-        for (xi, xn) in crate::hex::NODE_XI.iter().zip(x.iter()) {
-            for d in 0..3 {
-                for c in 0..3 {
-                    j[d][c] = if xi[d] > 0.0 {
-                        j[d][c] + xn[c]
-                    } else {
-                        j[d][c] - xn[c]
-                    };
-                }
-            }
-        }
-        for d in 0..3 {
-            for c in 0..3 {
-                j[d][c] = j[d][c] * 0.125;
-            }
-        }
+    fn new(j: &M3) -> Frame {
         let norm = |v: &V3| dot(v, v).sqrt();
         let scale = |v: &V3, s: F| [v[0] * s, v[1] * s, v[2] * s];
         let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
@@ -318,33 +299,20 @@ fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
 
 /// The FB/PRONTO stiffness form's step on a group of elements ([`crate::hourglass`]'s
 /// `Hourglass::apply` for `Stiffness`): the generalised forces `hg` (element frame, N) grow by
-/// dt `rate` qd, their forces are added to `force`, and the work of the step (trapezoid) is
-/// returned, J. `rate`: kappa 2 mu V sum(b^2) / 8 of each lane, N/m.
+/// dt `rate` qd. Returns the work of the step (trapezoid), J, and the generalised forces in
+/// global axes, whose nodal forces are -H_a gamma_aI (the caller adds them in mode space).
+/// `rate`: kappa 2 mu V sum(b^2) / 8 of each lane, N/m.
 ///
-/// Cost per element: 288 (vectors) + 120 (frame) + 4 x 33 (rates) + 12 x 8 (update and work)
-/// + 4 x 120 (forces) = about 1,100 flops; 12 state doubles read and written.
+/// Cost per element: 50 (frame) + 4 x 15 (to local) + 12 x 8 (update and work) + 4 x 15
+/// (to global) = about 270 operations; 12 state doubles read and written.
 #[inline(always)]
-pub fn stiffness(
-    x: &[V3; NODES],
-    v: &[V3; NODES],
-    b: &[V3; NODES],
-    rate: F,
-    dt: f64,
-    hg: &mut [V3; 4],
-    force: &mut [V3; NODES],
-) -> F {
-    let gam = vectors(x, b);
-    let frame = Frame::new(x);
+pub fn stiffness(geo: &ModeGeometry, rate: F, dt: f64, hg: &mut [V3; 4]) -> (F, [V3; 4]) {
+    let frame = Frame::new(&geo.jac);
     let dt_rate = dt * rate;
     let mut work = F::ZERO;
+    let mut tg = [[F::ZERO; 3]; 4];
     for al in 0..4 {
-        let mut q = [F::ZERO; 3];
-        for k in 0..NODES {
-            for c in 0..3 {
-                q[c] = v[k][c].mul_add(gam[al][k], q[c]);
-            }
-        }
-        let qd = frame.to_local(&q);
+        let qd = frame.to_local(&geo.q[al]);
         let mut h = [F::ZERO; 3];
         for i in 0..3 {
             // As the scalar kernel: new = old + dt rate qd, and its viscous part qv = 0 x qd
@@ -356,37 +324,28 @@ pub fn stiffness(
             hg[al][i] = new;
             h[i] = new + qv;
         }
-        let tg = frame.to_global(&h);
-        for k in 0..NODES {
-            for c in 0..3 {
-                force[k][c] = tg[c].neg_mul_add(gam[al][k], force[k][c]);
-            }
-        }
+        tg[al] = frame.to_global(&h);
     }
-    work
+    (work, tg)
 }
 
-/// The physical kind's step on a group of elements ([`crate::hourglass`]'s `physical_step`): adds the
-/// hourglass forces to `force`, updates the stress amplitudes `sig` and returns the hourglass
-/// work of the step, J.
+/// The physical kind's step on a group of elements ([`crate::hourglass`]'s `physical_step`):
+/// updates the stress amplitudes `sig` and returns the hourglass work of the step, J, and the
+/// generalised forces H_a in global axes, whose nodal forces are -H_a gamma_aI (the caller adds
+/// them in mode space).
 ///
-/// Cost per element: about 288 (vectors) + 120 (frame) + 4 x 51 (rates) + 24 + 2 x 30 + 60
-/// (amplitudes) + 162 + 4 x 110 (yield bound) + 4 x 120 (forces) = about 1,800 flops with the
-/// yield bound, on 18 + 12 state doubles (read and written) and the lanes' nodal values.
+/// Cost per element: about 50 (frame) + 4 x 15 (to local) + 4 x 51 (rates) + 24 + 2 x 30 + 60
+/// (amplitudes) + 162 + 4 x 110 (yield bound) + 4 x 15 (to global) = about 1,100 flops with the
+/// yield bound, on 12 state doubles (read and written).
 #[inline(always)]
-pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -> F {
-    let gam = vectors(s.x, s.b);
-    let frame = Frame::new(s.x);
-    let mut qd = [[F::ZERO; 3]; 4];
-    for al in 0..4 {
-        let mut q = [F::ZERO; 3];
-        for k in 0..NODES {
-            for c in 0..3 {
-                q[c] = s.v[k][c].mul_add(gam[al][k], q[c]);
-            }
-        }
-        qd[al] = frame.to_local(&q);
-    }
+pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4]) -> (F, [V3; 4]) {
+    let frame = Frame::new(&s.geo.jac);
+    let qd = [
+        frame.to_local(&s.geo.q[0]),
+        frame.to_local(&s.geo.q[1]),
+        frame.to_local(&s.geo.q[2]),
+        frame.to_local(&s.geo.q[3]),
+    ];
     let e = strain_rates(&qd, &frame.ia);
     // Loading (positive power of the amplitudes) follows the tangent, unloading is elastic.
     let power = dot(&sig[0], &e[0])
@@ -410,14 +369,11 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4], force: &mut [V3; NODES]) -
     for al in 0..4 {
         work += s.dt * 0.5 * (dot(&h_old[al], &qd[al]) + dot(&h[al], &qd[al]));
     }
-    // f_iI -= sum_a H_ia gamma_aI with H turned to global axes.
-    for al in 0..4 {
-        let tg = frame.to_global(&h[al]);
-        for k in 0..NODES {
-            for c in 0..3 {
-                force[k][c] = tg[c].neg_mul_add(gam[al][k], force[k][c]);
-            }
-        }
-    }
-    work
+    let tg = [
+        frame.to_global(&h[0]),
+        frame.to_global(&h[1]),
+        frame.to_global(&h[2]),
+        frame.to_global(&h[3]),
+    ];
+    (work, tg)
 }

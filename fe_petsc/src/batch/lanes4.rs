@@ -4,11 +4,9 @@
 //! one with AVX).
 //!
 //! Every operation is the IEEE operation of `f64` lane by lane, in the order written: no fused
-//! multiply-add and no reassociation, so that a lane computes bit for bit what the scalar kernel
-//! computes for its element: `mul_add` here rounds twice, as the scalar kernel's `a * b + c`.
-//! (`f64::mul_add` without the `fma` target feature, which the baseline target lacks, is a
-//! library call, and a fused product would round differently from the scalar kernel that other
-//! materials and the tests use.)
+//! multiply-add and no reassociation, so that the AVX2 and the baseline builds give the same bits
+//! (`mul_add` here rounds twice, as `a * b + c`; `f64::mul_add` without the `fma` target feature,
+//! which the baseline target lacks, is a library call).
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
 /// Elements per group.

@@ -1,9 +1,10 @@
 //! The batched element kernel: the hexahedron of [`crate::hex`] on a group of consecutive
 //! elements of one material at once, one element per f64 lane, the same operations in every
 //! lane and the scalar kernel's branches as masked lane operations. Each lane computes what
-//! [`crate::hex::update`] computes for its element, operation for operation in the same order
-//! (nothing reassociated). Four lanes round as the scalar kernel does and agree with it to the
-//! bit; eight lanes fuse their multiply-adds (`F::mul_add`) and agree to round-off. The scalar
+//! [`crate::hex::update`] computes for its element, the geometry in mode space (`modes.rs`: the
+//! volume, its gradient and the nodal forces through the Walsh-Hadamard transform of the nodal
+//! values) and the rest in the scalar kernel's order; both widths agree with it to round-off
+//! (eight lanes fuse their multiply-adds, `F::mul_add`). The scalar
 //! kernel stays the reference the tests hold both to (`tests/lanes.rs`, 1e-12 relative).
 //!
 //! The kernel is written once (`hex.rs`, `hourglass.rs`, `law.rs` in this folder, on a lane
@@ -200,6 +201,8 @@ pub mod w4 {
     mod hourglass;
     #[path = "law.rs"]
     mod law;
+    #[path = "modes.rs"]
+    mod modes;
     pub use hex::LaneGroup;
 
     /// [`super::Batch::update`] for four lanes: the AVX2 build when the CPU has AVX2, the
@@ -279,6 +282,8 @@ pub mod w8 {
     mod hourglass;
     #[path = "law.rs"]
     mod law;
+    #[path = "modes.rs"]
+    mod modes;
     pub use hex::LaneGroup;
 
     /// [`super::Batch::update`] for eight lanes. Panics on a CPU without AVX-512F: the element
