@@ -25,6 +25,9 @@ use crate::hex::{HexControls, HexOutput, HexState, NODES, SQRT_3};
 
 type V3 = [F; 3];
 
+/// The mode sums of a nodal field ([`modes::modes`]): xi .. xi eta, and xi eta zeta.
+type Modes = ([V3; 6], V3);
+
 /// Nodal vectors of a group's elements in lanes: `[node][component]`.
 pub type LaneNodes = [[F; 3]; NODES];
 
@@ -153,9 +156,9 @@ struct Kinematics {
 /// (volume gradients) + 54 + 9 (L) + 20 (sum b^2) + 60 (the rotation) = about 520 operations;
 /// 48 doubles read from the lanes, none written outside.
 #[inline(always)]
-fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
-    let (xm, xm7) = modes::modes(x);
-    let (u, u7) = modes::modes(v);
+fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
+    let (xm, xm7) = xm;
+    let (u, u7) = *um;
     let eighth = F::splat(0.125);
     let mut a = [[F::ZERO; 3]; 6];
     let mut ah = [[F::ZERO; 3]; 6];
@@ -172,8 +175,8 @@ fn kinematics(x: &LaneNodes, v: &LaneNodes, dt: f64) -> Option<Kinematics> {
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
         return None;
     }
-    // 1/V and 1/V(n+1/2) from one division (as `hex::update`).
-    let inv = 1.0 / (vol * volh);
+    // 1/V and 1/V(n+1/2) from one reciprocal.
+    let inv = (vol * volh).recip();
     let (iv, ivh) = (volh * inv, vol * inv);
     // sum_I |B_I|^2 = 8 sum_k |G_k|^2 (the modes are orthogonal over the nodes).
     let mut gg = g[0][0] * g[0][0];
@@ -266,7 +269,7 @@ fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
     ];
     let det = m[0][2].mul_add(c[2][0], m[0][1].mul_add(c[1][0], m[0][0] * c[0][0]));
     let singular = det.eq(F::ZERO).or(!det.is_finite());
-    let id = 1.0 / det;
+    let id = det.recip();
     let mut ai = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
@@ -304,18 +307,30 @@ fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
     ]
 }
 
-/// The bulk viscosity's pressure q and damping ratio xi ([`crate::hex`]'s `bulk_viscosity`, whose
-/// comment derives them) and the element's stable step (its `critical_dt`), in lanes.
+/// The bulk viscosity's pressure q and the element's stable step (its `critical_dt`), in lanes:
+/// [`crate::hex`]'s `bulk_viscosity` (whose comment derives them) for the density `rho`, the
+/// wave modulus whose reciprocal is `inv_modulus`, sum(b^2) `bb` and the volumetric rate `ev`.
+///
+/// The sound speed c = sqrt(M / rho) and s = sqrt(2 sum b^2) enter as c, 1/c, s and 1/s: two
+/// reciprocal square roots (of rho / M and of 2 sum b^2) give all four, and 1/(c s) is their
+/// product, where the scalar kernel takes two square roots and two divisions. 30 operations.
 #[inline(always)]
-fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F) {
-    let s = (2.0 * bb).sqrt();
-    let ics = 1.0 / (c * s);
-    let len = SQRT_3 * (c * ics);
+fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, inv_modulus: f64, ev: F) -> (F, F) {
+    let x = rho * inv_modulus;
+    let c = x.rsqrt();
+    let rc = x * c;
+    let two_bb = 2.0 * bb;
+    let rs = two_bb.rsqrt();
+    let s = two_bb * rs;
+    let ics = rs * rc;
+    // The characteristic length sqrt(3) c / (c s) = sqrt(3) / s.
+    let len = SQRT_3 * rs;
     let comp = (-ev).max(F::ZERO);
-    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp * (s * ics);
+    let lin_quad = ctl.bv_linear + ctl.bv_quadratic * ctl.bv_quadratic * len * comp * rc;
     let q = rho * len * c * ev * lin_quad;
     let xi = lin_quad * len * s;
-    let dt = ics * ((1.0 + xi * xi).sqrt() - xi);
+    let y = xi.mul_add(xi, F::splat(1.0));
+    let dt = ics * (y * y.rsqrt() - xi);
     (q, dt)
 }
 
@@ -354,11 +369,12 @@ pub(super) fn update_inline(
         state,
         out,
     } = g;
-    update_core(x, v, *vol0, state, out, dt, m, ctl)
+    let (xm, um) = (modes::modes(x), modes::modes(v));
+    update_core(&xm, &um, *vol0, state, out, dt, m, ctl)
 }
 
-/// The update of [`update_inline`] on nodal values `x`, `v`, reference volumes `vol0` and the
-/// state `st`, its output in `out`.
+/// The update of [`update_inline`] on the modes of the nodal coordinates `xm` and velocities
+/// `um` ([`modes::modes`]), reference volumes `vol0` and the state `st`, its output in `out`.
 ///
 /// Cost per element: about 520 operations of kinematics in mode space (`kinematics`), 200 for
 /// the stress (rotation, Hooke, the radial return's both sides), 40 for the bulk viscosity and
@@ -368,8 +384,8 @@ pub(super) fn update_inline(
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn update_core(
-    x: &LaneNodes,
-    v: &LaneNodes,
+    xm: &Modes,
+    um: &Modes,
     vol0: F,
     st: &mut LaneState,
     out: &mut LaneOutput,
@@ -377,7 +393,7 @@ fn update_core(
     m: &LaneMaterial,
     ctl: &HexControls,
 ) -> Result<(), GroupInverted> {
-    let k = kinematics(x, v, dt).ok_or(GroupInverted)?;
+    let k = kinematics(xm, um, dt).ok_or(GroupInverted)?;
     let mut stress = rotate(&k.r, &st.stress);
     let mut deps = [F::ZERO; 6];
     for i in 0..6 {
@@ -391,9 +407,8 @@ fn update_core(
 
     // Bulk viscosity on the normal stresses for the force only; a material with a lane form has
     // the constant wave modulus lambda + 2 mu and keeps no heat.
-    let c = (m.dilatational / rho).sqrt();
     let ev = k.d[0] + k.d[1] + k.d[2];
-    let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, c, ev);
+    let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, 1.0 / m.dilatational, ev);
 
     let mut dsig = [F::ZERO; 6];
     for i in 0..6 {
@@ -503,14 +518,24 @@ pub(super) fn update_lanes_inline(
 ) -> Result<(), GroupInverted> {
     use crate::states::BLOCK;
     let conn = &io.conn[..LANES];
-    // Local arrays, not the group's `x` and `v` (which this path leaves as they were): the
-    // gathered values are dead once their modes are formed, and stores through `g` would
-    // have to be kept.
-    let mut x = [[F::ZERO; 3]; NODES];
-    let mut v = [[F::ZERO; 3]; NODES];
-    for k in 0..NODES {
-        (x[k], v[k]) = F::gather_corner(io.xs, io.vs, conn, k);
+    // The corners' points, then the coordinates gathered and turned into modes, then the
+    // velocities (24 vectors live at a time, not 48), into local arrays, not the group's `x`
+    // and `v` (which this path leaves as they were: stores through `g` would have to be kept).
+    let n = io.xs.len();
+    assert_eq!(io.vs.len(), n, "one velocity per point");
+    let mut at = [F::corner(conn, 0, n); NODES];
+    for (k, c) in at.iter_mut().enumerate().skip(1) {
+        *c = F::corner(conn, k, n);
     }
+    let mut y = [[F::ZERO; 3]; NODES];
+    for k in 0..NODES {
+        y[k] = F::gather(io.xs, at[k]);
+    }
+    let xm = modes::modes(&y);
+    for k in 0..NODES {
+        y[k] = F::gather(io.vs, at[k]);
+    }
+    let um = modes::modes(&y);
     let vol0 = F::load(io.vol0);
     let src = &*io.state;
     let mut st = LaneState::default();
@@ -526,7 +551,7 @@ pub(super) fn update_lanes_inline(
         Some(h) => F::load(h),
         None => F::ZERO,
     };
-    update_core(&x, &v, vol0, &mut st, &mut g.out, dt, m, ctl)?;
+    update_core(&xm, &um, vol0, &mut st, &mut g.out, dt, m, ctl)?;
     let dst = &mut *io.state;
     for k in 0..6 {
         st.stress[k].store(&mut dst[k * BLOCK..]);

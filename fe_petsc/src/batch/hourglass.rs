@@ -86,7 +86,7 @@ pub fn tangent_ratio(dsig: &[F; 6], deps: &[F; 6], mu: f64) -> F {
         + ds[1] * de[1]
         + ds[2] * de[2]
         + 2.0 * (dsig[3] * deps[3] + dsig[4] * deps[4] + dsig[5] * deps[5]);
-    let ratio = (se / (2.0 * mu * ee)).clamp(0.0, 1.0);
+    let ratio = (se * (2.0 * mu * ee).recip()).clamp(0.0, 1.0);
     F::select(round_off, F::splat(1.0), ratio)
 }
 
@@ -101,12 +101,10 @@ impl Frame {
     /// About 50 flops.
     #[inline(always)]
     fn new(j: &M3) -> Frame {
-        let norm = |v: &V3| dot(v, v).sqrt();
+        // 1 / |v| as one reciprocal square root (`F::rsqrt`).
+        let inv_norm = |v: &V3| dot(v, v).rsqrt();
         let scale = |v: &V3, s: F| [v[0] * s, v[1] * s, v[2] * s];
-        let a = [norm(&j[0]), norm(&j[1]), norm(&j[2])];
-        // 1 / a_j from one division.
-        let (a01, inv) = (a[0] * a[1], 1.0 / (a[0] * a[1] * a[2]));
-        let ia = [a[1] * a[2] * inv, a[0] * a[2] * inv, a01 * inv];
+        let ia = [inv_norm(&j[0]), inv_norm(&j[1]), inv_norm(&j[2])];
         let e0 = scale(&j[0], ia[0]);
         let d01 = dot(&j[1], &e0);
         let t = [
@@ -114,7 +112,7 @@ impl Frame {
             j[1][1] - d01 * e0[1],
             j[1][2] - d01 * e0[2],
         ];
-        let e1 = scale(&t, 1.0 / norm(&t));
+        let e1 = scale(&t, inv_norm(&t));
         let e2 = [
             e0[1] * e1[2] - e0[2] * e1[1],
             e0[2] * e1[0] - e0[0] * e1[2],
@@ -187,7 +185,8 @@ fn forces(sig: &[V3; 4], ia: &V3, vol: F) -> [V3; 4] {
 /// Ebar = 2 mu / (1 - nu), 2 mu on mode 3) for the lanes' moduli `mu`.
 #[inline(always)]
 fn stress_rates(e: &[V3; 4], mu: F, nu: f64) -> [V3; 4] {
-    let ebar = 2.0 * mu / (1.0 - nu);
+    // 2 / (1 - nu) once per group, not a division in the lanes.
+    let ebar = mu * (2.0 / (1.0 - nu));
     let mut r = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let [epp, err, gpr] = e[g];
@@ -247,7 +246,9 @@ impl Centre {
 /// centre stress, `sy2` the squared yield stress.
 #[inline(always)]
 fn group_scale((b, c): (F, F), a: F, sy2: F) -> F {
-    let f = ((-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c).min(F::splat(1.0));
+    // sqrt(d) as d / sqrt(d) (`F::rsqrt`); d > 0 in every lane the selects below keep.
+    let d = b.mul_add(b, c * (sy2 - a));
+    let f = ((-b.abs() + d * d.rsqrt()) * c.recip()).min(F::splat(1.0));
     let f = F::select(a.ge(sy2), F::ZERO, f);
     F::select(c.le(F::ZERO), F::splat(1.0), f)
 }

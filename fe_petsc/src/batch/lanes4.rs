@@ -78,26 +78,26 @@ impl F4 {
         F4(a)
     }
 
-    /// The coordinates and velocities of corner `c` of the elements `conn[..4]`, lane `l` from
-    /// node `conn[l][c]` of `xs` and `vs`. Panics when an index is out of range.
+    /// The node numbers of corner `c` of the elements `conn[..4]`, each checked below `len`.
+    /// Panics when one is not.
     #[inline(always)]
-    pub fn gather_corner(
-        xs: &[[f64; 3]],
-        vs: &[[f64; 3]],
-        conn: &[[u32; 8]],
-        c: usize,
-    ) -> ([F4; 3], [F4; 3]) {
+    pub fn corner(conn: &[[u32; 8]], c: usize, len: usize) -> [usize; LANES] {
         let n = [
             conn[0][c] as usize,
             conn[1][c] as usize,
             conn[2][c] as usize,
             conn[3][c] as usize,
         ];
-        let lanes = |a: &[[f64; 3]], k: usize| F4([a[n[0]][k], a[n[1]][k], a[n[2]][k], a[n[3]][k]]);
-        (
-            [lanes(xs, 0), lanes(xs, 1), lanes(xs, 2)],
-            [lanes(vs, 0), lanes(vs, 1), lanes(vs, 2)],
-        )
+        assert!(n.iter().all(|&i| i < len), "a node index beyond the points");
+        n
+    }
+
+    /// The vectors of `ys` at the nodes `n`, component by component. Panics when a node is not
+    /// in `ys`.
+    #[inline(always)]
+    pub fn gather(ys: &[[f64; 3]], n: [usize; LANES]) -> [F4; 3] {
+        let lanes = |k: usize| F4([ys[n[0]][k], ys[n[1]][k], ys[n[2]][k], ys[n[3]][k]]);
+        [lanes(0), lanes(1), lanes(2)]
     }
 
     /// Writes lane `l` to `s[l]` for the first `LANES` doubles of `s`. Panics when `s` is
@@ -128,6 +128,19 @@ impl F4 {
     #[inline(always)]
     pub fn sqrt(self) -> F4 {
         self.map(f64::sqrt)
+    }
+
+    /// 1 / self, the IEEE quotient (the eight lanes' `recip` is an estimate refined to about
+    /// 1 ulp, which the divider-bound eight-lane kernel needs and this one does not).
+    #[inline(always)]
+    pub fn recip(self) -> F4 {
+        self.map(|x| 1.0 / x)
+    }
+
+    /// 1 / sqrt(self) from the IEEE square root and quotient.
+    #[inline(always)]
+    pub fn rsqrt(self) -> F4 {
+        self.map(|x| 1.0 / x.sqrt())
     }
 
     /// Lane-wise absolute value.

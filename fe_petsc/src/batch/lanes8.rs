@@ -20,18 +20,26 @@
 //! `is_x86_feature_detected!("avx512f")` (see `batch::w8::LaneGroup::update`); the operations
 //! are inlined into that entry, which is compiled with the feature.
 use std::arch::x86_64::{
-    __m512d, __m512i, _mm256_add_epi32, _mm256_and_si256, _mm256_cmpgt_epi32,
+    __m256i, __m512d, __m512i, _mm256_add_epi32, _mm256_and_si256, _mm256_cmpgt_epi32,
     _mm256_i32gather_epi32, _mm256_movemask_epi8, _mm256_set1_epi32, _mm256_setr_epi32,
     _mm512_abs_pd, _mm512_add_pd, _mm512_castpd_si512, _mm512_castsi512_pd, _mm512_cmp_pd_mask,
     _mm512_div_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_i32gather_pd,
-    _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd, _mm512_mul_pd, _mm512_set1_epi64,
-    _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ,
-    _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
+    _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd, _mm512_mul_pd, _mm512_rcp14_pd,
+    _mm512_rsqrt14_pd, _mm512_set1_epi64, _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd,
+    _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
 };
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
 /// Elements per group.
 pub const LANES: usize = 8;
+
+/// The points of one corner of a group's elements ([`F8::corner`]), as 32-bit offsets into a
+/// flattened array of `len` points.
+#[derive(Clone, Copy)]
+pub struct Corner8 {
+    offsets: __m256i,
+    len: usize,
+}
 
 /// Eight f64 lanes (the layout of one AVX-512 register).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -117,51 +125,53 @@ impl F8 {
         F8(a)
     }
 
-    /// The coordinates and velocities of corner `c` of the elements `conn[..8]`, lane `l`
-    /// from node `conn[l][c]` of `xs` and `vs`: the eight node numbers by one 32-bit gather
-    /// (the connectivity rows are 32 bytes apart), then three AVX-512 gathers from each array
-    /// with the same indices. (Building the index vector from eight scalar writes stalled each
-    /// time on the store forwarding of the vector read: about 40 % of a group's load.) Panics
-    /// when `conn` has fewer than eight elements, `c` is not a corner, `xs` and `vs` differ in
-    /// length, a node is not in them, or they hold 2^31 / 3 points or more (32-bit indices).
+    /// The offsets 3 n of the points n = `conn[l][c]` of corner `c` of the elements `conn[..8]`
+    /// in a flattened array of `len` points: the eight node numbers by one 32-bit gather (the
+    /// connectivity rows are 32 bytes apart; building the vector from eight scalar writes
+    /// stalled each time on the store forwarding of the vector read: about 40 % of a group's
+    /// load). Panics when `conn` has fewer than eight elements, `c` is not a corner, a node is
+    /// not below `len`, or `len` is 2^31 / 3 or more (32-bit offsets).
     #[inline(always)]
-    pub fn gather_corner(
-        xs: &[[f64; 3]],
-        vs: &[[f64; 3]],
-        conn: &[[u32; 8]],
-        c: usize,
-    ) -> ([F8; 3], [F8; 3]) {
+    pub fn corner(conn: &[[u32; 8]], c: usize, len: usize) -> Corner8 {
         assert!(conn.len() >= LANES && c < 8, "eight elements, corner 0..8");
         assert!(
-            xs.len() == vs.len() && xs.len() <= i32::MAX as usize / 3,
-            "one velocity per point, and fewer than 2^31 / 3 points"
+            len <= i32::MAX as usize / 3,
+            "fewer than 2^31 / 3 points (32-bit offsets)"
         );
         // SAFETY: AVX-512F (and the AVX2 it implies) as in `avx512!`. The index gather reads
         // conn[l][c], l < 8, inside `conn` (checked above: rows of eight u32, 32 bytes apart).
-        // The node numbers are checked in range before any point is read, so the doubles
-        // 3 n + k (k < 3) lie inside `xs` and `vs`.
         unsafe {
             let rows = _mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56);
             let nodes = _mm256_i32gather_epi32::<4>(conn.as_ptr().cast::<i32>().add(c), rows);
-            let len = _mm256_set1_epi32(xs.len() as i32);
-            let below = _mm256_cmpgt_epi32(len, nodes);
+            let below = _mm256_cmpgt_epi32(_mm256_set1_epi32(len as i32), nodes);
             let nonneg = _mm256_cmpgt_epi32(nodes, _mm256_set1_epi32(-1));
             let ok = _mm256_movemask_epi8(_mm256_and_si256(below, nonneg));
             assert!(ok == -1, "a node index beyond the points");
-            let vi = _mm256_add_epi32(nodes, _mm256_add_epi32(nodes, nodes));
-            let (x, v) = (xs.as_flattened().as_ptr(), vs.as_flattened().as_ptr());
-            (
-                [
-                    val(_mm512_i32gather_pd::<8>(vi, x)),
-                    val(_mm512_i32gather_pd::<8>(vi, x.add(1))),
-                    val(_mm512_i32gather_pd::<8>(vi, x.add(2))),
-                ],
-                [
-                    val(_mm512_i32gather_pd::<8>(vi, v)),
-                    val(_mm512_i32gather_pd::<8>(vi, v.add(1))),
-                    val(_mm512_i32gather_pd::<8>(vi, v.add(2))),
-                ],
-            )
+            Corner8 {
+                offsets: _mm256_add_epi32(nodes, _mm256_add_epi32(nodes, nodes)),
+                len,
+            }
+        }
+    }
+
+    /// The vectors of `ys` at the points of `at`, component by component: three AVX-512
+    /// gathers. Panics when `ys` is not as long as the `len` `at` was checked against.
+    #[inline(always)]
+    pub fn gather(ys: &[[f64; 3]], at: Corner8) -> [F8; 3] {
+        assert_eq!(
+            ys.len(),
+            at.len,
+            "the points the corner was checked against"
+        );
+        let y = ys.as_flattened().as_ptr();
+        // SAFETY: AVX-512F as in `avx512!`; every offset is 3 n with n < len = ys.len()
+        // (checked in `corner` and above), so the doubles 3 n + k (k < 3) lie inside `ys`.
+        unsafe {
+            [
+                val(_mm512_i32gather_pd::<8>(at.offsets, y)),
+                val(_mm512_i32gather_pd::<8>(at.offsets, y.add(1))),
+                val(_mm512_i32gather_pd::<8>(at.offsets, y.add(2))),
+            ]
         }
     }
 
@@ -187,6 +197,41 @@ impl F8 {
     #[inline(always)]
     pub fn sqrt(self) -> F8 {
         val(avx512!(_mm512_sqrt_pd(reg(self))))
+    }
+
+    /// 1 / self, not the IEEE quotient but within about 1 ulp of it, for a positive finite
+    /// normal `self` (a zero, infinite or NaN lane gives NaN): the 14-bit estimate of
+    /// `vrcp14pd` and two Newton steps y <- y + y (1 - x y), fused, each squaring the relative
+    /// error (2^-14, 2^-28, 2^-56). Five instructions on the multiply-add ports against one
+    /// `vdivpd` that holds the divider for 16 cycles (Intel's optimisation manual, section
+    /// "Divide and square root": the divider is not pipelined; the kernel's dozen divisions and
+    /// square roots per group held it for about 600 of its 1,500 cycles).
+    #[inline(always)]
+    pub fn recip(self) -> F8 {
+        let one = F8::splat(1.0);
+        let mut y = val(avx512!(_mm512_rcp14_pd(reg(self))));
+        for _ in 0..2 {
+            let e = self.neg_mul_add(y, one);
+            y = y.mul_add(e, y);
+        }
+        y
+    }
+
+    /// 1 / sqrt(self), within about 2 ulp, for a positive finite normal `self` (zero gives NaN,
+    /// not infinity): the 14-bit estimate of `vrsqrt14pd` and two Newton steps
+    /// y <- y + y (1/2 - x y^2 / 2), each squaring the relative error (times 3/2). Seven
+    /// instructions instead of `vsqrtpd` (24 cycles of the divider for eight lanes) and a
+    /// division (see [`F8::recip`]); sqrt(x) is then x rsqrt(x).
+    #[inline(always)]
+    pub fn rsqrt(self) -> F8 {
+        let half = F8::splat(0.5);
+        let hx = self * half;
+        let mut y = val(avx512!(_mm512_rsqrt14_pd(reg(self))));
+        for _ in 0..2 {
+            let e = hx.neg_mul_add(y * y, half);
+            y = y.mul_add(e, y);
+        }
+        y
     }
 
     /// Lane-wise absolute value.

@@ -15,11 +15,11 @@ pub(super) fn update_stress(law: &LaneLaw, stress: &mut [F; 6], history: &mut F,
         LaneLaw::Elastic(m) => add_elastic(stress, deps, m.lambda, m.mu),
         LaneLaw::J2Plastic(m) => {
             add_elastic(stress, deps, m.lambda, m.mu);
-            let (s, p, q) = deviator(stress);
+            let (s, p, q, iq) = deviator(stress);
             let f = q - (m.yield_stress + m.hardening * *history);
             let flow = f.gt(F::ZERO);
             let dgamma = f * m.inv_return;
-            let scale = 1.0 - 3.0 * m.mu * dgamma / q;
+            let scale = 1.0 - 3.0 * m.mu * dgamma * iq;
             for k in 0..3 {
                 stress[k] = F::select(flow, s[k] * scale + p, stress[k]);
                 stress[k + 3] = F::select(flow, s[k + 3] * scale, stress[k + 3]);
@@ -49,12 +49,16 @@ fn add_elastic(stress: &mut [F; 6], deps: &[F; 6], lambda: f64, mu: f64) {
     }
 }
 
-/// The deviator, the mean stress and the von Mises stress (`material::deviator`) in lanes.
+/// The deviator, the mean stress, the von Mises stress q (`material::deviator`) and 1/q in
+/// lanes, q and 1/q from one reciprocal square root (`F::rsqrt`; a lane with no deviator gets
+/// NaN for both and does not flow: NaN > 0 is false).
 #[inline(always)]
-fn deviator(s: &[F; 6]) -> ([F; 6], F, F) {
+fn deviator(s: &[F; 6]) -> ([F; 6], F, F, F) {
     let p = (s[0] + s[1] + s[2]) * THIRD;
     let d = [s[0] - p, s[1] - p, s[2] - p, s[3], s[4], s[5]];
     let j2 =
         0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
-    (d, p, (3.0 * j2).sqrt())
+    let x = 3.0 * j2;
+    let iq = x.rsqrt();
+    (d, p, x * iq, iq)
 }
