@@ -394,6 +394,23 @@ fn update_core(
     ctl: &HexControls,
 ) -> Result<(), GroupInverted> {
     let k = kinematics(xm, um, dt).ok_or(GroupInverted)?;
+    // The hourglass rates first (the velocities' modes are dead after them: fewer live
+    // vectors through the stress update): the hourglass modes of the coordinates (over 8)
+    // and velocities, and
+    // sum_k U_k (x) G_k (V times the velocity gradient at the end of the step).
+    let a_hg = [k.a[3], k.a[4], k.a[5], k.a7];
+    let u_hg = [k.u[3], k.u[4], k.u[5], k.u7];
+    let mut lg = [[F::ZERO; 3]; 3];
+    for (i, row) in lg.iter_mut().enumerate() {
+        for (j, e) in row.iter_mut().enumerate() {
+            let mut s = k.u[0][i] * k.g[0][j];
+            for mm in 1..6 {
+                s = k.u[mm][i].mul_add(k.g[mm][j], s);
+            }
+            *e = s;
+        }
+    }
+    let geo = hourglass_lanes::ModeGeometry::new(&a_hg, &u_hg, &lg, k.iv, [k.a[0], k.a[1], k.a[2]]);
     let mut stress = rotate(&k.r, &st.stress);
     let mut deps = [F::ZERO; 6];
     for i in 0..6 {
@@ -414,21 +431,6 @@ fn update_core(
     for i in 0..6 {
         dsig[i] = stress[i] - rotated[i];
     }
-    // The hourglass modes of the coordinates (over 8) and velocities, and
-    // sum_k U_k (x) G_k (V times the velocity gradient at the end of the step).
-    let a_hg = [k.a[3], k.a[4], k.a[5], k.a7];
-    let u_hg = [k.u[3], k.u[4], k.u[5], k.u7];
-    let mut lg = [[F::ZERO; 3]; 3];
-    for (i, row) in lg.iter_mut().enumerate() {
-        for (j, e) in row.iter_mut().enumerate() {
-            let mut s = k.u[0][i] * k.g[0][j];
-            for mm in 1..6 {
-                s = k.u[mm][i].mul_add(k.g[mm][j], s);
-            }
-            *e = s;
-        }
-    }
-    let geo = hourglass_lanes::ModeGeometry::new(&a_hg, &u_hg, &lg, k.iv, [k.a[0], k.a[1], k.a[2]]);
     let (hg_work, tg) = match m.hourglass {
         LaneHourglassKind::Physical { scale } => {
             let hg = LaneHourglass {
