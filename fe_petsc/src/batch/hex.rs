@@ -310,10 +310,13 @@ fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
 /// The bulk viscosity's pressure q and damping ratio xi ([`crate::hex`]'s `bulk_viscosity`, whose
 /// comment derives them) and the element's stable step (its `critical_dt`), in lanes, for the
 /// density `rho`, sound speed `c`, sum(b^2) `bb` and volumetric rate `ev`. The square roots
-/// here stay IEEE (`vsqrtpd`): with reciprocal square roots (`F::rsqrt`, about 2 ulp) for s
-/// and sqrt(1 + xi^2) the `block_flat_drop` history at np 3 left np 1's by 3e-8 (the rank
-/// tests' limit is 1e-10), where every other site of `F::rsqrt` and `F::recip` left it
-/// bit-identical; why is not understood yet.
+/// here stay IEEE (`vsqrtpd`; reciprocal square roots gained nothing measurable here). With
+/// reciprocal square roots for s and sqrt(1 + xi^2), `block_flat_drop` with its nodes exactly
+/// over the plate's edge midpoints left np 1's history at np 3 by 3e-8 (the rank tests' limit
+/// is 1e-10): in that exactly tied contact the push-back follows last-bit differences in the
+/// positions, which the ghost sums' order makes rank-dependent once forces are not zero, and
+/// this form of the step happened to let them in a step before the tie was settled. (Moved by
+/// 1e-7 m off the tie, np 1 and np 3 agree to 1e-16 either way.)
 #[inline(always)]
 fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F) {
     let s = (2.0 * bb).sqrt();
