@@ -203,9 +203,11 @@ impl F8 {
     /// normal `self` (a zero, infinite or NaN lane gives NaN): the 14-bit estimate of
     /// `vrcp14pd` and two Newton steps y <- y + y (1 - x y), fused, each squaring the relative
     /// error (2^-14, 2^-28, 2^-56). Five instructions on the multiply-add ports against one
-    /// `vdivpd` that holds the divider for 16 cycles (Intel's optimisation manual, section
-    /// "Divide and square root": the divider is not pipelined; the kernel's dozen divisions and
-    /// square roots per group held it for about 600 of its 1,500 cycles).
+    /// `vdivpd`, which holds the divider (one per core, not pipelined) for about 16 cycles for
+    /// eight lanes (llvm-mca's Ice Lake model; `vsqrtpd` about 24): the kernel's 31 divisions and
+    /// square roots per group kept the divider busy 17 % of its cycles (llvm-mca) and about 600
+    /// of its 1,500 cycles by these figures. Measured error: at most 2.0 ulp over 1.6e8 random
+    /// inputs against the IEEE quotient.
     #[inline(always)]
     pub fn recip(self) -> F8 {
         let one = F8::splat(1.0);
@@ -221,7 +223,8 @@ impl F8 {
     /// not infinity): the 14-bit estimate of `vrsqrt14pd` and two Newton steps
     /// y <- y + y (1/2 - x y^2 / 2), each squaring the relative error (times 3/2). Seven
     /// instructions instead of `vsqrtpd` (24 cycles of the divider for eight lanes) and a
-    /// division (see [`F8::recip`]); sqrt(x) is then x rsqrt(x).
+    /// division (see [`F8::recip`]); sqrt(x) is then x rsqrt(x). Measured error: at most 2.4 ulp
+    /// over 1.6e8 random inputs against 1 / sqrt in IEEE arithmetic.
     #[inline(always)]
     pub fn rsqrt(self) -> F8 {
         let half = F8::splat(0.5);
