@@ -12,7 +12,7 @@
 //! fill the vector units and hide the latencies.
 //!
 //! Scope: the materials with a lane form ([`crate::material::LaneLaw`]: elastic, J2 plastic)
-//! under the physical hourglass control. A group with an element whose volume (end of step or
+//! under the physical hourglass control or the FB/PRONTO stiffness form. A group with an element whose volume (end of step or
 //! mid-step) is not positive and finite returns an error before it changes any state, so that the
 //! caller runs its elements through the scalar kernel, which reports the error as it
 //! always has.
@@ -152,9 +152,9 @@ struct Kinematics {
 /// their modes are a_k - dt/16 U_k. The velocity gradient L = sum_I v_I (x) B_I(n+1/2) / V(n+1/2)
 /// = sum_k U_k (x) G_k(n+1/2) / V(n+1/2).
 ///
-/// Cost per element: 2 x 69 (modes of x and v) + 18 (a) + 18 (mid-step modes) + 2 x 100
-/// (volume gradients) + 54 + 9 (L) + 20 (sum b^2) + 60 (the rotation) = about 520 operations;
-/// 48 doubles read from the lanes, none written outside.
+/// Cost per element: 18 (a) + 18 (mid-step modes) + 2 x 100 (volume gradients) + 54 + 9 (L)
+/// + 20 (sum b^2) + 60 (the rotation) = about 380 operations, after the 2 x 69 of the modes of
+/// x and v (`xm`, `um`, formed by the caller); nothing read or written outside the lanes.
 #[inline(always)]
 fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
     let (xm, xm7) = xm;
@@ -372,7 +372,8 @@ pub(super) fn update_inline(
 /// The update of [`update_inline`] on the modes of the nodal coordinates `xm` and velocities
 /// `um` ([`modes::modes`]), reference volumes `vol0` and the state `st`, its output in `out`.
 ///
-/// Cost per element: about 520 operations of kinematics in mode space (`kinematics`), 200 for
+/// Cost per element: about 520 operations of kinematics in mode space (the modes and
+/// `kinematics`), 200 for
 /// the stress (rotation, Hooke, the radial return's both sides), 40 for the bulk viscosity and
 /// stable step, 400-1,100 for the hourglass control (FB stiffness form, physical with the
 /// yield bound) and 200 for the nodal forces; memory: the 48 gathered nodal doubles (384 B),
