@@ -152,8 +152,8 @@ struct Kinematics {
 /// their modes are a_k - dt/16 U_k. The velocity gradient L = sum_I v_I (x) B_I(n+1/2) / V(n+1/2)
 /// = sum_k U_k (x) G_k(n+1/2) / V(n+1/2).
 ///
-/// Cost per element: 18 (a) + 18 (mid-step modes) + 2 x 100 (volume gradients) + 54 + 9 (L)
-/// + 20 (sum b^2) + 60 (the rotation) = about 380 operations, after the 2 x 69 of the modes of
+/// Cost per element: 18 (a) + 18 (mid-step modes) + 2 x 100 (volume gradients) + 54 + 9 (L) +
+/// 20 (sum b^2) + 60 (the rotation) = about 380 operations, after the 2 x 69 of the modes of
 /// x and v (`xm`, `um`, formed by the caller); nothing read or written outside the lanes.
 #[inline(always)]
 fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
