@@ -21,6 +21,7 @@ use crate::blocks::BlockWork;
 use crate::hex::{self, HexControls, HexState};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
+use crate::nodal::{self, NodalSums};
 use crate::petsc::PetscError;
 use crate::states::HexStates;
 use mpi::collective::SystemOperation;
@@ -487,19 +488,22 @@ impl ExplicitFe {
         self.x.len()
     }
 
+    /// Whether the nodal passes go eight nodes at a time (`nodal`): where the element kernel
+    /// runs eight lanes (the CPU has AVX-512F).
+    fn wide_nodes(&self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        return self.width == Width::W8;
+        #[cfg(not(target_arch = "x86_64"))]
+        return false;
+    }
+
     /// First half of the step: kick to the half step, apply constraints, drift the positions.
     pub fn kick_drift(&mut self, dt: f64) {
         let t0 = std::time::Instant::now();
-        let h = 0.5 * dt;
-        // One pass: kick, keep the start position, drift (per node: v, a, x read, v, x_old, x
-        // written: 144 B); then the constrained nodes' velocities and drifts again.
-        for n in 0..self.x.len() {
-            for c in 0..3 {
-                self.v[n][c] += h * self.a[n][c];
-                self.x_old[n][c] = self.x[n][c];
-                self.x[n][c] += dt * self.v[n][c];
-            }
-        }
+        // One pass: kick, keep the start position, drift (`nodal::kick_drift`); then the
+        // constrained nodes' velocities and drifts again.
+        let wide = self.wide_nodes();
+        nodal::kick_drift(&mut self.v, &self.a, &mut self.x, &mut self.x_old, dt, wide);
         self.constrain_velocities();
         for (n, _) in &self.constraints {
             let n = *n as usize;
@@ -782,25 +786,10 @@ impl ExplicitFe {
             gravity: g,
         };
         let constrained = &self.constrained[..nn];
+        let wide = self.wide_nodes();
         let (a, v) = (&mut self.a[..nn], &mut self.v[..nn]);
-        // One pass over the free nodes: acceleration, closing kick, sums. A free node's
-        // reactions are zero (only constrained nodes' are ever written), so it reads none.
-        // Per node: force, force_old, mass, v read (80 B), a and v written (48 B); about 40
-        // flops.
-        for n in 0..nn {
-            let im = 1.0 / read.mass[n];
-            let f = read.force[n];
-            let an = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
-            a[n] = an;
-            if !constrained[n] {
-                let vn = &mut v[n];
-                let half = *vn;
-                for c in 0..3 {
-                    vn[c] += h * an[c];
-                }
-                read.add(n, *vn, half, [0.0; 3], [0.0; 3], &mut sums);
-            }
-        }
+        // One pass over the nodes: accelerations; the free nodes' closing kick and sums.
+        nodal::close_free(&read, constrained, a, v, &mut sums, wide);
         // The constrained nodes: reaction = m a(constrained) - m a(free), the force the
         // constraint adds; then their kick and sums.
         std::mem::swap(&mut self.reaction, &mut self.reaction_old);
@@ -1036,58 +1025,6 @@ impl ExplicitFe {
                 + 8 * (3 + self.mat_stride)
                 + 8)
             + self.blocks.bytes()
-    }
-}
-
-/// What a node's energy and momentum sums read ([`ExplicitFe::finish_step`]), as slices of
-/// the local node count.
-struct NodalSums<'a> {
-    /// The step, s.
-    dt: f64,
-    force: &'a [[f64; 3]],
-    force_old: &'a [[f64; 3]],
-    mass: &'a [f64],
-    owned: &'a [bool],
-    gravity: [f64; 3],
-}
-
-impl NodalSums<'_> {
-    /// Adds node `n`'s kinetic energy (velocity `v` at the end of the step), element and
-    /// external work over the step (trapezoids with the reactions `r` now and `r_old` a step
-    /// ago, over the displacement dt `half`, `half` the velocity of the step's drift) and
-    /// momentum to `sums`, if this rank owns the node. About 35 flops.
-    ///
-    /// The displacement: the drift and the contact push-back move a node by dt times the
-    /// velocity they leave at the half step (x(n+1) = x(n) + dt v(n+1/2), the push-back adding
-    /// dv to v and dt dv to x), so dt v(n+1/2) is x(n+1) - x(n) without the rounding of x
-    /// (relative 1e-16 of |x| against |dx|) and without reading two position arrays.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn add(
-        &self,
-        n: usize,
-        v: [f64; 3],
-        half: [f64; 3],
-        r: [f64; 3],
-        r_old: [f64; 3],
-        sums: &mut [f64; 6],
-    ) {
-        if !self.owned[n] {
-            return;
-        }
-        let (g, m) = (self.gravity, self.mass[n]);
-        let (f, f_old) = (self.force[n], self.force_old[n]);
-        let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
-        for c in 0..3 {
-            let dx = self.dt * half[c];
-            ke += v[c] * v[c];
-            w_elem += 0.5 * (f[c] + f_old[c]) * dx;
-            w_ext += (0.5 * (r[c] + r_old[c]) + m * g[c]) * dx;
-            sums[3 + c] += m * v[c];
-        }
-        sums[0] += 0.5 * m * ke;
-        sums[1] -= w_elem;
-        sums[2] += w_ext;
     }
 }
 

@@ -18,6 +18,7 @@ pub mod implicit;
 pub mod locality;
 pub mod material;
 pub mod mesh;
+mod nodal;
 pub mod objects;
 pub mod petsc;
 pub mod solver;
