@@ -106,7 +106,7 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "fe.reaction_old"
         | "implicit.force_n"
         | "implicit.reaction_n" => Node,
-        "fe.hex_state" | "fe.mat_state" | "fe.vol" | "fe.pressure" => Element,
+        "fe.hex_state" | "fe.mat_state" => Element,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
         "fe.block_work" => BlockWork,
         _ => return None,
@@ -194,10 +194,6 @@ pub struct ExplicitFe {
     mat_stride: usize,
     /// Reference volume of each element.
     pub vol0: Vec<f64>,
-    /// Current volume of each element.
-    pub vol: Vec<f64>,
-    /// Pressure (without bulk viscosity) of each element, Pa.
-    pub pressure: Vec<f64>,
     /// Material index of each element.
     pub elem_material: Vec<usize>,
     /// The materials.
@@ -340,9 +336,7 @@ impl ExplicitFe {
             state: HexStates::new(ne),
             mat_state,
             mat_stride,
-            vol: vol0.clone(),
             vol0,
-            pressure: vec![0.0; ne],
             elem_material: setup.elem_material,
             materials: setup.materials,
             constraints: setup.constraints,
@@ -720,7 +714,8 @@ impl ExplicitFe {
     /// [`ExplicitFe::add_output`] for each, read straight from the lanes.
     ///
     /// Cost per element: the scatter-add of 24 force doubles (192 B read and written) through
-    /// the connectivity (32 B), volume and pressure written (16 B); 26 flops.
+    /// the connectivity (32 B); 26 flops. (The volumes and pressures are not kept: see
+    /// [`ExplicitFe::density`] and [`ExplicitFe::pressure`].)
     #[inline]
     fn add_group_output<B: Batch>(&mut self, e0: usize, n: usize, g: &B, sums: &mut LoopSums) {
         for l in 0..n {
@@ -733,7 +728,7 @@ impl ExplicitFe {
                 f[2] += fe[2];
             }
         }
-        let [hg_work, volume, dt_stable, pressure] = g.scalars();
+        let [hg_work, _, dt_stable, _] = g.scalars();
         if self.blocks.active() {
             for l in 0..n {
                 let out = g.lane_output(l);
@@ -744,12 +739,10 @@ impl ExplicitFe {
             sums.hg_work += hg_work[l];
             sums.dt_min = sums.dt_min.min(dt_stable[l]);
         }
-        self.vol[e0..e0 + n].copy_from_slice(&volume[..n]);
-        self.pressure[e0..e0 + n].copy_from_slice(&pressure[..n]);
     }
 
     /// Adds element `e`'s output: its forces to its nodes and its block, its hourglass work and
-    /// stable step to `sums`, its volume and pressure to the element arrays.
+    /// stable step to `sums`.
     #[inline]
     fn add_output(&mut self, e: usize, out: &hex::HexOutput, sums: &mut LoopSums) {
         for (k, &n) in self.elems[e].iter().enumerate() {
@@ -761,8 +754,6 @@ impl ExplicitFe {
         sums.hg_work += out.hg_work;
         self.blocks.add(e, &out.force, out.hg_work);
         sums.dt_min = sums.dt_min.min(out.dt_stable);
-        self.vol[e] = out.volume;
-        self.pressure[e] = out.pressure;
     }
 
     /// Second half of the step: accelerations, constraints and reactions, the closing kick, and
@@ -932,8 +923,6 @@ impl ExplicitFe {
             ("fe.reaction_old", flat(&self.reaction_old)),
             ("fe.hex_state", hex),
             ("fe.mat_state", self.mat_state.clone()),
-            ("fe.vol", self.vol.clone()),
-            ("fe.pressure", self.pressure.clone()),
             ("fe.scalars", scalars),
             ("fe.block_energies", blocks),
             ("fe.block_work", block_sums),
@@ -972,8 +961,6 @@ impl ExplicitFe {
         self.reaction_old = unflat(take("fe.reaction_old", n3)?);
         self.state.set_flat(&take("fe.hex_state", 18 * ne)?);
         self.mat_state = take("fe.mat_state", self.mat_state.len())?;
-        self.vol = take("fe.vol", ne)?;
-        self.pressure = take("fe.pressure", ne)?;
         let s = take("fe.scalars", 11)?;
         self.energies = Energies {
             kinetic: s[0],
@@ -1009,9 +996,19 @@ impl ExplicitFe {
         self.materials[self.elem_material[e]].plastic_strain(&self.mat_state[e * s..(e + 1) * s])
     }
 
-    /// Current density of element `e`, kg/m^3.
+    /// Current density of element `e`, kg/m^3: its mass over its volume at the current
+    /// positions ([`hex::volume`]; the element loop's own volume differs from it at round-off
+    /// and is not kept: formed on demand here, for output, not written every step).
     pub fn density(&self, e: usize) -> f64 {
-        self.materials[self.elem_material[e]].density() * self.vol0[e] / self.vol[e]
+        let v = hex::volume(&gather(&self.x, &self.elems[e]));
+        self.materials[self.elem_material[e]].density() * self.vol0[e] / v
+    }
+
+    /// Pressure (without bulk viscosity) of element `e`, Pa: -tr(sigma) / 3 of its stress, as
+    /// the element update reports it (formed on demand, not written every step).
+    pub fn pressure(&self, e: usize) -> f64 {
+        let s = self.state.stress(e);
+        -(s[0] + s[1] + s[2]) * crate::hourglass::THIRD
     }
 
     /// Bytes of the per-node and per-element arrays on this rank.
@@ -1022,7 +1019,7 @@ impl ExplicitFe {
             + ne * (std::mem::size_of::<[u32; 8]>()
                 + 8
                 + std::mem::size_of::<HexState>()
-                + 8 * (3 + self.mat_stride)
+                + 8 * (1 + self.mat_stride)
                 + 8)
             + self.blocks.bytes()
     }

@@ -250,8 +250,6 @@ pub struct ImplicitFe {
     reaction_n: Vec<[f64; 3]>,
     state_trial: HexStates,
     mat_trial: Vec<f64>,
-    vol_trial: Vec<f64>,
-    pressure_trial: Vec<f64>,
     hg_work_trial: f64,
     owned_buf: Vec<f64>,
     local_buf: Vec<f64>,
@@ -313,7 +311,6 @@ impl ImplicitFe {
         let solver = Solver::new(comm, &matrix)?;
         let rhs = matrix.vector()?;
         let sol = matrix.vector()?;
-        let ne = fe.elems.len();
         let mut imp = ImplicitFe {
             dt,
             options: NewtonOptions::from_options()?,
@@ -336,8 +333,6 @@ impl ImplicitFe {
             reaction_n: vec![[0.0; 3]; nn],
             state_trial: fe.state.clone(),
             mat_trial: fe.mat_state.clone(),
-            vol_trial: fe.vol.clone(),
-            pressure_trial: vec![0.0; ne],
             hg_work_trial: 0.0,
             owned_buf: vec![0.0; 3 * owned_nodes.len()],
             local_buf: vec![0.0; 3 * nn],
@@ -524,8 +519,6 @@ impl ImplicitFe {
                     hg_work += out.hg_work;
                     self.fe.blocks.add(e, &out.force, out.hg_work);
                     self.state_trial.set(e, &st);
-                    self.vol_trial[e] = out.volume;
-                    self.pressure_trial[e] = out.pressure;
                 }
                 Err(hex::ElementError::Inverted { volume }) => {
                     failure = Some(StepError::Inverted {
@@ -799,8 +792,6 @@ impl ImplicitFe {
         self.fe.force.copy_from_slice(&self.force_n);
         std::mem::swap(&mut self.fe.state, &mut self.state_trial);
         std::mem::swap(&mut self.fe.mat_state, &mut self.mat_trial);
-        self.fe.vol.copy_from_slice(&self.vol_trial);
-        self.fe.pressure.copy_from_slice(&self.pressure_trial);
         self.fe.timers.nodal += t0.elapsed().as_secs_f64();
         sums
     }

@@ -194,6 +194,7 @@ impl Outputs {
         let vel = |i| fe.map_or([0.0; 3], |(_, st, _)| st.v[node(i)]);
         let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state.stress(e));
         let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
+        let pressure = |e| fe.map_or(0.0, |(_, st, _)| st.pressure(e));
         let nodes = fe.map(|(m, _, _)| NodeFrame {
             ids: &m.node_ids,
             position: Values::Made(&pos),
@@ -208,7 +209,7 @@ impl Outputs {
             },
             stress: Some(Values::Made(&stress)),
             plastic_strain: Some(Values::Made(&eps)),
-            pressure: Some(&st.pressure),
+            pressure: Some(Values::Made(&pressure)),
             rank: Some(&m.rank_field),
         });
         let rank = self.rank;

@@ -69,7 +69,7 @@ pub struct ElementFrame<'a> {
     /// Equivalent plastic strain.
     pub plastic_strain: Option<Values<'a, f64>>,
     /// Pressure.
-    pub pressure: Option<&'a [f64]>,
+    pub pressure: Option<Values<'a, f64>>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -342,7 +342,7 @@ impl FieldWriter {
             cols.push(("plastic_strain", 1, scalar(move |e| s.at(e)), false));
         }
         if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
-            cols.push(("pressure", 1, scalar(move |e| s[e]), false));
+            cols.push(("pressure", 1, scalar(move |e| s.at(e)), false));
         }
         if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
             cols.push(("rank", 1, scalar(move |e| f64::from(s[e])), true));

@@ -239,7 +239,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             connectivity: Connectivity::Ids(&conn),
             stress: first.then_some(Values::Held(&stress[..])),
             plastic_strain: Some(Values::Held(&eps)),
-            pressure: Some(&pe),
+            pressure: Some(Values::Held(&pe)),
             rank: Some(&elem_rank),
         };
         let particles = ParticleFrame {
