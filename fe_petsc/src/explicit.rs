@@ -184,7 +184,11 @@ pub struct ExplicitFe {
     force_old: Vec<[f64; 3]>,
     reaction: Vec<[f64; 3]>,
     reaction_old: Vec<[f64; 3]>,
+    /// Start positions of the step, where kept ([`ExplicitFe::keep_start_positions`]).
     x_old: Vec<[f64; 3]>,
+    keep_start: bool,
+    /// The constrained nodes' start positions, in `constraints`' order (scratch).
+    constrained_start: Vec<[f64; 3]>,
     /// Whether this rank owns each node.
     pub owned: Vec<bool>,
     /// Element state (stress, hourglass forces), in the batched kernel's lane layout.
@@ -332,6 +336,8 @@ impl ExplicitFe {
             reaction: vec![[0.0; 3]; nn],
             reaction_old: vec![[0.0; 3]; nn],
             x_old: m.coords.clone(),
+            keep_start: true,
+            constrained_start: Vec::new(),
             owned: m.owned.clone(),
             state: HexStates::new(ne),
             mat_state,
@@ -412,9 +418,22 @@ impl ExplicitFe {
         }
     }
 
-    /// Positions at the start of the step (before `kick_drift` moved them).
+    /// Positions at the start of the step (before `kick_drift` moved them). Panics unless they
+    /// are kept ([`ExplicitFe::keep_start_positions`]).
     pub fn x_start(&self) -> &[[f64; 3]] {
+        assert!(
+            self.keep_start,
+            "the start positions are not kept (no contact stage)"
+        );
         &self.x_old
+    }
+
+    /// Whether `kick_drift` keeps every node's start position for [`ExplicitFe::x_start`] (the
+    /// contact stage's; the default). A model without contact turns it off: the positions are
+    /// then neither copied every step (48 B per node-step with the line's fill) nor held.
+    pub fn keep_start_positions(&mut self, keep: bool) {
+        self.keep_start = keep;
+        self.x_old = if keep { self.x.clone() } else { Vec::new() };
     }
 
     /// Whether local node `n` has a constraint that prescribes all its velocity components
@@ -497,12 +516,18 @@ impl ExplicitFe {
         // One pass: kick, keep the start position, drift (`nodal::kick_drift`); then the
         // constrained nodes' velocities and drifts again.
         let wide = self.wide_nodes();
-        nodal::kick_drift(&mut self.v, &self.a, &mut self.x, &mut self.x_old, dt, wide);
+        // The constrained nodes' start positions (every node's where they are kept).
+        self.constrained_start.clear();
+        let x = &self.x;
+        let starts = self.constraints.iter().map(|(n, _)| x[*n as usize]);
+        self.constrained_start.extend(starts);
+        let x_old = self.keep_start.then_some(&mut self.x_old[..]);
+        nodal::kick_drift(&mut self.v, &self.a, &mut self.x, x_old, dt, wide);
         self.constrain_velocities();
-        for (n, _) in &self.constraints {
+        for ((n, _), x0) in self.constraints.iter().zip(&self.constrained_start) {
             let n = *n as usize;
             for c in 0..3 {
-                self.x[n][c] = self.x_old[n][c] + dt * self.v[n][c];
+                self.x[n][c] = x0[c] + dt * self.v[n][c];
             }
         }
         self.timers.nodal += t0.elapsed().as_secs_f64();
@@ -914,7 +939,15 @@ impl ExplicitFe {
         block_sums.extend(self.blocks.restart_state());
         vec![
             ("fe.x", flat(&self.x)),
-            ("fe.x_old", flat(&self.x_old)),
+            // Without kept start positions, the positions (read back only where kept).
+            (
+                "fe.x_old",
+                flat(if self.keep_start {
+                    &self.x_old
+                } else {
+                    &self.x
+                }),
+            ),
             ("fe.v", flat(&self.v)),
             ("fe.a", flat(&self.a)),
             ("fe.force", flat(&self.force)),
@@ -952,7 +985,10 @@ impl ExplicitFe {
             v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
         };
         self.x = unflat(take("fe.x", n3)?);
-        self.x_old = unflat(take("fe.x_old", n3)?);
+        let x_old = unflat(take("fe.x_old", n3)?);
+        if self.keep_start {
+            self.x_old = x_old;
+        }
         self.v = unflat(take("fe.v", n3)?);
         self.a = unflat(take("fe.a", n3)?);
         self.force = unflat(take("fe.force", n3)?);
@@ -1015,7 +1051,8 @@ impl ExplicitFe {
     pub fn bytes(&self) -> usize {
         let nn = self.x.len();
         let ne = self.elems.len();
-        nn * (9 * 24 + 8 + 1)
+        nn * (8 * 24 + 8 + 1)
+            + 24 * self.x_old.len()
             + ne * (std::mem::size_of::<[u32; 8]>()
                 + 8
                 + std::mem::size_of::<HexState>()

@@ -108,7 +108,7 @@ pub fn build(
     algorithms: &Algorithms,
 ) -> Result<Model, RunFailure> {
     let file = scene.file.display().to_string();
-    let (fe, groups) = if scene.meshes.is_empty() {
+    let (mut fe, groups) = if scene.meshes.is_empty() {
         (None, Groups::default())
     } else {
         let (mesh, groups) = load_mesh(world, scene)?;
@@ -148,6 +148,10 @@ pub fn build(
         )?),
         _ => None,
     };
+    if let (None, Some(fe)) = (&contact, &mut fe) {
+        // Only the contact stage reads the nodes' start positions.
+        fe.state_mut().keep_start_positions(false);
+    }
     Ok(Model {
         fe,
         sph,
