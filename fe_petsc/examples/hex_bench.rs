@@ -176,17 +176,9 @@ fn batched<B: Batch>(
                 vol0: &vol[e.clone()],
                 state: st.lanes_mut(g),
                 history: Some(&mut hist[e.clone()]),
+                force: Some(&mut force),
             };
             group.update_lanes(&mut io, 1e-7, lm, ctl).unwrap();
-            for l in 0..B::LANES {
-                for (k, &node) in conn[g + l].iter().enumerate() {
-                    let f = group.force(l, k);
-                    let fo = &mut force[node as usize];
-                    fo[0] += f[0];
-                    fo[1] += f[1];
-                    fo[2] += f[2];
-                }
-            }
         }
     };
     pass(&mut group);

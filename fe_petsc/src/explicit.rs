@@ -690,15 +690,19 @@ impl ExplicitFe {
                 vol0: &self.vol0[lanes.clone()],
                 state: self.state.lanes_mut(e0),
                 history: history.then(|| &mut self.mat_state[lanes]),
+                force: Some(&mut self.force),
             };
-            g.update_lanes(&mut io, dt, m, &self.controls).is_ok()
+            // The forces added to the nodes in the kernel.
+            g.update_lanes(&mut io, dt, m, &self.controls)
+                .is_ok()
+                .then_some(true)
         } else {
-            self.group_update_by_lane(e0, n, m, dt, g)
+            self.group_update_by_lane(e0, n, m, dt, g).then_some(false)
         };
-        if !ok {
+        let Some(added) = ok else {
             return false;
-        }
-        self.add_group_output(e0, n, g, sums);
+        };
+        self.add_group_output(e0, n, g, !added, sums);
         true
     }
 
@@ -736,14 +740,22 @@ impl ExplicitFe {
     }
 
     /// Adds the outputs of a group's first `n` lanes (elements `e0..e0 + n`), as
-    /// [`ExplicitFe::add_output`] for each, read straight from the lanes.
+    /// [`ExplicitFe::add_output`] for each, read straight from the lanes; their forces only
+    /// where `forces` (a whole group's were added in the kernel: [`batch::GroupLanes`]).
     ///
     /// Cost per element: the scatter-add of 24 force doubles (192 B read and written) through
     /// the connectivity (32 B); 26 flops. (The volumes and pressures are not kept: see
     /// [`ExplicitFe::density`] and [`ExplicitFe::pressure`].)
     #[inline]
-    fn add_group_output<B: Batch>(&mut self, e0: usize, n: usize, g: &B, sums: &mut LoopSums) {
-        for l in 0..n {
+    fn add_group_output<B: Batch>(
+        &mut self,
+        e0: usize,
+        n: usize,
+        g: &B,
+        forces: bool,
+        sums: &mut LoopSums,
+    ) {
+        for l in (0..n).filter(|_| forces) {
             let e = e0 + l;
             for (k, &node) in self.elems[e].iter().enumerate() {
                 let f = &mut self.force[node as usize];

@@ -164,6 +164,8 @@ fn compare_kernels<B: Batch>(
     let mut group_l = B::default();
     let mut st_l = HexStates::new(elems.len());
     let mut ms_l: Vec<f64> = vec![0.0; elems.len()];
+    // The nodal forces summed over every step: by the kernel, and from the lanes' outputs.
+    let (mut f_whole, mut f_lanes) = (vec![[0.0; 3]; x.len()], vec![[0.0; 3]; x.len()]);
     let dt = 2e-7;
     let (mut flowed, mut mixed) = (0, 0);
     let mut d_out: [Diff; 5] = Default::default();
@@ -209,6 +211,7 @@ fn compare_kernels<B: Batch>(
                 vol0: &vol0[e.clone()],
                 state: st_l.lanes_mut(g),
                 history: (mat.n_state() > 0).then(|| &mut ms_l[e.clone()]),
+                force: Some(&mut f_whole),
             };
             group_l
                 .update_lanes(&mut io, dt, &lm, &ctl)
@@ -242,10 +245,20 @@ fn compare_kernels<B: Batch>(
                 );
                 for k in 0..8 {
                     assert_eq!(group_l.force(l, k), group.lane_output(l).force[k]);
+                    let node = &mut f_lanes[elems[e][k] as usize];
+                    for c in 0..3 {
+                        node[c] += group.lane_output(l).force[k][c];
+                    }
                 }
             }
         }
     }
+    // The whole-group path adds its forces to the nodes in the kernel: the same sums, in the
+    // same order, as adding each lane's output element by element.
+    assert_eq!(
+        f_whole, f_lanes,
+        "{case}: the nodal forces added in the kernel differ from the lanes' outputs summed"
+    );
     for (d, what) in d_out.iter().zip(OUTPUTS) {
         d.check(what, case);
     }
@@ -402,6 +415,7 @@ fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
         vol0: &vol0,
         state: st.lanes_mut(0),
         history: Some(&mut hist),
+        force: None,
     };
     assert!(
         B::default().update_lanes(&mut io, 1e-7, &lm, &ctl).is_err(),

@@ -94,6 +94,10 @@ pub struct GroupLanes<'a> {
     pub state: &'a mut [f64],
     /// Their history values (`LANES`, consecutive), `None` for a material without one.
     pub history: Option<&'a mut [f64]>,
+    /// The nodal forces (one per point of `xs`) to which the update adds its elements' forces,
+    /// element by element in lane order, corner by corner (as adding each
+    /// [`Batch::lane_output`]'s forces would); `None` to leave them to the caller.
+    pub force: Option<&'a mut [[f64; 3]]>,
 }
 
 /// The group sizes of the batched kernel.
