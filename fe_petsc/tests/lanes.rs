@@ -246,8 +246,8 @@ fn compare_kernels<B: Batch>(
                 for k in 0..8 {
                     assert_eq!(group_l.force(l, k), group.lane_output(l).force[k]);
                     let node = &mut f_lanes[elems[e][k] as usize];
-                    for c in 0..3 {
-                        node[c] += group.lane_output(l).force[k][c];
+                    for (p, q) in node.iter_mut().zip(group.lane_output(l).force[k]) {
+                        *p += q;
                     }
                 }
             }
