@@ -231,59 +231,45 @@ pub(super) fn dot3(a0: F, b0: F, a1: F, b1: F, a2: F, b2: F) -> F {
     a2.mul_add(b2, a1.mul_add(b1, a0 * b0))
 }
 
-/// Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective; the inverse by
-/// cofactors, the identity in a lane whose determinant is zero or not finite (as the scalar
-/// kernel's `unwrap_or`). About 60 flops per element.
+/// Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective, in the Cayley
+/// transform's closed form: with A = dt/2 W = skew(omega) (A x = omega x x) and A^3 =
+/// -theta^2 A (theta = |omega|), (I - A)(I + c (A + A^2)) = I + (c (1 + theta^2) - 1) A = I + A
+/// for c = 2 / (1 + theta^2), so R = I + c (A + omega omega^T - theta^2 I). The scalar kernel
+/// inverts I - A by cofactors (the same R to round-off; `tests/lanes.rs`); its identity for a
+/// singular or non-finite determinant, det(I - A) = 1 + theta^2, is kept. About 45 operations
+/// per element (the cofactor form: 60).
 #[inline(always)]
 fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
-    let h = 0.5 * dt;
-    let one = F::splat(1.0);
-    let m = [
-        [one, -h * w01, h * w20],
-        [h * w01, one, -h * w12],
-        [-h * w20, h * w12, one],
+    let h = F::splat(-0.5 * dt);
+    // A = [[0, h w01, -h w20], [-h w01, 0, h w12], [h w20, -h w12, 0]] (h = dt/2) = skew(om).
+    let om = [w12 * h, w20 * h, w01 * h];
+    let th2 = dot3(om[0], om[0], om[1], om[1], om[2], om[2]);
+    let det = 1.0 + th2;
+    let c = 2.0 * det.recip();
+    let diag = |i: usize| c.mul_add(om[i].mul_sub(om[i], th2), F::splat(1.0));
+    let off = |i: usize, j: usize, k: usize, plus: bool| {
+        // c (om_i om_j +- om_k): A_ij = -om_k for (i, j, k) cyclic, +om_k otherwise.
+        let t = if plus {
+            om[i].mul_add(om[j], om[k])
+        } else {
+            om[i].mul_sub(om[j], om[k])
+        };
+        c * t
+    };
+    let r = [
+        [diag(0), off(0, 1, 2, false), off(0, 2, 1, true)],
+        [off(1, 0, 2, true), diag(1), off(1, 2, 0, false)],
+        [off(2, 0, 1, false), off(2, 1, 0, true), diag(2)],
     ];
-    let p = [
-        [one, h * w01, -h * w20],
-        [-h * w01, one, h * w12],
-        [h * w20, -h * w12, one],
-    ];
-    // a b - c d as `mul_sub` (the scalar kernel's two roundings in four lanes).
-    let cof = |a: F, b: F, c: F, d: F| a.mul_sub(b, c * d);
-    let c = [
-        [
-            cof(m[1][1], m[2][2], m[1][2], m[2][1]),
-            cof(m[0][2], m[2][1], m[0][1], m[2][2]),
-            cof(m[0][1], m[1][2], m[0][2], m[1][1]),
-        ],
-        [
-            cof(m[1][2], m[2][0], m[1][0], m[2][2]),
-            cof(m[0][0], m[2][2], m[0][2], m[2][0]),
-            cof(m[0][2], m[1][0], m[0][0], m[1][2]),
-        ],
-        [
-            cof(m[1][0], m[2][1], m[1][1], m[2][0]),
-            cof(m[0][1], m[2][0], m[0][0], m[2][1]),
-            cof(m[0][0], m[1][1], m[0][1], m[1][0]),
-        ],
-    ];
-    let det = m[0][2].mul_add(c[2][0], m[0][1].mul_add(c[1][0], m[0][0] * c[0][0]));
-    let singular = det.eq(F::ZERO).or(!det.is_finite());
-    let id = det.recip();
-    let mut ai = [[F::ZERO; 3]; 3];
+    let bad = !det.is_finite();
+    let mut out = [[F::ZERO; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             let eye = F::splat(if i == j { 1.0 } else { 0.0 });
-            ai[i][j] = F::select(singular, eye, c[i][j] * id);
+            out[i][j] = F::select(bad, eye, r[i][j]);
         }
     }
-    let mut r = [[F::ZERO; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = dot3(ai[i][0], p[0][j], ai[i][1], p[1][j], ai[i][2], p[2][j]);
-        }
-    }
-    r
+    out
 }
 
 /// sigma <- R sigma R^T (Voigt in, Voigt out). 90 flops per element.
@@ -421,7 +407,7 @@ fn update_core(
 
     // Bulk viscosity on the normal stresses for the force only; a material with a lane form has
     // the constant wave modulus lambda + 2 mu and keeps no heat.
-    let c = (m.dilatational / rho).sqrt();
+    let c = (m.dilatational * rho.recip()).sqrt();
     let ev = k.d[0] + k.d[1] + k.d[2];
     let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, c, ev);
 
