@@ -175,7 +175,10 @@ pub struct ExplicitFe {
     pub x: Vec<[f64; 3]>,
     /// Velocities (at full steps between calls of `step`).
     pub v: Vec<[f64; 3]>,
-    /// Accelerations.
+    /// Accelerations: the implicit integrator's (its Newmark state); in the explicit step only
+    /// the constrained nodes' (as their constraints leave them) and the initial ones, the free
+    /// nodes' formed from the forces where needed ([`ExplicitFe::acceleration`]: 48 B per node
+    /// and step not written and read back).
     pub a: Vec<[f64; 3]>,
     /// Lumped nodal masses.
     pub mass: Vec<f64>,
@@ -479,21 +482,31 @@ impl ExplicitFe {
             if let Some(i) = cons[n] {
                 apply(&self.constraints[i].1, &mut dv, false);
             }
+            let a_n = self.acceleration(n);
             for c in 0..3 {
                 if self.owned[n] {
                     // The change of the half-step kinetic energy, less the part of the start
                     // kick that the element and external work (trapezoids over the corrected
                     // displacement) already count: velocity Verlet with an impulse dv between
                     // the kicks gives dKE = W_trapezoid + m dv.(v + dv/2) - (dt/2) m a_n.dv.
-                    work += self.mass[n]
-                        * dv[c]
-                        * (self.v[n][c] + 0.5 * dv[c] - 0.5 * dt * self.a[n][c]);
+                    work += self.mass[n] * dv[c] * (self.v[n][c] + 0.5 * dv[c] - 0.5 * dt * a_n[c]);
                 }
                 self.v[n][c] += dv[c];
                 self.x[n][c] += dv[c] * dt;
             }
         }
         Ok(work)
+    }
+
+    /// Node `n`'s acceleration at the start of the step (between `kick_drift` and the element
+    /// loop: the forces are the last step's), m/s^2: f / m + g, as the kick formed it; a
+    /// constrained node's as its constraints left it in the last `finish_step` (kept in `a`).
+    pub fn acceleration(&self, n: usize) -> [f64; 3] {
+        if self.constrained[n] {
+            return self.a[n];
+        }
+        let (f, im, g) = (self.force[n], 1.0 / self.mass[n], self.gravity);
+        [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]]
     }
 
     /// Number of local nodes.
@@ -522,7 +535,8 @@ impl ExplicitFe {
         let starts = self.constraints.iter().map(|(n, _)| x[*n as usize]);
         self.constrained_start.extend(starts);
         let x_old = self.keep_start.then_some(&mut self.x_old[..]);
-        nodal::kick_drift(&mut self.v, &self.a, &mut self.x, x_old, dt, wide);
+        let (f, m, g) = (&self.force, &self.mass, self.gravity);
+        nodal::kick_drift(&mut self.v, f, m, g, &mut self.x, x_old, dt, wide);
         self.constrain_velocities();
         for ((n, _), x0) in self.constraints.iter().zip(&self.constrained_start) {
             let n = *n as usize;
@@ -816,10 +830,16 @@ impl ExplicitFe {
         let constrained = &self.constrained[..nn];
         let wide = self.wide_nodes();
         let (a, v) = (&mut self.a[..nn], &mut self.v[..nn]);
-        // One pass over the nodes: accelerations; the free nodes' closing kick and sums.
-        nodal::close_free(&read, constrained, a, v, &mut sums, wide);
-        // The constrained nodes: reaction = m a(constrained) - m a(free), the force the
-        // constraint adds; then their kick and sums.
+        // One pass over the free nodes: closing kick and sums (their accelerations are not
+        // kept: the next kick forms them from the same forces).
+        nodal::close_free(&read, constrained, v, &mut sums, wide);
+        // The constrained nodes: their free accelerations, then reaction = m a(constrained) -
+        // m a(free), the force the constraint adds; then their kick and sums.
+        for (node, _) in &self.constraints {
+            let n = *node as usize;
+            let (f, im) = (read.force[n], 1.0 / read.mass[n]);
+            a[n] = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
+        }
         std::mem::swap(&mut self.reaction, &mut self.reaction_old);
         for (node, con) in &self.constraints {
             let n = *node as usize;

@@ -67,13 +67,19 @@ impl NodalSums<'_> {
     }
 }
 
-/// The kick to the half step and the drift of every node: v += dt/2 a, x_old = x (where
-/// `x_old` is given: the start positions kept for the contact stage), x += dt v (before the
-/// constraints, which the caller applies). `wide`: eight nodes at a time (the CPU must have
-/// AVX-512F). Per node: v, a, x read (72 B), v, x written (48 B), and x_old (24 B); 12 flops.
+/// The kick to the half step and the drift of every node: v += dt/2 a with the acceleration
+/// a = f / m + g of the forces `force` (the step's start: the last step's element forces),
+/// x_old = x (where `x_old` is given: the start positions kept for the contact stage),
+/// x += dt v; before the constraints, which the caller applies to the velocities (a
+/// constrained component's velocity is set there, whatever this kick gave it). `wide`: eight
+/// nodes at a time (the CPU must have AVX-512F). Per node: v, f, m, x read (80 B), v, x
+/// written (48 B), and x_old (24 B); 16 flops and a division.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn kick_drift(
     v: &mut [[f64; 3]],
-    a: &[[f64; 3]],
+    force: &[[f64; 3]],
+    mass: &[f64],
+    gravity: [f64; 3],
     x: &mut [[f64; 3]],
     mut x_old: Option<&mut [[f64; 3]]>,
     dt: f64,
@@ -81,17 +87,20 @@ pub(crate) fn kick_drift(
 ) {
     let nn = v.len();
     assert!(
-        a.len() == nn && x.len() == nn && x_old.as_ref().is_none_or(|o| o.len() == nn),
+        force.len() == nn
+            && mass.len() == nn
+            && x.len() == nn
+            && x_old.as_ref().is_none_or(|o| o.len() == nn),
         "one value per node"
     );
-    let h = 0.5 * dt;
+    let (g, h) = (gravity, 0.5 * dt);
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     if wide {
         assert!(std::arch::is_x86_feature_detected!("avx512f"), "AVX-512F");
         // SAFETY: the CPU has AVX-512F (checked just above); the slices have one length.
-        done = unsafe { w8::kick_drift(v, a, x, x_old.as_deref_mut(), dt) };
+        done = unsafe { w8::kick_drift(v, force, mass, g, x, x_old.as_deref_mut(), dt) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = wide;
@@ -99,32 +108,32 @@ pub(crate) fn kick_drift(
         if let Some(o) = x_old.as_deref_mut() {
             o[n] = x[n];
         }
+        let im = 1.0 / mass[n];
+        let f = force[n];
         for c in 0..3 {
-            v[n][c] += h * a[n][c];
+            v[n][c] += h * (f[c] * im + g[c]);
             x[n][c] += dt * v[n][c];
         }
     }
 }
 
-/// The first part of `finish_step` on every node: its acceleration a = f / m + g written to
-/// `a`; for a free node (not `constrained`) also the closing kick of `v` (the half-step
-/// velocity to the end of the step) and its sums ([`NodalSums::add`] with zero reactions: only
-/// constrained nodes' reactions are ever written) added to `sums`. The constrained nodes'
-/// kicks and sums are the caller's. `wide`: eight nodes at a time (AVX-512F).
+/// The first part of `finish_step`: for every free node (not `constrained`) the closing kick
+/// of `v` (the half-step velocity to the end of the step) with a = f / m + g, and its sums
+/// ([`NodalSums::add`] with zero reactions: only constrained nodes' reactions are ever
+/// written) added to `sums`. The constrained nodes' kicks and sums are the caller's. `wide`:
+/// eight nodes at a time (AVX-512F).
 ///
-/// Per node: force, force_old, mass and v read (80 B), a and v written (48 B); about 40 flops.
+/// Per node: force, force_old, mass and v read (80 B), v written (24 B); about 40 flops.
 pub(crate) fn close_free(
     read: &NodalSums,
     constrained: &[bool],
-    a: &mut [[f64; 3]],
     v: &mut [[f64; 3]],
     sums: &mut [f64; 6],
     wide: bool,
 ) {
     let nn = v.len();
     assert!(
-        a.len() == nn
-            && constrained.len() == nn
+        constrained.len() == nn
             && read.force.len() == nn
             && read.force_old.len() == nn
             && read.mass.len() == nn
@@ -137,17 +146,16 @@ pub(crate) fn close_free(
     if wide {
         assert!(std::arch::is_x86_feature_detected!("avx512f"), "AVX-512F");
         // SAFETY: the CPU has AVX-512F (checked just above); every slice has `nn` nodes.
-        done = unsafe { w8::close_free(read, constrained, a, v, sums) };
+        done = unsafe { w8::close_free(read, constrained, v, sums) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = wide;
     let (g, h) = (read.gravity, 0.5 * read.dt);
     for n in done..nn {
-        let im = 1.0 / read.mass[n];
-        let f = read.force[n];
-        let an = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
-        a[n] = an;
         if !constrained[n] {
+            let im = 1.0 / read.mass[n];
+            let f = read.force[n];
+            let an = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
             let vn = &mut v[n];
             let half = *vn;
             for c in 0..3 {
@@ -204,37 +212,65 @@ mod w8 {
             .fold(0, |m, (k, &x)| m | ((x as u8) << k))
     }
 
+    /// The gravity of each slot of register j (slot 8 j + t is component (8 j + t) % 3).
+    #[inline(always)]
+    fn gravity_slots(g: [f64; 3]) -> [__m512d; 3] {
+        std::array::from_fn(|j| {
+            let s: [f64; 8] = std::array::from_fn(|t| g[(8 * j + t) % 3]);
+            // SAFETY: eight doubles (AVX-512F: every caller is built with it).
+            unsafe { _mm512_loadu_pd(s.as_ptr()) }
+        })
+    }
+
+    /// `SLOT_NODE` as index vectors.
+    #[inline(always)]
+    fn slot_nodes() -> [__m512i; 3] {
+        // SAFETY: eight i64 each (AVX-512F: every caller is built with it).
+        std::array::from_fn(|j| unsafe { _mm512_loadu_epi64(SLOT_NODE[j].as_ptr()) })
+    }
+
     /// [`super::kick_drift`] on the whole chunks; returns the nodes done.
     ///
     /// # Safety
-    /// The CPU must have AVX-512F; the slices must have one length.
+    /// The CPU must have AVX-512F; the slices must have one value per node.
+    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn kick_drift(
         v: &mut [[f64; 3]],
-        a: &[[f64; 3]],
+        force: &[[f64; 3]],
+        mass: &[f64],
+        g: [f64; 3],
         x: &mut [[f64; 3]],
         x_old: Option<&mut [[f64; 3]]>,
         dt: f64,
     ) -> usize {
         let whole = v.len() / 8 * 8;
-        let (h, dtv) = (_mm512_set1_pd(0.5 * dt), _mm512_set1_pd(dt));
-        let (pv, pa) = (v.as_mut_ptr() as *mut f64, a.as_ptr() as *const f64);
+        let (gp, idx) = (gravity_slots(g), slot_nodes());
+        let (h, dtv, one) = (
+            _mm512_set1_pd(0.5 * dt),
+            _mm512_set1_pd(dt),
+            _mm512_set1_pd(1.0),
+        );
+        let (pv, pf) = (v.as_mut_ptr() as *mut f64, force.as_ptr() as *const f64);
         let px = x.as_mut_ptr() as *mut f64;
         let po = x_old.map(|o| o.as_mut_ptr() as *mut f64);
-        // Three registers per chunk; the slots are independent.
-        for s in (0..3 * whole).step_by(8) {
-            // SAFETY: s + 8 <= 3 whole <= 3 len doubles in each array.
-            unsafe {
-                let vn = _mm512_add_pd(
-                    _mm512_loadu_pd(pv.add(s)),
-                    _mm512_mul_pd(h, _mm512_loadu_pd(pa.add(s))),
-                );
-                _mm512_storeu_pd(pv.add(s), vn);
-                let xs = _mm512_loadu_pd(px.add(s));
-                if let Some(po) = po {
-                    _mm512_storeu_pd(po.add(s), xs);
+        for n0 in (0..whole).step_by(8) {
+            // SAFETY: n0 + 8 <= len masses.
+            let im = _mm512_div_pd(one, unsafe { _mm512_loadu_pd(mass.as_ptr().add(n0)) });
+            for j in 0..3 {
+                let s = 3 * n0 + 8 * j;
+                let imj = _mm512_permutexvar_pd(idx[j], im);
+                // SAFETY: s + 8 <= 3 (n0 + 8) <= 3 len doubles in each array.
+                unsafe {
+                    let an = _mm512_add_pd(_mm512_mul_pd(_mm512_loadu_pd(pf.add(s)), imj), gp[j]);
+                    let vn = _mm512_add_pd(_mm512_loadu_pd(pv.add(s)), _mm512_mul_pd(h, an));
+                    _mm512_storeu_pd(pv.add(s), vn);
+                    let xs = _mm512_loadu_pd(px.add(s));
+                    if let Some(po) = po {
+                        _mm512_storeu_pd(po.add(s), xs);
+                    }
+                    _mm512_storeu_pd(px.add(s), _mm512_add_pd(xs, _mm512_mul_pd(dtv, vn)));
                 }
-                _mm512_storeu_pd(px.add(s), _mm512_add_pd(xs, _mm512_mul_pd(dtv, vn)));
             }
         }
         whole
@@ -248,22 +284,12 @@ mod w8 {
     pub(super) unsafe fn close_free(
         r: &NodalSums,
         constrained: &[bool],
-        a: &mut [[f64; 3]],
         v: &mut [[f64; 3]],
         sums: &mut [f64; 6],
     ) -> usize {
         let nn = v.len();
         let whole = nn / 8 * 8;
-        let g = r.gravity;
-        // The gravity of each slot of register j (slot 8 j + t is component (8 j + t) % 3).
-        let gp: [__m512d; 3] = std::array::from_fn(|j| {
-            let s: [f64; 8] = std::array::from_fn(|t| g[(8 * j + t) % 3]);
-            // SAFETY: eight doubles.
-            unsafe { _mm512_loadu_pd(s.as_ptr()) }
-        });
-        // SAFETY: eight i64 each.
-        let idx: [__m512i; 3] =
-            std::array::from_fn(|j| unsafe { _mm512_loadu_epi64(SLOT_NODE[j].as_ptr()) });
+        let (gp, idx) = (gravity_slots(r.gravity), slot_nodes());
         let (h, dt, one) = (
             _mm512_set1_pd(0.5 * r.dt),
             _mm512_set1_pd(r.dt),
@@ -274,7 +300,7 @@ mod w8 {
         let (mut ke, mut we, mut wx, mut mo) = ([zero; 3], [zero; 3], [zero; 3], [zero; 3]);
         let pf = r.force.as_ptr() as *const f64;
         let pfo = r.force_old.as_ptr() as *const f64;
-        let (pa, pv) = (a.as_mut_ptr() as *mut f64, v.as_mut_ptr() as *mut f64);
+        let pv = v.as_mut_ptr() as *mut f64;
         for n0 in (0..whole).step_by(8) {
             // SAFETY: n0 + 8 <= nn masses.
             let m = unsafe { _mm512_loadu_pd(r.mass.as_ptr().add(n0)) };
@@ -291,7 +317,6 @@ mod w8 {
                 unsafe {
                     let f = _mm512_loadu_pd(pf.add(s));
                     let an = _mm512_add_pd(_mm512_mul_pd(f, imj), gp[j]);
-                    _mm512_storeu_pd(pa.add(s), an);
                     let half = _mm512_loadu_pd(pv.add(s));
                     let vn = _mm512_mask_add_pd(half, kf, half, _mm512_mul_pd(h, an));
                     _mm512_storeu_pd(pv.add(s), vn);
@@ -345,7 +370,7 @@ mod tests {
     /// The eight-node passes against the node-by-node ones (the reference: the loops of the
     /// explicit step as they were written node by node), on 101 nodes (whole chunks and a
     /// tail) with random fields, a quarter of the nodes constrained and a third not owned:
-    /// velocities, positions and accelerations bit for bit, the six sums to 1e-13 of their
+    /// velocities and positions bit for bit, the six sums to 1e-13 of their
     /// scale (their order of summation differs).
     #[test]
     fn eight_nodes_at_a_time_give_the_node_by_node_results() {
@@ -357,23 +382,22 @@ mod tests {
         }
         let n = 101;
         let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-        let (v0, a0, x0) = (
-            field(&mut rng, n, 30.0),
-            field(&mut rng, n, 1e5),
-            field(&mut rng, n, 1.0),
+        let (v0, x0) = (field(&mut rng, n, 30.0), field(&mut rng, n, 1.0));
+        let (f0, f, fo) = (
+            field(&mut rng, n, 1e4),
+            field(&mut rng, n, 1e4),
+            field(&mut rng, n, 1e4),
         );
-        let (f, fo) = (field(&mut rng, n, 1e4), field(&mut rng, n, 1e4));
         let mass: Vec<f64> = (0..n).map(|_| 1.0 + rng.next()).collect();
         let owned: Vec<bool> = (0..n).map(|i| i % 3 != 1).collect();
         let constrained: Vec<bool> = (0..n).map(|i| i % 4 == 2).collect();
-        let dt = 1e-7;
+        let (dt, g) = (1e-7, [0.0, -9.81, 0.0]);
         let run = |wide: bool| {
-            let (mut v, mut x, mut x_old, mut a) =
-                (v0.clone(), x0.clone(), vec![[0.0; 3]; n], a0.clone());
-            kick_drift(&mut v, &a0, &mut x, Some(&mut x_old), dt, wide);
+            let (mut v, mut x, mut x_old) = (v0.clone(), x0.clone(), vec![[0.0; 3]; n]);
+            kick_drift(&mut v, &f0, &mass, g, &mut x, Some(&mut x_old), dt, wide);
             // Without start positions: the same velocities and positions.
             let (mut v2, mut x2) = (v0.clone(), x0.clone());
-            kick_drift(&mut v2, &a0, &mut x2, None, dt, wide);
+            kick_drift(&mut v2, &f0, &mass, g, &mut x2, None, dt, wide);
             assert_eq!(
                 (&v2, &x2),
                 (&v, &x),
@@ -385,23 +409,22 @@ mod tests {
                 force_old: &fo,
                 mass: &mass,
                 owned: &owned,
-                gravity: [0.0, -9.81, 0.0],
+                gravity: g,
             };
             let mut sums = [0.0; 6];
-            close_free(&read, &constrained, &mut a, &mut v, &mut sums, wide);
-            (v, x, x_old, a, sums)
+            close_free(&read, &constrained, &mut v, &mut sums, wide);
+            (v, x, x_old, sums)
         };
         let (narrow, wide) = (run(false), run(true));
         assert_eq!(narrow.0, wide.0, "velocities");
         assert_eq!(narrow.1, wide.1, "positions");
         assert_eq!(narrow.2, wide.2, "start positions");
-        assert_eq!(narrow.3, wide.3, "accelerations");
         // Each sum's scale: the sum of its terms' magnitudes (momentum and work can cancel).
         let v = &narrow.0;
         let speed = |i: usize| v[i].iter().map(|c| c.abs()).sum::<f64>();
         let momentum: f64 = (0..n).map(|i| mass[i] * speed(i)).sum();
         let scale = [
-            narrow.4[0],
+            narrow.3[0],
             (0..n).map(|i| 2e4 * dt * speed(i)).sum(),
             (0..n).map(|i| mass[i] * 9.81 * dt * speed(i)).sum(),
             momentum,
@@ -409,7 +432,7 @@ mod tests {
             momentum,
         ];
         for k in 0..6 {
-            let (p, q) = (narrow.4[k], wide.4[k]);
+            let (p, q) = (narrow.3[k], wide.3[k]);
             assert!(
                 (p - q).abs() <= 1e-13 * scale[k],
                 "sum {k}: node by node {p:e}, eight at a time {q:e} (tolerance 1e-13 of {:e})",
