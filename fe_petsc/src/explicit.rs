@@ -101,7 +101,6 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "fe.v"
         | "fe.a"
         | "fe.force"
-        | "fe.force_old"
         | "fe.reaction"
         | "fe.reaction_old"
         | "implicit.force_n"
@@ -184,7 +183,11 @@ pub struct ExplicitFe {
     pub mass: Vec<f64>,
     /// Summed element forces on each node (incl. hourglass and bulk viscosity), N.
     pub force: Vec<[f64; 3]>,
-    force_old: Vec<[f64; 3]>,
+    /// The old forces' half of this step's element work over the owned nodes, J: counted by
+    /// the kick and the contact push-back, taken by `finish_step` (zero between steps).
+    kick_work: f64,
+    /// The constrained nodes, once each, in order.
+    constrained_nodes: Vec<u32>,
     reaction: Vec<[f64; 3]>,
     reaction_old: Vec<[f64; 3]>,
     /// Start positions of the step, where kept ([`ExplicitFe::keep_start_positions`]).
@@ -335,7 +338,8 @@ impl ExplicitFe {
             a: vec![[0.0; 3]; nn],
             mass,
             force: vec![[0.0; 3]; nn],
-            force_old: vec![[0.0; 3]; nn],
+            kick_work: 0.0,
+            constrained_nodes: Vec::new(),
             reaction: vec![[0.0; 3]; nn],
             reaction_old: vec![[0.0; 3]; nn],
             x_old: m.coords.clone(),
@@ -372,6 +376,9 @@ impl ExplicitFe {
         for (n, _) in &fe.constraints {
             fe.constrained[*n as usize] = true;
         }
+        fe.constrained_nodes = (0..nn as u32)
+            .filter(|&n| fe.constrained[n as usize])
+            .collect();
         // Boundary conditions act on the initial velocities; the initial acceleration is
         // gravity (zero stress), constrained.
         fe.constrain_velocities();
@@ -483,6 +490,13 @@ impl ExplicitFe {
                 apply(&self.constraints[i].1, &mut dv, false);
             }
             let a_n = self.acceleration(n);
+            if self.owned[n] {
+                // The old forces' half of the element work over the push-back's dt dv.
+                let f = self.force[n];
+                for c in 0..3 {
+                    self.kick_work += 0.5 * f[c] * (dt * dv[c]);
+                }
+            }
             for c in 0..3 {
                 if self.owned[n] {
                     // The change of the half-step kinetic energy, less the part of the start
@@ -535,8 +549,14 @@ impl ExplicitFe {
         let starts = self.constraints.iter().map(|(n, _)| x[*n as usize]);
         self.constrained_start.extend(starts);
         let x_old = self.keep_start.then_some(&mut self.x_old[..]);
-        let (f, m, g) = (&self.force, &self.mass, self.gravity);
-        nodal::kick_drift(&mut self.v, f, m, g, &mut self.x, x_old, dt, wide);
+        let input = nodal::KickInput {
+            force: &self.force,
+            mass: &self.mass,
+            gravity: self.gravity,
+            owned: &self.owned,
+            constrained: &self.constrained,
+        };
+        let mut work = nodal::kick_drift(&mut self.v, &input, &mut self.x, x_old, dt, wide);
         self.constrain_velocities();
         for ((n, _), x0) in self.constraints.iter().zip(&self.constrained_start) {
             let n = *n as usize;
@@ -544,6 +564,17 @@ impl ExplicitFe {
                 self.x[n][c] = x0[c] + dt * self.v[n][c];
             }
         }
+        // The constrained owned nodes' f(n) . dt v(n+1/2), with their constrained velocities.
+        for &n in &self.constrained_nodes {
+            let n = n as usize;
+            if self.owned[n] {
+                let (f, v) = (self.force[n], self.v[n]);
+                for c in 0..3 {
+                    work += f[c] * (dt * v[c]);
+                }
+            }
+        }
+        self.kick_work = 0.5 * work;
         self.timers.nodal += t0.elapsed().as_secs_f64();
     }
 
@@ -561,7 +592,7 @@ impl ExplicitFe {
         exchange: &mut NodeExchange,
     ) -> Result<f64, StepError> {
         let t0 = std::time::Instant::now();
-        std::mem::swap(&mut self.force, &mut self.force_old);
+        // The last step's forces were last read by the kick and the contact push-back.
         for f in self.force.iter_mut() {
             *f = [0.0; 3];
         }
@@ -822,7 +853,6 @@ impl ExplicitFe {
         let read = NodalSums {
             dt,
             force: &self.force[..nn],
-            force_old: &self.force_old[..nn],
             mass: &self.mass[..nn],
             owned: &self.owned[..nn],
             gravity: g,
@@ -849,23 +879,24 @@ impl ExplicitFe {
                 self.reaction[n][c] = read.mass[n] * (a[n][c] - free[c]);
             }
         }
-        for n in 0..nn {
-            if constrained[n] {
-                let vn = &mut v[n];
-                let half = *vn;
-                for c in 0..3 {
-                    vn[c] += h * a[n][c];
-                }
-                read.add(
-                    n,
-                    *vn,
-                    half,
-                    self.reaction[n],
-                    self.reaction_old[n],
-                    &mut sums,
-                );
+        for &n in &self.constrained_nodes {
+            let n = n as usize;
+            let vn = &mut v[n];
+            let half = *vn;
+            for c in 0..3 {
+                vn[c] += h * a[n][c];
             }
+            read.add(
+                n,
+                *vn,
+                half,
+                self.reaction[n],
+                self.reaction_old[n],
+                &mut sums,
+            );
         }
+        // The element work's other half, counted at the kick (`nodal::kick_drift`).
+        sums[1] -= std::mem::take(&mut self.kick_work);
         self.timers.nodal += t0.elapsed().as_secs_f64();
         sums
     }
@@ -983,7 +1014,6 @@ impl ExplicitFe {
             ("fe.v", flat(&self.v)),
             ("fe.a", flat(&self.a)),
             ("fe.force", flat(&self.force)),
-            ("fe.force_old", flat(&self.force_old)),
             ("fe.reaction", flat(&self.reaction)),
             ("fe.reaction_old", flat(&self.reaction_old)),
             ("fe.hex_state", hex),
@@ -1024,7 +1054,6 @@ impl ExplicitFe {
         self.v = unflat(take("fe.v", n3)?);
         self.a = unflat(take("fe.a", n3)?);
         self.force = unflat(take("fe.force", n3)?);
-        self.force_old = unflat(take("fe.force_old", n3)?);
         self.reaction = unflat(take("fe.reaction", n3)?);
         self.reaction_old = unflat(take("fe.reaction_old", n3)?);
         self.state.set_flat(&take("fe.hex_state", 18 * ne)?);
@@ -1083,7 +1112,7 @@ impl ExplicitFe {
     pub fn bytes(&self) -> usize {
         let nn = self.x.len();
         let ne = self.elems.len();
-        nn * (8 * 24 + 8 + 1)
+        nn * (7 * 24 + 8 + 1)
             + 24 * self.x_old.len()
             + ne * (std::mem::size_of::<[u32; 8]>()
                 + 8

@@ -21,7 +21,6 @@ pub(crate) struct NodalSums<'a> {
     /// The step, s.
     pub dt: f64,
     pub force: &'a [[f64; 3]],
-    pub force_old: &'a [[f64; 3]],
     pub mass: &'a [f64],
     pub owned: &'a [bool],
     pub gravity: [f64; 3],
@@ -30,8 +29,9 @@ pub(crate) struct NodalSums<'a> {
 impl NodalSums<'_> {
     /// Adds node `n`'s kinetic energy (velocity `v` at the end of the step), element and
     /// external work over the step (trapezoids with the reactions `r` now and `r_old` a step
-    /// ago, over the displacement dt `half`, `half` the velocity of the step's drift) and
-    /// momentum to `sums`, if this rank owns the node. About 35 flops.
+    /// ago, over the displacement dt `half`, `half` the velocity of the step's drift; of the
+    /// element work's trapezoid, f(n+1)/2 . dx: the kick counted f(n)/2 . dx, [`kick_drift`])
+    /// and momentum to `sums`, if this rank owns the node. About 30 flops.
     ///
     /// The displacement: the drift and the contact push-back move a node by dt times the
     /// velocity they leave at the half step (x(n+1) = x(n) + dt v(n+1/2), the push-back adding
@@ -52,12 +52,12 @@ impl NodalSums<'_> {
             return;
         }
         let (g, m) = (self.gravity, self.mass[n]);
-        let (f, f_old) = (self.force[n], self.force_old[n]);
+        let f = self.force[n];
         let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
         for c in 0..3 {
             let dx = self.dt * half[c];
             ke += v[c] * v[c];
-            w_elem += 0.5 * (f[c] + f_old[c]) * dx;
+            w_elem += 0.5 * f[c] * dx;
             w_ext += (0.5 * (r[c] + r_old[c]) + m * g[c]) * dx;
             sums[3 + c] += m * v[c];
         }
@@ -67,40 +67,52 @@ impl NodalSums<'_> {
     }
 }
 
+/// What the kick reads of each node besides its motion: the forces at the step's start (the
+/// last step's element forces), masses, gravity, and which nodes this rank owns and which are
+/// constrained.
+pub(crate) struct KickInput<'a> {
+    pub force: &'a [[f64; 3]],
+    pub mass: &'a [f64],
+    pub gravity: [f64; 3],
+    pub owned: &'a [bool],
+    pub constrained: &'a [bool],
+}
+
 /// The kick to the half step and the drift of every node: v += dt/2 a with the acceleration
-/// a = f / m + g of the forces `force` (the step's start: the last step's element forces),
-/// x_old = x (where `x_old` is given: the start positions kept for the contact stage),
-/// x += dt v; before the constraints, which the caller applies to the velocities (a
-/// constrained component's velocity is set there, whatever this kick gave it). `wide`: eight
-/// nodes at a time (the CPU must have AVX-512F). Per node: v, f, m, x read (80 B), v, x
-/// written (48 B), and x_old (24 B); 16 flops and a division.
-#[allow(clippy::too_many_arguments)]
+/// a = f / m + g, x_old = x (where `x_old` is given: the start positions kept for the contact
+/// stage), x += dt v; before the constraints, which the caller applies to the velocities (a
+/// constrained component's velocity is set there, whatever this kick gave it). Returns the
+/// sum over the owned free nodes of f . dt v(n+1/2), twice the old forces' half of the element
+/// work's trapezoid (the caller adds the constrained nodes' and the contact push-back's, and
+/// `finish_step` the new forces' half): so that the closing pass reads no old forces. `wide`:
+/// eight nodes at a time (the CPU must have AVX-512F). Per node: v, f, m, x read (80 B), v, x
+/// written (48 B), and x_old (24 B); 19 flops and a division.
 pub(crate) fn kick_drift(
     v: &mut [[f64; 3]],
-    force: &[[f64; 3]],
-    mass: &[f64],
-    gravity: [f64; 3],
+    input: &KickInput,
     x: &mut [[f64; 3]],
     mut x_old: Option<&mut [[f64; 3]]>,
     dt: f64,
     wide: bool,
-) {
+) -> f64 {
     let nn = v.len();
     assert!(
-        force.len() == nn
-            && mass.len() == nn
+        input.force.len() == nn
+            && input.mass.len() == nn
+            && input.owned.len() == nn
+            && input.constrained.len() == nn
             && x.len() == nn
             && x_old.as_ref().is_none_or(|o| o.len() == nn),
         "one value per node"
     );
-    let (g, h) = (gravity, 0.5 * dt);
+    let (g, h) = (input.gravity, 0.5 * dt);
     #[allow(unused_mut)]
-    let mut done = 0;
+    let (mut done, mut work) = (0, 0.0);
     #[cfg(target_arch = "x86_64")]
     if wide {
         assert!(std::arch::is_x86_feature_detected!("avx512f"), "AVX-512F");
         // SAFETY: the CPU has AVX-512F (checked just above); the slices have one length.
-        done = unsafe { w8::kick_drift(v, force, mass, g, x, x_old.as_deref_mut(), dt) };
+        (done, work) = unsafe { w8::kick_drift(v, input, x, x_old.as_deref_mut(), dt) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = wide;
@@ -108,13 +120,18 @@ pub(crate) fn kick_drift(
         if let Some(o) = x_old.as_deref_mut() {
             o[n] = x[n];
         }
-        let im = 1.0 / mass[n];
-        let f = force[n];
+        let im = 1.0 / input.mass[n];
+        let f = input.force[n];
+        let counted = input.owned[n] && !input.constrained[n];
         for c in 0..3 {
             v[n][c] += h * (f[c] * im + g[c]);
             x[n][c] += dt * v[n][c];
+            if counted {
+                work += f[c] * (dt * v[n][c]);
+            }
         }
     }
+    work
 }
 
 /// The first part of `finish_step`: for every free node (not `constrained`) the closing kick
@@ -123,7 +140,7 @@ pub(crate) fn kick_drift(
 /// written) added to `sums`. The constrained nodes' kicks and sums are the caller's. `wide`:
 /// eight nodes at a time (AVX-512F).
 ///
-/// Per node: force, force_old, mass and v read (80 B), v written (24 B); about 40 flops.
+/// Per node: force, mass and v read (56 B), v written (24 B); about 35 flops.
 pub(crate) fn close_free(
     read: &NodalSums,
     constrained: &[bool],
@@ -135,7 +152,6 @@ pub(crate) fn close_free(
     assert!(
         constrained.len() == nn
             && read.force.len() == nn
-            && read.force_old.len() == nn
             && read.mass.len() == nn
             && read.owned.len() == nn,
         "one value per node"
@@ -170,7 +186,7 @@ pub(crate) fn close_free(
 /// 3 n0: register j holds slots 8 j .. 8 j + 8, slot s being component s % 3 of node s / 3.
 #[cfg(target_arch = "x86_64")]
 mod w8 {
-    use super::NodalSums;
+    use super::{KickInput, NodalSums};
     use std::arch::x86_64::*;
 
     /// The node of each slot of register j, as an index for `vpermpd`.
@@ -229,51 +245,68 @@ mod w8 {
         std::array::from_fn(|j| unsafe { _mm512_loadu_epi64(SLOT_NODE[j].as_ptr()) })
     }
 
-    /// [`super::kick_drift`] on the whole chunks; returns the nodes done.
+    /// The slot masks (24 bits) of the free nodes and of the counted ones (owned and free) of
+    /// the chunk at `n0`.
+    #[inline(always)]
+    fn chunk_masks(owned: &[bool], constrained: &[bool], n0: usize) -> (u32, u32) {
+        let con = node_mask(&constrained[n0..]);
+        let own = node_mask(&owned[n0..]);
+        (SPREAD[!con as usize], SPREAD[(own & !con) as usize])
+    }
+
+    /// [`super::kick_drift`] on the whole chunks; returns the nodes done and their work sum.
     ///
     /// # Safety
     /// The CPU must have AVX-512F; the slices must have one value per node.
-    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn kick_drift(
         v: &mut [[f64; 3]],
-        force: &[[f64; 3]],
-        mass: &[f64],
-        g: [f64; 3],
+        input: &KickInput,
         x: &mut [[f64; 3]],
         x_old: Option<&mut [[f64; 3]]>,
         dt: f64,
-    ) -> usize {
+    ) -> (usize, f64) {
         let whole = v.len() / 8 * 8;
-        let (gp, idx) = (gravity_slots(g), slot_nodes());
+        let (gp, idx) = (gravity_slots(input.gravity), slot_nodes());
         let (h, dtv, one) = (
             _mm512_set1_pd(0.5 * dt),
             _mm512_set1_pd(dt),
             _mm512_set1_pd(1.0),
         );
-        let (pv, pf) = (v.as_mut_ptr() as *mut f64, force.as_ptr() as *const f64);
+        let mut work = [_mm512_setzero_pd(); 3];
+        let (pv, pf) = (
+            v.as_mut_ptr() as *mut f64,
+            input.force.as_ptr() as *const f64,
+        );
         let px = x.as_mut_ptr() as *mut f64;
         let po = x_old.map(|o| o.as_mut_ptr() as *mut f64);
+        let pm = input.mass.as_ptr();
         for n0 in (0..whole).step_by(8) {
             // SAFETY: n0 + 8 <= len masses.
-            let im = _mm512_div_pd(one, unsafe { _mm512_loadu_pd(mass.as_ptr().add(n0)) });
+            let im = _mm512_div_pd(one, unsafe { _mm512_loadu_pd(pm.add(n0)) });
+            let (_, counted) = chunk_masks(input.owned, input.constrained, n0);
             for j in 0..3 {
                 let s = 3 * n0 + 8 * j;
+                let kc = (counted >> (8 * j)) as u8;
                 let imj = _mm512_permutexvar_pd(idx[j], im);
                 // SAFETY: s + 8 <= 3 (n0 + 8) <= 3 len doubles in each array.
                 unsafe {
-                    let an = _mm512_add_pd(_mm512_mul_pd(_mm512_loadu_pd(pf.add(s)), imj), gp[j]);
+                    let f = _mm512_loadu_pd(pf.add(s));
+                    let an = _mm512_add_pd(_mm512_mul_pd(f, imj), gp[j]);
                     let vn = _mm512_add_pd(_mm512_loadu_pd(pv.add(s)), _mm512_mul_pd(h, an));
                     _mm512_storeu_pd(pv.add(s), vn);
                     let xs = _mm512_loadu_pd(px.add(s));
                     if let Some(po) = po {
                         _mm512_storeu_pd(po.add(s), xs);
                     }
-                    _mm512_storeu_pd(px.add(s), _mm512_add_pd(xs, _mm512_mul_pd(dtv, vn)));
+                    let dx = _mm512_mul_pd(dtv, vn);
+                    _mm512_storeu_pd(px.add(s), _mm512_add_pd(xs, dx));
+                    work[j] = _mm512_mask3_fmadd_pd(f, dx, work[j], kc);
                 }
             }
         }
-        whole
+        let total = _mm512_add_pd(_mm512_add_pd(work[0], work[1]), work[2]);
+        (whole, _mm512_reduce_add_pd(total))
     }
 
     /// [`super::close_free`] on the whole chunks; returns the nodes done.
@@ -296,18 +329,15 @@ mod w8 {
             _mm512_set1_pd(1.0),
         );
         let zero = _mm512_setzero_pd();
-        // Per slot: m v^2, (f + f_old) dx, m g dx, m v, over the counted nodes.
+        // Per slot: m v^2, f dx, m g dx, m v, over the counted nodes.
         let (mut ke, mut we, mut wx, mut mo) = ([zero; 3], [zero; 3], [zero; 3], [zero; 3]);
         let pf = r.force.as_ptr() as *const f64;
-        let pfo = r.force_old.as_ptr() as *const f64;
         let pv = v.as_mut_ptr() as *mut f64;
         for n0 in (0..whole).step_by(8) {
             // SAFETY: n0 + 8 <= nn masses.
             let m = unsafe { _mm512_loadu_pd(r.mass.as_ptr().add(n0)) };
             let im = _mm512_div_pd(one, m);
-            let con = node_mask(&constrained[n0..]);
-            let own = node_mask(&r.owned[n0..]);
-            let (free, counted) = (SPREAD[!con as usize], SPREAD[(own & !con) as usize]);
+            let (free, counted) = chunk_masks(r.owned, constrained, n0);
             for j in 0..3 {
                 let (kf, kc) = ((free >> (8 * j)) as u8, (counted >> (8 * j)) as u8);
                 let s = 3 * n0 + 8 * j;
@@ -321,9 +351,8 @@ mod w8 {
                     let vn = _mm512_mask_add_pd(half, kf, half, _mm512_mul_pd(h, an));
                     _mm512_storeu_pd(pv.add(s), vn);
                     let dx = _mm512_mul_pd(dt, half);
-                    let fo = _mm512_loadu_pd(pfo.add(s));
                     ke[j] = _mm512_mask3_fmadd_pd(mj, _mm512_mul_pd(vn, vn), ke[j], kc);
-                    we[j] = _mm512_mask3_fmadd_pd(_mm512_add_pd(f, fo), dx, we[j], kc);
+                    we[j] = _mm512_mask3_fmadd_pd(f, dx, we[j], kc);
                     wx[j] = _mm512_mask3_fmadd_pd(_mm512_mul_pd(mj, gp[j]), dx, wx[j], kc);
                     mo[j] = _mm512_mask3_fmadd_pd(mj, vn, mo[j], kc);
                 }
@@ -383,21 +412,24 @@ mod tests {
         let n = 101;
         let mut rng = Rng(0x2545_f491_4f6c_dd1d);
         let (v0, x0) = (field(&mut rng, n, 30.0), field(&mut rng, n, 1.0));
-        let (f0, f, fo) = (
-            field(&mut rng, n, 1e4),
-            field(&mut rng, n, 1e4),
-            field(&mut rng, n, 1e4),
-        );
+        let (f0, f) = (field(&mut rng, n, 1e4), field(&mut rng, n, 1e4));
         let mass: Vec<f64> = (0..n).map(|_| 1.0 + rng.next()).collect();
         let owned: Vec<bool> = (0..n).map(|i| i % 3 != 1).collect();
         let constrained: Vec<bool> = (0..n).map(|i| i % 4 == 2).collect();
         let (dt, g) = (1e-7, [0.0, -9.81, 0.0]);
+        let input = KickInput {
+            force: &f0,
+            mass: &mass,
+            gravity: g,
+            owned: &owned,
+            constrained: &constrained,
+        };
         let run = |wide: bool| {
             let (mut v, mut x, mut x_old) = (v0.clone(), x0.clone(), vec![[0.0; 3]; n]);
-            kick_drift(&mut v, &f0, &mass, g, &mut x, Some(&mut x_old), dt, wide);
+            let work = kick_drift(&mut v, &input, &mut x, Some(&mut x_old), dt, wide);
             // Without start positions: the same velocities and positions.
             let (mut v2, mut x2) = (v0.clone(), x0.clone());
-            kick_drift(&mut v2, &f0, &mass, g, &mut x2, None, dt, wide);
+            kick_drift(&mut v2, &input, &mut x2, None, dt, wide);
             assert_eq!(
                 (&v2, &x2),
                 (&v, &x),
@@ -406,14 +438,13 @@ mod tests {
             let read = NodalSums {
                 dt,
                 force: &f,
-                force_old: &fo,
                 mass: &mass,
                 owned: &owned,
                 gravity: g,
             };
             let mut sums = [0.0; 6];
             close_free(&read, &constrained, &mut v, &mut sums, wide);
-            (v, x, x_old, sums)
+            (v, x, x_old, sums, work)
         };
         let (narrow, wide) = (run(false), run(true));
         assert_eq!(narrow.0, wide.0, "velocities");
@@ -425,12 +456,19 @@ mod tests {
         let momentum: f64 = (0..n).map(|i| mass[i] * speed(i)).sum();
         let scale = [
             narrow.3[0],
-            (0..n).map(|i| 2e4 * dt * speed(i)).sum(),
+            (0..n).map(|i| 1e4 * dt * speed(i)).sum(),
             (0..n).map(|i| mass[i] * 9.81 * dt * speed(i)).sum(),
             momentum,
             momentum,
             momentum,
         ];
+        let kick_scale: f64 = (0..n).map(|i| 1e4 * dt * speed(i)).sum();
+        let (p, q) = (narrow.4, wide.4);
+        assert!(
+            (p - q).abs() <= 1e-13 * kick_scale,
+            "the kick's work: node by node {p:e}, eight at a time {q:e} (tolerance 1e-13 of \
+             {kick_scale:e})"
+        );
         for k in 0..6 {
             let (p, q) = (narrow.3[k], wide.3[k]);
             assert!(
