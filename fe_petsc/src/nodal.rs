@@ -67,11 +67,9 @@ impl NodalSums<'_> {
     }
 }
 
-/// What the kick reads of each node besides its motion: the forces at the step's start (the
-/// last step's element forces), masses, gravity, and which nodes this rank owns and which are
-/// constrained.
+/// What the kick reads of each node besides its motion and forces: masses, gravity, and which
+/// nodes this rank owns and which are constrained.
 pub(crate) struct KickInput<'a> {
-    pub force: &'a [[f64; 3]],
     pub mass: &'a [f64],
     pub gravity: [f64; 3],
     pub owned: &'a [bool],
@@ -79,7 +77,9 @@ pub(crate) struct KickInput<'a> {
 }
 
 /// The kick to the half step and the drift of every node: v += dt/2 a with the acceleration
-/// a = f / m + g, x_old = x (where `x_old` is given: the start positions kept for the contact
+/// a = f / m + g of the forces `force` at the step's start (the last step's element forces;
+/// set to zero as read where `zero`: for the next element loop, when nothing reads them after
+/// the kick), x_old = x (where `x_old` is given: the start positions kept for the contact
 /// stage), x += dt v; before the constraints, which the caller applies to the velocities (a
 /// constrained component's velocity is set there, whatever this kick gave it). Returns the
 /// sum over the owned free nodes of f . dt v(n+1/2), twice the old forces' half of the element
@@ -87,8 +87,11 @@ pub(crate) struct KickInput<'a> {
 /// `finish_step` the new forces' half): so that the closing pass reads no old forces. `wide`:
 /// eight nodes at a time (the CPU must have AVX-512F). Per node: v, f, m, x read (80 B), v, x
 /// written (48 B), and x_old (24 B); 19 flops and a division.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn kick_drift(
     v: &mut [[f64; 3]],
+    force: &mut [[f64; 3]],
+    zero: bool,
     input: &KickInput,
     x: &mut [[f64; 3]],
     mut x_old: Option<&mut [[f64; 3]]>,
@@ -97,7 +100,7 @@ pub(crate) fn kick_drift(
 ) -> f64 {
     let nn = v.len();
     assert!(
-        input.force.len() == nn
+        force.len() == nn
             && input.mass.len() == nn
             && input.owned.len() == nn
             && input.constrained.len() == nn
@@ -112,7 +115,8 @@ pub(crate) fn kick_drift(
     if wide {
         assert!(std::arch::is_x86_feature_detected!("avx512f"), "AVX-512F");
         // SAFETY: the CPU has AVX-512F (checked just above); the slices have one length.
-        (done, work) = unsafe { w8::kick_drift(v, input, x, x_old.as_deref_mut(), dt) };
+        (done, work) =
+            unsafe { w8::kick_drift(v, force, zero, input, x, x_old.as_deref_mut(), dt) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = wide;
@@ -121,7 +125,10 @@ pub(crate) fn kick_drift(
             o[n] = x[n];
         }
         let im = 1.0 / input.mass[n];
-        let f = input.force[n];
+        let f = force[n];
+        if zero {
+            force[n] = [0.0; 3];
+        }
         let counted = input.owned[n] && !input.constrained[n];
         for c in 0..3 {
             v[n][c] += h * (f[c] * im + g[c]);
@@ -261,6 +268,8 @@ mod w8 {
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn kick_drift(
         v: &mut [[f64; 3]],
+        force: &mut [[f64; 3]],
+        zero: bool,
         input: &KickInput,
         x: &mut [[f64; 3]],
         x_old: Option<&mut [[f64; 3]]>,
@@ -274,10 +283,7 @@ mod w8 {
             _mm512_set1_pd(1.0),
         );
         let mut work = [_mm512_setzero_pd(); 3];
-        let (pv, pf) = (
-            v.as_mut_ptr() as *mut f64,
-            input.force.as_ptr() as *const f64,
-        );
+        let (pv, pf) = (v.as_mut_ptr() as *mut f64, force.as_mut_ptr() as *mut f64);
         let px = x.as_mut_ptr() as *mut f64;
         let po = x_old.map(|o| o.as_mut_ptr() as *mut f64);
         let pm = input.mass.as_ptr();
@@ -292,6 +298,9 @@ mod w8 {
                 // SAFETY: s + 8 <= 3 (n0 + 8) <= 3 len doubles in each array.
                 unsafe {
                     let f = _mm512_loadu_pd(pf.add(s));
+                    if zero {
+                        _mm512_storeu_pd(pf.add(s), _mm512_setzero_pd());
+                    }
                     let an = _mm512_add_pd(_mm512_mul_pd(f, imj), gp[j]);
                     let vn = _mm512_add_pd(_mm512_loadu_pd(pv.add(s)), _mm512_mul_pd(h, an));
                     _mm512_storeu_pd(pv.add(s), vn);
@@ -418,7 +427,6 @@ mod tests {
         let constrained: Vec<bool> = (0..n).map(|i| i % 4 == 2).collect();
         let (dt, g) = (1e-7, [0.0, -9.81, 0.0]);
         let input = KickInput {
-            force: &f0,
             mass: &mass,
             gravity: g,
             owned: &owned,
@@ -426,15 +434,27 @@ mod tests {
         };
         let run = |wide: bool| {
             let (mut v, mut x, mut x_old) = (v0.clone(), x0.clone(), vec![[0.0; 3]; n]);
-            let work = kick_drift(&mut v, &input, &mut x, Some(&mut x_old), dt, wide);
-            // Without start positions: the same velocities and positions.
+            let mut fk = f0.clone();
+            let work = kick_drift(
+                &mut v,
+                &mut fk,
+                false,
+                &input,
+                &mut x,
+                Some(&mut x_old),
+                dt,
+                wide,
+            );
+            assert_eq!(fk, f0, "the forces kept");
+            // Without start positions, the forces zeroed: the same velocities and positions.
             let (mut v2, mut x2) = (v0.clone(), x0.clone());
-            kick_drift(&mut v2, &input, &mut x2, None, dt, wide);
+            kick_drift(&mut v2, &mut fk, true, &input, &mut x2, None, dt, wide);
             assert_eq!(
                 (&v2, &x2),
                 (&v, &x),
                 "the same drift without start positions"
             );
+            assert!(fk.iter().flatten().all(|&c| c == 0.0), "the forces zeroed");
             let read = NodalSums {
                 dt,
                 force: &f,

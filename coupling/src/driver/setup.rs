@@ -149,8 +149,8 @@ pub fn build(
         _ => None,
     };
     if let (None, Some(fe)) = (&contact, &mut fe) {
-        // Only the contact stage reads the nodes' start positions.
-        fe.state_mut().keep_start_positions(false);
+        // Only the contact stage reads the start positions and forces after the kick.
+        fe.state_mut().set_contact_stage(false);
     }
     Ok(Model {
         fe,
