@@ -124,16 +124,19 @@ fn valid_volume(v: F) -> M {
 /// velocities' modes, the end-of-step volume gradient, the rate of deformation and the
 /// Hughes-Winget rotation of the step.
 struct Kinematics {
-    /// Modes of the coordinates at t(n+1) over 8, a_k = X_k / 8 (xi .. xi eta); their first
-    /// three are the rows of the Jacobian at the centre.
-    a: [V3; 6],
-    /// The xi eta zeta mode of the coordinates over 8.
-    a7: V3,
+    /// Modes of the coordinates at t(n+1), X_k (xi .. xi eta): 8 a_k, a_k the modes over 8
+    /// (the module comment's); their first three are 8 times the rows of the Jacobian at the
+    /// centre. (Here and below the factors of 8 and 64 are powers of two carried exactly to
+    /// where a product already forms: every value has the bits of the unscaled form's.)
+    xk: [V3; 6],
+    /// The xi eta zeta mode of the coordinates, X_7.
+    xk7: V3,
     /// Modes of the velocities U_k (xi .. xi eta), and the xi eta zeta one.
     u: [V3; 6],
     u7: V3,
-    /// dV/dX_k at t(n+1): the mean gradient B_I = sum_k phi_k(I) G_k.
-    g: [V3; 6],
+    /// 64 dV/dX_k at t(n+1) (64 G_k: the gradient of the modes X rather than a): the mean
+    /// gradient B_I = sum_k phi_k(I) G_k.
+    g64: [V3; 6],
     /// Sum over the nodes of |b_I|^2, b = B / V.
     bb: F,
     vol: F,
@@ -157,45 +160,44 @@ struct Kinematics {
 /// x and v (`xm`, `um`, formed by the caller); nothing read or written outside the lanes.
 #[inline(always)]
 fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
-    let (xm, xm7) = xm;
+    let (xk, xk7) = *xm;
     let (u, u7) = *um;
-    let eighth = F::splat(0.125);
-    let mut a = [[F::ZERO; 3]; 6];
-    let mut ah = [[F::ZERO; 3]; 6];
-    let h16 = F::splat(0.5 * dt * 0.125);
+    // The mid-step modes X - dt/2 U (8 times a - dt/16 U).
+    let mut xh = [[F::ZERO; 3]; 6];
+    let h2 = F::splat(0.5 * dt);
     for m in 0..6 {
         for c in 0..3 {
-            a[m][c] = xm[m][c] * eighth;
-            ah[m][c] = h16.neg_mul_add(u[m][c], a[m][c]);
+            xh[m][c] = h2.neg_mul_add(u[m][c], xk[m][c]);
         }
     }
-    let a7 = [xm7[0] * eighth, xm7[1] * eighth, xm7[2] * eighth];
-    let (g, vol) = modes::volume_gradient(&a);
-    let (gh, volh) = modes::volume_gradient(&ah);
+    let (g64, vol) = modes::volume_gradient(&xk);
+    let (gh64, volh) = modes::volume_gradient(&xh);
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
         return None;
     }
     // 1/V and 1/V(n+1/2) from one reciprocal.
     let inv = (vol * volh).recip();
     let (iv, ivh) = (volh * inv, vol * inv);
-    // sum_I |B_I|^2 = 8 sum_k |G_k|^2 (the modes are orthogonal over the nodes).
-    let mut gg = g[0][0] * g[0][0];
+    // sum_I |B_I|^2 = 8 sum_k |G_k|^2 (the modes are orthogonal over the nodes), the sum
+    // formed on 64 G (4096 times).
+    let mut gg = g64[0][0] * g64[0][0];
     for m in 0..6 {
         for c in 0..3 {
             if m + c > 0 {
-                gg = g[m][c].mul_add(g[m][c], gg);
+                gg = g64[m][c].mul_add(g64[m][c], gg);
             }
         }
     }
-    let bb = 8.0 * gg * (iv * iv);
+    let bb = (8.0 / 4096.0) * gg * (iv * iv);
+    let ivh64 = ivh * (1.0 / 64.0);
     let mut l = [[F::ZERO; 3]; 3];
     for (i, row) in l.iter_mut().enumerate() {
         for (j, e) in row.iter_mut().enumerate() {
-            let mut s = u[0][i] * gh[0][j];
+            let mut s = u[0][i] * gh64[0][j];
             for m in 1..6 {
-                s = u[m][i].mul_add(gh[m][j], s);
+                s = u[m][i].mul_add(gh64[m][j], s);
             }
-            *e = s * ivh;
+            *e = s * ivh64;
         }
     }
     let d = [
@@ -211,11 +213,11 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
     let w20 = 0.5 * (l[2][0] - l[0][2]);
     let r = hughes_winget(w01, w12, w20, dt);
     Some(Kinematics {
-        a,
-        a7,
+        xk,
+        xk7,
         u,
         u7,
-        g,
+        g64,
         bb,
         vol,
         iv,
@@ -381,19 +383,26 @@ fn update_core(
     // vectors through the stress update): the hourglass modes of the coordinates (over 8)
     // and velocities, and
     // sum_k U_k (x) G_k (V times the velocity gradient at the end of the step).
-    let a_hg = [k.a[3], k.a[4], k.a[5], k.a7];
+    let x_hg = [k.xk[3], k.xk[4], k.xk[5], k.xk7];
     let u_hg = [k.u[3], k.u[4], k.u[5], k.u7];
+    // 64 lg.
     let mut lg = [[F::ZERO; 3]; 3];
     for (i, row) in lg.iter_mut().enumerate() {
         for (j, e) in row.iter_mut().enumerate() {
-            let mut s = k.u[0][i] * k.g[0][j];
+            let mut s = k.u[0][i] * k.g64[0][j];
             for mm in 1..6 {
-                s = k.u[mm][i].mul_add(k.g[mm][j], s);
+                s = k.u[mm][i].mul_add(k.g64[mm][j], s);
             }
             *e = s;
         }
     }
-    let geo = hourglass_lanes::ModeGeometry::new(&a_hg, &u_hg, &lg, k.iv, [k.a[0], k.a[1], k.a[2]]);
+    let geo = hourglass_lanes::ModeGeometry::new(
+        &x_hg,
+        &u_hg,
+        &lg,
+        k.iv * (1.0 / 64.0),
+        [k.xk[0], k.xk[1], k.xk[2]],
+    );
     let mut stress = rotate(&k.r, &st.stress);
     let mut deps = [F::ZERO; 6];
     for i in 0..6 {
@@ -454,26 +463,30 @@ fn update_core(
 /// gamma vectors).
 #[inline(always)]
 fn nodal_forces(k: &Kinematics, stress: &[F; 6], q: F, tg: &[V3; 4]) -> LaneNodes {
-    let sig = [
-        [stress[0] + q, stress[3], stress[5]],
-        [stress[3], stress[1] + q, stress[4]],
-        [stress[5], stress[4], stress[2] + q],
-    ];
-    let a_hg = [&k.a[3], &k.a[4], &k.a[5], &k.a7];
-    let s8 = 8.0 * k.iv;
+    // (N - sigma_tot) / 64, to multiply 64 G (exact: powers of two).
+    let s = 1.0 / 64.0;
+    let (d0, d1, d2) = (
+        (stress[0] + q) * s,
+        (stress[1] + q) * s,
+        (stress[2] + q) * s,
+    );
+    let (o3, o4, o5) = (stress[3] * s, stress[4] * s, stress[5] * s);
+    let sig = [[d0, o3, o5], [o3, d1, o4], [o5, o4, d2]];
+    let x_hg = [&k.xk[3], &k.xk[4], &k.xk[5], &k.xk7];
+    // N = (1/V) sum_a H_a (x) X_a = (8/V) sum_a H_a (x) a_a; over 64.
+    let s8 = k.iv * (1.0 / 64.0);
     let mut nm = [[F::ZERO; 3]; 3];
     for c in 0..3 {
         for j in 0..3 {
-            let mut n = tg[0][c] * a_hg[0][j];
+            let mut n = tg[0][c] * x_hg[0][j];
             for al in 1..4 {
-                n = tg[al][c].mul_add(a_hg[al][j], n);
+                n = tg[al][c].mul_add(x_hg[al][j], n);
             }
-            // N - sigma_tot.
             nm[c][j] = s8.mul_sub(n, sig[c][j]);
         }
     }
     let mut fm = [[F::ZERO; 3]; 6];
-    for (f, g) in fm.iter_mut().zip(&k.g) {
+    for (f, g) in fm.iter_mut().zip(&k.g64) {
         for c in 0..3 {
             f[c] = dot3(nm[c][0], g[0], nm[c][1], g[1], nm[c][2], g[2]);
         }

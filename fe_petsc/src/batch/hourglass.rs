@@ -38,14 +38,16 @@ pub struct LaneHourglass<'a> {
 pub struct ModeGeometry {
     /// q_a = sum_I v_I gamma_aI (global axes), m/s.
     pub q: [V3; 4],
-    /// The Jacobian's rows dx/dxi, dx/deta, dx/dzeta at the centre.
+    /// 8 times the Jacobian's rows dx/dxi, dx/deta, dx/dzeta at the centre.
     pub jac: M3,
 }
 
 impl ModeGeometry {
-    /// The hourglass rates from the modes (over 8) `a` of the coordinates and `u` of the
-    /// velocities for the hourglass modes (eta zeta, zeta xi, xi eta, xi eta zeta), the matrix
-    /// `lg` = sum_k U_k (x) G_k (V times the end-of-step velocity gradient) and 1/V `iv`.
+    /// The hourglass rates from the modes X = 8 a of the coordinates and `u` of the velocities
+    /// for the hourglass modes (eta zeta, zeta xi, xi eta, xi eta zeta), the matrix `lg` =
+    /// 64 sum_k U_k (x) G_k (64 V times the end-of-step velocity gradient) and `iv` 1/(64 V):
+    /// (8/V) lg a_a = iv (64 lg) X_a, exactly (powers of two). `jac`: 8 times the centre
+    /// Jacobian's rows (the frame's directions are the same; its inverse half-lengths 1/8).
     ///
     /// `crate::hourglass::vectors` forms gamma_aI = Gamma_aI - (Gamma_a . x) . b_I node by node;
     /// in mode space sum_I v_I Gamma_aI = U_a and sum_I v_I ((Gamma_a . x) . b_I)
@@ -53,7 +55,7 @@ impl ModeGeometry {
     /// 4 x 12 operations per element (the node-by-node form: 4 x 120).
     #[inline(always)]
     pub fn new(a: &[V3; 4], u: &[V3; 4], lg: &M3, iv: F, jac: M3) -> ModeGeometry {
-        let s8 = 8.0 * iv;
+        let s8 = iv;
         let mut q = [[F::ZERO; 3]; 4];
         for al in 0..4 {
             for c in 0..3 {
@@ -90,7 +92,9 @@ pub fn tangent_ratio(dsig: &[F; 6], deps: &[F; 6], mu: f64) -> F {
     F::select(round_off, F::splat(1.0), ratio)
 }
 
-/// [`crate::hourglass::Frame`] in lanes: rows e_j and inverse half-lengths 1 / a_j.
+/// [`crate::hourglass::Frame`] in lanes: rows e_j and inverse lengths 1 / (8 a_j) of the
+/// centre Jacobian's rows given 8 times (`ModeGeometry::jac`; a_j the half-lengths): the
+/// (1/8) 1/a_j the strain rates take, exactly.
 struct Frame {
     e: M3,
     ia: V3,
@@ -143,9 +147,9 @@ impl Frame {
 /// [`crate::hourglass::physical_strain_rates`] in lanes. 30 flops, no division.
 #[inline(always)]
 fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
-    // 1/8 taken into 1/a_j: a power of two scales exactly, so each product and sum has the
-    // scalar kernel's bits.
-    let ia8 = [0.125 * ia[0], 0.125 * ia[1], 0.125 * ia[2]];
+    // 1/8 in the frame's 1/(8 a_j): a power of two scales exactly, so each product and sum
+    // has the scalar kernel's bits.
+    let ia8 = ia;
     let mut e = [[F::ZERO; 3]; 4];
     for g in 0..3 {
         let (p, r) = ((g + 1) % 3, (g + 2) % 3);
@@ -164,7 +168,8 @@ fn strain_rates(qd: &[V3; 4], ia: &V3) -> [V3; 4] {
 /// [`crate::hourglass::physical_forces`] in lanes. About 45 flops, no division.
 #[inline(always)]
 fn forces(sig: &[V3; 4], ia: &V3, vol: F) -> [V3; 4] {
-    let w = 0.125 * vol * THIRD;
+    // w = V/24 on the half-lengths' 1/a_j; 8 w on the frame's 1/(8 a_j).
+    let w = vol * THIRD;
     let wia = [w * ia[0], w * ia[1], w * ia[2]];
     let mut h = [[F::ZERO; 3]; 4];
     for g in 0..3 {

@@ -97,11 +97,13 @@ fn cross2(p: &V3, q: &V3, r: &V3, s: &V3) -> V3 {
     [comp(1, 2), comp(2, 0), comp(0, 1)]
 }
 
-/// The volume gradient G_k = dV/dX_k (k = xi .. xi eta) and the volume V of the element whose
-/// coordinates have the modes `a` = X / 8 (see the module comment; the xi eta zeta mode does not
-/// enter). 9 + 6 x 12 + 19 = 100 operations per element.
+/// 64 times the volume gradient G_k = dV/dX_k (k = xi .. xi eta), and the volume V, of the
+/// element whose coordinates have the modes `x` = X = 8 a (see the module comment; the xi eta
+/// zeta mode does not enter): the module's forms on a, each product of two modes 64 times as
+/// large, exactly (powers of two). 9 + 6 x 12 + 19 = 100 operations per element.
 #[inline(always)]
 pub fn volume_gradient(a: &[V3; 6]) -> ([V3; 6], F) {
+    // (`a` here is X = 8 a: the forms below are those on a, scaled.)
     let third = F::splat(crate::hourglass::THIRD);
     let t = |m: usize| [a[m][0] * third, a[m][1] * third, a[m][2] * third];
     let (t3, t4, t5) = (t(3), t(4), t(5));
@@ -113,7 +115,7 @@ pub fn volume_gradient(a: &[V3; 6]) -> ([V3; 6], F) {
         cross2(&a[0], &t5, &t3, &a[2]),
         cross2(&t4, &a[0], &a[1], &t3),
     ];
-    // V = sum_k X_k . G_k / 3 = (8 / 3) sum_k a_k . G_k.
+    // V = sum_k X_k . G_k / 3 = (8 / 3) sum_k a_k . G_k = (8 / 3) / 512 sum_k X_k . 64 G_k.
     let mut s = a[0][0] * g[0][0];
     for m in 0..6 {
         for c in 0..3 {
@@ -122,5 +124,5 @@ pub fn volume_gradient(a: &[V3; 6]) -> ([V3; 6], F) {
             }
         }
     }
-    (g, s * (8.0 * crate::hourglass::THIRD))
+    (g, s * (8.0 * crate::hourglass::THIRD / 512.0))
 }
