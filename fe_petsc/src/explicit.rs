@@ -470,19 +470,61 @@ impl ExplicitFe {
         out
     }
 
-    /// Applies contact push-back forces after `kick_drift`: `force` holds each node's force on
-    /// this rank's owned nodes (zero on the others); it is summed over ranks to every copy, then
-    /// the half-step velocity gets `F dt / m` and the position `F dt^2 / m`, with the nodal
-    /// constraints applied to the correction. Returns the local work of the push-back over
-    /// owned nodes, `m dv . (v + dv/2 - a_n dt/2)` with `dv` the velocity correction: what
-    /// closes the energy balance of the step with the element and external work.
-    pub fn apply_contact(
+    /// Sums contact push-back forces over ranks: `force` holds each node's force on this
+    /// rank's owned nodes (zero on the others); after the call every copy holds the sum.
+    pub fn sum_contact_forces(
         &mut self,
         force: &mut [[f64; 3]],
-        dt: f64,
         exchange: &mut NodeExchange,
-    ) -> Result<f64, StepError> {
+    ) -> Result<(), StepError> {
         exchange.sum_shared(flat(force))?;
+        Ok(())
+    }
+
+    /// The terms `[A, B]` of the change of the half-step kinetic energy that the summed
+    /// contact forces `force` scaled by `alpha` make, `dK(alpha) = alpha A + alpha^2 B`, over
+    /// owned nodes: `A = sum m dv . v`, `B = sum m |dv|^2 / 2` for the constrained velocity
+    /// corrections `dv = F dt / m` (J).
+    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
+        let mut t = [0.0; 2];
+        for n in 0..self.x.len() {
+            let f = force[n];
+            if f == [0.0; 3] || !self.owned[n] {
+                continue;
+            }
+            let dv = self.contact_dv(n, f, dt);
+            for c in 0..3 {
+                t[0] += self.mass[n] * dv[c] * self.v[n][c];
+                t[1] += 0.5 * self.mass[n] * dv[c] * dv[c];
+            }
+        }
+        t
+    }
+
+    /// Node `n`'s velocity correction for contact force `f` over `dt`, its constraints applied.
+    fn contact_dv(&self, n: usize, f: [f64; 3], dt: f64) -> [f64; 3] {
+        let mut dv = [
+            f[0] * dt / self.mass[n],
+            f[1] * dt / self.mass[n],
+            f[2] * dt / self.mass[n],
+        ];
+        if self.constrained[n] {
+            for (m, c) in &self.constraints {
+                if *m as usize == n {
+                    apply(c, &mut dv, false);
+                }
+            }
+        }
+        dv
+    }
+
+    /// Applies contact push-back forces after `kick_drift`: `force` holds each node's force
+    /// summed over ranks ([`ExplicitFe::sum_contact_forces`]); the half-step velocity gets
+    /// `F dt / m` and the position `F dt^2 / m`, with the nodal constraints applied to the
+    /// correction. Returns the local work of the push-back over owned nodes,
+    /// `m dv . (v + dv/2 - a_n dt/2)` with `dv` the velocity correction: what closes the energy
+    /// balance of the step with the element and external work.
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> f64 {
         let mut cons: Vec<Option<usize>> = vec![None; self.x.len()];
         for (i, (n, _)) in self.constraints.iter().enumerate() {
             cons[*n as usize] = Some(i);
@@ -521,7 +563,7 @@ impl ExplicitFe {
                 self.x[n][c] += dv[c] * dt;
             }
         }
-        Ok(work)
+        work
     }
 
     /// Node `n`'s acceleration at the start of the step (between `kick_drift` and the element

@@ -43,6 +43,19 @@ enum ContactDecomposition {
     Static,
 }
 
+/// `--kernel`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Kernel {
+    /// The widest every rank's CPU offers (eight lanes with AVX-512F, else four).
+    Auto,
+    /// One element at a time.
+    Scalar,
+    /// Four elements per group.
+    Lanes4,
+    /// Eight elements per group (AVX-512F only).
+    Lanes8,
+}
+
 /// `--contact-rebuild`, `--sph-pairs`.
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum Rebuild {
@@ -169,6 +182,10 @@ struct RunArgs {
     /// `every-step`: search afresh every step (the reference).
     #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
     sph_pairs: Rebuild,
+    /// The element kernel: `auto` (default: the widest every rank's CPU offers), `scalar`,
+    /// `lanes4`, or `lanes8` (refused on a CPU without AVX-512F).
+    #[arg(long, value_enum, default_value = "auto")]
+    kernel: Kernel,
     /// Replace an earlier run's results in the output folder (without it they are kept:
     /// `--out` naming a folder that holds a run is refused, and the default out/<scene
     /// name> goes on to out/<scene name>-2, -3, ...).
@@ -415,6 +432,12 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
             contact_kept: a.contact_rebuild == Rebuild::Kept,
             contact_skins: a.contact_skins,
             sph_kept_pairs: a.sph_pairs == Rebuild::Kept,
+            kernel: match a.kernel {
+                Kernel::Auto => driver::KernelChoice::Auto,
+                Kernel::Scalar => driver::KernelChoice::Scalar,
+                Kernel::Lanes4 => driver::KernelChoice::Lanes4,
+                Kernel::Lanes8 => driver::KernelChoice::Lanes8,
+            },
         },
         overwrite: a.overwrite,
         restart: a.restart,

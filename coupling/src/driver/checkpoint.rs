@@ -67,6 +67,9 @@ pub struct CheckState {
     pub err_max_checked: f64,
     /// The blocks' hourglass watch.
     pub hourglass: HourglassWatch,
+    /// The energy scale's state.
+    #[serde(default)]
+    pub scale: super::energy::EnergyScale,
 }
 
 /// What every rank shares (`meta.json`).

@@ -32,12 +32,12 @@ pub fn energy_error_limit(step: u64, max_energy_error: f64) -> f64 {
 /// guideline: hourglass energy under 10 % of the internal energy).
 const HOURGLASS_WARN_RATIO: f64 = 0.10;
 
-/// A block's internal energy below this fraction of the run's energy scale, E(0) +
-/// |W_external| (the energy error's denominator), is negligible: no hourglass ratio is taken
-/// from it. A block's own initial kinetic energy is no floor (a target plate starts at rest,
-/// with zero), and early on the internal energy of a block the loading has barely reached is
-/// round-off, where hourglass/internal is noise; 1e-30 J keeps the floor positive when the run
-/// starts from rest.
+/// A block's internal energy below this fraction of the run's energy scale
+/// ([`EnergyScale::value`], the energy error's denominator, with its floor from the model's
+/// mass) is negligible: no hourglass ratio is taken from it. A block's own initial kinetic
+/// energy is no floor (a target plate starts at rest, with zero), and early on the internal
+/// energy of a block the loading has barely reached is round-off, where hourglass/internal is
+/// noise.
 const HOURGLASS_NEGLIGIBLE: f64 = 1e-6;
 
 /// Each block's hourglass share of its internal energy, watched every step: one warning line
@@ -66,8 +66,8 @@ impl HourglassWatch {
         }
     }
 
-    /// After a step at `time`, `step`: `scale` is the run's energy scale, E(0) +
-    /// |W_external|. Returns the warning lines to print (each block's first passing).
+    /// After a step at `time`, `step`: `scale` is the run's energy scale
+    /// ([`EnergyScale::value`]). Returns the warning lines to print (each block's first passing).
     pub fn check(
         &mut self,
         time: f64,
@@ -138,10 +138,56 @@ pub fn early_note(step: u64) -> String {
     }
 }
 
-/// Relative energy error (SCENE.md): |E - E0 - W| / (|E0| + |W|), with E the total energy
-/// (kinetic, internal, hourglass, contact), E0 its value at t = 0 and W the external work.
-pub fn energy_error(e: f64, e0: f64, w: f64) -> f64 {
-    (e - e0 - w).abs() / (e0.abs() + w.abs()).max(1e-30)
+/// The reference speed of the energy floor ([`EnergyScale`]): the whole model moving at 1 mm/s.
+/// A model at rest (E(0) = 0, no external work) then measures its round-off (1e-26 J for a
+/// half-kilogram cube on a plate) against 0.5 M (1e-3 m/s)^2 = 2.8e-7 J, not against zero,
+/// while an instability, which grows geometrically, passes it within a few steps.
+pub const FLOOR_SPEED: f64 = 1e-3;
+
+/// The energy scale `S(t)` the energy error is measured against (SCENE.md "Energies"): the
+/// largest of `|E(0)| + |W_external(t)|`, the largest kinetic energy and the largest internal
+/// (plus hourglass) energy reached so far, and the floor `0.5 M FLOOR_SPEED^2` of the model's
+/// mass `M`. It exists when E(0) = 0: a scene at rest does not stop on round-off.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EnergyScale {
+    /// `0.5 M FLOOR_SPEED^2`, J.
+    pub floor: f64,
+    /// The largest kinetic energy so far, J.
+    pub kinetic_max: f64,
+    /// The largest internal plus hourglass energy so far, J.
+    pub internal_max: f64,
+}
+
+impl EnergyScale {
+    /// The scale of a model of mass `mass` (kg) before its first step.
+    pub fn new(mass: f64) -> EnergyScale {
+        EnergyScale {
+            floor: 0.5 * mass * FLOOR_SPEED * FLOOR_SPEED,
+            ..Default::default()
+        }
+    }
+
+    /// Takes in a step's kinetic and internal (plus hourglass) energies.
+    pub fn observe(&mut self, kinetic: f64, internal: f64) {
+        self.kinetic_max = self.kinetic_max.max(kinetic.abs());
+        self.internal_max = self.internal_max.max(internal.abs());
+    }
+
+    /// `S(t)` with E(0) = `e0` and the external work `w`, J (never below 1e-30).
+    pub fn value(&self, e0: f64, w: f64) -> f64 {
+        (e0.abs() + w.abs())
+            .max(self.kinetic_max)
+            .max(self.internal_max)
+            .max(self.floor)
+            .max(1e-30)
+    }
+}
+
+/// Relative energy error (SCENE.md): |E - E0 - W| / S, with E the total energy (kinetic,
+/// internal, hourglass, contact), E0 its value at t = 0, W the external work and S the run's
+/// energy scale ([`EnergyScale::value`]).
+pub fn energy_error(e: f64, e0: f64, w: f64, scale: f64) -> f64 {
+    (e - e0 - w).abs() / scale
 }
 
 #[cfg(test)]

@@ -75,6 +75,22 @@ pub struct Algorithms {
     /// Keep the SPH pair candidates between steps on one rank (default); false searches
     /// afresh every step.
     pub sph_kept_pairs: bool,
+    /// The element kernel (`tdyn run --kernel`): every choice gives the same answer.
+    pub kernel: KernelChoice,
+}
+
+/// Which element kernel the explicit element loop runs (`tdyn run --kernel`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum KernelChoice {
+    /// The widest every rank's CPU offers (eight lanes where all have AVX-512F, else four).
+    #[default]
+    Auto,
+    /// One element at a time.
+    Scalar,
+    /// Four elements per group (any CPU).
+    Lanes4,
+    /// Eight elements per group in AVX-512 registers (refused on a CPU without AVX-512F).
+    Lanes8,
 }
 
 impl Default for Algorithms {
@@ -84,6 +100,7 @@ impl Default for Algorithms {
             contact_kept: true,
             contact_skins: None,
             sph_kept_pairs: true,
+            kernel: KernelChoice::Auto,
         }
     }
 }
@@ -276,7 +293,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         &std::fs::read_to_string(&scene.file).unwrap_or_default(),
         &format!("{:?}", opts.overrides),
     );
-    let mut check = EnergyCheck::new(&scene, &model, forced, stable0);
+    let mut check = EnergyCheck::new(world, &scene, &model, forced, stable0);
     let restart = match &opts.restart {
         Some(dir) => {
             if opts.out.as_ref().is_some_and(|o| o != dir) {
@@ -645,11 +662,19 @@ struct EnergyCheck {
     err_max: f64,
     err_max_checked: f64,
     hourglass: energy::HourglassWatch,
+    scale: energy::EnergyScale,
 }
 
 impl EnergyCheck {
-    fn new(scene: &Scene, model: &Model, forced: bool, stable0: f64) -> EnergyCheck {
+    fn new(
+        world: &SimpleCommunicator,
+        scene: &Scene,
+        model: &Model,
+        forced: bool,
+        stable0: f64,
+    ) -> EnergyCheck {
         EnergyCheck {
+            scale: energy::EnergyScale::new(model_mass(world, model)),
             file: scene.file.display().to_string(),
             e0: sum_energies(model).total(),
             max_energy_error: scene.run.max_energy_error,
@@ -668,6 +693,7 @@ impl EnergyCheck {
             err_max: self.err_max,
             err_max_checked: self.err_max_checked,
             hourglass: self.hourglass.clone(),
+            scale: self.scale,
         }
     }
 
@@ -677,6 +703,9 @@ impl EnergyCheck {
         self.err_max = s.err_max;
         self.err_max_checked = s.err_max_checked;
         self.hourglass = s.hourglass.clone();
+        if s.scale.floor > 0.0 {
+            self.scale = s.scale;
+        }
     }
 
     /// A history row now.
@@ -713,7 +742,10 @@ impl EnergyCheck {
         let contact = model.contact.as_ref().map_or(0.0, |c| c.energy);
         let total = en.total() + contact;
         let external = en.external_work;
-        let err = energy::energy_error(total, self.e0, external);
+        self.scale
+            .observe(en.kinetic, en.internal + en.hourglass);
+        let scale = self.scale.value(self.e0, external);
+        let err = energy::energy_error(total, self.e0, external, scale);
         let (t, step, dt, file) = (clock.time, clock.step, clock.dt, &self.file);
         let blow_up = if self.forced {
             format!(
@@ -732,7 +764,6 @@ impl EnergyCheck {
         }
         self.err_max = self.err_max.max(err);
         if let Some(fe) = &model.fe {
-            let scale = self.e0 + external.abs();
             for line in self
                 .hourglass
                 .check(t, step, &fe.state().block_energies, scale)
@@ -760,6 +791,25 @@ impl EnergyCheck {
         }
         Ok(err)
     }
+}
+
+/// The model's mass, kg: the FE nodes' (owned, finite) and the particles' (owned), summed
+/// over ranks (collective).
+fn model_mass(world: &SimpleCommunicator, model: &Model) -> f64 {
+    let mut m = 0.0;
+    if let Some(fe) = &model.fe {
+        let s = fe.state();
+        for (mass, owned) in s.mass.iter().zip(&s.owned) {
+            if *owned && mass.is_finite() {
+                m += mass;
+            }
+        }
+    }
+    if let Some(sph) = &model.sph {
+        let p = &sph.stage.parts;
+        m += p.m[..p.n_owned].iter().sum::<f64>();
+    }
+    crate::kernels::collective::sum(world, m)
 }
 
 /// The stages' energies and momentum summed (FE, then SPH).

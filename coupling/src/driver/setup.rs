@@ -120,6 +120,10 @@ pub fn build(
             groups,
         )
     };
+    if let Some(fe) = &mut fe {
+        fe.choose_kernel(world, algorithms.kernel)
+            .map_err(RunFailure::from)?;
+    }
     let sph = if scene.particles.is_empty() {
         None
     } else {

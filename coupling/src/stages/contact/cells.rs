@@ -138,6 +138,11 @@ pub(crate) struct Solved {
     pub sweeps: u64,
     /// Contacts this rank solved (those of its cells).
     pub rows: u64,
+    /// Contacts over all ranks none of whose nodes can move (skipped), and those whose
+    /// depth was bounded by the step's own penetration (`contact::PushBack`).
+    pub immovable: u64,
+    /// See `immovable`.
+    pub bounded: u64,
 }
 
 /// The push-back of the contacts found in `parts` (each box with its contacts), solved in
@@ -168,6 +173,8 @@ pub(crate) fn solve_in_cells(
             coupled: 0,
             sweeps: 0,
             rows: 0,
+            immovable: 0,
+            bounded: 0,
         });
     }
     let cells = Cells::for_reach(largest);
@@ -227,9 +234,14 @@ pub(crate) fn solve_in_cells(
     let back = holders.plan.reverse_lists(&lists);
     sent += holders.plan.bytes_sent - before + halo.announce.bytes_sent;
     let all: HashMap<u64, [f64; 3]> = back.iter().map(|v| (v.gid, v.v)).collect();
-    let mut sums = [0.0f64; 2];
+    let mut sums = [0.0f64; 4];
     comm.all_reduce_into(
-        &[owned_work(parts, &all, dt), coupled as f64][..],
+        &[
+            owned_work(parts, &all, dt),
+            coupled as f64,
+            pb.immovable as f64,
+            pb.bounded as f64,
+        ][..],
         &mut sums[..],
         SystemOperation::sum(),
     );
@@ -241,6 +253,8 @@ pub(crate) fn solve_in_cells(
         coupled: sums[1] as u64,
         sweeps: pb.sweeps as u64,
         rows: local.contacts.len() as u64,
+        immovable: sums[2] as u64,
+        bounded: sums[3] as u64,
     })
 }
 

@@ -181,6 +181,10 @@ pub struct PushbackCounts {
     /// Contacts solved (all solves): this rank's in `solve_rechecked`, the largest over ranks
     /// in the step's outcome (the push-back's work on its busiest rank).
     pub rows: u64,
+    /// Contacts of the applied solve none of whose nodes can move (skipped), over all ranks.
+    pub immovable: u64,
+    /// Contacts of the applied solve whose depth was bounded by the step's own penetration.
+    pub bounded: u64,
     /// Contacts by kind, over all ranks: a node of a later body in a face of an earlier
     /// one (bodies numbered by their lowest element id), of an earlier body in a later one's,
     /// within one body (self-contact), a particle.
@@ -241,7 +245,11 @@ pub(crate) fn solve_rechecked(
             coupled,
             sweeps,
             rows,
+            immovable,
+            bounded,
         } = super::cells::solve_in_cells(comm, tree, &views, &mut holders, dt, friction)?;
+        counts.immovable = immovable;
+        counts.bounded = bounded;
         bytes += sent;
         counts.solves += u64::from(total > 0);
         counts.coupled = coupled;

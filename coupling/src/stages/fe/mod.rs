@@ -97,6 +97,41 @@ impl Fe {
         })
     }
 
+    /// Sets the element kernel every rank runs (collective). `Auto` takes the widest group
+    /// every rank's CPU offers (a rank without AVX-512F makes all run four lanes: one answer,
+    /// one arithmetic); `Lanes8` on a rank without AVX-512F is an error on every rank.
+    pub fn choose_kernel(
+        &mut self,
+        world: &SimpleCommunicator,
+        choice: crate::driver::KernelChoice,
+    ) -> Result<(), String> {
+        use crate::driver::KernelChoice;
+        use fe_petsc::batch::{widest, Width};
+        use fe_petsc::explicit::ElementKernel;
+        let mine: i32 = match widest() {
+            Width::W4 => 4,
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => 8,
+        };
+        let mut all = 0i32;
+        world.all_reduce_into(&mine, &mut all, SystemOperation::min());
+        if choice == KernelChoice::Lanes8 && all < 8 {
+            return Err("--kernel lanes8 needs AVX-512F, which this CPU (or another rank's) \
+                        does not have: use --kernel auto, lanes4 or scalar"
+                .into());
+        }
+        let wide = if all >= 8 { widest() } else { Width::W4 };
+        let (kernel, width) = match choice {
+            KernelChoice::Auto | KernelChoice::Lanes8 => (ElementKernel::Batched, wide),
+            KernelChoice::Lanes4 => (ElementKernel::Batched, Width::W4),
+            KernelChoice::Scalar => (ElementKernel::Scalar, Width::W4),
+        };
+        let fe = self.state_mut();
+        fe.kernel = kernel;
+        fe.width = width;
+        Ok(())
+    }
+
     /// The state (nodes, elements, energies).
     pub fn state(&self) -> &ExplicitFe {
         match &self.integrator {

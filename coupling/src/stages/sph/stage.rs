@@ -322,6 +322,25 @@ impl SphStage {
             .collect()
     }
 
+    /// The terms `[A, B]` of the change of the half-step kinetic energy that `force` scaled by
+    /// `alpha` makes, `dK(alpha) = alpha A + alpha^2 B`, over owned moving particles (J):
+    /// `A = sum m dv . v`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`.
+    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
+        let p = &self.parts;
+        let mut t = [0.0; 2];
+        for (i, f) in force.iter().enumerate().take(p.n_owned) {
+            if *f == [0.0; 3] || p.fixed[i] {
+                continue;
+            }
+            for c in 0..3 {
+                let dv = f[c] * dt / p.m[i];
+                t[0] += p.m[i] * dv * p.v[i][c];
+                t[1] += 0.5 * p.m[i] * dv * dv;
+            }
+        }
+        t
+    }
+
     /// Applies the contact stage's push-back forces (aligned with `contact_records`) over the
     /// step: dv = f dt / m on the half-step (and predicted) velocity, dx = dv dt. Returns the
     /// change of kinetic energy beyond what the pair and gravity work count (velocity Verlet
