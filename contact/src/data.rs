@@ -39,7 +39,9 @@ pub struct NodeRecord {
     pub x0: V3,
     /// Predicted position at the end of the step, before contact, m.
     pub x1: V3,
-    /// Predicted velocity over the step (central difference: `v^{n+1/2}`), m/s.
+    /// Velocity at the start of the step, m/s (central difference: `v^n = v^{n+1/2} - a^n dt /
+    /// 2`, the velocity against which the step's energy balance measures the push-back; where
+    /// nothing accelerates the node, `(x1 - x0) / dt`).
     pub v: V3,
 }
 
@@ -118,7 +120,7 @@ pub struct ContactNodes {
     pub x0: Vec<V3>,
     /// Predicted end-of-step positions.
     pub x1: Vec<V3>,
-    /// Predicted velocities.
+    /// Start-of-step velocities ([`NodeRecord::v`]).
     pub v: Vec<V3>,
     /// Number of leading entries this box searches for.
     pub n_owned: usize,

@@ -106,18 +106,31 @@
 //! which leaves the pair separating at `p0 / dt` (measured on `container_crush`, np 2: a node
 //! 9.8 um behind a face at the start, moving away from it, pushed out at 47 m/s through a
 //! face whose other side rested on a fixed wall: 1.5 times the initial energy in one step).
-//! So each row closes at most twice the penetration the step made along it,
-//! `min(d, 2 max(g0 - g, 0))` with `g = n . sum_j w_j x_j` the row's gap at the start (`x0`)
-//! and at the end (`x1`, plus the corrections of earlier passes). A node that started outside
-//! closes its whole depth (`d <= g0 - g`); one that started inside keeps what the bound leaves
-//! of its start penetration, recovering at most the step's approach each step; one moving
-//! away takes no impulse. Then, for every active row, the relative normal velocity after the
-//! correction, `u' = u + d_used / dt` with `u = -(g0 - g) / dt <= 0`, lies in `[u, -u]`: at
-//! most an elastic impact's reversal, so the kinetic energy of the corrected velocities,
-//! `dK = sum_k lambda_k (u_k + u'_k) / (2 dt)` with every `u_k + u'_k <= 0`, can only fall
-//! (perfectly inelastic for a node that started outside: `u' = 0`). The factor 2 rather than 1
-//! lets a node pressed on a face for many steps take back the second-order remainders the
-//! linearisation leaves (behind the other faces of a dimple), which would otherwise add up.
+//! So each row closes in all at most what the step explains: with `c = g0 - g1` the
+//! penetration the step's motion made along it (`g = n . sum_j w_j x_j` the row's gap, at the
+//! start `x0` and the predicted end `x1`) and `u` the approach speed at the step's start
+//! (`-n . sum_j w_j v_j`, the records' start-of-step velocities),
+//!
+//! ```text
+//!   d_used = min(d, max(c, min(2 c, 2 u dt)))      (0 where c < 0: moving apart)
+//! ```
+//!
+//! - `c`: a node that started outside closes its whole depth (`d <= c`), whatever its
+//!   acceleration (a node pressed onto a face from rest stops on it);
+//! - `2 c`: with `d_used <= 2 c` the relative normal velocity after the correction lies
+//!   between its predicted value and its reverse, so the kinetic energy of the predicted
+//!   velocities, `dK = sum_k lambda_k (u_k + u'_k) / (2 dt)`, every `u_k + u'_k <= 0`, can
+//!   only fall;
+//! - `2 u dt`: the work the step's energy balance books for the correction, `sum m dv . (v(n)
+//!   + dv / 2)` on the start velocities ([`PushBack::kinetic_energy_change`]), is then `<= 0`
+//!   as well (an elastic reversal of the approach at most). A node resting on a face under a
+//!   steady load approaches at `u = a dt / 2` and closes `c = a dt^2 = 2 u dt`: no more, so
+//!   a held stack of touching parts is not pumped up by remainders it keeps recovering.
+//!
+//! A node that started inside (within the capture tolerance) keeps what the bound leaves of
+//! its start penetration and takes it back over the following steps at most as fast as it
+//! approaches; one moving away takes no impulse. The later geometric passes take from the same
+//! budget what the earlier passes' corrections have already opened along the row.
 //!
 //! # Never energy out of contact
 //!
@@ -214,10 +227,12 @@ pub struct PushBack {
     /// frictionless contact it is `-F_n` times the gap the pair closed during the step: zero while
     /// two surfaces stay together, negative at an impact.
     pub work: f64,
-    /// Change of the kinetic energy `sum_j m_j |v_j|^2 / 2` of the predicted velocities `v` made
-    /// by the correction, J: `sum_j F_j . (v_j + dv_j / 2) dt`, `dv_j = F_j dt / m_j`. Never
-    /// positive when the nodes started outside. In a central-difference scheme this half-step
-    /// kinetic energy is not the conserved one, so use [`PushBack::work`] for energy balances.
+    /// Change of the kinetic energy `sum_j m_j |v_j|^2 / 2` of the records' start-of-step
+    /// velocities `v` made by the correction, J: `sum_j F_j . (v_j + dv_j / 2) dt`, `dv_j = F_j
+    /// dt / m_j`: in a central-difference scheme the work the step's energy balance books for
+    /// the push-back (the correction of `v(n+1/2)` measured from `v(n)`). Not positive, but
+    /// where a load presses a node that started outside onto a face faster than it approached
+    /// (module documentation, "Only the step's own penetration"): second order in `dt`.
     pub kinetic_energy_change: f64,
     /// Gauss-Seidel sweeps done (all passes).
     pub sweeps: usize,
@@ -397,25 +412,29 @@ impl Row {
         r
     }
 
-    /// The row's depth bounded by twice the penetration the step made along it (see the
-    /// module documentation, "Only the step's own penetration"):
-    /// `min(d, 2 max(g0 - g, 0))` with `g = n . sum_j w_j x_j` the row's gap at the start
-    /// (`x0`) and now (`x1 + dx`); a depth `d <= 0` (a gap the row keeps, from a recheck) is
-    /// left as it is. Returns the row and whether the bound cut its depth.
-    fn bounded(mut self, b: &ContactBox, dx: &[V3]) -> (Row, bool) {
+    /// The row's depth bounded by what the step explains (see the module documentation,
+    /// "Only the step's own penetration"): with `c = n . sum_j w_j (x0_j - x1_j)` the
+    /// penetration the step's motion made along the row and `s = -2 dt n . sum_j w_j v_j`
+    /// twice the approach at the step's start, the row closes in all at most
+    /// `max(c, min(2 c, s))`, of which `o = n . sum_j w_j dx_j` the corrections of earlier
+    /// passes already opened. A depth `d <= 0` (a gap the row keeps, from a recheck) is left
+    /// as it is. Returns the row and whether the bound cut its depth.
+    fn bounded(mut self, b: &ContactBox, dx: &[V3], dt: f64) -> (Row, bool) {
         if self.depth <= 0.0 {
             return (self, false);
         }
-        let mut made = 0.0;
+        let (mut made, mut approach, mut opened) = (0.0, 0.0, 0.0);
         for q in 0..self.len {
             let j = self.nodes[q];
-            let now = match dx.get(j) {
-                Some(d) => add(b.nodes.x1[j], *d),
-                None => b.nodes.x1[j],
-            };
-            made += self.w[q] * dot(self.normal, sub(b.nodes.x0[j], now));
+            let w = self.w[q];
+            made += w * dot(self.normal, sub(b.nodes.x0[j], b.nodes.x1[j]));
+            approach -= w * dot(self.normal, b.nodes.v[j]);
+            if let Some(d) = dx.get(j) {
+                opened += w * dot(self.normal, *d);
+            }
         }
-        let most = RESTITUTION_BOUND * made.max(0.0);
+        let total = made.max((RESTITUTION_BOUND * made).min(RESTITUTION_BOUND * dt * approach));
+        let most = (total - opened).max(0.0);
         // Counted only past round-off.
         let cut = most < self.depth * (1.0 - 1e-6);
         self.depth = self.depth.min(most);
@@ -604,7 +623,7 @@ pub fn push_back_in(
     let immovable = rows.iter().filter(|r| r.immovable()).count();
     let mut bounded = vec![false; rows.len()];
     for (r, cut) in rows.iter_mut().zip(bounded.iter_mut()) {
-        let (row, c) = std::mem::replace(r, Row::inert()).bounded(b, &[]);
+        let (row, c) = std::mem::replace(r, Row::inert()).bounded(b, &[], params.dt);
         *r = row;
         *cut = c;
     }
@@ -654,7 +673,7 @@ pub fn push_back_in(
             } else {
                 continue;
             };
-            let (row, cut) = row.bounded(b, &dx);
+            let (row, cut) = row.bounded(b, &dx, params.dt);
             bounded[k] |= cut;
             left = left.max(row.depth);
             rows[k] = row;
@@ -704,8 +723,6 @@ pub fn push_back_in(
         bounded: bounded.iter().filter(|&&c| c).count(),
     }
 }
-
-
 
 /// The index ranges of the colours' runs in the sweep order.
 fn colour_ranges(ends: &[usize; COLOURS]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {

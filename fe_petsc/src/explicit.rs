@@ -198,6 +198,8 @@ pub struct ExplicitFe {
     /// Whether a contact stage runs between the kick and the element loop (it reads the start
     /// positions and the start-of-step forces there).
     contact: bool,
+    /// The last kick's step, s ([`ExplicitFe::start_velocity`]).
+    kick_dt: f64,
     /// Whether the kick left the forces zero for the element loop (no contact stage).
     forces_zeroed: bool,
     /// The constrained nodes' start positions, in `constraints`' order (scratch).
@@ -352,6 +354,7 @@ impl ExplicitFe {
             reaction_old: vec![[0.0; 3]; nn],
             x_old: m.coords.clone(),
             contact: true,
+            kick_dt: 0.0,
             forces_zeroed: false,
             constrained_start: Vec::new(),
             owned: m.owned.clone(),
@@ -493,8 +496,9 @@ impl ExplicitFe {
                 continue;
             }
             let dv = self.contact_dv(n, f, dt);
+            let v = self.start_velocity(n);
             for c in 0..3 {
-                t[0] += self.mass[n] * dv[c] * self.v[n][c];
+                t[0] += self.mass[n] * dv[c] * v[c];
                 t[1] += 0.5 * self.mass[n] * dv[c] * dv[c];
             }
         }
@@ -566,6 +570,16 @@ impl ExplicitFe {
         work
     }
 
+    /// Node `n`'s velocity at the start of the step (between `kick_drift` and the element
+    /// loop), `v(n) = v(n+1/2) - a(n) dt / 2` with the kick's `dt`, m/s: the velocity against
+    /// which the step's energy balance measures a contact correction
+    /// ([`ExplicitFe::apply_contact`]'s work is `m dv . (v(n) + dv/2)`).
+    pub fn start_velocity(&self, n: usize) -> [f64; 3] {
+        let (a, h) = (self.acceleration(n), 0.5 * self.kick_dt);
+        let v = self.v[n];
+        [v[0] - h * a[0], v[1] - h * a[1], v[2] - h * a[2]]
+    }
+
     /// Node `n`'s acceleration at the start of the step (between `kick_drift` and the element
     /// loop: the forces are the last step's), m/s^2: f / m + g, as the kick formed it; a
     /// constrained node's as its constraints left it in the last `finish_step` (kept in `a`).
@@ -619,6 +633,7 @@ impl ExplicitFe {
             constrained: &self.constrained,
         };
         let zero = !self.contact;
+        self.kick_dt = dt;
         let mut work = nodal::kick_drift(
             &mut self.v,
             &mut self.force,

@@ -215,3 +215,43 @@ pub fn validate_fast(cases: &str, np: usize, tag: &str) -> (bool, String) {
     });
     (o.status.success(), report)
 }
+
+/// SCENE.md "Contact never gives energy back": between consecutive rows of `out`'s
+/// history.csv, `contact_energy` falls by at most `1e-3` of the run's energy scale there, the
+/// largest of |E(0)| + |W_external|, the kinetic and internal (plus hourglass) energies reached
+/// so far, and the floor `0.5 mass (1 mm/s)^2` (`mass`: the model's, kg, from its geometry).
+/// Returns the largest fall over that scale.
+pub fn assert_contact_energy_never_falls(out: &Path, mass: f64) -> f64 {
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let col = |n: &str| column(&h, &rows, n);
+    let (ke, ie, hg, w, ce) = (
+        col("kinetic_energy"),
+        col("internal_energy"),
+        col("hourglass_energy"),
+        col("external_work"),
+        col("contact_energy"),
+    );
+    let e0 = ke[0] + ie[0] + hg[0] + ce[0];
+    let (mut ke_max, mut ie_max, mut worst) = (0.0f64, 0.0f64, 0.0f64);
+    for i in 0..rows.len() {
+        ke_max = ke_max.max(ke[i].abs());
+        ie_max = ie_max.max((ie[i] + hg[i]).abs());
+        let scale = (e0.abs() + w[i].abs())
+            .max(ke_max)
+            .max(ie_max)
+            .max(0.5 * mass * 1e-6);
+        if i > 0 {
+            let fall = (ce[i - 1] - ce[i]) / scale;
+            worst = worst.max(fall);
+            assert!(
+                fall <= 1e-3,
+                "{}: contact_energy fell from {} to {} J at row {i} (t = {}), {fall:.3e} of the energy scale {scale:.3e} J (limit 1e-3)",
+                out.display(),
+                ce[i - 1],
+                ce[i],
+                rows[i][1]
+            );
+        }
+    }
+    worst
+}

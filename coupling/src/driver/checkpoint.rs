@@ -70,6 +70,9 @@ pub struct CheckState {
     /// The energy scale's state.
     #[serde(default)]
     pub scale: super::energy::EnergyScale,
+    /// The external work after the last step, J.
+    #[serde(default)]
+    pub external_last: f64,
 }
 
 /// What every rank shares (`meta.json`).

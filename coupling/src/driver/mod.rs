@@ -19,6 +19,7 @@ pub mod checkpoint;
 pub mod energy;
 pub mod outdir;
 pub mod outputs;
+pub mod overlap;
 pub mod probes;
 pub mod progress;
 pub mod report;
@@ -436,6 +437,9 @@ fn time_loop(
         world.rank() == 0,
         &start_info(world, scene, model, stable0, clock.dt),
     );
+    if let Some(c) = model.contact.as_mut() {
+        c.energy_scale = check.scale_now();
+    }
     while let Some(dt) = clock.next_step() {
         let next = step::step(world, model, dt).map_err(|e| check.failure(e))?;
         clock.advance();
@@ -443,6 +447,9 @@ fn time_loop(
             fe.set_time(clock.time);
         }
         let err = check.after_step(world, clock, model, outputs)?;
+        if let Some(c) = model.contact.as_mut() {
+            c.energy_scale = check.scale_now();
+        }
         // This rank's first output failure; the others go on with their (collective) output.
         let mut out_err = None;
         if clock.row_due() {
@@ -663,6 +670,8 @@ struct EnergyCheck {
     err_max_checked: f64,
     hourglass: energy::HourglassWatch,
     scale: energy::EnergyScale,
+    /// The external work after the last step, J.
+    external_last: f64,
 }
 
 impl EnergyCheck {
@@ -675,6 +684,7 @@ impl EnergyCheck {
     ) -> EnergyCheck {
         EnergyCheck {
             scale: energy::EnergyScale::new(model_mass(world, model)),
+            external_last: 0.0,
             file: scene.file.display().to_string(),
             e0: sum_energies(model).total(),
             max_energy_error: scene.run.max_energy_error,
@@ -686,6 +696,11 @@ impl EnergyCheck {
         }
     }
 
+    /// The energy scale after the last step, J (`energy::EnergyScale::value`).
+    fn scale_now(&self) -> f64 {
+        self.scale.value(self.e0, self.external_last)
+    }
+
     /// The state a checkpoint keeps.
     fn state(&self) -> checkpoint::CheckState {
         checkpoint::CheckState {
@@ -694,6 +709,7 @@ impl EnergyCheck {
             err_max_checked: self.err_max_checked,
             hourglass: self.hourglass.clone(),
             scale: self.scale,
+            external_last: self.external_last,
         }
     }
 
@@ -705,6 +721,7 @@ impl EnergyCheck {
         self.hourglass = s.hourglass.clone();
         if s.scale.floor > 0.0 {
             self.scale = s.scale;
+            self.external_last = s.external_last;
         }
     }
 
@@ -742,9 +759,9 @@ impl EnergyCheck {
         let contact = model.contact.as_ref().map_or(0.0, |c| c.energy);
         let total = en.total() + contact;
         let external = en.external_work;
-        self.scale
-            .observe(en.kinetic, en.internal + en.hourglass);
+        self.scale.observe(en.kinetic, en.internal + en.hourglass);
         let scale = self.scale.value(self.e0, external);
+        self.external_last = external;
         let err = energy::energy_error(total, self.e0, external, scale);
         let (t, step, dt, file) = (clock.time, clock.step, clock.dt, &self.file);
         let blow_up = if self.forced {

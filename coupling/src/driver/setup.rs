@@ -123,6 +123,7 @@ pub fn build(
     if let Some(fe) = &mut fe {
         fe.choose_kernel(world, algorithms.kernel)
             .map_err(RunFailure::from)?;
+        super::overlap::check(world, scene, fe.state()).map_err(RunFailure::from)?;
     }
     let sph = if scene.particles.is_empty() {
         None

@@ -276,7 +276,7 @@ impl FeContact {
             radius: 0.0,
             x0: fe.x_start()[i],
             x1: fe.x[i],
-            v: fe.v[i],
+            v: fe.start_velocity(i),
         }
     }
 

@@ -9,8 +9,9 @@ use crate::kernels::collective;
 use crate::output::{Report, StageStats};
 use crate::transfer::fe_contact::FeContact;
 use baseline::BaselineStage;
+use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
-use mpi::traits::Communicator;
+use mpi::traits::{Communicator, CommunicatorCollectives};
 use stage::{ContactOutcome, ContactStage};
 use std::time::Instant;
 
@@ -144,37 +145,50 @@ impl ContactStats {
     }
 }
 
-/// Relative size past which a positive change of kinetic energy is not round-off: `dK > tol
-/// (|A| + B)` ([`energy_guard`]).
+/// Relative size below which a positive work of the push-back is round-off: `W <= tol (|A| +
+/// B)` ([`energy_guard`]).
 pub const ENERGY_TOL: f64 = 1e-9;
 
-/// Contact never gives energy back (`contact::pushback`, "Only the step's own penetration"):
-/// the change the step's push-back makes to the half-step kinetic energy (the velocities it
-/// corrects), `dK(alpha) = alpha A + alpha^2 B` for its forces scaled by `alpha` (summed over
-/// ranks: FE nodes and particles), must not be positive; the bound on each contact's depth
-/// makes it so for the linearised rows, and this checks what the geometric passes and friction
-/// leave. Where it is positive past [`ENERGY_TOL`], the forces are scaled by `alpha = -A / B`
-/// (clamped to `[0, 1]`), which makes it zero. (The work booked in `contact_energy` differs from
-/// `dK` by the part of the start kick the element and external work count, `-(dt/2) sum m a_n .
-/// dv`: second order in `dt` where a force presses a node into a face.) Returns `alpha` (1:
-/// untouched; the same on every rank). Collective.
+/// How far `contact_energy` may fall below its largest value so far, as a fraction of the
+/// run's energy scale ([`energy_guard`]): half SCENE.md's bound between history rows (1e-3),
+/// so that no two rows ever differ by more.
+pub const ENERGY_FALL_BUDGET: f64 = 5e-4;
+
+/// Contact never gives energy back (SCENE.md; `contact::pushback`, "Only the step's own
+/// penetration"). The work the step's push-back books, `W(alpha) = alpha A + alpha^2 B` for its
+/// forces scaled by `alpha` (`A = sum m dv . v(n)`, `B = sum m |dv|^2 / 2`, summed over ranks:
+/// FE nodes and particles), is `<= 0` for the bounded rows of a linear solve; what the geometric
+/// passes, the rechecks' rows and friction leave, and the pressing transient the bound allows
+/// (second order in dt), can be positive. The guard keeps `contact_energy - W` at least
+/// `peak - ENERGY_FALL_BUDGET S` (`peak`: the largest contact energy so far, `S`: the run's
+/// energy scale): where the step's work would take it lower (and is not round-off,
+/// [`ENERGY_TOL`]), the forces are scaled by the largest `alpha` in `[0, 1]` with `W(alpha)`
+/// within the budget (a root of `alpha A + alpha^2 B = budget`). An injection like one new
+/// contact pushing a node out at its depth over dt, which no motion explains, is thereby cut to
+/// the budget wherever the bound missed it. Returns `alpha` (1: untouched; the same on every
+/// rank). Collective.
 fn energy_guard(
     world: &SimpleCommunicator,
     fe: &fe_petsc::explicit::ExplicitFe,
     sph: Option<&Sph>,
     (fe_force, sph_force): (&mut [[f64; 3]], &mut [[f64; 3]]),
-    dt: f64,
+    (dt, budget): (f64, f64),
 ) -> f64 {
     let mut t = fe.contact_energy_terms(fe_force, dt);
     if let Some(s) = sph {
         let u = s.stage.contact_energy_terms(sph_force, dt);
         t = [t[0] + u[0], t[1] + u[1]];
     }
-    let (a, b) = (collective::sum(world, t[0]), collective::sum(world, t[1]));
-    if !(a + b > ENERGY_TOL * (a.abs() + b) && b > 0.0) {
+    let mut g = [0.0f64; 2];
+    world.all_reduce_into(&t[..], &mut g[..], SystemOperation::sum());
+    let (a, b) = (g[0], g[1]);
+    let w = a + b;
+    if w <= ENERGY_TOL * (a.abs() + b) || w <= budget || b <= 0.0 {
         return 1.0;
     }
-    let alpha = (-a / b).clamp(0.0, 1.0) + 0.0; // + 0.0: never -0
+    // The larger root of alpha A + alpha^2 B = budget (>= -A / B, where W is back to 0).
+    let budget = budget.max(0.0);
+    let alpha = ((-a + (a * a + 4.0 * b * budget).sqrt()) / (2.0 * b)).clamp(0.0, 1.0) + 0.0;
     for f in fe_force.iter_mut().chain(sph_force.iter_mut()) {
         *f = f.map(|c| c * alpha);
     }
@@ -195,6 +209,11 @@ pub struct Contact {
     passes: i64,
     /// Energy taken by the push-back (minus the work of the contact forces), J.
     pub energy: f64,
+    /// The largest `energy` so far, J ([`energy_guard`]).
+    pub energy_peak: f64,
+    /// The run's energy scale after the last step (the energy error's denominator), J: the
+    /// driver sets it ([`energy_guard`]).
+    pub energy_scale: f64,
     /// What it found and cost.
     pub stats: ContactStats,
 }
@@ -255,6 +274,8 @@ impl Contact {
             particle_gid_offset: local.global_nodes,
             passes: def.passes,
             energy: 0.0,
+            energy_peak: 0.0,
+            energy_scale: 0.0,
             stats: ContactStats {
                 last_imbalance: 1.0,
                 ..ContactStats::default()
@@ -277,7 +298,7 @@ impl Contact {
         let n_fe = nodes.len();
         let sph = sph.filter(|_| self.particles);
         if let Some(s) = &sph {
-            nodes.extend(s.stage.contact_records(self.particle_gid_offset));
+            nodes.extend(s.stage.contact_records(self.particle_gid_offset, dt));
         }
         let (out, mut f) = match &mut self.search {
             Search::Dynamic(stage) => {
@@ -310,16 +331,24 @@ impl Contact {
             .sum_contact_forces(&mut f, &mut mesh.exchange)
             .map_err(|e| e.to_string())?;
         let mut sph_force = out.force[n_fe..].to_vec();
-        let alpha = energy_guard(world, state, sph.as_deref(), (&mut f, &mut sph_force), dt);
+        let budget = self.energy - self.energy_peak + ENERGY_FALL_BUDGET * self.energy_scale;
+        let alpha = energy_guard(
+            world,
+            state,
+            sph.as_deref(),
+            (&mut f, &mut sph_force),
+            (dt, budget),
+        );
         let mut w = state.apply_contact(&f, dt);
         if let Some(s) = sph {
             w += s.stage.apply_contact(&sph_force, dt);
         }
         self.energy -= collective::sum(world, w);
+        self.energy_peak = self.energy_peak.max(self.energy);
         if alpha < 1.0 {
             if self.stats.energy_limited_steps == 0 && world.rank() == 0 {
                 eprintln!(
-                    "tdyn: warning: the contact push-back at t = {:.4e} s would have added kinetic energy; its forces were scaled by {alpha:.3} to add none (report.json contact_energy_limited_steps counts such steps; logged once)",
+                    "tdyn: warning: the contact push-back at t = {:.4e} s would have given back more energy than contact took; its forces were scaled by {alpha:.3} (report.json contact_energy_limited_steps counts such steps; logged once)",
                     state.time + dt
                 );
             }
@@ -337,7 +366,12 @@ impl Contact {
         let c = &self.stats;
         w.put(
             "contact.state",
-            &[self.energy, c.last_imbalance, c.last_bytes],
+            &[
+                self.energy,
+                c.last_imbalance,
+                c.last_bytes,
+                self.energy_peak,
+            ],
         );
         w.put("contact.contacts", &[c.contacts]);
     }
@@ -345,10 +379,11 @@ impl Contact {
     /// Sets the state `save` wrote.
     pub fn restore(&mut self, r: &crate::output::state::StateReader) -> Result<(), String> {
         let s: Vec<f64> = r.get("contact.state")?;
-        if s.len() != 3 {
+        if s.len() != 3 && s.len() != 4 {
             return Err("checkpoint: contact.state".into());
         }
         self.energy = s[0];
+        self.energy_peak = s.get(3).copied().unwrap_or(s[0]);
         self.stats.last_imbalance = s[1];
         self.stats.last_bytes = s[2];
         self.stats.contacts = r

@@ -116,9 +116,11 @@ impl Fe {
         let mut all = 0i32;
         world.all_reduce_into(&mine, &mut all, SystemOperation::min());
         if choice == KernelChoice::Lanes8 && all < 8 {
-            return Err("--kernel lanes8 needs AVX-512F, which this CPU (or another rank's) \
+            return Err(
+                "--kernel lanes8 needs AVX-512F, which this CPU (or another rank's) \
                         does not have: use --kernel auto, lanes4 or scalar"
-                .into());
+                    .into(),
+            );
         }
         let wide = if all >= 8 { widest() } else { Width::W4 };
         let (kernel, width) = match choice {

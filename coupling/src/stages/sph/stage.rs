@@ -294,15 +294,20 @@ impl SphStage {
     }
 
     /// Contact-node records of the owned particles after `drift` (start and predicted end
-    /// position, half-step velocity), ids `gid_offset + id`. Fixed particles have infinite
+    /// position, start-of-step velocity), ids `gid_offset + id`. Fixed particles have infinite
     /// mass (they take reactions but do not move). The contact radius is half the particle's
     /// own size, (m/rho)^(1/3)/2: a particle touches a face when its volume does. An expanding
     /// particle keeps the radius of its material's reference density (when the EOS has one):
     /// the search counts a contact only for a sphere that was outside the face at the start of
     /// the step, so a radius growing faster than the push-back follows (detonation products
     /// expanding to several times their volume) would let the particle through the face.
-    pub fn contact_records(&self, gid_offset: u64) -> Vec<contact::NodeRecord> {
+    pub fn contact_records(&self, gid_offset: u64, dt: f64) -> Vec<contact::NodeRecord> {
         let p = &self.parts;
+        // The start-of-step velocity v(n) = v(n+1/2) - (dt/2) f(n)/m, as `apply_contact`
+        // measures its work.
+        let start = |i: usize| -> [f64; 3] {
+            std::array::from_fn(|c| p.v[i][c] - 0.5 * dt * p.f[i][c] / p.m[i])
+        };
         (0..p.n_owned)
             .map(|i| contact::NodeRecord {
                 gid: gid_offset + p.id[i],
@@ -317,7 +322,7 @@ impl SphStage {
                 },
                 x0: self.x_start[i],
                 x1: p.x_real[i],
-                v: p.v[i],
+                v: start(i),
             })
             .collect()
     }
@@ -334,7 +339,7 @@ impl SphStage {
             }
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                t[0] += p.m[i] * dv * p.v[i][c];
+                t[0] += p.m[i] * dv * (p.v[i][c] - 0.5 * dt * p.f[i][c] / p.m[i]);
                 t[1] += 0.5 * p.m[i] * dv * dv;
             }
         }

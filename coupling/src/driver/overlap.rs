@@ -1,0 +1,103 @@
+//! Particles that start inside a meshed body are a scene error (before anything is computed):
+//! nothing would push them out (particle-face contact only sees crossings during a step, and
+//! a particle that starts behind a face never crossed it), so they would stay inside silently,
+//! and their mass and pressure would count twice in the same space.
+//!
+//! Every rank generates every particle position (`input::particles` makes all seeds before it
+//! deals them out), so each rank tests them all against its own elements, in the reference
+//! configuration, through a grid of the elements' boxes; the ranks then agree on the error of
+//! the lowest rank that found one.
+use crate::input::particles as particles_setup;
+use crate::input::scene::Scene;
+use crate::kernels::collective::first_error;
+use fe_petsc::explicit::ExplicitFe;
+use fe_petsc::hex;
+use mpi::topology::SimpleCommunicator;
+use rustc_hash::FxHashMap as HashMap;
+
+/// A particle centre counts as inside an element when its natural coordinates lie within
+/// `[-1 + INSIDE_MARGIN, 1 - INSIDE_MARGIN]^3`: a lattice that starts on a body's face (a
+/// particle resting on it) is not inside it.
+const INSIDE_MARGIN: f64 = 1e-6;
+
+/// Whether any particle of `scene` starts inside an element of `fe` (collective): the error
+/// names the `[[particles]]` entry, the block, the element and the point.
+pub fn check(world: &SimpleCommunicator, scene: &Scene, fe: &ExplicitFe) -> Result<(), String> {
+    let mine = if scene.particles.is_empty() {
+        None
+    } else {
+        first_inside(scene, fe)
+    };
+    first_error(world, mine)
+}
+
+/// This rank's first particle (in seed order) inside one of its elements, as the error line.
+fn first_inside(scene: &Scene, fe: &ExplicitFe) -> Option<String> {
+    let (seeds, _) = particles_setup::particles(scene, 0, 1).ok()?;
+    let corners =
+        |e: usize| -> [[f64; 3]; 8] { std::array::from_fn(|k| fe.x0[fe.elems[e][k] as usize]) };
+    // A grid of cells of the mean element size over the elements' boxes.
+    let n = fe.elems.len();
+    if n == 0 {
+        return None;
+    }
+    let boxes: Vec<([f64; 3], [f64; 3])> = (0..n)
+        .map(|e| {
+            let x = corners(e);
+            let lo = std::array::from_fn(|c| x.iter().map(|q| q[c]).fold(f64::INFINITY, f64::min));
+            let hi =
+                std::array::from_fn(|c| x.iter().map(|q| q[c]).fold(f64::NEG_INFINITY, f64::max));
+            (lo, hi)
+        })
+        .collect();
+    let size = boxes
+        .iter()
+        .map(|(lo, hi)| (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max))
+        .sum::<f64>()
+        / n as f64;
+    if !(size > 0.0) {
+        return None;
+    }
+    let cell = |p: [f64; 3]| -> [i64; 3] { std::array::from_fn(|c| (p[c] / size).floor() as i64) };
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
+    for (e, (lo, hi)) in boxes.iter().enumerate() {
+        let (a, b) = (cell(*lo), cell(*hi));
+        for i in a[0]..=b[0] {
+            for j in a[1]..=b[1] {
+                for k in a[2]..=b[2] {
+                    grid.entry([i, j, k]).or_default().push(e as u32);
+                }
+            }
+        }
+    }
+    for s in &seeds {
+        let Some(list) = grid.get(&cell(s.x)) else {
+            continue;
+        };
+        for &e in list {
+            let e = e as usize;
+            let (lo, hi) = boxes[e];
+            if (0..3).any(|c| s.x[c] <= lo[c] || s.x[c] >= hi[c]) {
+                continue;
+            }
+            let Some(xi) = hex::natural_coords(&corners(e), s.x, 0.0) else {
+                continue;
+            };
+            if xi.iter().all(|v| v.abs() < 1.0 - INSIDE_MARGIN) {
+                let def = &scene.particles[s.entry];
+                let block = &scene.blocks[fe.blocks.block_of(e)].group;
+                return Some(format!(
+                    "{}: particles[{}] \"{}\": a particle at ({}, {}, {}) starts inside block \"{block}\" (element {}): particle regions must not overlap meshed bodies (move the region, or shrink it by a particle spacing)",
+                    scene.file.display(),
+                    s.entry,
+                    def.name,
+                    s.x[0],
+                    s.x[1],
+                    s.x[2],
+                    fe.elem_id[e]
+                ));
+            }
+        }
+    }
+    None
+}
