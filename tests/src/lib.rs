@@ -86,15 +86,31 @@ pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
     launch(np, scene, out, &[])
 }
 
-/// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success.
+/// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success;
+/// a run with contact must keep SCENE.md's promise that contact never gives energy back
+/// ([`assert_contact_energy_never_falls`], the model's mass from report.json).
 pub fn run_ok_args(np: usize, scene: &Path, out: &Path, extra: &[&str]) {
     let o = launch(np, scene, out, extra);
     assert_ran(&o, &format!("at np {np} with {extra:?}"));
+    check_contact_energy(out);
 }
 
-/// Runs and insists on success.
+/// Runs and insists on success (and on contact's energy, as [`run_ok_args`]).
 pub fn run_ok(np: usize, scene: &Path, out: &Path) {
     assert_ran(&run(np, scene, out), &format!("at np {np}"));
+    check_contact_energy(out);
+}
+
+/// [`assert_contact_energy_never_falls`] for a run whose history has contact.
+fn check_contact_energy(out: &Path) {
+    let (h, _) = read_csv(&out.join("history.csv"));
+    if !h.iter().any(|c| c == "contact_energy") {
+        return;
+    }
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let mass = r["mass"].as_f64().unwrap_or(0.0);
+    assert_contact_energy_never_falls(out, mass);
 }
 
 /// A CSV file as (header, rows).

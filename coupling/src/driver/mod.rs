@@ -388,6 +388,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             dt_stable_initial: stable0,
             dt_min: clock.dt_min,
             hourglass: &check.hourglass,
+            energy_floor: check.scale.floor,
+            mass: check.scale.floor / (0.5 * energy::FLOOR_SPEED * energy::FLOOR_SPEED),
             failure: res.as_ref().err().map(|e| (e.kind, e.message.as_str())),
         },
     )?;

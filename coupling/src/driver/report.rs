@@ -33,6 +33,10 @@ pub struct RunFigures<'a> {
     pub dt_min: f64,
     /// The blocks' hourglass watch.
     pub hourglass: &'a HourglassWatch,
+    /// The energy scale's floor, J (`energy::EnergyScale`), and the model's mass, kg.
+    pub energy_floor: f64,
+    /// See `energy_floor`.
+    pub mass: f64,
     /// How the run ended when it did not finish: the failure's kind and message.
     pub failure: Option<(super::FailureKind, &'a str)>,
 }
@@ -123,6 +127,8 @@ pub fn write(
         "energy_error_max_checked".into(),
         f.energy_error_max_checked.into(),
     );
+    ex.insert("mass".into(), f.mass.into());
+    ex.insert("energy_scale_floor".into(), f.energy_floor.into());
     if let Some(fe) = &model.fe {
         ex.insert("blocks".into(), f.hourglass.report(fe.state()));
         // How many ranks put their elements and nodes in a new order (a poor file order).
