@@ -121,8 +121,8 @@
 //!   between its predicted value and its reverse, so the kinetic energy of the predicted
 //!   velocities, `dK = sum_k lambda_k (u_k + u'_k) / (2 dt)`, every `u_k + u'_k <= 0`, can
 //!   only fall;
-//! - `2 u dt`: the work the step's energy balance books for the correction, `sum m dv . (v(n)
-//!   + dv / 2)` on the start velocities ([`PushBack::kinetic_energy_change`]), is then `<= 0`
+//! - `2 u dt`: the work the step's energy balance books for the correction,
+//!   `sum m dv . (v(n) + dv / 2)` on the start velocities ([`PushBack::kinetic_energy_change`]), is then `<= 0`
 //!   as well (an elastic reversal of the approach at most). A node resting on a face under a
 //!   steady load approaches at `u = a dt / 2` and closes `c = a dt^2 = 2 u dt`: no more, so
 //!   a held stack of touching parts is not pumped up by remainders it keeps recovering.

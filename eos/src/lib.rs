@@ -163,7 +163,7 @@ impl Eos {
                 // rho * (1/rho0), not rho/rho0: LIGGGHTS's `fix sph/pressure` multiplies by a
                 // precomputed 1/rho0, and this order reproduces its p bit for bit
                 let ratio = rho * (1.0 / rho0);
-                let pw = ratio.powf(gamma);
+                let pw = libm::pow(ratio, gamma);
                 let p = b * (pw - 1.0);
                 // dp/drho = B gamma/rho0 (rho/rho0)^(gamma-1) = c0^2 (rho/rho0)^(gamma-1)
                 let dp = c0 * c0 * pw / ratio;
@@ -193,8 +193,8 @@ impl Eos {
                 rho0,
             } => {
                 let v = rho0 / rho;
-                let e1 = (-r1 * v).exp();
-                let e2 = (-r2 * v).exp();
+                let e1 = libm::exp(-r1 * v);
+                let e2 = libm::exp(-r2 * v);
                 let p = a * (1.0 - omega / (r1 * v)) * e1
                     + b * (1.0 - omega / (r2 * v)) * e2
                     + omega * rho * e;

@@ -467,7 +467,7 @@ impl Hourglass {
             }
             Hourglass::Viscous { coefficient } => (
                 0.0,
-                0.25 * coefficient * mat.rho * mat.c * s.vol.cbrt().powi(2),
+                0.25 * coefficient * mat.rho * mat.c * libm::cbrt(s.vol).powi(2),
             ),
             Hourglass::Physical { .. } => unreachable!(),
         };

@@ -170,7 +170,7 @@ pub fn second_half(p: &mut Particles, dt: f64, params: &Params) {
         update_eos(p, params);
         if let Some(eta) = params.adaptive_h {
             for i in 0..p.n_owned {
-                p.h[i] = eta * (p.m[i] / p.rho[i]).cbrt();
+                p.h[i] = eta * libm::cbrt(p.m[i] / p.rho[i]);
             }
         }
     }

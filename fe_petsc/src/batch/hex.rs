@@ -35,11 +35,11 @@ pub type LaneNodes = [[F; 3]; NODES];
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneState {
     /// Cauchy stress (Voigt), Pa.
-    pub stress: [F; 6],
+    pub(crate) stress: [F; 6],
     /// Hourglass stress amplitudes in each element's frame, Pa.
-    pub hg: [[F; 3]; 4],
+    pub(crate) hg: [[F; 3]; 4],
     /// The material's history variable (the plastic strain of J2), 0 for elastic.
-    pub history: F,
+    pub(crate) history: F,
 }
 
 impl LaneState {
@@ -72,15 +72,15 @@ impl LaneState {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneOutput {
     /// Force on each node from each element, N.
-    pub force: LaneNodes,
+    pub(crate) force: LaneNodes,
     /// Hourglass work of each element this step, J.
-    pub hg_work: F,
+    pub(crate) hg_work: F,
     /// Current volumes, m^3.
-    pub volume: F,
+    pub(crate) volume: F,
     /// Stable steps (no safety factor), s.
-    pub dt_stable: F,
+    pub(crate) dt_stable: F,
     /// Pressures without bulk viscosity, Pa.
-    pub pressure: F,
+    pub(crate) pressure: F,
 }
 
 impl LaneOutput {
@@ -324,15 +324,15 @@ fn bulk_viscosity_and_dt(ctl: &HexControls, bb: F, rho: F, c: F, ev: F) -> (F, F
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LaneGroup {
     /// Nodal coordinates at t(n+1), m.
-    pub x: LaneNodes,
+    pub(crate) x: LaneNodes,
     /// Nodal velocities at t(n+1/2), m/s.
-    pub v: LaneNodes,
+    pub(crate) v: LaneNodes,
     /// Reference volumes, m^3.
-    pub vol0: F,
+    pub(crate) vol0: F,
     /// The elements' state.
-    pub state: LaneState,
+    pub(crate) state: LaneState,
     /// What the last update produced.
-    pub out: LaneOutput,
+    pub(crate) out: LaneOutput,
 }
 
 /// One explicit update over the step `dt` of the group's elements of the material `m`: in

@@ -296,7 +296,8 @@ pub mod w4 {
 #[cfg(target_arch = "x86_64")]
 #[path = "."]
 pub mod w8 {
-    pub use super::lanes8::{F8 as F, LANES, M8 as M};
+    pub use super::lanes8::LANES;
+    pub(crate) use super::lanes8::{F8 as F, M8 as M};
     use super::{GroupInverted, LaneMaterial};
     use crate::hex::HexControls;
 

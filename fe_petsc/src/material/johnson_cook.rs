@@ -78,8 +78,8 @@ impl JohnsonCook {
 
     /// Flow stress at plastic strain `ep` and plastic strain rate `rate`.
     pub fn flow_stress(&self, ep: f64, rate: f64) -> f64 {
-        (self.a + self.b * ep.max(0.0).powf(self.n))
-            * (1.0 + self.c * (rate / self.eps_dot0).max(1.0).ln())
+        (self.a + self.b * libm::pow(ep.max(0.0), self.n))
+            * (1.0 + self.c * libm::log((rate / self.eps_dot0).max(1.0)))
     }
 }
 

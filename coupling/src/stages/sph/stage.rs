@@ -318,7 +318,7 @@ impl SphStage {
                     let rho_ref = self.params.eos[p.mat[i] as usize]
                         .reference_density()
                         .unwrap_or(p.rho[i]);
-                    0.5 * (p.m[i] / p.rho[i].max(rho_ref)).cbrt()
+                    0.5 * libm::cbrt(p.m[i] / p.rho[i].max(rho_ref))
                 },
                 x0: self.x_start[i],
                 x1: p.x_real[i],
