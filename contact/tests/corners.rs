@@ -17,23 +17,6 @@ use contact::{
 
 const DT: f64 = 1e-3;
 
-fn record(gid: u64, body: u32, mass: f64, x0: V3, x1: V3) -> NodeRecord {
-    NodeRecord {
-        gid,
-        body,
-        flags: 0,
-        mass,
-        radius: 0.0,
-        x0,
-        x1,
-        v: [
-            (x1[0] - x0[0]) / DT,
-            (x1[1] - x0[1]) / DT,
-            (x1[2] - x0[2]) / DT,
-        ],
-    }
-}
-
 /// A plate of `n x n` unit faces (body 0, gids 100 + k) over `[-n/2, n/2]^2` at `z = 0` with
 /// node masses `mass`, then the node (body 1, gid 1) moving from `p0` to `p1`. `plate0`,
 /// `plate1`: the plate nodes' start and end positions (row-major, `(n + 1)^2`).
@@ -720,4 +703,8 @@ fn a_node_on_a_node_at_a_junction_is_two_constraints() {
         dot(sum, sum).sqrt() <= 1e-12 * largest,
         "forces sum to {sum:?} (largest {largest:.3e}): momentum not conserved"
     );
+}
+
+fn record(gid: u64, body: u32, mass: f64, x0: V3, x1: V3) -> NodeRecord {
+    common::node_record(gid, body, mass, x0, x1, DT)
 }

@@ -17,19 +17,6 @@ const DT: f64 = 1e-6;
 /// `dK <= ENERGY_TOL * K` (round-off of the sums).
 const ENERGY_TOL: f64 = 1e-12;
 
-fn record(gid: u64, body: u32, mass: f64, x0: V3, x1: V3) -> NodeRecord {
-    NodeRecord {
-        gid,
-        body,
-        flags: 0,
-        mass,
-        radius: 0.0,
-        x0,
-        x1,
-        v: std::array::from_fn(|c| (x1[c] - x0[c]) / DT),
-    }
-}
-
 /// A node (gid 1, body 0, 1 kg) moving from `z0` to `z1` over a unit face in z = 0 (normal +z,
 /// body 1) whose corners have mass `corner_mass` (infinite: a held wall) and move by `dz` in z.
 fn node_over_face(z0: f64, z1: f64, corner_mass: f64, dz: f64) -> ContactBox {
@@ -148,4 +135,8 @@ fn push_back_never_adds_kinetic_energy_on_random_crowded_boxes() {
         bounded += pb.bounded;
     }
     println!("{bounded} contacts bounded by the step's own penetration");
+}
+
+fn record(gid: u64, body: u32, mass: f64, x0: V3, x1: V3) -> NodeRecord {
+    common::node_record(gid, body, mass, x0, x1, DT)
 }

@@ -24,19 +24,6 @@ const MOMENTUM_TOL: f64 = 1e-14;
 const PENETRATION_TOL: f64 = 1e-9;
 const WORK_TOL: f64 = 1e-12;
 
-fn node(gid: u64, body: u32, mass: f64, x0: V3, x1: V3, dt: f64) -> NodeRecord {
-    NodeRecord {
-        gid,
-        body,
-        flags: 0,
-        mass,
-        radius: 0.0,
-        x0,
-        x1,
-        v: scale(sub(x1, x0), 1.0 / dt),
-    }
-}
-
 /// Sum of forces relative to the sum of their magnitudes.
 fn momentum_error(force: &[V3]) -> f64 {
     let mut total = [0.0; 3];
@@ -131,7 +118,7 @@ fn face_and_crossers(rng: &mut Rng, k: usize, dt: f64) -> (ContactBox, Vec<f64>)
             add(scale(n, w), scale(rng.unit(), 0.05 * a)),
         );
         x1[i] = add(add(x0[i], vel), scale(rng.unit(), 0.02 * a));
-        nodes.push(node(
+        nodes.push(common::node_record(
             100 + i as u64,
             1,
             rng.range(0.2, 5.0),
@@ -151,7 +138,14 @@ fn face_and_crossers(rng: &mut Rng, k: usize, dt: f64) -> (ContactBox, Vec<f64>)
             scale(m0.normal(s, t), rng.range(0.01, 0.2) * a),
         );
         let p1 = sub(m1.at(s, t), scale(m1.normal(s, t), d));
-        nodes.push(node(q as u64, 0, rng.range(0.2, 5.0), p0, p1, dt));
+        nodes.push(common::node_record(
+            q as u64,
+            0,
+            rng.range(0.2, 5.0),
+            p0,
+            p1,
+            dt,
+        ));
         depths.push(d);
     }
     let faces = [FaceRecord {
@@ -249,9 +243,16 @@ fn immovable_face() {
         [0.0, 1.0, 0.0],
     ];
     let mut nodes: Vec<NodeRecord> = (0..4)
-        .map(|i| node(10 + i as u64, 1, f64::INFINITY, wall[i], wall[i], dt))
+        .map(|i| common::node_record(10 + i as u64, 1, f64::INFINITY, wall[i], wall[i], dt))
         .collect();
-    nodes.push(node(0, 0, 2.0, [0.3, 0.6, 0.1], [0.3, 0.6, -0.05], dt));
+    nodes.push(common::node_record(
+        0,
+        0,
+        2.0,
+        [0.3, 0.6, 0.1],
+        [0.3, 0.6, -0.05],
+        dt,
+    ));
     let faces = [FaceRecord {
         gid: 0,
         nodes: [10, 11, 12, 13],
@@ -294,7 +295,7 @@ fn redundant_contacts_do_not_double_push() {
     let upper = sq(0.1);
     let mut nodes = Vec::new();
     for i in 0..4 {
-        nodes.push(node(
+        nodes.push(common::node_record(
             i as u64,
             0,
             1.0,
@@ -302,10 +303,31 @@ fn redundant_contacts_do_not_double_push() {
             add(lower[i], [0.0, 0.0, 0.1]),
             dt,
         ));
-        nodes.push(node(10 + i as u64, 1, 1.0, upper[i], upper[i], dt));
+        nodes.push(common::node_record(
+            10 + i as u64,
+            1,
+            1.0,
+            upper[i],
+            upper[i],
+            dt,
+        ));
     }
-    nodes.push(node(4, 0, 1.0, [0.5, 0.5, 0.0], [0.5, 0.5, 0.1], dt));
-    nodes.push(node(14, 1, 1.0, [0.47, 0.52, 0.1], [0.47, 0.52, 0.0], dt));
+    nodes.push(common::node_record(
+        4,
+        0,
+        1.0,
+        [0.5, 0.5, 0.0],
+        [0.5, 0.5, 0.1],
+        dt,
+    ));
+    nodes.push(common::node_record(
+        14,
+        1,
+        1.0,
+        [0.47, 0.52, 0.1],
+        [0.47, 0.52, 0.0],
+        dt,
+    ));
     for n in nodes.iter_mut().filter(|n| n.body == 1) {
         n.x1[2] = 0.0;
         n.v = scale(sub(n.x1, n.x0), 1.0 / dt);

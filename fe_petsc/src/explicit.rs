@@ -486,8 +486,9 @@ impl ExplicitFe {
 
     /// The terms `[A, B]` of the change of the half-step kinetic energy that the summed
     /// contact forces `force` scaled by `alpha` make, `dK(alpha) = alpha A + alpha^2 B`, over
-    /// owned nodes: `A = sum m dv . v`, `B = sum m |dv|^2 / 2` for the constrained velocity
-    /// corrections `dv = F dt / m` (J).
+    /// owned nodes: `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2` for the constrained
+    /// velocity corrections `dv = F dt / m` (J). Called after `kick_drift`, before
+    /// `apply_contact`.
     pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
         let mut t = [0.0; 2];
         for n in 0..self.x.len() {
@@ -496,7 +497,7 @@ impl ExplicitFe {
                 continue;
             }
             let dv = self.contact_dv(n, f, dt);
-            let v = self.start_velocity(n);
+            let v = self.v[n];
             for c in 0..3 {
                 t[0] += self.mass[n] * dv[c] * v[c];
                 t[1] += 0.5 * self.mass[n] * dv[c] * dv[c];

@@ -101,8 +101,21 @@ pub fn run_ok(np: usize, scene: &Path, out: &Path) {
     check_contact_energy(out);
 }
 
+/// [`run_ok`] for a run whose `contact_energy` may fall by up to `limit` of the energy scale
+/// between rows (SCENE.md's 1e-3 elsewhere): only for a case the caller measured and explains.
+pub fn run_ok_with_contact_fall(np: usize, scene: &Path, out: &Path, limit: f64) {
+    assert_ran(&run(np, scene, out), &format!("at np {np}"));
+    assert_contact_energy_falls_at_most(out, limit);
+}
+
 /// [`assert_contact_energy_never_falls`] for a run whose history has contact.
 fn check_contact_energy(out: &Path) {
+    assert_contact_energy_falls_at_most(out, 1e-3);
+}
+
+/// [`assert_contact_energy_never_falls`] with the bound `limit` (a fraction of the energy
+/// scale), for a run whose history has contact; the model's mass from report.json.
+fn assert_contact_energy_falls_at_most(out: &Path, limit: f64) {
     let (h, _) = read_csv(&out.join("history.csv"));
     if !h.iter().any(|c| c == "contact_energy") {
         return;
@@ -110,7 +123,7 @@ fn check_contact_energy(out: &Path) {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let mass = r["mass"].as_f64().unwrap_or(0.0);
-    assert_contact_energy_never_falls(out, mass);
+    contact_energy_fall(out, mass, limit);
 }
 
 /// A CSV file as (header, rows).
@@ -238,6 +251,12 @@ pub fn validate_fast(cases: &str, np: usize, tag: &str) -> (bool, String) {
 /// so far, and the floor `0.5 mass (1 mm/s)^2` (`mass`: the model's, kg, from its geometry).
 /// Returns the largest fall over that scale.
 pub fn assert_contact_energy_never_falls(out: &Path, mass: f64) -> f64 {
+    contact_energy_fall(out, mass, 1e-3)
+}
+
+/// The largest fall of `contact_energy` between rows as a fraction of the energy scale,
+/// asserted at most `limit`.
+fn contact_energy_fall(out: &Path, mass: f64, limit: f64) -> f64 {
     let (h, rows) = read_csv(&out.join("history.csv"));
     let col = |n: &str| column(&h, &rows, n);
     let (ke, ie, hg, w, ce) = (
@@ -260,8 +279,8 @@ pub fn assert_contact_energy_never_falls(out: &Path, mass: f64) -> f64 {
             let fall = (ce[i - 1] - ce[i]) / scale;
             worst = worst.max(fall);
             assert!(
-                fall <= 1e-3,
-                "{}: contact_energy fell from {} to {} J at row {i} (t = {}), {fall:.3e} of the energy scale {scale:.3e} J (limit 1e-3)",
+                fall <= limit,
+                "{}: contact_energy fell from {} to {} J at row {i} (t = {}), {fall:.3e} of the energy scale {scale:.3e} J (limit {limit:e})",
                 out.display(),
                 ce[i - 1],
                 ce[i],

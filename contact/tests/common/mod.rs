@@ -49,6 +49,21 @@ impl Rng {
     }
 }
 
+/// A mesh node's record (no flags, radius 0) moving from `x0` to `x1` over a step `dt` at the
+/// constant velocity `(x1 - x0) / dt`.
+pub fn node_record(gid: u64, body: u32, mass: f64, x0: V3, x1: V3, dt: f64) -> NodeRecord {
+    NodeRecord {
+        gid,
+        body,
+        flags: 0,
+        mass,
+        radius: 0.0,
+        x0,
+        x1,
+        v: scale(sub(x1, x0), 1.0 / dt),
+    }
+}
+
 pub fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }

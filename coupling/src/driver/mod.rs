@@ -795,7 +795,21 @@ impl EnergyCheck {
         if step >= ENERGY_CHECK_FROM_STEP {
             self.err_max_checked = self.err_max_checked.max(err);
         }
-        if err > energy_error_limit(step, self.max_energy_error) {
+        // Before step 100 a blow-up is measured against the start scale (energy.rs,
+        // EARLY_BLOW_UP_ERROR); err <= early always (S(t) >= the start scale).
+        let early = energy::energy_error(
+            total,
+            self.e0,
+            external,
+            self.scale.start_value(self.e0, external),
+        );
+        let measured = if step >= ENERGY_CHECK_FROM_STEP {
+            err
+        } else {
+            early
+        };
+        if measured > energy_error_limit(step, self.max_energy_error) {
+            let err = measured;
             let _ = outputs.history_row(model, &self.row(clock, model, err));
             outputs.flush();
             return Err(RunFailure::new(

@@ -56,7 +56,14 @@ impl Sph {
         let (seeds, ids) = seeds.expect("checked");
         let n_total = crate::kernels::collective::sum(world, seeds.len() as f64) as u64;
         let parts = particles_from_seeds(&seeds, &map)?;
+        let mut contact_rho = vec![0.0; params.eos.len()];
+        for (m, entry) in scene.materials.iter().zip(&map) {
+            if let Some((k, _)) = entry {
+                contact_rho[*k as usize] = m.density;
+            }
+        }
         let mut stage = SphStage::new(world, parts, params);
+        stage.set_contact_density(contact_rho);
         stage.set_kept_pairs(kept_pairs);
         stage.setup()?;
         let g = globals(world, &stage);

@@ -94,6 +94,9 @@ pub struct SphStage {
     pub work: PairWork,
     /// Start positions of the owned particles in the current step (for contact).
     x_start: Vec<[f64; 3]>,
+    /// Per EOS index (`Particles::mat`), the material's initial density, kg/m^3, that fixes
+    /// the contact radius (`contact_records`); empty: the EOS's reference density.
+    contact_rho: Vec<f64>,
     /// Wall time of the last drift, s.
     drift_s: f64,
     /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
@@ -156,6 +159,7 @@ impl SphStage {
             stats: SphStats::default(),
             work: PairWork::default(),
             x_start: Vec::new(),
+            contact_rho: Vec::new(),
             drift_s: 0.0,
             pair_count: Vec::new(),
             balanced_once: false,
@@ -293,14 +297,37 @@ impl SphStage {
         self.drift_s = t0.elapsed().as_secs_f64();
     }
 
+    /// Sets each material's initial density (per EOS index), kg/m^3: the contact radius's
+    /// (`contact_records`).
+    pub fn set_contact_density(&mut self, rho: Vec<f64>) {
+        self.contact_rho = rho;
+    }
+
+    /// The density that fixes owned particle `i`'s contact radius, kg/m^3: its material's
+    /// initial density, else its EOS's reference density, else its own.
+    fn contact_density(&self, i: usize) -> f64 {
+        let p = &self.parts;
+        let mat = p.mat[i] as usize;
+        self.contact_rho
+            .get(mat)
+            .copied()
+            .or_else(|| self.params.eos[mat].reference_density())
+            .unwrap_or(p.rho[i])
+    }
+
     /// Contact-node records of the owned particles after `drift` (start and predicted end
     /// position, start-of-step velocity), ids `gid_offset + id`. Fixed particles have infinite
     /// mass (they take reactions but do not move). The contact radius is half the particle's
-    /// own size, (m/rho)^(1/3)/2: a particle touches a face when its volume does. An expanding
-    /// particle keeps the radius of its material's reference density (when the EOS has one):
-    /// the search counts a contact only for a sphere that was outside the face at the start of
-    /// the step, so a radius growing faster than the push-back follows (detonation products
-    /// expanding to several times their volume) would let the particle through the face.
+    /// size at its material's initial density, (m/rho_init)^(1/3)/2 (half the spacing it was
+    /// seeded at), and does not change over the run. It must not grow: the search counts a
+    /// contact only for a sphere that was outside the face (within the capture tolerance) at
+    /// the start of the step, and the push-back closes only what the step's motion made (see
+    /// `contact::pushback`), so a radius that grows while the particle rests on a face (a
+    /// compressed particle expanding back, detonation products expanding to several times
+    /// their volume) puts the particle behind the face by the growth and, past the tolerance,
+    /// loses the contact. Measured on `cloud_on_plate` with the radius of the current density:
+    /// particles at the bottom compressed to 1190 kg/m^3 and expanding back to 860 fell through
+    /// the plate at 9 m/s.
     pub fn contact_records(&self, gid_offset: u64, dt: f64) -> Vec<contact::NodeRecord> {
         let p = &self.parts;
         // The start-of-step velocity v(n) = v(n+1/2) - (dt/2) f(n)/m, as `apply_contact`
@@ -314,12 +341,7 @@ impl SphStage {
                 body: u32::MAX,
                 flags: contact::FLAG_PARTICLE,
                 mass: if p.fixed[i] { f64::INFINITY } else { p.m[i] },
-                radius: {
-                    let rho_ref = self.params.eos[p.mat[i] as usize]
-                        .reference_density()
-                        .unwrap_or(p.rho[i]);
-                    0.5 * libm::cbrt(p.m[i] / p.rho[i].max(rho_ref))
-                },
+                radius: 0.5 * libm::cbrt(p.m[i] / self.contact_density(i)),
                 x0: self.x_start[i],
                 x1: p.x_real[i],
                 v: start(i),
@@ -329,7 +351,7 @@ impl SphStage {
 
     /// The terms `[A, B]` of the change of the half-step kinetic energy that `force` scaled by
     /// `alpha` makes, `dK(alpha) = alpha A + alpha^2 B`, over owned moving particles (J):
-    /// `A = sum m dv . v`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`.
+    /// `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`.
     pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
         let p = &self.parts;
         let mut t = [0.0; 2];
@@ -339,7 +361,7 @@ impl SphStage {
             }
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                t[0] += p.m[i] * dv * (p.v[i][c] - 0.5 * dt * p.f[i][c] / p.m[i]);
+                t[0] += p.m[i] * dv * p.v[i][c];
                 t[1] += 0.5 * p.m[i] * dv * dv;
             }
         }
