@@ -79,7 +79,8 @@ fn main() {
                 elems: conn,
                 ..Default::default()
             };
-            assert!(locality::order_elements(&mut mesh));
+            let (lo, hi) = locality::centroid_bounds(&mesh);
+            locality::order_elements(&mut mesh, lo, hi);
             mesh.elems
         } else {
             assert_eq!(order, "shuffled", "order: file, shuffled or reordered");

@@ -16,6 +16,7 @@
 //! Energy bookkeeping uses the work of the nodal forces over each step's displacement,
 //! W += (f(n) + f(n+1))/2 . (x(n+1) - x(n)), which velocity Verlet balances against the kinetic
 //! energy to O(dt^2) without drift.
+use crate::assembly::Assembly;
 use crate::batch::{self, Batch, LaneMaterial, Width};
 use crate::blocks::BlockWork;
 use crate::hex::{self, HexControls, HexState};
@@ -183,6 +184,8 @@ pub struct ExplicitFe {
     pub mass: Vec<f64>,
     /// Summed element forces on each node (incl. hourglass and bulk viscosity), N.
     pub force: Vec<[f64; 3]>,
+    /// The nodal sums in canonical element order at any rank count ([`crate::assembly`]).
+    assembly: Assembly,
     /// The old forces' half of this step's element work over the owned nodes, J: counted by
     /// the kick and the contact push-back, taken by `finish_step` (zero between steps).
     kick_work: f64,
@@ -301,6 +304,8 @@ impl ExplicitFe {
             .max()
             .unwrap_or(0);
         let mut mass3 = vec![[0.0; 3]; nn];
+        // The lumped masses summed as the forces are ([`crate::assembly`]).
+        let mut assembly = Assembly::new(&m.elems, &m.elem_key, exchange)?;
         let mut vol0 = Vec::with_capacity(ne);
         let mut mat_state = vec![0.0; ne * mat_stride];
         let mut inverted = None;
@@ -328,11 +333,12 @@ impl ExplicitFe {
                     mass3[n as usize][c] += me;
                 }
             }
+            assembly.record(e, |_| [me; 3]);
             if mat_stride > 0 {
                 mat.init_state(&mut mat_state[e * mat_stride..(e + 1) * mat_stride]);
             }
         }
-        exchange.sum_shared(flat(&mut mass3))?;
+        assembly.finish(&mut mass3, exchange)?;
         if let Some(e) = inverted {
             return Err(e);
         }
@@ -347,6 +353,7 @@ impl ExplicitFe {
             a: vec![[0.0; 3]; nn],
             mass,
             force: vec![[0.0; 3]; nn],
+            assembly,
             kick_work: 0.0,
             constrained_nodes: Vec::new(),
             constrained_force: Vec::new(),
@@ -673,8 +680,8 @@ impl ExplicitFe {
     /// With [`ElementKernel::Batched`] (the default), groups of consecutive elements of one
     /// material with a lane form ([`LaneMaterial`]) are updated together by [`Batch::update`]
     /// (four or eight at once: [`ExplicitFe::width`]); the other elements, and a group with an
-    /// inverted element, go through [`hex::update`] one by one. Either way each element's forces are added to the nodes in element order, so
-    /// the two kernels' sums are the same.
+    /// inverted element, go through [`hex::update`] one by one. Either way each element's forces are added to the nodes in element order (the
+    /// canonical order, [`crate::assembly`]), so the two kernels' sums are the same.
     pub fn element_forces(
         &mut self,
         dt: f64,
@@ -708,7 +715,8 @@ impl ExplicitFe {
         }
         let t1 = std::time::Instant::now();
         self.timers.elements += (t1 - t0).as_secs_f64();
-        exchange.sum_shared(flat(&mut self.force))?;
+        // The shared nodes' forces in canonical element order over all ranks holding them.
+        self.assembly.finish(&mut self.force, exchange)?;
         self.timers.exchange += t1.elapsed().as_secs_f64();
         match sums.inverted {
             Some(e) => Err(e),
@@ -902,6 +910,9 @@ impl ExplicitFe {
                 f[2] += fe[2];
             }
         }
+        for l in 0..n {
+            self.assembly.record(e0 + l, |k| g.force(l, k));
+        }
         let [hg_work, _, dt_stable, _] = g.scalars();
         if self.blocks.active() {
             for l in 0..n {
@@ -925,6 +936,7 @@ impl ExplicitFe {
             f[1] += out.force[k][1];
             f[2] += out.force[k][2];
         }
+        self.assembly.record(e, |k| out.force[k]);
         sums.hg_work += out.hg_work;
         self.blocks.add(e, &out.force, out.hg_work);
         sums.dt_min = sums.dt_min.min(out.dt_stable);

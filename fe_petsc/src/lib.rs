@@ -9,6 +9,7 @@
 #![allow(clippy::macro_metavars_in_unsafe)]
 
 pub mod agree;
+pub mod assembly;
 pub mod batch;
 pub mod blocks;
 pub mod explicit;

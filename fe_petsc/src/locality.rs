@@ -13,13 +13,15 @@
 //! numbered at random 190 against 128. The whole benchmark from a shuffled mesh file: 237-263
 //! ns per element-cycle, 149-154 with both orders applied (`docs/benchmarks.md`).
 //!
-//! Blocks stay contiguous (the batched kernel takes runs of one material). The orders are
-//! deterministic (exact integer keys on the rank's own bounding box, ties by global id; first
-//! touch in that element order): the same mesh on the same ranks gives the same order, so
-//! restarts continue bit for bit; on other rank counts the sums of element forces at a node
-//! come in another order, as they do anyway (results agree to round-off). A file whose order is
-//! already about as local is kept ([`KEEP_FACTOR`]). The mesh module renumbers the ghost
-//! exchange's leaves with the nodes (`mesh::DistributedMesh::load`).
+//! Blocks stay contiguous (the batched kernel takes runs of one material). The element order
+//! is canonical: the curve runs on the whole mesh's centroid box (the same on every rank),
+//! ties by global id, so any rank's elements are in the whole mesh's order restricted to them,
+//! and the element loop adds each node's forces in the same order at every rank count
+//! ([`crate::assembly`]). It is always applied: a structured mesh's lexicographic file order
+//! ran 3-10 % faster than the curve's, but keeping it on some ranks and not on others would
+//! give other sums. The node numbering only places values in memory (no sum depends on it): a
+//! file's numbering that is already about as local is kept ([`KEEP_FACTOR`]). The mesh module
+//! renumbers the ghost exchange's leaves with the nodes (`mesh::DistributedMesh::load`).
 use crate::mesh::LocalMesh;
 
 /// Bits per axis of the curve's grid (3 x 21 = 63 bits of key).
@@ -41,38 +43,43 @@ fn morton(i: u64, j: u64, k: u64) -> u64 {
     spread(i) | spread(j) << 1 | spread(k) << 2
 }
 
-/// A file order is kept unless its mean distance between consecutive centroids (for the
-/// nodes: its mean span of node numbers within an element) is more than this many times the
-/// curve's (first touch's): a structured mesh's lexicographic order (mean step about 2
-/// element widths on the 47^3 block, the curve's about 1.5) ran 3-10 % faster than the curve's
-/// in the benchmark, and only a poor order gains from the curve.
+/// A node numbering is kept unless its mean span of node numbers within an element is more
+/// than this many times the first-touch numbering's ([`node_order`]).
 pub const KEEP_FACTOR: f64 = 2.0;
 
-/// Reorders `mesh`'s elements (connectivity, ids and blocks together) by block, then by the
-/// Morton key of the centroid on the local bounding box, then by global id, unless the file's
-/// order is already about as local ([`KEEP_FACTOR`]). Returns whether it reordered.
-pub fn order_elements(mesh: &mut LocalMesh) -> bool {
-    let n = mesh.elems.len();
-    if n < 2 {
-        return false;
-    }
-    let centroid = |c: &[u32; 8]| {
-        let mut s = [0.0; 3];
-        for &v in c {
-            for d in 0..3 {
-                s[d] += mesh.coords[v as usize][d];
-            }
+/// The centroid of element `c` (the mean of its 8 nodes), m.
+fn centroid(mesh: &LocalMesh, c: &[u32; 8]) -> [f64; 3] {
+    let mut s = [0.0; 3];
+    for &v in c {
+        for d in 0..3 {
+            s[d] += mesh.coords[v as usize][d];
         }
-        s.map(|x| x / 8.0)
-    };
-    let cents: Vec<[f64; 3]> = mesh.elems.iter().map(centroid).collect();
+    }
+    s.map(|x| x / 8.0)
+}
+
+/// The smallest and largest centroid coordinates of `mesh`'s elements, m (infinite when it
+/// has none): over all ranks, the bounding box of [`order_elements`]' curve.
+pub fn centroid_bounds(mesh: &LocalMesh) -> ([f64; 3], [f64; 3]) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for c in &cents {
+    for c in &mesh.elems {
+        let c = centroid(mesh, c);
         for d in 0..3 {
             lo[d] = lo[d].min(c[d]);
             hi[d] = hi[d].max(c[d]);
         }
     }
+    (lo, hi)
+}
+
+/// Puts `mesh`'s elements (connectivity, ids and blocks together) in the canonical order: by
+/// block, then by the Morton key of the centroid on the box `lo..hi` (the whole mesh's
+/// centroid bounds, the same on every rank), then by global id; sets `mesh.elem_key` to each
+/// element's key. The order is the same for any partition (a rank's elements in it are the
+/// whole mesh's order restricted to them), so the element loop meets each node's elements in
+/// the same order on every rank count: the nodal sums' order ([`crate::assembly`]).
+pub fn order_elements(mesh: &mut LocalMesh, lo: [f64; 3], hi: [f64; 3]) {
+    let n = mesh.elems.len();
     let top = ((1u64 << BITS) - 1) as f64;
     let cell = |x: f64, d: usize| {
         let span = hi[d] - lo[d];
@@ -82,37 +89,21 @@ pub fn order_elements(mesh: &mut LocalMesh) -> bool {
             0
         }
     };
-    let key = |e: usize| {
-        let c = cents[e];
-        let m = morton(cell(c[0], 0), cell(c[1], 1), cell(c[2], 2));
-        (mesh.elem_block[e], m, mesh.elem_id[e])
-    };
+    let keys: Vec<[u64; 3]> = (0..n)
+        .map(|e| {
+            let c = centroid(mesh, &mesh.elems[e]);
+            let m = morton(cell(c[0], 0), cell(c[1], 1), cell(c[2], 2));
+            // The block tag as an order-preserving u64 (tags may be -1).
+            let b = (mesh.elem_block[e] as i64 as u64) ^ (1 << 63);
+            [b, m, mesh.elem_id[e]]
+        })
+        .collect();
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_unstable_by_key(|&e| key(e));
-    let mean_step = |seq: &mut dyn Iterator<Item = usize>| {
-        let mut prev: Option<[f64; 3]> = None;
-        let mut sum = 0.0;
-        for e in seq {
-            let c = cents[e];
-            if let Some(p) = prev {
-                sum +=
-                    ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2) + (c[2] - p[2]).powi(2)).sqrt();
-            }
-            prev = Some(c);
-        }
-        sum / (n - 1) as f64
-    };
-    let (file, curve) = (
-        mean_step(&mut (0..n)),
-        mean_step(&mut order.iter().copied()),
-    );
-    if !(file > KEEP_FACTOR * curve) {
-        return false;
-    }
+    order.sort_unstable_by_key(|&e| keys[e]);
     mesh.elems = order.iter().map(|&e| mesh.elems[e]).collect();
     mesh.elem_id = order.iter().map(|&e| mesh.elem_id[e]).collect();
     mesh.elem_block = order.iter().map(|&e| mesh.elem_block[e]).collect();
-    true
+    mesh.elem_key = order.iter().map(|&e| keys[e]).collect();
 }
 
 /// A node numbering that follows the element order: nodes numbered as the elements first
@@ -237,7 +228,8 @@ mod tests {
                 }
             }
         }
-        // In lexicographic order (mean step 1.86) the grid is left as it is.
+        // The canonical order does not depend on the order the elements come in: the
+        // lexicographic grid and its shuffle (below) end in the same order.
         let mut lex = LocalMesh {
             coords: mesh.coords.clone(),
             elems: cells.iter().map(|t| t.0).collect(),
@@ -245,12 +237,8 @@ mod tests {
             elem_block: cells.iter().map(|t| t.2).collect(),
             ..Default::default()
         };
-        let kept = lex.clone();
-        assert!(
-            !order_elements(&mut lex),
-            "a lexicographic grid was reordered"
-        );
-        assert_eq!(lex.elem_id, kept.elem_id);
+        let (lo, hi) = centroid_bounds(&lex);
+        order_elements(&mut lex, lo, hi);
         let mut s = 0x2545_f491_4f6c_dd1du64;
         for i in (1..cells.len()).rev() {
             s ^= s << 13;
@@ -279,11 +267,12 @@ mod tests {
             d / (mesh.elems.len() - 1) as f64
         };
         let before = mean_step(&mesh);
-        assert!(
-            order_elements(&mut mesh),
-            "a shuffled grid must be reordered"
-        );
+        order_elements(&mut mesh, lo, hi);
         let after = mean_step(&mesh);
+        assert_eq!(
+            mesh.elem_id, lex.elem_id,
+            "the shuffled grid's order is the lexicographic grid's"
+        );
         println!(
             "mean step between consecutive elements: shuffled {before:.2}, ordered {after:.2}"
         );

@@ -58,6 +58,10 @@ pub struct LocalMesh {
     pub elem_id: Vec<u64>,
     /// gmsh tag of the physical volume each element belongs to (-1: none).
     pub elem_block: Vec<i32>,
+    /// Each element's place in the canonical order (block, Morton key of its centroid on the
+    /// whole mesh's box, global id), the same on every rank count: the local elements are in
+    /// this order ([`crate::locality::order_elements`]).
+    pub elem_key: Vec<[u64; 3]>,
     /// Nodes in the whole mesh.
     pub global_nodes: u64,
     /// Elements in the whole mesh.
@@ -82,17 +86,19 @@ pub struct DistributedMesh {
 /// forest is kept: the DM, its sections and vectors are freed once the arrays are extracted
 /// (measured: about 260 bytes per element of a 110,592-element block's peak memory).
 pub struct NodeExchange {
-    sf: StarForest,
+    pub(crate) sf: StarForest,
     /// Three contiguous doubles, a node's values (committed; never freed: one small datatype,
     /// and the exchange may outlive MPI's own tear-down).
-    unit: mpi_sys::MPI_Datatype,
+    pub(crate) unit: mpi_sys::MPI_Datatype,
     /// The owners' values (roots): 3 per owned node.
-    roots: Vec<f64>,
+    pub(crate) roots: Vec<f64>,
     /// The leaves the star forest keeps (nodes more than one rank holds), local node indices.
-    shared_leaves: Vec<u32>,
+    pub(crate) shared_leaves: Vec<u32>,
+    /// The root (owner rank, root index) of each of `shared_leaves`.
+    pub(crate) shared_remotes: Vec<sys::PetscSFNode>,
     /// The roots with leaves on other ranks.
     shared_roots: Vec<u32>,
-    n_local_nodes: usize,
+    pub(crate) n_local_nodes: usize,
     /// Bytes this rank sent in ghost exchanges so far (estimate: 2 x 24 bytes per ghost node).
     pub bytes_sent: u64,
     ghosts: usize,
@@ -129,7 +135,21 @@ impl NodeExchange {
         for &l in &self.shared_leaves {
             data[3 * l as usize..3 * l as usize + 3].fill(0.0);
         }
-        // SAFETY: as above.
+        self.broadcast_roots(data)?;
+        self.bytes_sent += (2 * 24 * self.ghosts) as u64;
+        Ok(())
+    }
+
+    /// Adds each shared node's root value (the owner's, in `roots`) to every copy of the node
+    /// in `data` (`3 * n_local_nodes` long, node-major): on copies the caller zeroed, the
+    /// broadcast of the owner's value.
+    pub(crate) fn broadcast_roots(&mut self, data: &mut [f64]) -> Result<(), PetscError> {
+        assert_eq!(data.len(), 3 * self.n_local_nodes);
+        let (leaves, roots) = (data.as_mut_ptr(), self.roots.as_ptr());
+        // SAFETY: reading MPI's predefined handle (a constant after MPI_Init).
+        let (unit, sum) = (self.unit, unsafe { mpi_sys::RSMPI_SUM });
+        // SAFETY: FFI on the section's star forest: `data` holds its n_local_nodes leaves and
+        // `roots` its roots, three doubles each, both alive across Begin and End.
         unsafe {
             crate::petsc::check(
                 sys::PetscSFBcastBegin(self.sf.0, unit, roots as *const _, leaves as *mut _, sum),
@@ -140,7 +160,6 @@ impl NodeExchange {
                 "PetscSFBcastEnd",
             )?;
         }
-        self.bytes_sent += (2 * 24 * self.ghosts) as u64;
         Ok(())
     }
 }
@@ -219,7 +238,20 @@ impl DistributedMesh {
         agree(comm, extracted.err())?;
         // Elements along a space-filling curve, nodes in the order the elements first touch
         // them, each where the file's order is poor (`locality`).
-        let elements = crate::locality::order_elements(&mut local);
+        let (mut lo, mut hi) = crate::locality::centroid_bounds(&local);
+        let (l0, h0) = (lo, hi);
+        comm.all_reduce_into(
+            &l0[..],
+            &mut lo[..],
+            mpi::collective::SystemOperation::min(),
+        );
+        comm.all_reduce_into(
+            &h0[..],
+            &mut hi[..],
+            mpi::collective::SystemOperation::max(),
+        );
+        crate::locality::order_elements(&mut local, lo, hi);
+        let elements = true;
         let renumbered = crate::locality::node_order(&local);
         if let Some(p) = &renumbered {
             crate::locality::renumber_nodes(&mut local, p);
@@ -654,6 +686,7 @@ fn node_exchange(
         unit: three_doubles()?,
         roots: vec![0.0; 3 * nroots as usize],
         shared_leaves: shared.leaves,
+        shared_remotes: shared.remotes,
         shared_roots: shared.roots,
         n_local_nodes: nv,
         bytes_sent: 0,
@@ -668,6 +701,8 @@ struct SharedForest {
     leaves: Vec<u32>,
     /// Root index of each owned node with ghosts elsewhere.
     roots: Vec<u32>,
+    /// The root of each leaf kept.
+    remotes: Vec<sys::PetscSFNode>,
 }
 
 /// The star forest without the leaves of nodes only this rank holds: such a node's sum is its
@@ -722,6 +757,7 @@ fn shared_forest(
         .map(|r| r as u32)
         .collect();
     // The cut forest: the kept leaves at their (new) local indices, each with its root.
+    let kept = remotes.clone();
     let mut ilocal: Vec<sys::PetscInt> = leaves.iter().map(|&l| l as sys::PetscInt).collect();
     let mut cut: sys::PetscSF = std::ptr::null_mut();
     // SAFETY: reading the communicator of a live PETSc object.
@@ -742,6 +778,7 @@ fn shared_forest(
         sf: cut,
         leaves,
         roots,
+        remotes: kept,
     })
 }
 
@@ -749,7 +786,7 @@ fn shared_forest(
 ///
 /// # Safety
 /// A non-null `p` points to `n` initialised elements that outlive the slice.
-unsafe fn slice_or_empty<'a, T>(p: *const T, n: usize) -> &'a [T] {
+pub(crate) unsafe fn slice_or_empty<'a, T>(p: *const T, n: usize) -> &'a [T] {
     if p.is_null() || n == 0 {
         &[]
     } else {

@@ -290,3 +290,82 @@ fn contact_energy_fall(out: &Path, mass: f64, limit: f64) -> f64 {
     }
     worst
 }
+
+/// Every frame's values in `fields.h5` of run `b` against run `a`, matched by id in each
+/// group that has ids (nodes, elements, particles): `Err` names the first frame, group and
+/// dataset whose bits differ (the rank column and the ids themselves are not compared).
+pub fn fields_differ(a: &Path, b: &Path) -> Result<(), String> {
+    let (fa, fb) = (
+        hdf5::File::open(a.join("fields.h5")).map_err(|e| e.to_string())?,
+        hdf5::File::open(b.join("fields.h5")).map_err(|e| e.to_string())?,
+    );
+    let mut frames = fa.group("frames").unwrap().member_names().unwrap();
+    frames.sort();
+    let mut fb_frames = fb.group("frames").unwrap().member_names().unwrap();
+    fb_frames.sort();
+    if frames != fb_frames {
+        return Err(format!("frames {} and {}", frames.len(), fb_frames.len()));
+    }
+    for fr in &frames {
+        let (ga, gb) = (
+            fa.group(&format!("frames/{fr}")).unwrap(),
+            fb.group(&format!("frames/{fr}")).unwrap(),
+        );
+        for grp in ga.member_names().unwrap() {
+            let (Ok(ha), Ok(hb)) = (ga.group(&grp), gb.group(&grp)) else {
+                continue;
+            };
+            let (Ok(ia), Ok(ib)) = (ha.dataset("id"), hb.dataset("id")) else {
+                continue;
+            };
+            let (ia, ib): (Vec<u64>, Vec<u64>) = (ia.read_raw().unwrap(), ib.read_raw().unwrap());
+            let order = |ids: &[u64]| {
+                let mut o: Vec<usize> = (0..ids.len()).collect();
+                o.sort_by_key(|&i| ids[i]);
+                o
+            };
+            let (oa, ob) = (order(&ia), order(&ib));
+            if oa.iter().map(|&i| ia[i]).ne(ob.iter().map(|&i| ib[i])) {
+                return Err(format!("frame {fr}, {grp}: other ids"));
+            }
+            for ds in ha.member_names().unwrap() {
+                if ds == "id" || ds == "rank" {
+                    continue;
+                }
+                let va: Vec<f64> = ha.dataset(&ds).unwrap().read_raw().unwrap();
+                let vb: Vec<f64> = hb.dataset(&ds).unwrap().read_raw().unwrap();
+                let w = va.len() / ia.len().max(1);
+                let same = va.len() == vb.len()
+                    && oa.iter().zip(&ob).all(|(&i, &j)| {
+                        (0..w).all(|c| va[i * w + c].to_bits() == vb[j * w + c].to_bits())
+                    });
+                if !same {
+                    return Err(format!("frame {fr}, {grp}/{ds}: other bits"));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The columns of CSV file `name` in runs `a` and `b` whose text differs in some row (`skip`
+/// left out), with the first such row; and whether the row counts differ.
+pub fn csv_columns_differ(a: &Path, b: &Path, name: &str, skip: &[&str]) -> Vec<(String, usize)> {
+    let read = |d: &Path| std::fs::read_to_string(d.join(name)).unwrap();
+    let (ta, tb) = (read(a), read(b));
+    let (la, lb): (Vec<&str>, Vec<&str>) = (ta.lines().collect(), tb.lines().collect());
+    let head: Vec<&str> = la[0].split(',').collect();
+    let mut out: Vec<(String, usize)> = Vec::new();
+    if la.len() != lb.len() {
+        out.push((format!("rows {} and {}", la.len(), lb.len()), 0));
+    }
+    for (r, (x, y)) in la.iter().zip(&lb).enumerate().skip(1) {
+        for (k, (u, v)) in x.split(',').zip(y.split(',')).enumerate() {
+            let h = head.get(k).copied().unwrap_or("?");
+            if u != v && !skip.contains(&h) && !out.iter().any(|(c, _)| c == h) {
+                out.push((h.to_string(), r));
+            }
+        }
+    }
+    out
+}

@@ -111,6 +111,11 @@ impl Probes {
         if !vals.is_empty() {
             comm.all_reduce_into(&vals[..], &mut out[..], SystemOperation::sum());
         }
+        // One rank's value plus zeros is that value exactly, but for its sign at zero: -0.0
+        // (a pressure at rest) comes back +0.0 from several ranks; one sign at any rank count.
+        for v in out.iter_mut() {
+            *v += 0.0;
+        }
         // Particle probes: their columns from the particles (collective: every rank has the
         // same list).
         let parts: Vec<&Probe> = self
