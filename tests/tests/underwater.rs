@@ -67,7 +67,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
         // over the first three steps and recovers by row 3: velocity Verlet books the
         // push-back against the start velocity, and the products pressed on the cavity from
         // rest hold the second half-kick's kinetic energy, sum m (a dt/2)^2 / 2, which
-        // contact books as its own (docs/scene.md, "Contact's energy"). Allowed here up to
+        // contact books as its own (docs/scene.md, `[contact]`). Allowed here up to
         // 3e-3 (SCENE.md: 1e-3); issue 27 keeps it open.
         run_ok_with_contact_fall(
             np,
