@@ -347,7 +347,7 @@ impl EnergyChart {
             .draw_series(LineSeries::new(err, c.stroke_width(2)))
             .map_err(chart::err)?;
         if text {
-            s.label("|K + I + H + C - E(0) - W| / (E(0) + |W|)")
+            s.label("|K + I + H + C - E(0) - W| / S (energy scale)")
                 .legend(chart::line_key(c));
             chart::legend(&mut ch, SeriesLabelPosition::LowerRight, 15)?;
         }
