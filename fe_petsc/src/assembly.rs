@@ -101,6 +101,44 @@ fn max_over_ranks(sf: &StarForest, x: u64) -> Result<u64, PetscError> {
     Ok(out)
 }
 
+/// The multi-root gather (`gather`: each leaf's unit of `from` to its own place among its
+/// root's in `to`) or scatter (the other way) of forest `sf` (collective).
+///
+/// # Safety
+/// `unit` is a committed datatype of the same size on every rank; `from` and `to` hold the
+/// units the forest's leaves (gather: `from`) and multi-roots (gather: `to`) need.
+unsafe fn multi_root(
+    sf: &StarForest,
+    unit: mpi_sys::MPI_Datatype,
+    from: &[u64],
+    to: &mut [u64],
+    gather: bool,
+) -> Result<(), PetscError> {
+    let (f, t) = (
+        from.as_ptr() as *const c_void,
+        to.as_mut_ptr() as *mut c_void,
+    );
+    // SAFETY: as the caller promises.
+    unsafe {
+        if gather {
+            crate::petsc::check(
+                sys::PetscSFGatherBegin(sf.0, unit, f, t),
+                "PetscSFGatherBegin",
+            )?;
+            crate::petsc::check(sys::PetscSFGatherEnd(sf.0, unit, f, t), "PetscSFGatherEnd")
+        } else {
+            crate::petsc::check(
+                sys::PetscSFScatterBegin(sf.0, unit, f, t),
+                "PetscSFScatterBegin",
+            )?;
+            crate::petsc::check(
+                sys::PetscSFScatterEnd(sf.0, unit, f, t),
+                "PetscSFScatterEnd",
+            )
+        }
+    }
+}
+
 impl Assembly {
     /// The plan for elements `elems` (local node indices, 8 per element, in canonical order)
     /// with canonical keys `elem_key`, over the node exchange `ex` (collective: every rank of
@@ -218,22 +256,9 @@ impl Assembly {
         let mut gathered = vec![u64::MAX; total * w];
         // SAFETY: reading MPI's predefined handle (a constant after MPI_Init).
         let unit = contiguous(w as i32, unsafe { mpi_sys::RSMPI_UINT64_T })?;
-        let (uptr, gptr) = (
-            ids.as_ptr() as *const c_void,
-            gathered.as_mut_ptr() as *mut c_void,
-        );
-        // SAFETY: the unit is the forest's unit on every rank; `ids` holds one unit per leaf
-        // and `gathered` one per root's leaf (the degrees' sum).
-        unsafe {
-            crate::petsc::check(
-                sys::PetscSFGatherBegin(lists.0, unit, uptr, gptr),
-                "PetscSFGatherBegin",
-            )?;
-            crate::petsc::check(
-                sys::PetscSFGatherEnd(lists.0, unit, uptr, gptr),
-                "PetscSFGatherEnd",
-            )?;
-        }
+        // SAFETY: `ids` holds one unit per leaf and `gathered` one per root's leaf (the
+        // degrees' sum).
+        unsafe { multi_root(&lists, unit, &ids, &mut gathered, true)? };
         // The owner: each shared node's slots are its elements in canonical order; each
         // gathered key's first word becomes its slot.
         let key = |c: &[u64]| [c[0], c[1], c[2]];
@@ -261,20 +286,9 @@ impl Assembly {
             at += d;
         }
         let mut slot_of = vec![u64::MAX; nleaves * w];
-        let (gptr, sptr) = (
-            gathered.as_ptr() as *const c_void,
-            slot_of.as_mut_ptr() as *mut c_void,
-        );
-        // SAFETY: as the gather, the other way.
+        // SAFETY: as the gather, the other way; the unit is not used after.
         unsafe {
-            crate::petsc::check(
-                sys::PetscSFScatterBegin(lists.0, unit, gptr, sptr),
-                "PetscSFScatterBegin",
-            )?;
-            crate::petsc::check(
-                sys::PetscSFScatterEnd(lists.0, unit, gptr, sptr),
-                "PetscSFScatterEnd",
-            )?;
+            multi_root(&lists, unit, &gathered, &mut slot_of, false)?;
             let mut u = unit;
             mpi_sys::MPI_Type_free(&mut u);
         }
