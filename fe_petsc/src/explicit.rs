@@ -19,6 +19,8 @@
 use crate::assembly::Assembly;
 use crate::batch::{self, Batch, LaneMaterial, Width};
 use crate::blocks::BlockWork;
+use crate::exact::{self as exact_sum, Folds};
+use crate::exact::{StepFolds, SumGrids};
 use crate::hex::{self, HexControls, HexState};
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
@@ -85,9 +87,6 @@ pub enum RestartLayout {
     /// The same on every rank (global energies, the clock), except the entry
     /// [`RESTART_DT_STABLE`] of `fe.scalars`: this rank's smallest stable step.
     Global,
-    /// `fe.block_work`: this rank's per-block step sums, then its own element forces per
-    /// (node, block) slot ([`BlockWork::slots`]), partial sums that only add up over ranks.
-    BlockWork,
 }
 
 /// The index in `fe.scalars` of the rank's own smallest stable step (the others are global).
@@ -106,9 +105,8 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "fe.reaction_old"
         | "implicit.force_n"
         | "implicit.reaction_n" => Node,
-        "fe.hex_state" | "fe.mat_state" => Element,
+        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
-        "fe.block_work" => BlockWork,
         _ => return None,
     })
 }
@@ -186,9 +184,13 @@ pub struct ExplicitFe {
     pub force: Vec<[f64; 3]>,
     /// The nodal sums in canonical element order at any rank count ([`crate::assembly`]).
     assembly: Assembly,
-    /// The old forces' half of this step's element work over the owned nodes, J: counted by
-    /// the kick and the contact push-back, taken by `finish_step` (zero between steps).
-    kick_work: f64,
+    /// The old forces' sum f(n) . dx of this step's element work over the owned nodes (twice
+    /// their half of the trapezoids), J: counted by the kick and the contact push-back, taken by
+    /// `finish_step` (zero between steps).
+    kick_work: Folds,
+    /// The grids of the energy and momentum sums ([`crate::exact`]), from the mass
+    /// ([`ExplicitFe::initial_energies`]).
+    pub grids: SumGrids,
     /// The constrained nodes, once each, in order.
     constrained_nodes: Vec<u32>,
     /// Their forces at the step's start (scratch of `kick_drift`).
@@ -261,7 +263,8 @@ pub enum ElementKernel {
 
 /// What the element loop sums over elements.
 struct LoopSums {
-    hg_work: f64,
+    hg_work: Folds,
+    grid: exact_sum::Grid,
     dt_min: f64,
     /// The first inverted element.
     inverted: Option<StepError>,
@@ -354,7 +357,8 @@ impl ExplicitFe {
             mass,
             force: vec![[0.0; 3]; nn],
             assembly,
-            kick_work: 0.0,
+            kick_work: [0.0; 3],
+            grids: SumGrids::for_mass(1.0),
             constrained_nodes: Vec::new(),
             constrained_force: Vec::new(),
             reaction: vec![[0.0; 3]; nn],
@@ -496,8 +500,9 @@ impl ExplicitFe {
     /// owned nodes: `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2` for the constrained
     /// velocity corrections `dv = F dt / m` (J). Called after `kick_drift`, before
     /// `apply_contact`.
-    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
-        let mut t = [0.0; 2];
+    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [Folds; 2] {
+        let mut t = [[0.0; 3]; 2];
+        let e = &self.grids.energy;
         for n in 0..self.x.len() {
             let f = force[n];
             if f == [0.0; 3] || !self.owned[n] {
@@ -506,8 +511,8 @@ impl ExplicitFe {
             let dv = self.contact_dv(n, f, dt);
             let v = self.v[n];
             for c in 0..3 {
-                t[0] += self.mass[n] * dv[c] * v[c];
-                t[1] += 0.5 * self.mass[n] * dv[c] * dv[c];
+                e.add(&mut t[0], self.mass[n] * dv[c] * v[c]);
+                e.add(&mut t[1], 0.5 * self.mass[n] * dv[c] * dv[c]);
             }
         }
         t
@@ -536,12 +541,13 @@ impl ExplicitFe {
     /// correction. Returns the local work of the push-back over owned nodes,
     /// `m dv . (v + dv/2 - a_n dt/2)` with `dv` the velocity correction: what closes the energy
     /// balance of the step with the element and external work.
-    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> f64 {
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> Folds {
         let mut cons: Vec<Option<usize>> = vec![None; self.x.len()];
         for (i, (n, _)) in self.constraints.iter().enumerate() {
             cons[*n as usize] = Some(i);
         }
-        let mut work = 0.0;
+        let mut work = [0.0; 3];
+        let grid = self.grids.energy;
         for n in 0..self.x.len() {
             let f = force[n];
             if f == [0.0; 3] {
@@ -560,7 +566,7 @@ impl ExplicitFe {
                 // The old forces' half of the element work over the push-back's dt dv.
                 let f = self.force[n];
                 for c in 0..3 {
-                    self.kick_work += 0.5 * f[c] * (dt * dv[c]);
+                    grid.add(&mut self.kick_work, f[c] * (dt * dv[c]));
                 }
             }
             for c in 0..3 {
@@ -569,7 +575,8 @@ impl ExplicitFe {
                     // kick that the element and external work (trapezoids over the corrected
                     // displacement) already count: velocity Verlet with an impulse dv between
                     // the kicks gives dKE = W_trapezoid + m dv.(v + dv/2) - (dt/2) m a_n.dv.
-                    work += self.mass[n] * dv[c] * (self.v[n][c] + 0.5 * dv[c] - 0.5 * dt * a_n[c]);
+                    let w = self.mass[n] * dv[c] * (self.v[n][c] + 0.5 * dv[c] - 0.5 * dt * a_n[c]);
+                    grid.add(&mut work, w);
                 }
                 self.v[n][c] += dv[c];
                 self.x[n][c] += dv[c] * dt;
@@ -635,6 +642,7 @@ impl ExplicitFe {
         let kept = self.constrained_nodes.iter().map(|&n| f[n as usize]);
         self.constrained_force.extend(kept);
         let input = nodal::KickInput {
+            energy: self.grids.energy,
             mass: &self.mass,
             gravity: self.gravity,
             owned: &self.owned,
@@ -666,11 +674,11 @@ impl ExplicitFe {
             if self.owned[n] {
                 let v = self.v[n];
                 for c in 0..3 {
-                    work += f[c] * (dt * v[c]);
+                    self.grids.energy.add(&mut work, f[c] * (dt * v[c]));
                 }
             }
         }
-        self.kick_work = 0.5 * work;
+        self.kick_work = work;
         self.timers.nodal += t0.elapsed().as_secs_f64();
     }
 
@@ -686,7 +694,7 @@ impl ExplicitFe {
         &mut self,
         dt: f64,
         exchange: &mut NodeExchange,
-    ) -> Result<f64, StepError> {
+    ) -> Result<Folds, StepError> {
         let t0 = std::time::Instant::now();
         // The last step's forces were last read by the kick and the contact push-back; the
         // kick zeroed them where no contact stage reads them after it.
@@ -696,7 +704,8 @@ impl ExplicitFe {
             }
         }
         let mut sums = LoopSums {
-            hg_work: 0.0,
+            hg_work: [0.0; 3],
+            grid: self.grids.energy,
             dt_min: f64::INFINITY,
             inverted: None,
         };
@@ -921,7 +930,7 @@ impl ExplicitFe {
             }
         }
         for l in 0..n {
-            sums.hg_work += hg_work[l];
+            sums.grid.add(&mut sums.hg_work, hg_work[l]);
             sums.dt_min = sums.dt_min.min(dt_stable[l]);
         }
     }
@@ -937,19 +946,19 @@ impl ExplicitFe {
             f[2] += out.force[k][2];
         }
         self.assembly.record(e, |k| out.force[k]);
-        sums.hg_work += out.hg_work;
+        sums.grid.add(&mut sums.hg_work, out.hg_work);
         self.blocks.add(e, &out.force, out.hg_work);
         sums.dt_min = sums.dt_min.min(out.dt_stable);
     }
 
     /// Second half of the step: accelerations, constraints and reactions, the closing kick, and
-    /// the local energy increments. Returns the local sums to be reduced:
-    /// `[kinetic, d(internal+hourglass), d(external work), px, py, pz]`.
-    pub fn finish_step(&mut self, dt: f64) -> [f64; 6] {
+    /// the local energy increments. Returns the local sums to be reduced, raw
+    /// ([`StepFolds`]: [`ExplicitFe::accumulate`] scales them).
+    pub fn finish_step(&mut self, dt: f64) -> StepFolds {
         let t0 = std::time::Instant::now();
         let g = self.gravity;
         let h = 0.5 * dt;
-        let mut sums = [0.0; 6];
+        let mut sums = [[0.0; 3]; 6];
         let nn = self.x.len();
         // The arrays as slices of one length, borrowed field by field (the loops below index
         // them without bounds checks and keep the sums in registers: through `&self` methods
@@ -960,6 +969,7 @@ impl ExplicitFe {
             mass: &self.mass[..nn],
             owned: &self.owned[..nn],
             gravity: g,
+            grids: self.grids,
         };
         let constrained = &self.constrained[..nn];
         let wide = self.wide_nodes();
@@ -1000,28 +1010,30 @@ impl ExplicitFe {
             );
         }
         // The element work's other half, counted at the kick (`nodal::kick_drift`).
-        sums[1] -= std::mem::take(&mut self.kick_work);
+        exact_sum::merge(&mut sums[1], &std::mem::take(&mut self.kick_work));
         self.timers.nodal += t0.elapsed().as_secs_f64();
         sums
     }
 
-    /// The local sums of a step to be reduced over ranks (one reduction): `finish_step`'s six,
-    /// the element loop's hourglass work, then with several blocks `blocks.step_sums`.
-    pub fn step_sums(&self, finish: &[f64; 6], hg_work: f64) -> Vec<f64> {
-        let mut v = Vec::with_capacity(7 + 2 * self.block_energies.len());
-        v.extend_from_slice(finish);
-        v.push(hg_work);
+    /// The local sums of a step to be reduced over ranks (one reduction, MPI's sum), as
+    /// folds laid out flat ([`exact_sum::flatten`]): `finish_step`'s six, the element loop's
+    /// hourglass work, then with several blocks `blocks.step_sums`.
+    pub fn step_sums(&self, finish: &StepFolds, hg_work: &Folds) -> Vec<f64> {
+        let mut v = finish.to_vec();
+        v.push(*hg_work);
         if self.blocks.active() {
             v.extend_from_slice(&self.blocks.step_sums);
         }
-        v
+        exact_sum::flatten(&v)
     }
 
     /// Applies the reduced sums of a step (`step_sums` summed over ranks) to the global
-    /// energies.
-    pub fn accumulate(&mut self, global: &[f64], dt: f64) {
-        self.energies.kinetic = global[0];
-        self.internal_plus_hg += global[1];
+    /// energies: the kinetic energy is half the sum of m v.v, the change of internal plus
+    /// hourglass energy minus half the sum of f . dx over both halves of the trapezoids.
+    pub fn accumulate(&mut self, global_folds: &[f64], dt: f64) {
+        let global = exact_sum::values(global_folds);
+        self.energies.kinetic = 0.5 * global[0];
+        self.internal_plus_hg += -0.5 * global[1];
         self.energies.external_work += global[2];
         self.energies.momentum = [global[3], global[4], global[5]];
         self.energies.hourglass += global[6];
@@ -1045,15 +1057,23 @@ impl ExplicitFe {
     /// kinetic energy: its elements' lumped masses (rho V0 / 8 per corner) at their nodes'
     /// velocities, so that a node between blocks counts in each by its share of mass.
     pub fn initial_energies(&mut self, comm: &SimpleCommunicator) {
+        // The grids of every energy and momentum sum, from the mass summed exactly.
+        let owned_mass: Vec<f64> = (0..self.x.len())
+            .filter(|&n| self.owned[n] && self.mass[n].is_finite())
+            .map(|n| self.mass[n])
+            .collect();
+        self.grids = SumGrids::for_mass(exact_sum::total(comm, &owned_mass));
+        self.blocks.grid = self.grids.energy;
+        let (ge, gp) = (self.grids.energy, self.grids.momentum);
         let nb = self.block_energies.len();
-        let mut s = vec![0.0; 4 + nb];
+        let mut s = vec![[0.0; 3]; 4 + nb];
         for n in 0..self.x.len() {
             if self.owned[n] {
                 let m = self.mass[n];
                 let v = self.v[n];
-                s[0] += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
                 for c in 0..3 {
-                    s[1 + c] += m * v[c];
+                    ge.add(&mut s[0], m * (v[c] * v[c]));
+                    gp.add(&mut s[1 + c], m * v[c]);
                 }
             }
         }
@@ -1062,15 +1082,19 @@ impl ExplicitFe {
             let b = self.blocks.block_of(e);
             for &n in conn {
                 let v = self.v[n as usize];
-                s[4 + b] += 0.5 * me * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                for c in 0..3 {
+                    ge.add(&mut s[4 + b], me * (v[c] * v[c]));
+                }
             }
         }
-        let mut g = vec![0.0; 4 + nb];
-        comm.all_reduce_into(&s[..], &mut g[..], SystemOperation::sum());
-        self.energies.kinetic = g[0];
+        let flat = exact_sum::flatten(&s);
+        let mut g = vec![0.0; flat.len()];
+        comm.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+        let g = exact_sum::values(&g);
+        self.energies.kinetic = 0.5 * g[0];
         self.energies.momentum = [g[1], g[2], g[3]];
         for (b, be) in self.block_energies.iter_mut().enumerate() {
-            be.kinetic0 = g[4 + b];
+            be.kinetic0 = 0.5 * g[4 + b];
         }
     }
 
@@ -1102,8 +1126,6 @@ impl ExplicitFe {
             .iter()
             .flat_map(|b| [b.internal, b.hourglass, b.kinetic0, b.internal_plus_hg])
             .collect();
-        let mut block_sums = self.blocks.step_sums.clone();
-        block_sums.extend(self.blocks.restart_state());
         vec![
             ("fe.x", flat(&self.x)),
             // Without kept start positions, the positions (read back only where kept).
@@ -1120,7 +1142,7 @@ impl ExplicitFe {
             ("fe.mat_state", self.mat_state.clone()),
             ("fe.scalars", scalars),
             ("fe.block_energies", blocks),
-            ("fe.block_work", block_sums),
+            ("fe.block_forces", self.blocks.restart_state()),
         ]
     }
 
@@ -1178,12 +1200,11 @@ impl ExplicitFe {
             be.kinetic0 = c[2];
             be.internal_plus_hg = c[3];
         }
-        let ns = self.blocks.step_sums.len();
-        let w = get("fe.block_work").ok_or("fe.block_work: missing")?;
-        if w.len() < ns || !self.blocks.set_restart_state(&w[ns..]) {
-            return Err("fe.block_work: does not fit this rank's mesh".into());
+        // The step sums are filled by the next force evaluation before they are read.
+        let w = get("fe.block_forces").ok_or("fe.block_forces: missing")?;
+        if !self.blocks.set_restart_state(&w) {
+            return Err("fe.block_forces: does not fit this rank's mesh".into());
         }
-        self.blocks.step_sums.copy_from_slice(&w[..ns]);
         Ok(())
     }
 

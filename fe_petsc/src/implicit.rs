@@ -250,7 +250,7 @@ pub struct ImplicitFe {
     reaction_n: Vec<[f64; 3]>,
     state_trial: HexStates,
     mat_trial: Vec<f64>,
-    hg_work_trial: f64,
+    hg_work_trial: crate::exact::Folds,
     owned_buf: Vec<f64>,
     local_buf: Vec<f64>,
     tangent_stale: bool,
@@ -333,7 +333,7 @@ impl ImplicitFe {
             reaction_n: vec![[0.0; 3]; nn],
             state_trial: fe.state.clone(),
             mat_trial: fe.mat_state.clone(),
-            hg_work_trial: 0.0,
+            hg_work_trial: [0.0; 3],
             owned_buf: vec![0.0; 3 * owned_nodes.len()],
             local_buf: vec![0.0; 3 * nn],
             owned_nodes,
@@ -488,7 +488,8 @@ impl ImplicitFe {
             *f = [0.0; 3];
         }
         let stride = self.mat_stride;
-        let mut hg_work = 0.0;
+        let mut hg_work = [0.0; 3];
+        let grid = self.fe.grids.energy;
         let mut failure: Option<StepError> = None;
         self.fe.blocks.begin();
         for (e, conn) in self.fe.elems.iter().enumerate() {
@@ -516,7 +517,7 @@ impl ImplicitFe {
                             f[c] += out.force[k][c];
                         }
                     }
-                    hg_work += out.hg_work;
+                    grid.add(&mut hg_work, out.hg_work);
                     self.fe.blocks.add(e, &out.force, out.hg_work);
                     self.state_trial.set(e, &st);
                 }
@@ -753,7 +754,8 @@ impl ImplicitFe {
         let dt = self.dt;
         let c_mass = 4.0 / (dt * dt);
         let g = self.gravity;
-        let mut sums = [0.0; 6];
+        let mut sums = [[0.0; 3]; 6];
+        let (ge, gp) = (self.fe.grids.energy, self.fe.grids.momentum);
         for n in 0..self.n_nodes() {
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
             let a_raw: [f64; 3] = std::array::from_fn(|c| c_mass * (du[c] - dt * v[c]) - a[c]);
@@ -773,20 +775,18 @@ impl ImplicitFe {
                 continue;
             }
             let m = self.fe.mass[n];
-            let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
+            // The raw terms of `nodal::StepFolds`.
             for c in 0..3 {
-                ke += v_new[c] * v_new[c];
-                w_elem += 0.5 * (f[c] + self.force_n[n][c]) * du[c];
-                w_ext += (0.5 * (self.reaction[n][c] + self.reaction_n[n][c]) + m * g[c]) * du[c];
-                sums[3 + c] += m * v_new[c];
+                ge.add(&mut sums[0], m * (v_new[c] * v_new[c]));
+                ge.add(&mut sums[1], (f[c] + self.force_n[n][c]) * du[c]);
+                let r = 0.5 * (self.reaction[n][c] + self.reaction_n[n][c]);
+                ge.add(&mut sums[2], (r + m * g[c]) * du[c]);
+                gp.add(&mut sums[3 + c], m * v_new[c]);
             }
-            sums[0] += 0.5 * m * ke;
-            sums[1] -= w_elem;
-            sums[2] += w_ext;
         }
         let du = &self.du;
         self.fe.blocks.accept(|n| du[n]);
-        let sums = self.fe.step_sums(&sums, self.hg_work_trial);
+        let sums = self.fe.step_sums(&sums, &self.hg_work_trial);
         std::mem::swap(&mut self.force_n, &mut self.force);
         std::mem::swap(&mut self.reaction_n, &mut self.reaction);
         self.fe.force.copy_from_slice(&self.force_n);

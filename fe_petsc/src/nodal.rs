@@ -11,9 +11,12 @@
 //! the per-node values spread to the nodes' three slots by one permutation per register.
 //!
 //! Both forms compute the same accelerations, velocities and positions bit for bit (each
-//! product and sum rounded as node by node, no fused multiply-adds); the eight-node form sums
-//! the energies and momenta slot by slot, so its sums differ from node by node's at round-off
-//! (`tests` below).
+//! product and sum rounded as node by node, no fused multiply-adds), and the same terms of the
+//! energy and momentum sums, which both add on the fixed grids of [`crate::exact`]: the sums
+//! are the same bits in either form, in any order of the nodes and on any partition (`tests`
+//! below).
+
+use crate::exact::{Folds, Grid, StepFolds, SumGrids};
 
 /// What a node's energy and momentum sums read ([`close_free`], [`NodalSums::add`]), as slices
 /// of the local node count.
@@ -24,6 +27,7 @@ pub(crate) struct NodalSums<'a> {
     pub mass: &'a [f64],
     pub owned: &'a [bool],
     pub gravity: [f64; 3],
+    pub grids: SumGrids,
 }
 
 impl NodalSums<'_> {
@@ -31,7 +35,8 @@ impl NodalSums<'_> {
     /// external work over the step (trapezoids with the reactions `r` now and `r_old` a step
     /// ago, over the displacement dt `half`, `half` the velocity of the step's drift; of the
     /// element work's trapezoid, f(n+1)/2 . dx: the kick counted f(n)/2 . dx, [`kick_drift`])
-    /// and momentum to `sums`, if this rank owns the node. About 30 flops.
+    /// and momentum to `sums` ([`StepFolds`]), if this rank owns the node. About 30 flops and
+    /// 15 terms binned.
     ///
     /// The displacement: the drift and the contact push-back move a node by dt times the
     /// velocity they leave at the half step (x(n+1) = x(n) + dt v(n+1/2), the push-back adding
@@ -46,30 +51,29 @@ impl NodalSums<'_> {
         half: [f64; 3],
         r: [f64; 3],
         r_old: [f64; 3],
-        sums: &mut [f64; 6],
+        sums: &mut StepFolds,
     ) {
         if !self.owned[n] {
             return;
         }
         let (g, m) = (self.gravity, self.mass[n]);
         let f = self.force[n];
-        let (mut ke, mut w_elem, mut w_ext) = (0.0, 0.0, 0.0);
+        let (e, p) = (&self.grids.energy, &self.grids.momentum);
         for c in 0..3 {
             let dx = self.dt * half[c];
-            ke += v[c] * v[c];
-            w_elem += 0.5 * f[c] * dx;
-            w_ext += (0.5 * (r[c] + r_old[c]) + m * g[c]) * dx;
-            sums[3 + c] += m * v[c];
+            e.add(&mut sums[0], m * (v[c] * v[c]));
+            e.add(&mut sums[1], f[c] * dx);
+            e.add(&mut sums[2], (0.5 * (r[c] + r_old[c]) + m * g[c]) * dx);
+            p.add(&mut sums[3 + c], m * v[c]);
         }
-        sums[0] += 0.5 * m * ke;
-        sums[1] -= w_elem;
-        sums[2] += w_ext;
     }
 }
 
 /// What the kick reads of each node besides its motion and forces: masses, gravity, and which
 /// nodes this rank owns and which are constrained.
 pub(crate) struct KickInput<'a> {
+    /// The grid of the work's sum.
+    pub energy: Grid,
     pub mass: &'a [f64],
     pub gravity: [f64; 3],
     pub owned: &'a [bool],
@@ -97,7 +101,7 @@ pub(crate) fn kick_drift(
     mut x_old: Option<&mut [[f64; 3]]>,
     dt: f64,
     wide: bool,
-) -> f64 {
+) -> Folds {
     let nn = v.len();
     assert!(
         force.len() == nn
@@ -110,7 +114,7 @@ pub(crate) fn kick_drift(
     );
     let (g, h) = (input.gravity, 0.5 * dt);
     #[allow(unused_mut)]
-    let (mut done, mut work) = (0, 0.0);
+    let (mut done, mut work) = (0, [0.0; 3]);
     #[cfg(target_arch = "x86_64")]
     if wide {
         assert!(std::arch::is_x86_feature_detected!("avx512f"), "AVX-512F");
@@ -134,7 +138,7 @@ pub(crate) fn kick_drift(
             v[n][c] += h * (f[c] * im + g[c]);
             x[n][c] += dt * v[n][c];
             if counted {
-                work += f[c] * (dt * v[n][c]);
+                input.energy.add(&mut work, f[c] * (dt * v[n][c]));
             }
         }
     }
@@ -152,7 +156,7 @@ pub(crate) fn close_free(
     read: &NodalSums,
     constrained: &[bool],
     v: &mut [[f64; 3]],
-    sums: &mut [f64; 6],
+    sums: &mut StepFolds,
     wide: bool,
 ) {
     let nn = v.len();
@@ -193,7 +197,7 @@ pub(crate) fn close_free(
 /// 3 n0: register j holds slots 8 j .. 8 j + 8, slot s being component s % 3 of node s / 3.
 #[cfg(target_arch = "x86_64")]
 mod w8 {
-    use super::{KickInput, NodalSums};
+    use super::{Folds, KickInput, NodalSums, StepFolds};
     use std::arch::x86_64::*;
 
     /// The node of each slot of register j, as an index for `vpermpd`.
@@ -261,6 +265,29 @@ mod w8 {
         (SPREAD[!con as usize], SPREAD[(own & !con) as usize])
     }
 
+    /// A grid's shifts in every lane.
+    #[inline(always)]
+    fn shifts(g: &crate::exact::Grid) -> [__m512d; 3] {
+        // SAFETY: AVX-512F (every caller is built with it).
+        g.shift.map(|c| unsafe { _mm512_set1_pd(c) })
+    }
+
+    /// [`crate::exact::Grid::add`] lane by lane, in the lanes of mask `k`.
+    #[inline(always)]
+    fn bin(acc: &mut [__m512d; 3], x: __m512d, c: &[__m512d; 3], k: u8) {
+        // SAFETY: AVX-512F (every caller is built with it).
+        unsafe {
+            let t1 = _mm512_sub_pd(_mm512_add_pd(x, c[0]), c[0]);
+            let r1 = _mm512_sub_pd(x, t1);
+            let t2 = _mm512_sub_pd(_mm512_add_pd(r1, c[1]), c[1]);
+            let r2 = _mm512_sub_pd(r1, t2);
+            let t3 = _mm512_sub_pd(_mm512_add_pd(r2, c[2]), c[2]);
+            acc[0] = _mm512_mask_add_pd(acc[0], k, acc[0], t1);
+            acc[1] = _mm512_mask_add_pd(acc[1], k, acc[1], t2);
+            acc[2] = _mm512_mask_add_pd(acc[2], k, acc[2], t3);
+        }
+    }
+
     /// [`super::kick_drift`] on the whole chunks; returns the nodes done and their work sum.
     ///
     /// # Safety
@@ -274,7 +301,7 @@ mod w8 {
         x: &mut [[f64; 3]],
         x_old: Option<&mut [[f64; 3]]>,
         dt: f64,
-    ) -> (usize, f64) {
+    ) -> (usize, Folds) {
         let whole = v.len() / 8 * 8;
         let (gp, idx) = (gravity_slots(input.gravity), slot_nodes());
         let (h, dtv, one) = (
@@ -282,6 +309,7 @@ mod w8 {
             _mm512_set1_pd(dt),
             _mm512_set1_pd(1.0),
         );
+        let grid = shifts(&input.energy);
         let mut work = [_mm512_setzero_pd(); 3];
         let (pv, pf) = (v.as_mut_ptr() as *mut f64, force.as_mut_ptr() as *mut f64);
         let px = x.as_mut_ptr() as *mut f64;
@@ -310,12 +338,11 @@ mod w8 {
                     }
                     let dx = _mm512_mul_pd(dtv, vn);
                     _mm512_storeu_pd(px.add(s), _mm512_add_pd(xs, dx));
-                    work[j] = _mm512_mask3_fmadd_pd(f, dx, work[j], kc);
+                    bin(&mut work, _mm512_mul_pd(f, dx), &grid, kc);
                 }
             }
         }
-        let total = _mm512_add_pd(_mm512_add_pd(work[0], work[1]), work[2]);
-        (whole, _mm512_reduce_add_pd(total))
+        (whole, work.map(|w| _mm512_reduce_add_pd(w)))
     }
 
     /// [`super::close_free`] on the whole chunks; returns the nodes done.
@@ -327,7 +354,7 @@ mod w8 {
         r: &NodalSums,
         constrained: &[bool],
         v: &mut [[f64; 3]],
-        sums: &mut [f64; 6],
+        sums: &mut StepFolds,
     ) -> usize {
         let nn = v.len();
         let whole = nn / 8 * 8;
@@ -338,8 +365,11 @@ mod w8 {
             _mm512_set1_pd(1.0),
         );
         let zero = _mm512_setzero_pd();
-        // Per slot: m v^2, f dx, m g dx, m v, over the counted nodes.
-        let (mut ke, mut we, mut wx, mut mo) = ([zero; 3], [zero; 3], [zero; 3], [zero; 3]);
+        let (ge, gm) = (shifts(&r.grids.energy), shifts(&r.grids.momentum));
+        // The folds of m v^2, f dx and m g dx over every slot, and of m v per register (its
+        // slots' components), over the counted nodes.
+        let (mut ke, mut we, mut wx) = ([zero; 3], [zero; 3], [zero; 3]);
+        let mut mo = [[zero; 3]; 3];
         let pf = r.force.as_ptr() as *const f64;
         let pv = v.as_mut_ptr() as *mut f64;
         for n0 in (0..whole).step_by(8) {
@@ -360,24 +390,28 @@ mod w8 {
                     let vn = _mm512_mask_add_pd(half, kf, half, _mm512_mul_pd(h, an));
                     _mm512_storeu_pd(pv.add(s), vn);
                     let dx = _mm512_mul_pd(dt, half);
-                    ke[j] = _mm512_mask3_fmadd_pd(mj, _mm512_mul_pd(vn, vn), ke[j], kc);
-                    we[j] = _mm512_mask3_fmadd_pd(f, dx, we[j], kc);
-                    wx[j] = _mm512_mask3_fmadd_pd(_mm512_mul_pd(mj, gp[j]), dx, wx[j], kc);
-                    mo[j] = _mm512_mask3_fmadd_pd(mj, vn, mo[j], kc);
+                    bin(&mut ke, _mm512_mul_pd(mj, _mm512_mul_pd(vn, vn)), &ge, kc);
+                    bin(&mut we, _mm512_mul_pd(f, dx), &ge, kc);
+                    let mg = _mm512_add_pd(zero, _mm512_mul_pd(mj, gp[j]));
+                    bin(&mut wx, _mm512_mul_pd(mg, dx), &ge, kc);
+                    bin(&mut mo[j], _mm512_mul_pd(mj, vn), &gm, kc);
                 }
             }
         }
-        let total =
-            |r: &[__m512d; 3]| _mm512_reduce_add_pd(_mm512_add_pd(_mm512_add_pd(r[0], r[1]), r[2]));
-        sums[0] += 0.5 * total(&ke);
-        sums[1] -= 0.5 * total(&we);
-        sums[2] += total(&wx);
+        // Each fold's lanes are exact multiples of its quantum: added in any order.
+        for (k, acc) in [ke, we, wx].iter().enumerate() {
+            for f in 0..3 {
+                sums[k][f] += _mm512_reduce_add_pd(acc[f]);
+            }
+        }
         for (j, reg) in mo.iter().enumerate() {
-            let mut lanes = [0.0; 8];
-            // SAFETY: eight doubles.
-            unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), *reg) };
-            for (t, x) in lanes.iter().enumerate() {
-                sums[3 + (8 * j + t) % 3] += x;
+            for (f, fold) in reg.iter().enumerate() {
+                let mut lanes = [0.0; 8];
+                // SAFETY: eight doubles.
+                unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), *fold) };
+                for (t, x) in lanes.iter().enumerate() {
+                    sums[3 + (8 * j + t) % 3][f] += x;
+                }
             }
         }
         whole
@@ -408,8 +442,9 @@ mod tests {
     /// The eight-node passes against the node-by-node ones (the reference: the loops of the
     /// explicit step as they were written node by node), on 101 nodes (whole chunks and a
     /// tail) with random fields, a quarter of the nodes constrained and a third not owned:
-    /// velocities and positions bit for bit, the six sums to 1e-13 of their
-    /// scale (their order of summation differs).
+    /// velocities, positions and the sums bit for bit (the sums' terms are added in another
+    /// order, on the exact grids); the sums against plain sums of the same terms to 1e-13 of
+    /// their scale.
     #[test]
     fn eight_nodes_at_a_time_give_the_node_by_node_results() {
         if !cfg!(target_arch = "x86_64")
@@ -426,7 +461,9 @@ mod tests {
         let owned: Vec<bool> = (0..n).map(|i| i % 3 != 1).collect();
         let constrained: Vec<bool> = (0..n).map(|i| i % 4 == 2).collect();
         let (dt, g) = (1e-7, [0.0, -9.81, 0.0]);
+        let grids = SumGrids::for_mass(mass.iter().sum());
         let input = KickInput {
+            energy: grids.energy,
             mass: &mass,
             gravity: g,
             owned: &owned,
@@ -461,39 +498,45 @@ mod tests {
                 mass: &mass,
                 owned: &owned,
                 gravity: g,
+                grids,
             };
-            let mut sums = [0.0; 6];
+            let mut sums = [[0.0; 3]; 6];
+            let half = v.clone();
             close_free(&read, &constrained, &mut v, &mut sums, wide);
-            (v, x, x_old, sums, work)
+            (v, x, x_old, sums, work, half)
         };
         let (narrow, wide) = (run(false), run(true));
         assert_eq!(narrow.0, wide.0, "velocities");
         assert_eq!(narrow.1, wide.1, "positions");
         assert_eq!(narrow.2, wide.2, "start positions");
-        // Each sum's scale: the sum of its terms' magnitudes (momentum and work can cancel).
-        let v = &narrow.0;
-        let speed = |i: usize| v[i].iter().map(|c| c.abs()).sum::<f64>();
-        let momentum: f64 = (0..n).map(|i| mass[i] * speed(i)).sum();
-        let scale = [
-            narrow.3[0],
-            (0..n).map(|i| 1e4 * dt * speed(i)).sum(),
-            (0..n).map(|i| mass[i] * 9.81 * dt * speed(i)).sum(),
-            momentum,
-            momentum,
-            momentum,
-        ];
-        let kick_scale: f64 = (0..n).map(|i| 1e4 * dt * speed(i)).sum();
-        let (p, q) = (narrow.4, wide.4);
-        assert!(
-            (p - q).abs() <= 1e-13 * kick_scale,
-            "the kick's work: node by node {p:e}, eight at a time {q:e} (tolerance 1e-13 of \
-             {kick_scale:e})"
-        );
+        assert_eq!(narrow.3, wide.3, "the step's sums, fold by fold");
+        assert_eq!(narrow.4, wide.4, "the kick's work, fold by fold");
+        // The sums against plain sums of the terms (the reference: the formulas written out).
+        let (v, v_half) = (&narrow.0, &narrow.5);
+        let counted = |i: usize| owned[i] && !constrained[i];
+        let mut plain = [0.0f64; 6];
+        let mut scale = [0.0f64; 6];
+        for i in (0..n).filter(|&i| counted(i)) {
+            for c in 0..3 {
+                let dx = dt * v_half[i][c];
+                let t = [
+                    mass[i] * v[i][c] * v[i][c],
+                    f[i][c] * dx,
+                    mass[i] * g[c] * dx,
+                ];
+                for k in 0..3 {
+                    plain[k] += t[k];
+                    scale[k] += t[k].abs();
+                }
+                plain[3 + c] += mass[i] * v[i][c];
+                scale[3 + c] += (mass[i] * v[i][c]).abs();
+            }
+        }
         for k in 0..6 {
-            let (p, q) = (narrow.3[k], wide.3[k]);
+            let (p, q) = (plain[k], crate::exact::value(&narrow.3[k]));
             assert!(
                 (p - q).abs() <= 1e-13 * scale[k],
-                "sum {k}: node by node {p:e}, eight at a time {q:e} (tolerance 1e-13 of {:e})",
+                "sum {k}: plain {p:e}, on the grids {q:e} (tolerance 1e-13 of {:e})",
                 scale[k]
             );
         }

@@ -182,14 +182,17 @@ fn energy_guard(
     (fe_force, sph_force): (&mut [[f64; 3]], &mut [[f64; 3]]),
     (dt, budget): (f64, f64),
 ) -> f64 {
-    let mut t = fe.contact_energy_terms(fe_force, dt);
-    if let Some(s) = sph {
-        let u = s.stage.contact_energy_terms(sph_force, dt);
-        t = [t[0] + u[0], t[1] + u[1]];
-    }
-    let mut g = [0.0f64; 2];
-    world.all_reduce_into(&t[..], &mut g[..], SystemOperation::sum());
-    let (a, b) = (g[0], g[1]);
+    // FE's and the particles' terms on their own grids, each exact (the same bits at any rank
+    // count), added once reduced.
+    let mut t = fe.contact_energy_terms(fe_force, dt).to_vec();
+    t.extend(sph.map_or([[0.0; 3]; 2], |s| {
+        s.stage.contact_energy_terms(sph_force, dt)
+    }));
+    let flat = fe_petsc::exact::flatten(&t);
+    let mut g = vec![0.0f64; flat.len()];
+    world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+    let g = fe_petsc::exact::values(&g);
+    let (a, b) = (g[0] + g[2], g[1] + g[3]);
     let w = a + b;
     if w <= ENERGY_TOL * (a.abs() + b) || w <= budget || b <= 0.0 {
         return 1.0;
@@ -344,11 +347,13 @@ impl Contact {
             (&mut f, &mut sph_force),
             (dt, budget),
         );
-        let mut w = state.apply_contact(&f, dt);
-        if let Some(s) = sph {
-            w += s.stage.apply_contact(&sph_force, dt);
-        }
-        self.energy -= collective::sum(world, w);
+        let mut w = vec![state.apply_contact(&f, dt)];
+        w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, dt)));
+        let flat = fe_petsc::exact::flatten(&w);
+        let mut g = vec![0.0f64; flat.len()];
+        world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+        let g = fe_petsc::exact::values(&g);
+        self.energy -= g[0] + g[1];
         if alpha < 1.0 {
             if self.stats.energy_limited_steps == 0 && world.rank() == 0 {
                 eprintln!(

@@ -169,7 +169,7 @@ impl Fe {
         let hg = fe.element_forces(dt, &mut mesh.exchange);
         let (local_dt, local_err, hg_work) = match hg {
             Ok(w) => (fe.dt_stable_local, None, w),
-            Err(e) => (-1.0 - world.rank() as f64, Some(e), 0.0),
+            Err(e) => (-1.0 - world.rank() as f64, Some(e), [0.0; 3]),
         };
         let next = collective::min(world, local_dt);
         if next < 0.0 {
@@ -181,7 +181,7 @@ impl Fe {
         }
         let sums = fe.finish_step(dt);
         // The totals and the per-block sums in one reduction.
-        let local = fe.step_sums(&sums, hg_work);
+        let local = fe.step_sums(&sums, &hg_work);
         let mut global = vec![0.0; local.len()];
         world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
         fe.accumulate(&global, dt);
@@ -279,10 +279,10 @@ impl Stage for Fe {
 
     fn restore_remapped(
         &mut self,
-        world: &SimpleCommunicator,
+        _world: &SimpleCommunicator,
         pieces: &[StateReader],
     ) -> Result<(), String> {
-        let arrays = remap::arrays(world, self, pieces)?;
+        let arrays = remap::arrays(self, pieces)?;
         let mut get = |name: &str| arrays.get(name).cloned();
         match &mut self.integrator {
             Integrator::Explicit(fe) => fe.set_restart_state(&mut get),

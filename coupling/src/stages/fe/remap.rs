@@ -8,47 +8,28 @@
 //! - per element: from the one rank that held the element;
 //! - global (energies, the clock): from rank 0's file, except the rank's own smallest stable
 //!   step, set to the minimum over the files (only its minimum over ranks is ever read, and
-//!   the next force evaluation replaces it);
-//! - the per-block work bookkeeping (`fe_petsc::blocks`): each rank's element forces per
-//!   (node, block) slot are partial sums that only add up over ranks. Their sums over the
-//!   writing ranks go to the lowest new rank holding that slot, zeros to the others: the next
-//!   step's per-block work, sum over ranks and slots of (f_old + f_new)/2 . dx with dx the same
-//!   on every copy of a node, is unchanged but for the order of the additions. The step sums
-//!   before the forces are zero: the next force evaluation fills them before they are read.
+//!   the next force evaluation replaces it).
+//!
+//! The per-block work bookkeeping (`fe_petsc::blocks`) is per element (each element's corner
+//! forces at the last accepted state).
 use super::Fe;
-use crate::kernels::collective::all_gather_varcount;
 use crate::output::state::{StateReader, StateWriter};
 use fe_petsc::explicit::{restart_layout, ExplicitFe, RestartLayout, RESTART_DT_STABLE};
 use fe_petsc::mesh::LocalMesh;
-use mpi::topology::SimpleCommunicator;
-use mpi::traits::*;
 use std::collections::HashMap;
 
 /// Sections naming the ids of the local arrays, written beside them (`save_ids`).
 const NODE_ID: &str = "fe.node_id";
 const NODE_OWNED: &str = "fe.node_owned";
 const ELEM_ID: &str = "fe.elem_id";
-/// (global node id, block) of each per-block slot, flattened.
-const BLOCK_SLOTS: &str = "fe.block_slots";
 
-/// Writes the global ids of this rank's nodes and elements, which nodes it owns, and its
-/// per-block slots' keys: what a restart on another rank count maps the arrays by.
+/// Writes the global ids of this rank's nodes and elements and which nodes it owns: what a
+/// restart on another rank count maps the arrays by.
 pub fn save_ids(w: &mut StateWriter, mesh: &LocalMesh, fe: &ExplicitFe) {
     w.put(NODE_ID, &mesh.node_id);
     let owned: Vec<u8> = fe.owned.iter().map(|&o| o as u8).collect();
     w.put(NODE_OWNED, &owned);
     w.put(ELEM_ID, &fe.elem_id);
-    w.put(BLOCK_SLOTS, &slot_keys(mesh, fe));
-}
-
-/// (global node id, block) of each of this rank's per-block slots, flattened.
-fn slot_keys(mesh: &LocalMesh, fe: &ExplicitFe) -> Vec<u64> {
-    let (nodes, blocks) = fe.blocks.slots();
-    nodes
-        .iter()
-        .zip(blocks)
-        .flat_map(|(&n, &b)| [mesh.node_id[n as usize], b as u64])
-        .collect()
 }
 
 /// Where the items (nodes or elements) of the writing ranks lie.
@@ -113,69 +94,9 @@ fn gather(
     Ok(out)
 }
 
-/// The per-block bookkeeping for this rank (`len` values: `n_sums` step sums, then 3 per
-/// slot), from the writing ranks' slot forces; `holder`: the lowest new rank holding each slot.
-fn block_work(
-    pieces: &[StateReader],
-    keys: &[u64],
-    n_sums: usize,
-    holder: &HashMap<(u64, u64), i32>,
-    rank: i32,
-) -> Result<Vec<f64>, String> {
-    let mut total: HashMap<(u64, u64), [f64; 3]> = HashMap::new();
-    for (p, r) in pieces.iter().enumerate() {
-        let k: Vec<u64> = r.get(BLOCK_SLOTS)?;
-        let w: Vec<f64> = r.get("fe.block_work")?;
-        let n_slots = k.len() / 2;
-        if w.len() < 3 * n_slots {
-            return Err(format!("checkpoint: fe.block_work of rank {p} is short"));
-        }
-        let f = &w[w.len() - 3 * n_slots..];
-        for (s, key) in k.chunks_exact(2).enumerate() {
-            let t = total.entry((key[0], key[1])).or_insert([0.0; 3]);
-            for c in 0..3 {
-                t[c] += f[3 * s + c];
-            }
-        }
-    }
-    let mut out = vec![0.0; n_sums];
-    for key in keys.chunks_exact(2) {
-        let k = (key[0], key[1]);
-        let f = match holder.get(&k) {
-            Some(&h) if h == rank => total.get(&k).copied().unwrap_or([0.0; 3]),
-            _ => [0.0; 3],
-        };
-        out.extend_from_slice(&f);
-    }
-    Ok(out)
-}
-
-/// The lowest rank holding each (node, block) slot (collective: every rank's keys).
-fn slot_holders(world: &SimpleCommunicator, keys: &[u64]) -> HashMap<(u64, u64), i32> {
-    let rank = world.rank() as u64;
-    let mine: Vec<u64> = keys
-        .chunks_exact(2)
-        .flat_map(|k| [k[0], k[1], rank])
-        .collect();
-    let all = all_gather_varcount(world, &mine);
-    let mut holder = HashMap::new();
-    for t in all.chunks_exact(3) {
-        let h = holder.entry((t[0], t[1])).or_insert(t[2] as i32);
-        *h = (*h).min(t[2] as i32);
-    }
-    holder
-}
-
-/// This rank's restart arrays, by name, built from every writing rank's (collective).
-pub fn arrays(
-    world: &SimpleCommunicator,
-    fe: &Fe,
-    pieces: &[StateReader],
-) -> Result<HashMap<&'static str, Vec<f64>>, String> {
+/// This rank's restart arrays, by name, built from every writing rank's.
+pub fn arrays(fe: &Fe, pieces: &[StateReader]) -> Result<HashMap<&'static str, Vec<f64>>, String> {
     let (mesh, st) = (&fe.mesh.local, fe.state());
-    // The one collective step first, so that an error below cannot leave a rank out of it.
-    let keys = slot_keys(mesh, st);
-    let holder = slot_holders(world, &keys);
     let first = pieces.first().ok_or("checkpoint: no rank files")?;
     let nodes = locate(pieces, NODE_ID, Some(NODE_OWNED))?;
     let elems = locate(pieces, ELEM_ID, None)?;
@@ -208,10 +129,6 @@ pub fn arrays(
                     }
                 }
                 a
-            }
-            RestartLayout::BlockWork => {
-                let n_sums = st.blocks.step_sums.len();
-                block_work(pieces, &keys, n_sums, &holder, world.rank())?
             }
         };
         out.insert(name, a);

@@ -63,6 +63,9 @@ impl Sph {
             }
         }
         let mut stage = SphStage::new(world, parts, params);
+        let p = &stage.parts;
+        let mass = fe_petsc::exact::total(world, &p.m[..p.n_owned]);
+        stage.grids = fe_petsc::exact::SumGrids::for_mass(if mass > 0.0 { mass } else { 1.0 });
         stage.set_contact_density(contact_rho);
         stage.set_kept_pairs(kept_pairs);
         stage.setup()?;

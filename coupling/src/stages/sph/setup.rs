@@ -182,24 +182,33 @@ impl SphGlobals {
     }
 }
 
-/// Global energies, momentum and gravity power, in one reduction (collective).
+/// Global energies, momentum and gravity power, in one reduction (collective): each sum on
+/// the stage's grids ([`fe_petsc::exact`]), the same bits at any rank count.
 pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
-    let e = sph::energies(&st.parts);
-    let gp = sph::gravity_power(&st.parts, st.params.gravity);
-    let loc = [
-        e.kinetic,
-        e.internal,
-        e.momentum[0],
-        e.momentum[1],
-        e.momentum[2],
-        gp,
-    ];
-    let mut g = [0.0; 6];
-    comm.all_reduce_into(&loc[..], &mut g[..], SystemOperation::sum());
+    let p = &st.parts;
+    let (ge, gm) = (st.grids.energy, st.grids.momentum);
+    let g = st.params.gravity;
+    // [sum m v.v, sum m (e + work), px, py, pz, sum m g.v (moving particles)]
+    let mut f = [[0.0; 3]; 6];
+    for i in 0..p.n_owned {
+        let (m, v) = (p.m[i], p.v[i]);
+        ge.add(&mut f[1], m * (p.e[i] + p.work[i]));
+        for c in 0..3 {
+            ge.add(&mut f[0], m * (v[c] * v[c]));
+            gm.add(&mut f[2 + c], m * v[c]);
+        }
+        if !p.fixed[i] {
+            ge.add(&mut f[5], m * (g[0] * v[0] + g[1] * v[1] + g[2] * v[2]));
+        }
+    }
+    let flat = fe_petsc::exact::flatten(&f);
+    let mut red = vec![0.0; flat.len()];
+    comm.all_reduce_into(&flat[..], &mut red[..], SystemOperation::sum());
+    let t = fe_petsc::exact::values(&red);
     SphGlobals {
-        kinetic: g[0],
-        internal: g[1],
-        momentum: [g[2], g[3], g[4]],
-        gravity_power: g[5],
+        kinetic: 0.5 * t[0],
+        internal: t[1],
+        momentum: [t[2], t[3], t[4]],
+        gravity_power: t[5],
     }
 }

@@ -16,6 +16,7 @@
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::{Rcb, RcbItem, RcbStats};
 use crate::output::state::{StateReader, StateWriter};
+use fe_petsc::exact::{Folds, SumGrids};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -97,6 +98,9 @@ pub struct SphStage {
     /// Per EOS index (`Particles::mat`), the material's initial density, kg/m^3, that fixes
     /// the contact radius (`contact_records`); empty: the EOS's reference density.
     contact_rho: Vec<f64>,
+    /// The grids of the energy and momentum sums ([`fe_petsc::exact`]), from the particles'
+    /// mass at the start (`Sph::new`).
+    pub grids: SumGrids,
     /// Wall time of the last drift, s.
     drift_s: f64,
     /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
@@ -160,6 +164,7 @@ impl SphStage {
             work: PairWork::default(),
             x_start: Vec::new(),
             contact_rho: Vec::new(),
+            grids: SumGrids::for_mass(1.0),
             drift_s: 0.0,
             pair_count: Vec::new(),
             balanced_once: false,
@@ -352,17 +357,18 @@ impl SphStage {
     /// The terms `[A, B]` of the change of the half-step kinetic energy that `force` scaled by
     /// `alpha` makes, `dK(alpha) = alpha A + alpha^2 B`, over owned moving particles (J):
     /// `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`.
-    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [f64; 2] {
+    pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [Folds; 2] {
         let p = &self.parts;
-        let mut t = [0.0; 2];
+        let e = &self.grids.energy;
+        let mut t = [[0.0; 3]; 2];
         for (i, f) in force.iter().enumerate().take(p.n_owned) {
             if *f == [0.0; 3] || p.fixed[i] {
                 continue;
             }
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                t[0] += p.m[i] * dv * p.v[i][c];
-                t[1] += 0.5 * p.m[i] * dv * dv;
+                e.add(&mut t[0], p.m[i] * dv * p.v[i][c]);
+                e.add(&mut t[1], 0.5 * p.m[i] * dv * dv);
             }
         }
         t
@@ -373,9 +379,10 @@ impl SphStage {
     /// change of kinetic energy beyond what the pair and gravity work count (velocity Verlet
     /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m),
     /// summed over this rank's particles.
-    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> f64 {
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> Folds {
         let p = &mut self.parts;
-        let mut work = 0.0;
+        let grid = self.grids.energy;
+        let mut work = [0.0; 3];
         for (i, f) in force.iter().enumerate().take(p.n_owned) {
             if *f == [0.0; 3] || p.fixed[i] {
                 continue;
@@ -392,7 +399,8 @@ impl SphStage {
                 .sum::<f64>();
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                work += p.m[i] * dv * (p.v[i][c] + 0.5 * dv - 0.5 * dt * p.f[i][c] / p.m[i]);
+                let w = p.m[i] * dv * (p.v[i][c] + 0.5 * dv - 0.5 * dt * p.f[i][c] / p.m[i]);
+                grid.add(&mut work, w);
                 p.v[i][c] += dv;
                 p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
                 p.x[i][c] += dv * dt;
