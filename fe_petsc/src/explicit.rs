@@ -253,7 +253,10 @@ pub struct ExplicitFe {
 /// The element kernel of the explicit element loop.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum ElementKernel {
-    /// [`hex::update`], one element at a time.
+    /// One element at a time: the batched kernel's source ([`Batch::update`]) on a group of
+    /// one element (its other lanes padding, their results dropped), so the same operations in
+    /// the same order as in a group of four or eight, and the same bits (about four times the
+    /// four-lane kernel's time per element); [`hex::update`] for a material without a lane form.
     Scalar,
     /// [`Batch::update`] on groups of consecutive elements of one material with a lane form
     /// (four or eight: [`ExplicitFe::width`]); the scalar kernel for the others.
@@ -738,11 +741,10 @@ impl ExplicitFe {
     /// run's last group padded (see [`Self::group_update`]); other elements, and a group with
     /// an inverted element, through the scalar kernel.
     ///
-    /// So every element of a lane material is updated by the same kernel however the elements
-    /// are dealt to ranks: the eight-lane kernel rounds its fused multiply-adds once where the
-    /// scalar kernel rounds twice, and an element's result must not depend on whether its
-    /// rank's share left it in a whole group (the rank-independence tests hold histories to
-    /// 1e-10 at np 1 to 4, and contact amplifies a last-bit difference past that).
+    /// So every element of a lane material is updated by the same kernel source however the
+    /// elements are dealt to ranks and whatever the width: every width runs the same IEEE
+    /// operations in the same order (no fused multiply-adds), so an element's result does not
+    /// depend on its group, its lane or its rank's share (SCENE.md, "One answer").
     fn element_loop<B: Batch>(&mut self, dt: f64, sums: &mut LoopSums) {
         let mut group = Box::<B>::default();
         let mut e = 0;
@@ -765,13 +767,16 @@ impl ExplicitFe {
     }
 
     /// How many of the elements `e..` go into one batched group: those that exist, lie before
-    /// the next multiple of `lanes` and share `e`'s material, when the batched kernel is on and
-    /// that material has a lane form; 0 otherwise. (Groups end at multiples of `lanes` so that
-    /// a whole group finds its state as whole vectors in [`HexStates`].)
+    /// the next multiple of `lanes` and share `e`'s material, when that material has a lane
+    /// form (one with [`ElementKernel::Scalar`]); 0 otherwise. (Groups end at multiples of
+    /// `lanes` so that a whole group finds its state as whole vectors in [`HexStates`].)
     fn lane_run(&self, e: usize, lanes: usize) -> usize {
         let mi = self.elem_material[e];
-        if self.kernel != ElementKernel::Batched || self.lane_materials[mi].is_none() {
+        if self.lane_materials[mi].is_none() {
             return 0;
+        }
+        if self.kernel == ElementKernel::Scalar {
+            return 1;
         }
         let end = ((e / lanes + 1) * lanes).min(self.elems.len());
         (e..end)

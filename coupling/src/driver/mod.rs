@@ -827,22 +827,23 @@ impl EnergyCheck {
 }
 
 /// The model's mass, kg: the FE nodes' (owned, finite) and the particles' (owned), summed
-/// over ranks (collective).
+/// over ranks exactly (`fe_petsc::exact::total`: the same bits at any rank count; it sets the
+/// energy floor, part of the energy error's denominator). Collective.
 fn model_mass(world: &SimpleCommunicator, model: &Model) -> f64 {
-    let mut m = 0.0;
+    let mut m = Vec::new();
     if let Some(fe) = &model.fe {
         let s = fe.state();
         for (mass, owned) in s.mass.iter().zip(&s.owned) {
             if *owned && mass.is_finite() {
-                m += mass;
+                m.push(*mass);
             }
         }
     }
     if let Some(sph) = &model.sph {
         let p = &sph.stage.parts;
-        m += p.m[..p.n_owned].iter().sum::<f64>();
+        m.extend_from_slice(&p.m[..p.n_owned]);
     }
-    crate::kernels::collective::sum(world, m)
+    fe_petsc::exact::total(world, &m)
 }
 
 /// The stages' energies and momentum summed (FE, then SPH).

@@ -9,11 +9,13 @@
 //! array, so lanes are read and written by index outside the kernel.
 //!
 //! Every operation is the IEEE operation of `f64` lane by lane, and the comparisons, `min`,
-//! `max`, `clamp`, `abs` and negation treat NaN, infinities and signed zeros as `f64`'s do. The
-//! one difference from the four lanes and the scalar kernel: `mul_add`, `mul_sub` and
-//! `neg_mul_add` are fused (one rounding instead of two, and one instruction instead of two),
-//! so eight-lane results differ from the scalar kernel's at round-off (1e-13 relative measured
-//! in `tests/lanes.rs`).
+//! `max`, `clamp`, `abs` and negation treat NaN, infinities and signed zeros as `f64`'s do.
+//! `mul_add`, `mul_sub` and `neg_mul_add` round twice (a multiply, then an add), `recip` and
+//! `rsqrt` are the IEEE quotient and square root: the same operations, in the same order, as
+//! the four lanes (the kernel's source is one, `batch/hex.rs`), so the eight-lane results are
+//! the four-lane results bit for bit (SCENE.md, "One answer": the same bits with any
+//! `--kernel`). Fused multiply-adds and the 14-bit reciprocal estimates with Newton steps were
+//! faster (the divider is one per core) but gave other bits than every CPU without AVX-512.
 //!
 //! Soundness: the operations execute AVX-512F instructions. `F8` is private to the batch module
 //! and operated on only inside `batch::w8`'s kernel, whose one entry runs after
@@ -23,9 +25,8 @@ use std::arch::x86_64::{
     __m256i, __m512d, __m512i, _mm256_add_epi32, _mm256_and_si256, _mm256_cmpgt_epi32,
     _mm256_i32gather_epi32, _mm256_movemask_epi8, _mm256_set1_epi32, _mm256_setr_epi32,
     _mm512_abs_pd, _mm512_add_pd, _mm512_castpd_si512, _mm512_castsi512_pd, _mm512_cmp_pd_mask,
-    _mm512_div_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_i32gather_pd,
-    _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd, _mm512_mul_pd, _mm512_rcp14_pd,
-    _mm512_rsqrt14_pd, _mm512_set1_epi64, _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd,
+    _mm512_div_pd, _mm512_i32gather_pd, _mm512_mask_blend_pd, _mm512_max_pd, _mm512_min_pd,
+    _mm512_mul_pd, _mm512_set1_epi64, _mm512_set1_pd, _mm512_sqrt_pd, _mm512_sub_pd,
     _mm512_xor_si512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_UNORD_Q,
 };
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
@@ -199,42 +200,16 @@ impl F8 {
         val(avx512!(_mm512_sqrt_pd(reg(self))))
     }
 
-    /// 1 / self, not the IEEE quotient but within about 1 ulp of it, for a positive finite
-    /// normal `self` (a zero, infinite or NaN lane gives NaN): the 14-bit estimate of
-    /// `vrcp14pd` and two Newton steps y <- y + y (1 - x y), fused, each squaring the relative
-    /// error (2^-14, 2^-28, 2^-56). Five instructions on the multiply-add ports against one
-    /// `vdivpd`, which holds the divider (one per core, not pipelined) for about 16 cycles for
-    /// eight lanes (llvm-mca's Ice Lake model; `vsqrtpd` about 24): the kernel's 31 divisions and
-    /// square roots per group kept the divider busy 17 % of its cycles (llvm-mca) and about 600
-    /// of its 1,500 cycles by these figures. Measured error: at most 2.0 ulp over 1.6e8 random
-    /// inputs against the IEEE quotient.
+    /// 1 / self, the IEEE quotient (as the four lanes').
     #[inline(always)]
     pub fn recip(self) -> F8 {
-        let one = F8::splat(1.0);
-        let mut y = val(avx512!(_mm512_rcp14_pd(reg(self))));
-        for _ in 0..2 {
-            let e = self.neg_mul_add(y, one);
-            y = y.mul_add(e, y);
-        }
-        y
+        F8::splat(1.0) / self
     }
 
-    /// 1 / sqrt(self), within about 2 ulp, for a positive finite normal `self` (zero gives NaN,
-    /// not infinity): the 14-bit estimate of `vrsqrt14pd` and two Newton steps
-    /// y <- y + y (1/2 - x y^2 / 2), each squaring the relative error (times 3/2). Seven
-    /// instructions instead of `vsqrtpd` (24 cycles of the divider for eight lanes) and a
-    /// division (see [`F8::recip`]); sqrt(x) is then x rsqrt(x). Measured error: at most 2.4 ulp
-    /// over 1.6e8 random inputs against 1 / sqrt in IEEE arithmetic.
+    /// 1 / sqrt(self) from the IEEE square root and quotient (as the four lanes').
     #[inline(always)]
     pub fn rsqrt(self) -> F8 {
-        let half = F8::splat(0.5);
-        let hx = self * half;
-        let mut y = val(avx512!(_mm512_rsqrt14_pd(reg(self))));
-        for _ in 0..2 {
-            let e = hx.neg_mul_add(y * y, half);
-            y = y.mul_add(e, y);
-        }
-        y
+        F8::splat(1.0) / self.sqrt()
     }
 
     /// Lane-wise absolute value.
@@ -302,23 +277,22 @@ impl F8 {
         self.abs().lt(F8::splat(f64::INFINITY))
     }
 
-    /// `self * b + c` fused: one rounding (the four-lane and scalar kernels round twice, so
-    /// the eight-lane results differ from theirs at round-off).
+    /// `self * b + c`, rounded twice (as the four lanes').
     #[inline(always)]
     pub fn mul_add(self, b: F8, c: F8) -> F8 {
-        val(avx512!(_mm512_fmadd_pd(reg(self), reg(b), reg(c))))
+        self * b + c
     }
 
-    /// `self * b - c` fused.
+    /// `self * b - c`, rounded twice.
     #[inline(always)]
     pub fn mul_sub(self, b: F8, c: F8) -> F8 {
-        val(avx512!(_mm512_fmsub_pd(reg(self), reg(b), reg(c))))
+        self * b - c
     }
 
-    /// `c - self * b` fused.
+    /// `c - self * b`, rounded twice.
     #[inline(always)]
     pub fn neg_mul_add(self, b: F8, c: F8) -> F8 {
-        val(avx512!(_mm512_fnmadd_pd(reg(self), reg(b), reg(c))))
+        c - self * b
     }
 
     /// `a` in the lanes where `m` holds, `b` in the others.
