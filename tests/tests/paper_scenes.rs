@@ -203,7 +203,7 @@ fn rod_wall_coarse_at_1_and_3_ranks() {
 }
 
 #[test]
-fn container_crush_at_2_ranks_on_four_lanes_takes_no_energy_out_of_contact_and_matches_3_ranks_bit_for_bit() {
+fn container_crush_np2_lanes4_keeps_contact_energy_and_matches_np3_bits() {
     // The paper's container at its own resolution on 2 ranks with the four-lane kernel (what a
     // CPU without AVX-512 runs): before each contact's correction was bounded by what the step
     // explains, one new contact at step 3867 (t = 0.573 ms) pushed a node that had started the
