@@ -1,134 +1,8 @@
-//! Sums whose value does not depend on the order of their terms: the energies and momenta of
-//! history.csv are the same bits at any rank count and with any element kernel (SCENE.md, "One
-//! answer").
-//!
-//! A floating-point sum depends on the order of its terms (each addition rounds), and the order
-//! follows the partition: each rank sums its own nodes, and the ranks' partial sums are added in
-//! the reduction's order. Here each term is instead split into three parts on fixed grids of
-//! power-of-two quanta `Q1 > Q2 = Q1 2^-26 > Q3 = Q2 2^-26` (binned summation: J. Demmel and
-//! H. D. Nguyen, "Parallel reproducible summation", IEEE Trans. Comput. 64 (2015) 2060). The
-//! part on grid `Qk` is `t = (r + C) - C` with `C = 1.5 2^52 Qk`: for `|r| < 2^51 Qk` the
-//! addition rounds `r` to a multiple of `Qk` (IEEE round to nearest) and the subtraction is
-//! exact, so `t` and the residual `r - t` (exact, `|r - t| <= Qk / 2`) carry the term on. Each
-//! part is a multiple of its quantum, so a fold's sum is exact while it stays below `2^53 Qk`:
-//! for the lower folds (parts below `Q(k-1) / 2 = 2^25 Qk`) up to `2^28` terms, for the top one
-//! while the total stays below `2^53 Q1`. Exact sums do not depend on the order, and folds
-//! reduced over ranks by MPI's sum stay exact. The value is `(f1 + f2) + f3`, rounded once more
-//! in a fixed order; the term is resolved to `Q3 = 2^-52 Q1` (what falls below is rounded away,
-//! term by term, the same at any rank count).
-//!
-//! Why by hand: a fixed-point integer sum would need 128-bit integers and a conversion per term
-//! that does not vectorise; the grid form is three additions and subtractions per fold, the
-//! same in the scalar code and in the eight-lane kernels (`nodal`), and the reduction stays an
-//! MPI sum of doubles. Cost: about 11 flops per term in place of one.
-
-/// The parts of one sum (top fold first).
-pub type Folds = [f64; 3];
-
-/// The bits between folds: a lower fold's parts are below `2^(FOLD_BITS - 1)` of its quantum.
-pub const FOLD_BITS: i32 = 26;
-
-/// The most terms one lower fold may sum exactly (`2^(54 - FOLD_BITS)`: each part is below
-/// `2^(FOLD_BITS - 1) Qk`, the fold exact below `2^53 Qk`).
-pub const MAX_TERMS: u64 = 1 << (54 - FOLD_BITS);
-
-/// A sum's three grids, as the shifts `C_k = 1.5 2^52 Q_k`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grid {
-    /// The shift of each fold, top first.
-    pub shift: [f64; 3],
-}
-
-/// `2^e` for `e` in the normal range.
-fn pow2(e: i32) -> f64 {
-    assert!(
-        (-1022..=1023).contains(&e),
-        "2^{e} outside the normal range"
-    );
-    f64::from_bits(((e + 1023) as u64) << 52)
-}
-
-/// The smallest `e` with `2^e >= x` (`x` positive and normal).
-fn ceil_log2(x: f64) -> i32 {
-    let bits = x.to_bits();
-    let e = ((bits >> 52) & 0x7ff) as i32 - 1023;
-    if bits & ((1u64 << 52) - 1) == 0 {
-        e
-    } else {
-        e + 1
-    }
-}
-
-impl Grid {
-    /// The grid whose top fold sums exactly up to at least `2 top`: `Q1 = 2^(ceil(log2 top) -
-    /// 52)`, resolution `Q3 = Q1 2^-52`. `top` is taken from values every rank agrees on (a
-    /// reduced maximum, a mass summed exactly), so every rank has the same grid.
-    pub fn covering(top: f64) -> Grid {
-        let top = if top.is_finite() && top > 1e-280 {
-            top
-        } else {
-            1e-280
-        };
-        let e1 = ceil_log2(top) - 52;
-        let q = [e1, e1 - FOLD_BITS, e1 - 2 * FOLD_BITS];
-        Grid {
-            shift: q.map(|e| 1.5 * pow2(e + 52)),
-        }
-    }
-
-    /// The sums of energies (J) of a model of mass `mass` (kg): exact up to `2^60` times the
-    /// energy of the whole model moving at 1 mm/s (about `6e11 M` J, the model at 10^6 m/s),
-    /// resolved to about `2.7e-20 M` J.
-    pub fn energy(mass: f64) -> Grid {
-        Grid::covering(pow2(60) * 0.5 * mass * 1e-6)
-    }
-
-    /// The sums of momenta (kg m/s) of a model of mass `mass` (kg): exact up to `2^60` times
-    /// the model's momentum at 1 mm/s.
-    pub fn momentum(mass: f64) -> Grid {
-        Grid::covering(pow2(60) * mass * 1e-3)
-    }
-
-    /// Adds `x` to `acc`.
-    #[inline(always)]
-    pub fn add(&self, acc: &mut Folds, x: f64) {
-        let [c1, c2, c3] = self.shift;
-        let t1 = (x + c1) - c1;
-        let r1 = x - t1;
-        let t2 = (r1 + c2) - c2;
-        let r2 = r1 - t2;
-        let t3 = (r2 + c3) - c3;
-        acc[0] += t1;
-        acc[1] += t2;
-        acc[2] += t3;
-    }
-}
-
-/// The value of a sum's folds (each exact; added top first).
-#[inline]
-pub fn value(f: &Folds) -> f64 {
-    (f[0] + f[1]) + f[2]
-}
-
-/// Adds fold sums `b` to `a` (exact, in any order).
-#[inline]
-pub fn merge(a: &mut Folds, b: &Folds) {
-    for k in 0..3 {
-        a[k] += b[k];
-    }
-}
-
-/// `n` sums' folds laid out flat (3 n doubles, sum by sum), for one reduction over ranks.
-pub fn flatten(sums: &[Folds]) -> Vec<f64> {
-    sums.as_flattened().to_vec()
-}
-
-/// The values of the sums laid out by [`flatten`] (after the reduction).
-pub fn values(flat: &[f64]) -> Vec<f64> {
-    flat.chunks_exact(3)
-        .map(|c| value(&[c[0], c[1], c[2]]))
-        .collect()
-}
+//! The exact sums of the FE stage ([`binsum`]: binned summation on fixed grids) and the
+//! collective exact total over ranks.
+pub use binsum::{
+    add_parts, flatten, merge, pow2, sub_parts, value, values, Folds, Grid, FOLD_BITS, MAX_TERMS,
+};
 
 /// A step's nodal sums, each exact on its grid ([`crate::exact`]), as raw sums of the terms:
 /// `[sum m v.v (twice the kinetic energy), sum f . dx over both halves of the element work's
@@ -159,112 +33,34 @@ impl SumGrids {
 /// grid covering the reduced largest magnitude times the reduced number of values (three
 /// reductions; for sums taken once, such as the model's mass). Collective.
 pub fn total(comm: &mpi::topology::SimpleCommunicator, values: &[f64]) -> f64 {
-    use mpi::collective::{CommunicatorCollectives, SystemOperation};
-    let big = values.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let (mut g_big, mut g_n) = (0.0f64, 0u64);
-    comm.all_reduce_into(&big, &mut g_big, SystemOperation::max());
-    comm.all_reduce_into(&(values.len() as u64), &mut g_n, SystemOperation::sum());
-    let grid = Grid::covering(g_big * g_n.max(1) as f64);
-    let mut f = [0.0; 3];
-    for &x in values {
-        grid.add(&mut f, x);
-    }
-    let mut g = [0.0; 3];
-    comm.all_reduce_into(&f[..], &mut g[..], SystemOperation::sum());
-    value(&g)
+    totals(comm, &[values.to_vec()])[0]
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
-    /// Terms of mixed signs over 30 decades, as energies of nodes are.
-    fn terms(n: usize, seed: u64) -> Vec<f64> {
-        let mut r = Rng(seed);
-        (0..n)
-            .map(|_| {
-                let s = if r.next() < 0.5 { -1.0 } else { 1.0 };
-                s * 10f64.powf(-20.0 + 30.0 * r.next())
-            })
-            .collect()
-    }
-
-    fn sum(g: &Grid, xs: &[f64]) -> Folds {
-        let mut f = [0.0; 3];
-        for &x in xs {
-            g.add(&mut f, x);
-        }
-        f
-    }
-
-    /// The reference: each term rounded to the bottom quantum Q3 as an integer (exact scaling
-    /// by a power of two, then `round`), summed in 128-bit integers: an exact sum computed
-    /// another way. The fold sum is that sum rounded (two roundings: within 2 ulps).
-    #[test]
-    fn the_sum_is_the_exact_sum_of_the_terms_on_the_finest_grid() {
-        let xs = terms(20000, 0x9e3779b97f4a7c15);
-        let top: f64 = xs.iter().map(|x| x.abs()).sum();
-        let g = Grid::covering(top);
-        let q3 = g.shift[2] / (1.5 * pow2(52));
-        let exact: i128 = xs.iter().map(|&x| (x / q3).round() as i128).sum();
-        let want = exact as f64 * q3;
-        let got = value(&sum(&g, &xs));
-        let ulp = f64::EPSILON * want.abs();
-        assert!(
-            (got - want).abs() <= 2.0 * ulp,
-            "fold sum {got:e} against the integer sum {want:e} (limit 2 ulp)"
-        );
-    }
-
-    /// The same bits whatever the order and however the terms are split into partial sums
-    /// (ranks) whose folds are then merged in another order.
-    #[test]
-    fn the_same_bits_in_any_order_and_partition() {
-        let mut xs = terms(5000, 7);
-        let top: f64 = xs.iter().map(|x| x.abs()).sum();
-        let g = Grid::covering(top);
-        let one = value(&sum(&g, &xs));
-        xs.reverse();
-        assert_eq!(value(&sum(&g, &xs)).to_bits(), one.to_bits(), "reversed");
-        let mut r = Rng(11);
-        for parts in [2usize, 3, 7] {
-            for i in (1..xs.len()).rev() {
-                let j = (r.next() * (i + 1) as f64) as usize;
-                xs.swap(i, j);
+/// [`total`] of several sums at once (each on its own grid; the same three reductions):
+/// `terms[k]` are this rank's terms of sum k (every rank passes as many sums). Collective.
+pub fn totals(comm: &mpi::topology::SimpleCommunicator, terms: &[Vec<f64>]) -> Vec<f64> {
+    use mpi::collective::{CommunicatorCollectives, SystemOperation};
+    let n = terms.len();
+    let big: Vec<f64> = terms
+        .iter()
+        .map(|t| t.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+        .collect();
+    let count: Vec<u64> = terms.iter().map(|t| t.len() as u64).collect();
+    let (mut g_big, mut g_n) = (vec![0.0f64; n], vec![0u64; n]);
+    comm.all_reduce_into(&big[..], &mut g_big[..], SystemOperation::max());
+    comm.all_reduce_into(&count[..], &mut g_n[..], SystemOperation::sum());
+    let folds: Vec<Folds> = (0..n)
+        .map(|k| {
+            let grid = Grid::covering(g_big[k] * g_n[k].max(1) as f64);
+            let mut f = [0.0; 3];
+            for &x in &terms[k] {
+                grid.add(&mut f, x);
             }
-            let mut total = [0.0; 3];
-            for chunk in xs.chunks(xs.len() / parts + 1).rev() {
-                merge(&mut total, &sum(&g, chunk));
-            }
-            assert_eq!(value(&total).to_bits(), one.to_bits(), "{parts} parts");
-        }
-        // The plain sum differs with the order (what the folds are for).
-        let plain: f64 = xs.iter().sum();
-        let back: f64 = xs.iter().rev().sum();
-        assert!(plain.to_bits() != back.to_bits() || plain == one);
-    }
-
-    #[test]
-    fn grids_are_powers_of_two_and_cover_their_top() {
-        for top in [1e-12, 1.0, 3.0, 4.0, 6.02e23] {
-            let g = Grid::covering(top);
-            let q1 = g.shift[0] / (1.5 * pow2(52));
-            assert_eq!(q1.to_bits() & ((1u64 << 52) - 1), 0, "Q1 a power of two");
-            assert!(pow2(53) * q1 >= 2.0 * top && pow2(52) * q1 < 4.0 * top);
-        }
-        // A non-finite term makes the sum non-finite (the run's non-finite check sees it).
-        let g = Grid::covering(1.0);
-        assert!(!value(&sum(&g, &[1.0, f64::INFINITY])).is_finite());
-        assert!(!value(&sum(&g, &[f64::NAN])).is_finite());
-    }
+            f
+        })
+        .collect();
+    let flat = flatten(&folds);
+    let mut red = vec![0.0; flat.len()];
+    comm.all_reduce_into(&flat[..], &mut red[..], SystemOperation::sum());
+    values(&red)
 }

@@ -5,10 +5,10 @@
 //! us per particle-step on this deck on one rank (peer README).
 //!
 //! `cargo run --release -p sph --example dambreak_bench [steps]`
+use sph::exact::{exact_pass, PassGrids};
 use sph::{
-    add_gravity, density_pass, first_half, force_pass, pairs, reset_density_sums, reset_force_sums,
-    second_half, setup_state, update_eos, ArtificialViscosity, Eos, NewParticle, Params, Particles,
-    Profile, TensileCorrection,
+    add_gravity, density_pass, first_half, force_pass, pairs, second_half, setup_state, update_eos,
+    ArtificialViscosity, Eos, NewParticle, Params, Particles, Profile, TensileCorrection,
 };
 use std::time::Instant;
 
@@ -73,8 +73,11 @@ fn main() {
     setup_state(&mut p, &params);
     let opts = params.search_options();
     let list = pairs(&p, &opts, |_| true);
-    reset_force_sums(&mut p);
-    force_pass(&list, &mut p, &params);
+    let mut g = PassGrids::default();
+    let one_box = |m: &[f64; 3]| *m;
+    exact_pass(&mut g, one_box, |g, m| {
+        force_pass(&list, &mut p, &params, g, m)
+    });
     add_gravity(&mut p, &params);
 
     let dt = 5e-5;
@@ -90,13 +93,15 @@ fn main() {
         npairs = list.len();
         t[1] += c.elapsed().as_secs_f64();
         let c = Instant::now();
-        reset_density_sums(&mut p, &params);
-        density_pass(&list, &mut p, &params);
+        exact_pass(&mut g, one_box, |g, m| {
+            density_pass(&list, &mut p, &params, g, m)
+        });
         update_eos(&mut p, &params);
         t[2] += c.elapsed().as_secs_f64();
         let c = Instant::now();
-        reset_force_sums(&mut p);
-        force_pass(&list, &mut p, &params);
+        exact_pass(&mut g, one_box, |g, m| {
+            force_pass(&list, &mut p, &params, g, m)
+        });
         add_gravity(&mut p, &params);
         t[3] += c.elapsed().as_secs_f64();
         let c = Instant::now();

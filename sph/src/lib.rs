@@ -15,12 +15,16 @@
 //! 3. `pairs(&parts, &params.search_options(), |x| my_box.contains(x))` with the box half-open.
 //!    Each physical pair is then listed on exactly one rank, and only once there, whatever
 //!    copies (images) the rank holds.
-//! 4. `reset_density_sums`, `density_pass`; send `pair_sums` of ghosts to their owners, who
-//!    `add_pair_sums` (with `with_rho` in summation mode).
+//! 4. `density_pass` (its sums exact on the grids of `exact::PassGrids`, redone by
+//!    `exact::exact_pass` where its terms did not fit them); send `pair_sums` of ghosts to their
+//!    owners, who `add_pair_sums` and `settle_density`.
 //! 5. `update_eos`; send `eos_state` of owners to their ghosts (`set_eos_state`).
-//! 6. `reset_force_sums`, `force_pass` (returns the pair work rate; sum it over ranks); send
-//!    ghost `pair_sums` (f, de) to owners; `add_gravity`.
+//! 6. `force_pass` (the same way; returns the pair work rate); send ghost `pair_sums` to
+//!    owners, who `add_pair_sums` and `settle_forces`; `add_gravity`.
 //! 7. `second_half`.
+//!
+//! The pair sums are exact, so every particle's force, energy rate and density are the same
+//! bits whatever the order of the pairs and however they are shared between ranks.
 //!
 //! Before step 1: `setup_state`, then steps 2-6, with 4-5 only if
 //! `Profile::setup_evaluates_density_and_eos`. The stable step is the minimum of `stable_dt`
@@ -32,6 +36,7 @@
 #![warn(missing_docs)]
 
 pub mod diagnostics;
+pub mod exact;
 /// The equations of state: the `eos` crate, shared with the meshed fluid (`fe_petsc`).
 pub use ::eos;
 pub mod integrate;
@@ -55,7 +60,7 @@ pub use params::{ArtificialViscosity, DensityMode, Params, Profile, TensileCorre
 pub use particles::{EosState, NewParticle, PairSums, ParticleRecord, Particles};
 pub use passes::{
     add_gravity, continuity_and_force_pass, continuity_and_force_pass_with, density_pass,
-    force_pass, reset_density_sums, reset_force_sums, update_eos, PairWork, PassBuffers,
+    force_pass, update_eos, PairWork, PassBuffers,
 };
 pub use periodic::{periodic_images, Periodic};
 pub use serial::SerialSim;

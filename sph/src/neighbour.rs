@@ -21,6 +21,7 @@
 //! with "a" the copy of smaller image index); folded back onto the owner, a pass adds both ends'
 //! contributions to the particle, i.e. the m and -m terms of its periodic sums. Two copies of
 //! one particle with the same image index are never a pair.
+use crate::exact::{PassGrids, TermMax};
 use crate::params::Params;
 use crate::particles::Particles;
 use crate::passes::{kept_continuity_and_force_pass, pos_part, PairWork, PassBuffers};
@@ -781,14 +782,24 @@ impl KeptPairs {
     /// (the same sums, bit for bit), with the filter's test applied to each candidate inside
     /// the pass (no filtered list is written), counting each pair's two entries in `count`
     /// (zeroed first). Returns the pair work rate and the number of pairs.
+    /// Sums exact on `g` ([`crate::exact`]), largest terms into `m`.
     pub fn continuity_and_force_pass(
         &mut self,
         parts: &mut Particles,
         params: &Params,
         count: &mut Vec<u32>,
+        g: &PassGrids,
+        m: &mut TermMax,
     ) -> (PairWork, usize) {
-        let out =
-            kept_continuity_and_force_pass(&self.pairs, &self.order, parts, params, &mut self.buf);
+        let out = kept_continuity_and_force_pass(
+            &self.pairs,
+            &self.order,
+            parts,
+            params,
+            &mut self.buf,
+            g,
+            m,
+        );
         count.clear();
         count.resize(parts.len(), 0);
         for (&e, &c) in self.order.iter().zip(self.buf.counts()) {

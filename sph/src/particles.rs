@@ -3,9 +3,12 @@
 //! Communication roles of the fields (what the parallel layer does with each):
 //! - sent to ghosts when they are made: every field of `ParticleRecord` (`record`/`push_ghost`);
 //! - refreshed on ghosts after the EOS (owner -> copies): `EosState` (rho, p, c);
-//! - summed back from ghosts after a pass (copies -> owner): `PairSums` (f, drho, de, and rho in
-//!   summation mode);
+//! - summed back from ghosts after a pass (copies -> owner): `PairSums`, the exact sums (folds,
+//!   [`crate::exact`]) of f, de and the density (rate), which the owner merges and then settles
+//!   into `f`, `de` and `drho` (or `rho` in summation mode);
 //! - carried when a particle migrates: every field of `ParticleRecord`.
+use crate::exact::values3;
+use binsum::{merge, value, Folds};
 use bytemuck::{Pod, Zeroable};
 
 /// The SPH particles held by one box.
@@ -59,6 +62,8 @@ pub struct Particles {
     pub mat: Vec<u16>,
     /// Boundary particle: its density (and energy) evolve, it never moves.
     pub fixed: Vec<bool>,
+    /// The exact sums a pass adds to, one per entry (sized by the passes' resets; not carried).
+    pub sums: Vec<PairSums>,
 }
 
 /// One particle packed for communication (migration, ghost creation, checkpoints): plain old
@@ -91,18 +96,29 @@ pub struct ParticleRecord {
     pub fixed: u32,
 }
 
-/// What a ghost copy accumulated in the passes, to be added to its owner (copies -> owner).
+/// What a pass added to an entry, as exact sums ([`crate::exact`]); a ghost copy's go to its
+/// owner (copies -> owner), who merges them (in any order: the sums are exact).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PairSums {
-    /// Force, N.
-    pub f: [f64; 3],
-    /// Density rate (continuity).
-    pub drho: f64,
-    /// Specific internal-energy rate.
-    pub de: f64,
-    /// Density (summation mode; 0 otherwise since ghosts start at 0).
-    pub rho: f64,
+    /// Force components, N.
+    pub f: [Folds; 3],
+    /// Density rate (continuity), kg/(m^3 s), or density (summation), kg/m^3.
+    pub dens: Folds,
+    /// Specific internal-energy rate, W/kg.
+    pub de: Folds,
+}
+
+impl PairSums {
+    /// Merges `o` into these sums (exact).
+    #[inline]
+    pub fn merge(&mut self, o: &PairSums) {
+        for c in 0..3 {
+            merge(&mut self.f[c], &o.f[c]);
+        }
+        merge(&mut self.dens, &o.dens);
+        merge(&mut self.de, &o.de);
+    }
 }
 
 /// The state the EOS update produces, to be copied from an owner to its ghosts (owner ->
@@ -311,24 +327,32 @@ impl Particles {
 
     /// The ghost contributions of entry `i`, to be sent to its owner.
     pub fn pair_sums(&self, i: usize) -> PairSums {
-        PairSums {
-            f: self.f[i],
-            drho: self.drho[i],
-            de: self.de[i],
-            rho: self.rho[i],
+        self.sums[i]
+    }
+
+    /// Merges contributions received from a ghost copy of owned entry `i` (exact).
+    pub fn add_pair_sums(&mut self, i: usize, s: &PairSums) {
+        self.sums[i].merge(s);
+    }
+
+    /// Sets the density of every owned entry from its sum: `rho` with `summation`, else the
+    /// continuity rate `drho`.
+    pub fn settle_density(&mut self, summation: bool) {
+        let out = if summation {
+            &mut self.rho
+        } else {
+            &mut self.drho
+        };
+        for (o, s) in out.iter_mut().zip(&self.sums).take(self.n_owned) {
+            *o = value(&s.dens);
         }
     }
 
-    /// Adds contributions received from a ghost copy of owned entry `i`. `with_rho`: summation
-    /// density (then ghost rho sums are density contributions).
-    pub fn add_pair_sums(&mut self, i: usize, s: &PairSums, with_rho: bool) {
-        for k in 0..3 {
-            self.f[i][k] += s.f[k];
-        }
-        self.drho[i] += s.drho;
-        self.de[i] += s.de;
-        if with_rho {
-            self.rho[i] += s.rho;
+    /// Sets the force and the energy rate of every owned entry from its sums.
+    pub fn settle_forces(&mut self) {
+        for i in 0..self.n_owned {
+            self.f[i] = values3(&self.sums[i].f);
+            self.de[i] = value(&self.sums[i].de);
         }
     }
 
@@ -373,6 +397,7 @@ impl Particles {
             + b(&self.e_half)
             + b(&self.mat)
             + b(&self.fixed)
+            + b(&self.sums)
     }
 
     /// The largest smoothing length over all entries (0 if none).

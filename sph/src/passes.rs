@@ -1,23 +1,29 @@
 //! The pair passes and the per-particle updates between them.
 //!
 //! A pass walks a pair list (from `neighbour::pairs`) and adds each pair's contribution to BOTH
-//! entries, owned or ghost; the parallel layer then adds the ghosts' sums to their owners
-//! (`Particles::pair_sums` / `add_pair_sums`). Order within one step (the parallel layer does the
-//! communication between the lines):
+//! entries, owned or ghost, as exact sums (`Particles::sums`, on the grids of
+//! [`crate::exact::PassGrids`]; each pass first zeroes the sums it adds to, and records its
+//! largest terms), then settles the owned entries' values (`f`, `de`, `drho` or `rho`); the
+//! parallel layer then merges the ghosts' sums into their owners (`Particles::pair_sums` /
+//! `add_pair_sums`) and settles again. Order within one step (the parallel layer does the
+//! communication between the lines; [`crate::exact::exact_pass`] redoes a pass whose terms did
+//! not fit its grids):
 //!
 //! ```text
-//! reset_density_sums; density_pass;  ghosts -> owners (drho, or rho with summation)
-//! update_eos (owned);                owners -> ghosts (rho, p, c)
-//! reset_force_sums; force_pass;      ghosts -> owners (f, de)
+//! density_pass;        ghosts -> owners (drho, or rho with summation); settle_density
+//! update_eos (owned);  owners -> ghosts (rho, p, c)
+//! force_pass;          ghosts -> owners (f, de); settle_forces
 //! add_gravity (owned)
 //! ```
 //!
 //! Notation: r_ab = x_a - x_b, r = |r_ab|, h = (h_a + h_b)/2, v^_ab = v^_a - v^_b,
 //! grad_a W_ab = dW/dr r_ab/r. Passes skip coincident pairs (r = 0: no direction).
 use crate::eos::Eos;
+use crate::exact::{note, q, PassGrids, TermMax};
 use crate::kernel::{Kernel, ScaledKernel};
 use crate::params::{DensityMode, Params, Profile};
-use crate::particles::Particles;
+use crate::particles::{PairSums, Particles};
+use binsum::Folds;
 
 /// The rate at which the pair forces of one pass turn kinetic into internal energy, W (J/s):
 /// sum over pairs of m_a m_b X (dW/dr/r)(v^_ab . r_ab) with X the pressure (with tensile
@@ -60,27 +66,43 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// Zeroes what the density pass accumulates, on every entry: continuity: drho = 0;
-/// summation: rho = m W(0, h) (the self term) on owned entries and 0 on ghosts.
-pub fn reset_density_sums(p: &mut Particles, params: &Params) {
-    p.drho.iter_mut().for_each(|d| *d = 0.0);
-    if params.density == DensityMode::Summation {
-        let k = params.smoothing_kernel();
-        for i in 0..p.len() {
-            p.rho[i] = if i < p.n_owned {
-                p.m[i] * k.w(0.0, p.h[i])
-            } else {
-                0.0
-            };
+/// Zeroes the density sums of every entry (and sizes `Particles::sums`): continuity: 0;
+/// summation: the self term m W(0, h) on owned entries, 0 on ghosts.
+fn reset_density_sums(p: &mut Particles, params: &Params, g: &PassGrids, m: &mut TermMax) {
+    p.sums.resize(p.len(), PairSums::default());
+    let k = params.smoothing_kernel();
+    let grid = g.grid(q::DENSITY);
+    for i in 0..p.len() {
+        let s = &mut p.sums[i].dens;
+        *s = [0.0; 3];
+        if params.density == DensityMode::Summation && i < p.n_owned {
+            let w0 = p.m[i] * k.w(0.0, p.h[i]);
+            grid.add(s, w0);
+            note(&mut m[q::DENSITY], w0);
         }
     }
 }
 
 /// Density pass. Continuity: adds m_b (dW/dr)(r_ab . v^_ab)/r to drho_a and m_a (...) to drho_b
-/// (Monaghan 1992, eq. 2.16; LIGGGHTS `fix sph/density/continuity`). Summation: adds m_b W_ab to
-/// rho_a and m_a W_ab to rho_b. Flops per pair ~30, bytes ~200 (positions, velocities, h, m).
-pub fn density_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) {
+/// (Monaghan 1992, eq. 2.16; LIGGGHTS `fix sph/density/continuity`). Summation: rho_a = m_a
+/// W(0, h_a) + sum m_b W_ab, the same for b. Sets the density sums of every entry (exact, on
+/// `g`; largest terms into `m`) and the owned entries' `drho` (or `rho`) from them. Flops per
+/// pair ~30 + 2 x 11 for the sums, bytes ~200 (positions, velocities, h, m).
+pub fn density_pass(
+    pairs: &[(u32, u32)],
+    p: &mut Particles,
+    params: &Params,
+    g: &PassGrids,
+    m: &mut TermMax,
+) {
+    reset_density_sums(p, params, g, m);
     let k = params.smoothing_kernel();
+    let grid = g.grid(q::DENSITY);
+    let mut big = m[q::DENSITY];
+    let mut add = |p: &mut Particles, i: usize, x: f64| {
+        grid.add(&mut p.sums[i].dens, x);
+        note(&mut big, x);
+    };
     match params.density {
         DensityMode::Continuity => {
             for &(i, j) in pairs {
@@ -92,8 +114,9 @@ pub fn density_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) {
                 }
                 let h = 0.5 * (p.h[i] + p.h[j]);
                 let t = k.dw_dr(r, h) * dot(d, sub(p.vhat[i], p.vhat[j])) / r;
-                p.drho[i] += p.m[j] * t;
-                p.drho[j] += p.m[i] * t;
+                let (ti, tj) = (p.m[j] * t, p.m[i] * t);
+                add(p, i, ti);
+                add(p, j, tj);
             }
         }
         DensityMode::Summation => {
@@ -102,11 +125,14 @@ pub fn density_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) {
                 let d = sub(p.x[i], p.x[j]);
                 let r = dot(d, d).sqrt();
                 let w = k.w(r, 0.5 * (p.h[i] + p.h[j]));
-                p.rho[i] += p.m[j] * w;
-                p.rho[j] += p.m[i] * w;
+                let (wi, wj) = (p.m[j] * w, p.m[i] * w);
+                add(p, i, wi);
+                add(p, j, wj);
             }
         }
     }
+    m[q::DENSITY] = big;
+    p.settle_density(params.density == DensityMode::Summation);
 }
 
 /// Sets p and c of every owned entry from its rho and e with its material's EOS. In the
@@ -134,12 +160,6 @@ fn liggghts_sound_speed(eos: &Eos) -> Option<f64> {
     }
 }
 
-/// Zeroes f and de on every entry.
-pub fn reset_force_sums(p: &mut Particles) {
-    p.f.iter_mut().for_each(|f| *f = [0.0; 3]);
-    p.de.iter_mut().for_each(|d| *d = 0.0);
-}
-
 /// Force pass: for each pair, with P = p_a/rho_a^2 + p_b/rho_b^2 + R_ab f_ab^4 and Pi_ab the
 /// viscous term,
 ///
@@ -154,12 +174,19 @@ pub fn reset_force_sums(p: &mut Particles) {
 /// epsilon |p|/rho^2 over those of a, b in tension; standard profile: R_a + R_b with R = epsilon
 /// |p|/rho^2 in tension and 0.01 p/rho^2 in compression (Monaghan 2000; Gray et al. 2001).
 /// With `Params::conductivity` (and the energy equation) it also adds Price's (2008)
-/// artificial conductivity to de (see there). Returns the pair work rate. Flops per pair ~80,
-/// bytes ~250.
-pub fn force_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) -> PairWork {
+/// artificial conductivity to de (see there). Sets the force and energy-rate sums of every
+/// entry (exact, on `g`; largest terms into `m`) and the owned entries' `f` and `de` from them.
+/// Returns the pair work rate. Flops per pair ~80 + ~60 for the sums, bytes ~250.
+pub fn force_pass(
+    pairs: &[(u32, u32)],
+    p: &mut Particles,
+    params: &Params,
+    g: &PassGrids,
+    m: &mut TermMax,
+) -> PairWork {
     let mut buf = PassBuffers::default();
     buf.pack(p, params, None);
-    let (work, _) = pair_loop::<false, false>(pairs, &mut buf, params);
+    let (work, _) = pair_loop::<false, false>(pairs, &mut buf, params, g, m);
     buf.unpack(p, None, false);
     work
 }
@@ -169,13 +196,16 @@ pub fn force_pass(pairs: &[(u32, u32)], p: &mut Particles, params: &Params) -> P
 /// once. Valid when the forces do not need this pass's density rates, i.e. with continuity
 /// density, whose rates only enter the next update of rho: call `update_eos` on the owners
 /// first and give the ghosts those (rho, p, c). Saves one walk over the pairs (~30 of ~110
-/// flops per pair) and, in parallel, one reverse communication and one ghost refresh.
+/// flops per pair) and, in parallel, one reverse communication and one ghost refresh. Sets
+/// every sum the two passes set.
 pub fn continuity_and_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
     params: &Params,
+    g: &PassGrids,
+    m: &mut TermMax,
 ) -> PairWork {
-    continuity_and_force_pass_with(pairs, p, params, &mut PassBuffers::default())
+    continuity_and_force_pass_with(pairs, p, params, &mut PassBuffers::default(), g, m)
 }
 
 /// [`continuity_and_force_pass`] with buffers kept from pass to pass (no allocation once they
@@ -185,10 +215,12 @@ pub fn continuity_and_force_pass_with(
     p: &mut Particles,
     params: &Params,
     buf: &mut PassBuffers,
+    g: &PassGrids,
+    m: &mut TermMax,
 ) -> PairWork {
     assert_continuity(params);
     buf.pack(p, params, None);
-    let (work, _) = pair_loop::<false, true>(pairs, buf, params);
+    let (work, _) = pair_loop::<false, true>(pairs, buf, params, g, m);
     buf.unpack(p, None, true);
     work
 }
@@ -220,13 +252,34 @@ struct Slot {
     p: f64,
 }
 
-/// What a pass adds to one entry: force and energy rate (32 bytes, aligned: within one cache
-/// line); the density rate is beside them (`PassBuffers::drho`).
+/// What a pass adds to one entry, as exact sums: force and energy rate, fold by fold (`fold[k]`
+/// = the parts on grid k of f_x, f_y, f_z, de: four lanes, split and added together; 96 bytes,
+/// aligned); the density rate is beside them (`PassBuffers::drho`).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 struct Sums {
-    f: [f64; 3],
-    de: f64,
+    fold: [[f64; 4]; 3],
+}
+
+/// The shifts of the four lanes of [`Sums`] on each grid: force, force, force, energy rate.
+#[inline]
+fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 3] {
+    let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
+    [0, 1, 2].map(|k| [f[k], f[k], f[k], e[k]])
+}
+
+/// Adds the four terms `x` to `acc`, each split on its lane's grids (`binsum::Grid::split`,
+/// lane by lane: the compiler keeps the lanes in vector registers).
+#[inline(always)]
+fn add4(acc: &mut [[f64; 4]; 3], x: [f64; 4], c: &[[f64; 4]; 3]) {
+    let mut r = x;
+    for k in 0..3 {
+        for l in 0..4 {
+            let t = (r[l] + c[k][l]) - c[k][l];
+            r[l] -= t;
+            acc[k][l] += t;
+        }
+    }
 }
 
 /// The buffers of a pair pass, reused from pass to pass: each entry's inputs packed
@@ -241,7 +294,7 @@ pub struct PassBuffers {
     e: Vec<f64>,
     sums: Vec<Sums>,
     /// Density rate of each slot (continuity).
-    drho: Vec<f64>,
+    drho: Vec<Folds>,
     /// Pairs of each slot that passed the overlap test (kept candidates only).
     count: Vec<u32>,
 }
@@ -269,23 +322,38 @@ impl PassBuffers {
         self.sums.clear();
         self.sums.resize(n, Sums::default());
         self.drho.clear();
-        self.drho.resize(n, 0.0);
+        self.drho.resize(n, [0.0; 3]);
         self.count.clear();
         self.count.resize(n, 0);
     }
 
-    /// Adds the sums of slot k to entry `order[k]` (entry k without `order`): f, de and, with
-    /// `continuity`, drho.
+    /// Sets the sums of entry `order[k]` (entry k without `order`) to those of slot k: f, de
+    /// and, with `continuity`, drho; then settles the owned entries' values from them.
     pub(crate) fn unpack(&self, p: &mut Particles, order: Option<&[u32]>, continuity: bool) {
+        p.sums.resize(p.len(), PairSums::default());
+        if order.is_some() {
+            // entries without a candidate have no slot: their sums are zero
+            for e in p.sums.iter_mut() {
+                e.f = [[0.0; 3]; 3];
+                e.de = [0.0; 3];
+                if continuity {
+                    e.dens = [0.0; 3];
+                }
+            }
+        }
         for (k, s) in self.sums.iter().enumerate() {
             let i = order.map_or(k, |o| o[k] as usize);
-            for c in 0..3 {
-                p.f[i][c] += s.f[c];
-            }
-            p.de[i] += s.de;
+            let e = &mut p.sums[i];
+            let part = |l: usize| [s.fold[0][l], s.fold[1][l], s.fold[2][l]];
+            e.f = [part(0), part(1), part(2)];
+            e.de = part(3);
             if continuity {
-                p.drho[i] += self.drho[k];
+                e.dens = self.drho[k];
             }
+        }
+        p.settle_forces();
+        if continuity {
+            p.settle_density(false);
         }
     }
 
@@ -358,21 +426,23 @@ fn pair_loop<const KEPT: bool, const CONTINUITY: bool>(
     pairs: &[(u32, u32)],
     buf: &mut PassBuffers,
     params: &Params,
+    g: &PassGrids,
+    m: &mut TermMax,
 ) -> (PairWork, usize) {
     // the kernel's shape and the profile as constants of the loop (no test of them per pair)
     let liggghts = params.profile == Profile::Liggghts;
     match (params.kernel, liggghts) {
         (Kernel::CubicSpline, true) => {
-            pair_loop_for::<KEPT, CONTINUITY, true, true>(pairs, buf, params)
+            pair_loop_for::<KEPT, CONTINUITY, true, true>(pairs, buf, params, g, m)
         }
         (Kernel::CubicSpline, false) => {
-            pair_loop_for::<KEPT, CONTINUITY, true, false>(pairs, buf, params)
+            pair_loop_for::<KEPT, CONTINUITY, true, false>(pairs, buf, params, g, m)
         }
         (Kernel::Wendland, true) => {
-            pair_loop_for::<KEPT, CONTINUITY, false, true>(pairs, buf, params)
+            pair_loop_for::<KEPT, CONTINUITY, false, true>(pairs, buf, params, g, m)
         }
         (Kernel::Wendland, false) => {
-            pair_loop_for::<KEPT, CONTINUITY, false, false>(pairs, buf, params)
+            pair_loop_for::<KEPT, CONTINUITY, false, false>(pairs, buf, params, g, m)
         }
     }
 }
@@ -389,8 +459,13 @@ fn pair_loop_for<
     pairs: &[(u32, u32)],
     buf: &mut PassBuffers,
     params: &Params,
+    g: &PassGrids,
+    m: &mut TermMax,
 ) -> (PairWork, usize) {
     let k = params.smoothing_kernel();
+    let gd = g.grid(q::DENSITY);
+    let shifts = lane_shifts(g);
+    let (mut mf, mut md, mut me) = (m[q::FORCE], m[q::DENSITY], m[q::ENERGY]);
     let kind = if CUBIC {
         Kernel::CubicSpline
     } else {
@@ -433,8 +508,11 @@ fn pair_loop_for<
         if CONTINUITY {
             // Monaghan 1992, eq. 2.16, as in density_pass
             let t = dw * vr * inv_r;
-            drho[i] += b.m * t;
-            drho[j] += a.m * t;
+            let (ti, tj) = (b.m * t, a.m * t);
+            gd.add(&mut drho[i], ti);
+            gd.add(&mut drho[j], tj);
+            note(&mut md, ti);
+            note(&mut md, tj);
         }
         let visc = match params.viscosity {
             Some(av) => {
@@ -470,13 +548,12 @@ fn pair_loop_for<
         let gr = dw * inv_r; // grad_a W_ab = gr r_ab
         let mm = a.m * b.m;
         let fs = mm * (press + visc) * gr;
-        for (c, dc) in d.into_iter().enumerate() {
-            sums[i].f[c] -= fs * dc;
-            sums[j].f[c] += fs * dc;
-        }
+        let fd = [fs * d[0], fs * d[1], fs * d[2]];
+        // the largest force term's bound, |fs| r >= |fs d_c|, is a function of the pair
+        note(&mut mf, fs * r);
         let de = (press + visc) * gr * vr;
-        sums[i].de += 0.5 * b.m * de;
-        sums[j].de += 0.5 * a.m * de;
+        let mut de_i = 0.5 * b.m * de;
+        let mut de_j = 0.5 * a.m * de;
         work.pressure += mm * press * gr * vr;
         work.viscosity += mm * visc * gr * vr;
         if let Some(alpha_u) = cond {
@@ -484,9 +561,15 @@ fn pair_loop_for<
             let rho_mean = 0.5 * (a.rho + b.rho);
             let v_sig = ((a.p - b.p).abs() / rho_mean).sqrt();
             let q = alpha_u * v_sig * (e[i] - e[j]) / rho_mean * dw;
-            sums[i].de += b.m * q;
-            sums[j].de -= a.m * q;
+            de_i += b.m * q;
+            de_j -= a.m * q;
         }
+        note(&mut me, de_i);
+        note(&mut me, de_j);
+        // equal and opposite forces: a swapped pair gives the negated terms, whose parts are
+        // the negated parts (binsum::Grid::split)
+        add4(&mut sums[i].fold, [-fd[0], -fd[1], -fd[2], de_i], &shifts);
+        add4(&mut sums[j].fold, [fd[0], fd[1], fd[2], de_j], &shifts);
     };
     let mut n_pairs = 0usize;
     if KEPT {
@@ -513,6 +596,7 @@ fn pair_loop_for<
             pair(i as usize, j as usize);
         }
     }
+    *m = [mf, md, me];
     (work, n_pairs)
 }
 
@@ -556,10 +640,12 @@ pub(crate) fn kept_continuity_and_force_pass(
     p: &mut Particles,
     params: &Params,
     buf: &mut PassBuffers,
+    g: &PassGrids,
+    m: &mut TermMax,
 ) -> (PairWork, usize) {
     assert_continuity(params);
     buf.pack(p, params, Some(order));
-    let out = pair_loop::<true, true>(candidates, buf, params);
+    let out = pair_loop::<true, true>(candidates, buf, params, g, m);
     buf.unpack(p, Some(order), true);
     out
 }

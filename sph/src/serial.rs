@@ -2,14 +2,12 @@
 //! reproduces with communication between them. Periodic images are made here as ghosts (what the
 //! parallel layer does for a rank that spans a periodic box), and ghost sums are folded back into
 //! their owners.
+use crate::exact::{exact_pass, PassGrids};
 use crate::integrate::{first_half, second_half, setup_state};
 use crate::neighbour::pairs;
 use crate::params::{DensityMode, Params};
 use crate::particles::Particles;
-use crate::passes::{
-    add_gravity, density_pass, force_pass, reset_density_sums, reset_force_sums, update_eos,
-    PairWork,
-};
+use crate::passes::{add_gravity, density_pass, force_pass, update_eos, PairWork};
 use crate::periodic::periodic_images;
 
 /// A serial SPH run over owned particles (no ghosts other than periodic images).
@@ -27,6 +25,8 @@ pub struct SerialSim {
     pub n_pairs: usize,
     /// Owner of each ghost entry (index `i - n_owned`).
     ghost_owner: Vec<usize>,
+    /// The grids of the pair sums.
+    grids: PassGrids,
 }
 
 impl SerialSim {
@@ -40,6 +40,7 @@ impl SerialSim {
             steps: 0,
             n_pairs: 0,
             ghost_owner: Vec::new(),
+            grids: PassGrids::default(),
         }
     }
 
@@ -65,28 +66,32 @@ impl SerialSim {
         let pairs = pairs(&self.parts, &self.params.search_options(), |_| true);
         self.n_pairs = pairs.len();
         let p = &mut self.parts;
+        let params = &self.params;
+        let one_box = |m: &[f64; 3]| *m;
         if density_and_eos {
-            reset_density_sums(p, &self.params);
-            density_pass(&pairs, p, &self.params);
-            let with_rho = self.params.density == DensityMode::Summation;
+            exact_pass(&mut self.grids, one_box, |g, m| {
+                density_pass(&pairs, p, params, g, m)
+            });
             for (g, &o) in self.ghost_owner.iter().enumerate() {
                 let s = p.pair_sums(p.n_owned + g);
-                p.add_pair_sums(o, &s, with_rho);
+                p.add_pair_sums(o, &s);
             }
-            update_eos(p, &self.params);
+            p.settle_density(params.density == DensityMode::Summation);
+            update_eos(p, params);
             for (g, &o) in self.ghost_owner.iter().enumerate() {
                 let s = p.eos_state(o);
                 p.set_eos_state(p.n_owned + g, &s);
             }
         }
-        reset_force_sums(p);
-        let work = force_pass(&pairs, p, &self.params);
+        let (work, _) = exact_pass(&mut self.grids, one_box, |g, m| {
+            force_pass(&pairs, p, params, g, m)
+        });
         for (g, &o) in self.ghost_owner.iter().enumerate() {
-            let mut s = p.pair_sums(p.n_owned + g);
-            s.drho = 0.0; // already folded in by the density stage
-            p.add_pair_sums(o, &s, false);
+            let s = p.pair_sums(p.n_owned + g);
+            p.add_pair_sums(o, &s);
         }
-        add_gravity(p, &self.params);
+        p.settle_forces();
+        add_gravity(p, params);
         work
     }
 

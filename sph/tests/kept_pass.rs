@@ -5,11 +5,13 @@
 //!   `continuity_and_force_pass`): the same pairs in the same order, so the same sums bit for
 //!   bit (tolerance 0);
 //! - the same pass over a fresh search (`pairs_in_box`), as a run that searches every step
-//!   would do: the same pairs in another order, so the sums agree to round-off (1e-12 of the
-//!   largest value of each field) and the pair counts exactly.
+//!   would do: the same pairs in another order, so the same sums bit for bit too (they are
+//!   exact sums, `sph::exact`: a plain floating-point sum would differ in its last bits), the
+//!   pair counts exactly, and the pass's work rate (a plain sum) to round-off (1e-12).
 mod common;
 
 use common::{jittered_lattice, Rng};
+use sph::exact::{exact_pass, PassGrids};
 use sph::{
     continuity_and_force_pass, pairs_in_box, setup_state, update_eos, ArtificialViscosity,
     DensityMode, Eos, KeptPairs, NewParticle, Params, Particles, Profile, SearchOptions,
@@ -84,11 +86,6 @@ fn sums(p: &Particles) -> Vec<[f64; 5]> {
         .collect()
 }
 
-fn reset(p: &mut Particles, params: &Params) {
-    sph::reset_density_sums(p, params);
-    sph::reset_force_sums(p);
-}
-
 #[test]
 fn kept_pass_equals_the_filtered_list_and_a_fresh_search() {
     let (lo, hi) = ([f64::NEG_INFINITY; 3], [f64::INFINITY; 3]);
@@ -112,16 +109,20 @@ fn kept_pass_equals_the_filtered_list_and_a_fresh_search() {
                 kept.still_valid(&p),
                 "{profile:?} step {step}: the kept list must still hold (the test moves too far)"
             );
-            // the pass under test
-            reset(&mut p, &params);
+            // the pass under test, on grids fitted to its terms
             let mut count = Vec::new();
-            let (work, n) = kept.continuity_and_force_pass(&mut p, &params, &mut count);
+            let mut g = PassGrids::default();
+            let ((work, n), _) = exact_pass(
+                &mut g,
+                |m| *m,
+                |g, m| kept.continuity_and_force_pass(&mut p, &params, &mut count, g, m),
+            );
             let got = sums(&p);
+            let mut m = [0.0; 3];
             // reference 1: the filtered list, same order
             let mut count_f = Vec::new();
             let list = kept.filter(&p, &mut count_f);
-            reset(&mut p, &params);
-            let work_f = continuity_and_force_pass(&list, &mut p, &params);
+            let work_f = continuity_and_force_pass(&list, &mut p, &params, &g, &mut m);
             assert_eq!(n, list.len(), "{profile:?} step {step}: pairs");
             counts.push(n);
             assert_eq!(count, count_f, "{profile:?} step {step}: pairs per entry");
@@ -143,23 +144,17 @@ fn kept_pass_equals_the_filtered_list_and_a_fresh_search() {
                 count, count_s,
                 "{profile:?} step {step}: counts against fresh"
             );
-            reset(&mut p, &params);
-            let work_s = continuity_and_force_pass(&fresh, &mut p, &params);
+            let work_s = continuity_and_force_pass(&fresh, &mut p, &params, &g, &mut m);
             let want = sums(&p);
             for c in 0..5 {
                 let scale = want.iter().map(|s| s[c].abs()).fold(0.0, f64::max);
                 assert!(scale > 0.0, "field {c} is all zero: nothing tested");
-                let d = got
-                    .iter()
-                    .zip(&want)
-                    .map(|(a, b)| (a[c] - b[c]).abs())
-                    .fold(0.0, f64::max);
-                assert!(
-                    d <= 1e-12 * scale,
-                    "{profile:?} step {step} field {c}: kept pass differs from a fresh search \
-                     by {d:e} (scale {scale:e}, tolerance 1e-12)"
-                );
             }
+            assert!(
+                got == want,
+                "{profile:?} step {step}: the kept pass's sums differ from a fresh search's \
+                 (exact sums: tolerance 0)"
+            );
             let dw = (work.total() - work_s.total()).abs();
             let scale = work_s.pressure.abs() + work_s.viscosity.abs();
             assert!(

@@ -113,9 +113,10 @@ pub fn particles_from_seeds(
 pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> Vec<f64> {
     let p = &st.parts;
     let k = st.params.smoothing_kernel();
-    let mut sums = Vec::new();
+    // each sum's terms (the denominator, then each field's numerator), summed exactly
+    let mut terms: Vec<Vec<f64>> = Vec::new();
     for pr in probes {
-        let (mut den, mut num) = (0.0, vec![0.0; pr.fields.len()]);
+        let (mut den, mut num) = (Vec::new(), vec![Vec::new(); pr.fields.len()]);
         for i in 0..p.n_owned {
             let x = p.x_real[i];
             let r2: f64 = (0..3).map(|c| (x[c] - pr.point[c]).powi(2)).sum();
@@ -123,7 +124,7 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
                 continue;
             }
             let w = p.m[i] / p.rho[i] * k.w(r2.sqrt(), p.h[i]);
-            den += w;
+            den.push(w);
             for (f, field) in pr.fields.iter().enumerate() {
                 let v = match field {
                     ProbeField::VelocityX => p.v[i][0],
@@ -135,14 +136,13 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
                     ProbeField::StressXy | ProbeField::StressYz | ProbeField::StressZx => 0.0,
                     _ => f64::NAN,
                 };
-                num[f] += w * v;
+                num[f].push(w * v);
             }
         }
-        sums.push(den);
-        sums.extend(num);
+        terms.push(den);
+        terms.extend(num);
     }
-    let mut g = vec![0.0; sums.len()];
-    comm.all_reduce_into(&sums[..], &mut g[..], SystemOperation::sum());
+    let g = fe_petsc::exact::totals(comm, &terms);
     let mut out = Vec::new();
     let mut k = 0;
     for pr in probes {

@@ -20,10 +20,11 @@ use fe_petsc::exact::{Folds, SumGrids};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use sph::exact::{exact_pass, PassGrids, TermMax};
 use sph::{
     add_gravity, continuity_and_force_pass_with, density_pass, first_half, force_pass,
-    pairs_in_box, periodic_images, reset_density_sums, reset_force_sums, second_half, setup_state,
-    update_eos, DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles,
+    pairs_in_box, periodic_images, second_half, setup_state, update_eos, DensityMode, EosState,
+    PairSums, PairWork, Params, ParticleRecord, Particles,
 };
 use std::time::Instant;
 
@@ -127,6 +128,10 @@ pub struct SphStage {
     pub pair_searches: u64,
     /// The fused pass's packed inputs and sums, reused from step to step.
     pass_buf: sph::PassBuffers,
+    /// The grids of the pair sums, the same on every rank ([`sph::exact`]).
+    pass_grids: PassGrids,
+    /// Passes redone because their terms did not fit the grids, so far.
+    pub passes_redone: u64,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -176,6 +181,8 @@ impl SphStage {
             build_weighted: false,
             pair_searches: 0,
             pass_buf: sph::PassBuffers::default(),
+            pass_grids: PassGrids::default(),
+            passes_redone: 0,
         }
     }
 
@@ -551,25 +558,44 @@ impl SphStage {
         self.plan = Some(plan);
     }
 
-    /// Sends the ghosts' sums back to their owners and adds them there.
-    fn fold_back(&mut self, with_rho: bool, with_drho: bool) {
+    /// Sends the ghosts' sums back to their owners and merges them there (exact: in any
+    /// order); then sets the owners' values from the sums: the density (rate) with
+    /// `density`, the force and energy rate with `forces`.
+    fn fold_back(&mut self, density: bool, forces: bool) {
         let n0 = self.parts.n_owned;
         let sums: Vec<PairSums> = (0..self.parts.n_ghosts())
-            .map(|g| {
-                let mut s = self.parts.pair_sums(n0 + g);
-                if !with_drho {
-                    s.drho = 0.0;
-                }
-                s
-            })
+            .map(|g| self.parts.pair_sums(n0 + g))
             .collect();
         let plan = self.plan.as_mut().expect("ghosts made");
         let back = plan.reverse(&sums);
         self.bytes += plan.bytes_sent;
         plan.bytes_sent = 0;
         for (k, s) in back.iter().enumerate() {
-            self.parts.add_pair_sums(self.ghost_src[k], s, with_rho);
+            self.parts.add_pair_sums(self.ghost_src[k], s);
         }
+        if density {
+            let summation = self.params.density == DensityMode::Summation;
+            self.parts.settle_density(summation);
+        }
+        if forces {
+            self.parts.settle_forces();
+        }
+    }
+
+    /// Runs `pass` (which sets the sums it adds to) until its terms fit the pair sums' grids,
+    /// the largest terms reduced over the ranks ([`sph::exact::exact_pass`]). Collective.
+    fn exact<T>(&mut self, mut pass: impl FnMut(&mut Self, &PassGrids, &mut TermMax) -> T) -> T {
+        let mut grids = self.pass_grids;
+        let comm = self.comm.clone();
+        let reduce = |m: &TermMax| {
+            let mut g = [0.0; 3];
+            comm.all_reduce_into(&m[..], &mut g[..], SystemOperation::max());
+            g
+        };
+        let (out, redone) = exact_pass(&mut grids, reduce, |g, m| pass(self, g, m));
+        self.pass_grids = grids;
+        self.passes_redone += redone as u64;
+        out
     }
 
     /// 3-4 with continuity density: one fused pass (density rates and forces), its sums back
@@ -577,25 +603,29 @@ impl SphStage {
     /// with a kept list the pass tests the candidates itself (see [`SphStage::one_rank_list`]).
     fn evaluate_fused(&mut self) {
         let one_rank = self.one_rank_list();
-        reset_density_sums(&mut self.parts, &self.params);
-        reset_force_sums(&mut self.parts);
-        let n_pairs = if one_rank {
-            let v = self.verlet.as_mut().expect("kept list made");
-            let (work, n) =
-                v.continuity_and_force_pass(&mut self.parts, &self.params, &mut self.pair_count);
-            self.work = work;
-            n
+        let list = if one_rank {
+            Vec::new()
         } else {
-            let list = self.pair_list();
-            self.work = continuity_and_force_pass_with(
-                &list,
-                &mut self.parts,
-                &self.params,
-                &mut self.pass_buf,
-            );
-            list.len()
+            self.pair_list()
         };
-        self.fold_back(false, true);
+        let (work, n_pairs) = self.exact(|st, g, m| {
+            if one_rank {
+                let v = st.verlet.as_mut().expect("kept list made");
+                v.continuity_and_force_pass(&mut st.parts, &st.params, &mut st.pair_count, g, m)
+            } else {
+                let w = continuity_and_force_pass_with(
+                    &list,
+                    &mut st.parts,
+                    &st.params,
+                    &mut st.pass_buf,
+                    g,
+                    m,
+                );
+                (w, list.len())
+            }
+        });
+        self.work = work;
+        self.fold_back(true, true);
         add_gravity(&mut self.parts, &self.params);
         self.stats.pairs = n_pairs as u64;
     }
@@ -680,10 +710,8 @@ impl SphStage {
     fn evaluate(&mut self, density_and_eos: bool) {
         let list = self.pair_list();
         if density_and_eos {
-            reset_density_sums(&mut self.parts, &self.params);
-            density_pass(&list, &mut self.parts, &self.params);
-            let with_rho = self.params.density == DensityMode::Summation;
-            self.fold_back(with_rho, true);
+            self.exact(|st, g, m| density_pass(&list, &mut st.parts, &st.params, g, m));
+            self.fold_back(true, false);
             update_eos(&mut self.parts, &self.params);
             // New (rho, p, c) of the owners out to their ghosts.
             let states: Vec<EosState> = self
@@ -700,9 +728,8 @@ impl SphStage {
                 self.parts.set_eos_state(n0 + g, s);
             }
         }
-        reset_force_sums(&mut self.parts);
-        self.work = force_pass(&list, &mut self.parts, &self.params);
-        self.fold_back(false, false);
+        self.work = self.exact(|st, g, m| force_pass(&list, &mut st.parts, &st.params, g, m));
+        self.fold_back(false, true);
         add_gravity(&mut self.parts, &self.params);
         self.stats.pairs = list.len() as u64;
     }
@@ -758,6 +785,9 @@ impl SphStage {
         );
         let b = [self.box_lo, self.box_hi];
         w.put("sph.box", b.as_flattened());
+        // the pair sums' grids (the same on every rank), so the sums after the stop are the
+        // same bits as without it
+        w.put("sph.pass_grids", &self.pass_grids.fitted());
         if let Some(cuts) = self.rcb.cuts() {
             let dims: Vec<u64> = cuts.iter().map(|c| c.dim as u64).collect();
             let values: Vec<f64> = cuts.iter().map(|c| c.value).collect();
@@ -823,6 +853,7 @@ impl SphStage {
         }
         self.box_lo = [b[0], b[1], b[2]];
         self.box_hi = [b[3], b[4], b[5]];
+        self.restore_pass_grids(r)?;
         if r.has("sph.cut_dims") {
             let dims: Vec<u64> = r.get("sph.cut_dims")?;
             let values: Vec<f64> = r.get("sph.cut_values")?;
@@ -878,6 +909,20 @@ impl SphStage {
         Ok(())
     }
 
+    /// The pair sums' grids a checkpoint holds (fitted afresh where it holds none).
+    fn restore_pass_grids(&mut self, r: &StateReader) -> Result<(), String> {
+        self.pass_grids = if r.has("sph.pass_grids") {
+            let m: Vec<f64> = r.get("sph.pass_grids")?;
+            let m: TermMax = m
+                .try_into()
+                .map_err(|_| "checkpoint: sph.pass_grids".to_string())?;
+            PassGrids::fitted_to(m)
+        } else {
+            PassGrids::default()
+        };
+        Ok(())
+    }
+
     /// Sets the state [`SphStage::save`] wrote on another rank count: `pieces` holds every
     /// writing rank's sections. This rank takes the block of the particles (ordered by id)
     /// that its rank number gives, with their RCB weights; the first step's rebalance moves
@@ -898,6 +943,9 @@ impl SphStage {
             searches += r.get::<u64>("sph.flags")?.get(1).copied().unwrap_or(0);
         }
         all.sort_by_key(|(rec, _)| rec.id);
+        if let Some(r) = pieces.first() {
+            self.restore_pass_grids(r)?;
+        }
         let (p, me) = (self.comm.size() as usize, self.comm.rank() as usize);
         let (lo, hi) = (all.len() * me / p, all.len() * (me + 1) / p);
         let mut parts = Particles::new();
