@@ -370,6 +370,7 @@ pub fn search_candidates(
                 kept.push((h, f));
             }
         }
+        blend_tied_normals(b, &hits, &mut kept);
         for &(h, f) in &kept {
             out.push(Contact {
                 node: j as u32,
@@ -385,6 +386,62 @@ pub fn search_candidates(
     // Stable: a node's contacts stay deepest first.
     out.sort_by_key(|c| c.node_gid);
     out
+}
+
+/// Depths within this fraction of the face's diameter are a tie ([`blend_tied_normals`]).
+pub const TIE_BAND: f64 = 1e-6;
+
+/// Makes a node's contact continuous where its face wins a tie by round-off: a hit dropped as
+/// the same contact as a kept one (one body, normals within [`SAME_NORMAL_COS`], the same side)
+/// whose depth is within `TIE_BAND d` of the kept one's (d the kept face's diameter) lends the
+/// kept contact its normal, with weight `1 - (depth_kept - depth) / (TIE_BAND d)`: at an exact
+/// tie (a node on the edge between two faces of a slightly dimpled surface, at the bottom of a
+/// dimple) the normal is the mean of the tied faces' whichever face the order puts first, and
+/// it turns into the kept face's own continuously as the depths part. The depth becomes the
+/// motion along that normal that leaves every fully lending face's plane, `max depth_f / (n_f .
+/// n)` (the node at the bottom of a symmetric dimple `eps` below its corner: `eps`, straight
+/// up), each lender's term weighted as its normal.
+/// The kept contact's face and point stay.
+fn blend_tied_normals(
+    b: &ContactBox,
+    hits: &[(pair::Hit, usize)],
+    kept: &mut [(pair::Hit, usize)],
+) {
+    let mut lenders: Vec<(pair::Hit, f64)> = Vec::new();
+    for kk in kept.iter_mut() {
+        let (k, g) = (kk.0, kk.1);
+        let band = TIE_BAND * b.quad(g, Config::End).diameter();
+        lenders.clear();
+        for &(h, f) in hits {
+            let gap = k.depth - h.depth;
+            if f == g || apart(b, g, f) || gap < 0.0 || gap >= band {
+                continue;
+            }
+            if dot(k.normal, h.normal) < SAME_NORMAL_COS {
+                continue; // another normal (kept on its own, or a valley's) or the other side
+            }
+            lenders.push((h, 1.0 - gap / band));
+        }
+        if lenders.is_empty() {
+            continue;
+        }
+        let mut n = k.normal;
+        for (h, w) in &lenders {
+            for c in 0..3 {
+                n[c] += w * h.normal[c];
+            }
+        }
+        let len = dot(n, n).sqrt();
+        let n = [n[0] / len, n[1] / len, n[2] / len];
+        // each lender's term enters with its weight, so the depth too is continuous at the band
+        let own = k.depth / dot(k.normal, n);
+        let mut depth = own;
+        for (h, w) in &lenders {
+            depth = depth.max(own + w * (h.depth / dot(h.normal, n) - own));
+        }
+        kk.0.normal = n;
+        kk.0.depth = depth;
+    }
 }
 
 /// Whether the faces of two hits of one mesh node form a valley (a concave edge or corner, seen
