@@ -157,6 +157,65 @@ pub fn values(flat: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The parts of a two-fold sum (top fold first): [`Grid2`].
+pub type Folds2 = [f64; 2];
+
+/// The bits between the two folds of a [`Grid2`].
+pub const FOLD2_BITS: i32 = 40;
+
+/// The most terms the lower fold of a [`Grid2`] sums exactly (`2^(54 - FOLD2_BITS)`).
+pub const MAX_TERMS2: u64 = 1 << (54 - FOLD2_BITS);
+
+/// Two folds, `Q2 = Q1 2^-40`: 92 bits from the top quantum's cover to the resolution (three
+/// folds 26 bits apart give 104), for sums of at most [`MAX_TERMS2`] terms (each particle's
+/// pair sums), at two thirds of [`Grid`]'s flops and storage. The same construction: the part
+/// on grid `Qk` is `(r + C_k) - C_k`, `C_k = 1.5 2^52 Q_k`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid2 {
+    /// The shift of each fold, top first.
+    pub shift: [f64; 2],
+}
+
+impl Grid2 {
+    /// The grid whose top fold sums exactly up to at least `2 top` (as [`Grid::covering`]),
+    /// resolved to `Q2 = Q1 2^-40`.
+    pub fn covering(top: f64) -> Grid2 {
+        let g = Grid::covering(top);
+        let e1 = g.top_exponent();
+        Grid2 {
+            shift: [e1, e1 - FOLD2_BITS].map(|e| 1.5 * pow2(e + 52)),
+        }
+    }
+
+    /// The parts of `x` on the two grids (`-x` gives the negated parts, as [`Grid::split`]).
+    #[inline(always)]
+    pub fn split(&self, x: f64) -> Folds2 {
+        let [c1, c2] = self.shift;
+        let t1 = (x + c1) - c1;
+        let t2 = ((x - t1) + c2) - c2;
+        [t1, t2]
+    }
+
+    /// Adds `x` to `acc`.
+    #[inline(always)]
+    pub fn add(&self, acc: &mut Folds2, x: f64) {
+        let t = self.split(x);
+        acc[0] += t[0];
+        acc[1] += t[1];
+    }
+
+    /// The exponent of the top quantum `Q1 = 2^e`.
+    pub fn top_exponent(&self) -> i32 {
+        ceil_log2(self.shift[0] / 1.5) - 52
+    }
+}
+
+/// The value of a two-fold sum (each fold exact; added top first).
+#[inline]
+pub fn value2(f: &Folds2) -> f64 {
+    f[0] + f[1]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,6 +314,44 @@ mod tests {
         let q1 = pow2(g.top_exponent());
         for x in [0.5 * q1, 1.5 * q1, 2.5 * q1, 3.5 * q1] {
             assert_eq!(g.split(x)[0], -g.split(-x)[0], "tie {x:e}");
+        }
+    }
+
+    /// Two folds: the fold sum is the terms rounded to Q2 summed as 128-bit integers (2 ulp),
+    /// and the same bits in any order and partition, for sums of up to MAX_TERMS2 terms.
+    #[test]
+    fn two_folds_sum_exactly_in_any_order() {
+        let mut xs = terms(1 << 13, 5);
+        let top: f64 = xs.iter().map(|x| x.abs()).sum();
+        let g = Grid2::covering(top);
+        let q2 = g.shift[1] / (1.5 * pow2(52));
+        let sum = |xs: &[f64]| {
+            let mut f = [0.0; 2];
+            for &x in xs {
+                g.add(&mut f, x);
+            }
+            f
+        };
+        let exact: i128 = xs.iter().map(|&x| (x / q2).round() as i128).sum();
+        let want = exact as f64 * q2;
+        let one = value2(&sum(&xs));
+        assert!(
+            (one - want).abs() <= 2.0 * f64::EPSILON * want.abs(),
+            "two-fold sum {one:e} against the integer sum {want:e} (limit 2 ulp)"
+        );
+        xs.reverse();
+        assert_eq!(value2(&sum(&xs)).to_bits(), one.to_bits(), "reversed");
+        let mut total = [0.0; 2];
+        for chunk in xs.chunks(1000).rev() {
+            let f = sum(chunk);
+            total[0] += f[0];
+            total[1] += f[1];
+        }
+        assert_eq!(value2(&total).to_bits(), one.to_bits(), "in parts");
+        assert_eq!(g.top_exponent(), Grid::covering(top).top_exponent());
+        for &x in &xs[..100] {
+            let (a, b) = (g.split(x), g.split(-x));
+            assert!(a[0] == -b[0] && a[1] == -b[1], "opposite parts of {x:e}");
         }
     }
 

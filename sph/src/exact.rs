@@ -5,23 +5,26 @@
 //!
 //! Why exact sums and not a fixed order: a fixed order (each particle's terms sorted by the
 //! partner's id) would need every pair term sent to the owner one by one, where today a ghost
-//! sends one partial sum; exact sums keep the fold-back one record per ghost (three doubles per
-//! value in place of one) and cost about ten flops per term.
+//! sends one partial sum; exact sums keep the fold-back one record per ghost (two doubles per
+//! value in place of one) and cost about eight flops per term.
 //!
-//! One grid per quantity q (force component terms, density or density-rate terms, energy-rate
-//! terms), the same on every rank: chosen from the largest term `M` of the previous pass,
-//! reduced over ranks (a maximum is exact in any order), as the grid covering
-//! `M K 2^HEADROOM_BITS` with `K = MAX_PARTNERS`. A pass is accepted when its own largest term
-//! `M'` (reduced) lies within `M 2^-SHRINK_BITS <= M' <= M 2^HEADROOM_BITS`; otherwise the pass
-//! is redone on the grid fitted to `M'` (the first pass of a run always, else only where a term
-//! grows 256-fold in one step). Accepted, each term is below half the top fold's cover and every
-//! particle's sum of fewer than `K` terms below its cover: the sums are exact (see [`binsum`]),
-//! resolved to `2^-104` of the cover: at worst `2^-58` of the largest term anywhere (about
-//! `2^-74` right after a fit).
-use binsum::{ceil_log2, pow2, Folds, Grid};
+//! Two folds 40 bits apart ([`binsum::Grid2`]), one grid per quantity q (force component terms,
+//! density or density-rate terms, energy-rate terms), the same on every rank: chosen from the
+//! largest term `M` of the previous pass, reduced over ranks (a maximum is exact in any order),
+//! as the grid covering `M K 2^(HEADROOM_BITS + 1)` with `K = MAX_PARTNERS`. A pass is accepted
+//! when its own largest term `M'` (reduced) lies within `M 2^-SHRINK_BITS <= M' <= M
+//! 2^HEADROOM_BITS`; otherwise the pass is redone on the grid fitted to `M'` (the first pass of
+//! a run always, else only where a term grows 256-fold in one step). Accepted, each term is
+//! below half the top fold's cover and every particle's sum of at most `K` terms below its
+//! cover, and the lower fold holds up to `2^14` terms: the sums are exact (see [`binsum`]),
+//! resolved to `2^-92` of the cover: at worst `2^-53` of the largest term anywhere (about
+//! `2^-69` right after a fit), as fine as a plain sum's rounding for every particle whose own
+//! terms are within `2^-20` of the largest. A particle with more than `K` partners is an error
+//! (the stage counts them).
+use binsum::{ceil_log2, pow2, Folds2, Grid2};
 
 /// The most pair terms one particle's sum may have (partners on every rank together).
-pub const MAX_PARTNERS: f64 = (1u64 << 20) as f64;
+pub const MAX_PARTNERS: f64 = (1u64 << 13) as f64;
 /// How far a pass's largest term may grow over the grid's before the pass is redone (bits).
 pub const HEADROOM_BITS: i32 = 8;
 /// How far a pass's largest term may shrink below the grid's before it is redone (bits).
@@ -43,7 +46,7 @@ pub type TermMax = [f64; 3];
 /// The grids of the three quantities and the largest terms they were fitted to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PassGrids {
-    grid: [Grid; 3],
+    grid: [Grid2; 3],
     /// The largest term each grid was fitted to (0: not fitted yet).
     fitted: TermMax,
 }
@@ -52,7 +55,7 @@ impl Default for PassGrids {
     /// Not fitted: every grid covers terms up to 1 (the first pass fits them).
     fn default() -> PassGrids {
         PassGrids {
-            grid: [Grid::covering(1.0); 3],
+            grid: [Grid2::covering(1.0); 3],
             fitted: [0.0; 3],
         }
     }
@@ -61,7 +64,7 @@ impl Default for PassGrids {
 impl PassGrids {
     /// The grid of quantity `q` ([`q`]).
     #[inline(always)]
-    pub fn grid(&self, q: usize) -> &Grid {
+    pub fn grid(&self, q: usize) -> &Grid2 {
         &self.grid[q]
     }
 
@@ -96,7 +99,7 @@ impl PassGrids {
             if now.is_finite() && now > 0.0 {
                 // cover M K 2^H, then one more doubling: every term below half the cover
                 let e = ceil_log2(now * MAX_PARTNERS) + HEADROOM_BITS + 1;
-                self.grid[k] = Grid::covering(pow2(e));
+                self.grid[k] = Grid2::covering(pow2(e));
                 self.fitted[k] = now;
             }
         }
@@ -134,11 +137,11 @@ pub fn note(m: &mut f64, x: f64) {
 
 /// The value of each of three sums (force components).
 #[inline]
-pub fn values3(f: &[Folds; 3]) -> [f64; 3] {
+pub fn values3(f: &[Folds2; 3]) -> [f64; 3] {
     [
-        binsum::value(&f[0]),
-        binsum::value(&f[1]),
-        binsum::value(&f[2]),
+        binsum::value2(&f[0]),
+        binsum::value2(&f[1]),
+        binsum::value2(&f[2]),
     ]
 }
 

@@ -8,7 +8,7 @@
 //!   into `f`, `de` and `drho` (or `rho` in summation mode);
 //! - carried when a particle migrates: every field of `ParticleRecord`.
 use crate::exact::values3;
-use binsum::{merge, value, Folds};
+use binsum::{value2, Folds2};
 use bytemuck::{Pod, Zeroable};
 
 /// The SPH particles held by one box.
@@ -102,22 +102,29 @@ pub struct ParticleRecord {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PairSums {
     /// Force components, N.
-    pub f: [Folds; 3],
+    pub f: [Folds2; 3],
     /// Density rate (continuity), kg/(m^3 s), or density (summation), kg/m^3.
-    pub dens: Folds,
+    pub dens: Folds2,
     /// Specific internal-energy rate, W/kg.
-    pub de: Folds,
+    pub de: Folds2,
+    /// Pair partners (an integer), for the bound of [`crate::exact::MAX_PARTNERS`].
+    pub partners: f64,
 }
 
 impl PairSums {
     /// Merges `o` into these sums (exact).
     #[inline]
     pub fn merge(&mut self, o: &PairSums) {
-        for c in 0..3 {
-            merge(&mut self.f[c], &o.f[c]);
+        fn merge2(a: &mut Folds2, b: &Folds2) {
+            a[0] += b[0];
+            a[1] += b[1];
         }
-        merge(&mut self.dens, &o.dens);
-        merge(&mut self.de, &o.de);
+        for c in 0..3 {
+            merge2(&mut self.f[c], &o.f[c]);
+        }
+        merge2(&mut self.dens, &o.dens);
+        merge2(&mut self.de, &o.de);
+        self.partners += o.partners;
     }
 }
 
@@ -344,7 +351,7 @@ impl Particles {
             &mut self.drho
         };
         for (o, s) in out.iter_mut().zip(&self.sums).take(self.n_owned) {
-            *o = value(&s.dens);
+            *o = value2(&s.dens);
         }
     }
 
@@ -352,7 +359,7 @@ impl Particles {
     pub fn settle_forces(&mut self) {
         for i in 0..self.n_owned {
             self.f[i] = values3(&self.sums[i].f);
-            self.de[i] = value(&self.sums[i].de);
+            self.de[i] = value2(&self.sums[i].de);
         }
     }
 

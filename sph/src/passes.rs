@@ -23,7 +23,7 @@ use crate::exact::{note, q, PassGrids, TermMax};
 use crate::kernel::{Kernel, ScaledKernel};
 use crate::params::{DensityMode, Params, Profile};
 use crate::particles::{PairSums, Particles};
-use binsum::Folds;
+use binsum::Folds2;
 
 /// The rate at which the pair forces of one pass turn kinetic into internal energy, W (J/s):
 /// sum over pairs of m_a m_b X (dW/dr/r)(v^_ab . r_ab) with X the pressure (with tensile
@@ -74,7 +74,7 @@ fn reset_density_sums(p: &mut Particles, params: &Params, g: &PassGrids, m: &mut
     let grid = g.grid(q::DENSITY);
     for i in 0..p.len() {
         let s = &mut p.sums[i].dens;
-        *s = [0.0; 3];
+        *s = [0.0; 2];
         if params.density == DensityMode::Summation && i < p.n_owned {
             let w0 = p.m[i] * k.w(0.0, p.h[i]);
             grid.add(s, w0);
@@ -253,27 +253,27 @@ struct Slot {
 }
 
 /// What a pass adds to one entry, as exact sums: force and energy rate, fold by fold (`fold[k]`
-/// = the parts on grid k of f_x, f_y, f_z, de: four lanes, split and added together; 96 bytes,
+/// = the parts on grid k of f_x, f_y, f_z, de: four lanes, split and added together; 64 bytes,
 /// aligned); the density rate is beside them (`PassBuffers::drho`).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 struct Sums {
-    fold: [[f64; 4]; 3],
+    fold: [[f64; 4]; 2],
 }
 
 /// The shifts of the four lanes of [`Sums`] on each grid: force, force, force, energy rate.
 #[inline]
-fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 3] {
+fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
     let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
-    [0, 1, 2].map(|k| [f[k], f[k], f[k], e[k]])
+    [0, 1].map(|k| [f[k], f[k], f[k], e[k]])
 }
 
-/// Adds the four terms `x` to `acc`, each split on its lane's grids (`binsum::Grid::split`,
+/// Adds the four terms `x` to `acc`, each split on its lane's grids (`binsum::Grid2::split`,
 /// lane by lane: the compiler keeps the lanes in vector registers).
 #[inline(always)]
-fn add4(acc: &mut [[f64; 4]; 3], x: [f64; 4], c: &[[f64; 4]; 3]) {
+fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
     let mut r = x;
-    for k in 0..3 {
+    for k in 0..2 {
         for l in 0..4 {
             let t = (r[l] + c[k][l]) - c[k][l];
             r[l] -= t;
@@ -294,7 +294,7 @@ pub struct PassBuffers {
     e: Vec<f64>,
     sums: Vec<Sums>,
     /// Density rate of each slot (continuity).
-    drho: Vec<Folds>,
+    drho: Vec<Folds2>,
     /// Pairs of each slot that passed the overlap test (kept candidates only).
     count: Vec<u32>,
 }
@@ -322,7 +322,7 @@ impl PassBuffers {
         self.sums.clear();
         self.sums.resize(n, Sums::default());
         self.drho.clear();
-        self.drho.resize(n, [0.0; 3]);
+        self.drho.resize(n, [0.0; 2]);
         self.count.clear();
         self.count.resize(n, 0);
     }
@@ -334,19 +334,21 @@ impl PassBuffers {
         if order.is_some() {
             // entries without a candidate have no slot: their sums are zero
             for e in p.sums.iter_mut() {
-                e.f = [[0.0; 3]; 3];
-                e.de = [0.0; 3];
+                e.f = [[0.0; 2]; 3];
+                e.de = [0.0; 2];
+                e.partners = 0.0;
                 if continuity {
-                    e.dens = [0.0; 3];
+                    e.dens = [0.0; 2];
                 }
             }
         }
         for (k, s) in self.sums.iter().enumerate() {
             let i = order.map_or(k, |o| o[k] as usize);
             let e = &mut p.sums[i];
-            let part = |l: usize| [s.fold[0][l], s.fold[1][l], s.fold[2][l]];
+            let part = |l: usize| [s.fold[0][l], s.fold[1][l]];
             e.f = [part(0), part(1), part(2)];
             e.de = part(3);
+            e.partners = self.count[k] as f64;
             if continuity {
                 e.dens = self.drho[k];
             }
@@ -593,7 +595,10 @@ fn pair_loop_for<
         }
     } else {
         for &(i, j) in pairs {
-            pair(i as usize, j as usize);
+            let (i, j) = (i as usize, j as usize);
+            count[i] += 1;
+            count[j] += 1;
+            pair(i, j);
         }
     }
     *m = [mf, md, me];

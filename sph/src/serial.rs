@@ -91,6 +91,13 @@ impl SerialSim {
             p.add_pair_sums(o, &s);
         }
         p.settle_forces();
+        let partners = (0..p.n_owned)
+            .map(|i| p.sums[i].partners)
+            .fold(0.0, f64::max);
+        assert!(
+            partners <= crate::exact::MAX_PARTNERS,
+            "a particle has {partners} pair partners, more than the exact sums hold"
+        );
         add_gravity(p, params);
         work
     }

@@ -72,6 +72,8 @@ pub struct SphStats {
     pub bytes_sent: u64,
     /// Wall time of the stage's step, max over ranks, s.
     pub wall_s: f64,
+    /// The most pair partners of any particle in the step.
+    pub max_partners: f64,
 }
 
 /// The SPH stage of one run.
@@ -287,6 +289,21 @@ impl SphStage {
         let full = self.params.profile.setup_evaluates_density_and_eos();
         self.evaluate(full);
         self.finish_stats(t0, 0.0);
+        self.check_partners()
+    }
+
+    /// The exact pair sums hold at most [`sph::exact::MAX_PARTNERS`] terms per particle: more
+    /// is an error (collective: the reduced count of `finish_stats`).
+    fn check_partners(&self) -> Result<(), String> {
+        let k = sph::exact::MAX_PARTNERS;
+        if self.stats.max_partners > k {
+            return Err(format!(
+                "SPH: a particle has {} pair partners, more than the {k} its exact sums hold: \
+                 particles packed far closer than their smoothing lengths (check the spacing, \
+                 h_factor and the material's density)",
+                self.stats.max_partners
+            ));
+        }
         Ok(())
     }
 
@@ -458,7 +475,7 @@ impl SphStage {
         }
         second_half(&mut self.parts, dt, &self.params);
         self.finish_stats(t0, self.drift_s);
-        Ok(())
+        self.check_partners()
     }
 
     /// 1. RCB over the owned particles, from the previous cuts.
@@ -747,15 +764,20 @@ impl SphStage {
             &mut sums[..],
             SystemOperation::sum(),
         );
-        let mut maxes = [0.0f64; 2];
+        let mut maxes = [0.0f64; 3];
+        let partners = (0..self.parts.n_owned)
+            .map(|i| self.parts.sums.get(i).map_or(0.0, |s| s.partners))
+            .fold(0.0, f64::max);
         comm.all_reduce_into(
             &[
                 self.stats.pairs as f64,
                 t0.elapsed().as_secs_f64() + extra_s,
+                partners,
             ][..],
             &mut maxes[..],
             SystemOperation::max(),
         );
+        self.stats.max_partners = maxes[2];
         let mean = sums[0] / comm.size() as f64;
         self.stats.pair_imbalance = if mean > 0.0 { maxes[0] / mean } else { 1.0 };
         self.stats.pairs_local = self.stats.pairs;
