@@ -427,8 +427,8 @@ fn blend_tied_normals(
         }
         let mut n = k.normal;
         for (h, w) in &lenders {
-            for c in 0..3 {
-                n[c] += w * h.normal[c];
+            for (nc, hc) in n.iter_mut().zip(h.normal) {
+                *nc += w * hc;
             }
         }
         let len = dot(n, n).sqrt();
