@@ -91,37 +91,48 @@ pub fn prepare(
     first_error(comm, err)?;
 
     // Initial velocity: the mean over the blocks of the elements around the node (weighted by
-    // element count, summed over all ranks so every copy agrees).
+    // element count). Each node's elements are counted per block (integers, summed over all
+    // ranks exactly) and the mean is then formed in block order, so every copy of a node and
+    // every rank count gives the same bits (a sum of the velocities themselves would round in
+    // the partition's order).
     let nn = m.coords.len();
-    let mut acc = vec![[0.0; 3]; nn];
-    let mut cnt = vec![[0.0; 3]; nn];
+    let nb = scene.blocks.len().max(1);
+    // the exchange sums three values per node: the counts go in groups of three blocks
+    let groups_of_3 = nb.div_ceil(3);
+    let mut parts = vec![vec![0.0; 3 * nn]; groups_of_3];
     for (e, conn) in m.elems.iter().enumerate() {
-        let v = by_tag
-            .get(&m.elem_block[e])
-            .map(|x| x.1)
-            .unwrap_or([0.0; 3]);
+        let b = elem_block[e] as usize;
         for &n in conn {
-            for c in 0..3 {
-                acc[n as usize][c] += v[c];
-                cnt[n as usize][c] += 1.0;
-            }
+            parts[b / 3][3 * n as usize + b % 3] += 1.0;
         }
     }
-    dm.exchange
-        .sum_shared(acc.as_flattened_mut())
-        .map_err(|e| e.to_string())?;
-    dm.exchange
-        .sum_shared(cnt.as_flattened_mut())
-        .map_err(|e| e.to_string())?;
-    let velocity: Vec<[f64; 3]> = acc
-        .iter()
-        .zip(cnt.iter())
-        .map(|(a, c)| {
-            if c[0] > 0.0 {
-                [a[0] / c[0], a[1] / c[1], a[2] / c[2]]
-            } else {
-                [0.0; 3]
+    for part in parts.iter_mut() {
+        dm.exchange.sum_shared(part).map_err(|e| e.to_string())?;
+    }
+    let cnt: Vec<f64> = (0..nn)
+        .flat_map(|n| (0..nb).map(move |b| (n, b)))
+        .map(|(n, b)| parts[b / 3][3 * n + b % 3])
+        .collect();
+    let block_v: Vec<[f64; 3]> = scene.blocks.iter().map(|b| b.velocity).collect();
+    let velocity: Vec<[f64; 3]> = cnt
+        .chunks_exact(nb)
+        .map(|c| {
+            let total: f64 = c.iter().sum();
+            if total == 0.0 {
+                return [0.0; 3];
             }
+            // inside one block: its velocity exactly
+            let mut present = c.iter().enumerate().filter(|(_, &ck)| ck > 0.0);
+            if let (Some((k, _)), None) = (present.next(), present.next()) {
+                return block_v[k];
+            }
+            let mut v = [0.0; 3];
+            for (k, &ck) in c.iter().enumerate().filter(|(_, &ck)| ck > 0.0) {
+                for (vc, bc) in v.iter_mut().zip(block_v[k]) {
+                    *vc += ck * bc;
+                }
+            }
+            v.map(|x| x / total)
         })
         .collect();
 
