@@ -87,7 +87,7 @@ fn reset_density_sums(p: &mut Particles, params: &Params, g: &PassGrids, m: &mut
 /// (Monaghan 1992, eq. 2.16; LIGGGHTS `fix sph/density/continuity`). Summation: rho_a = m_a
 /// W(0, h_a) + sum m_b W_ab, the same for b. Sets the density sums of every entry (exact, on
 /// `g`; largest terms into `m`) and the owned entries' `drho` (or `rho`) from them. Flops per
-/// pair ~30 + 2 x 11 for the sums, bytes ~200 (positions, velocities, h, m).
+/// pair ~30 + 2 x 8 for the sums, bytes ~200 (positions, velocities, h, m).
 pub fn density_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
