@@ -11,7 +11,8 @@
 //! - [`input`], [`output`]: the scene, gmsh and LIGGGHTS files; history, fields, report.
 //!
 //! The CLI and the analysis tools (`tdyn compare`, `sweep`, `validate`, ...) live in the `tdyn`
-//! crate; the MPI self-tests of the kernels are behind the `selftest` feature.
+//! crate; the MPI self-tests of the kernels and the output are the `tdyn_selftest` binary of the
+//! `tdyn-tests` package.
 #![warn(missing_docs)]
 // Index loops over nodes and components read like the formulas they implement; `!(x > 0.0)`
 // deliberately also rejects NaN.
@@ -21,7 +22,5 @@ pub mod driver;
 pub mod input;
 pub mod kernels;
 pub mod output;
-#[cfg(feature = "selftest")]
-pub mod selftest;
 pub mod stages;
 pub mod transfer;

@@ -129,14 +129,6 @@ enum Cmd {
     /// measure fails or a run fails. Run it without mpirun (it launches `mpirun -np N tdyn
     /// run` itself): `tdyn validate [--cases a,b] [--np N] [--fast] [--out DIR]`
     Validate(ValidateArgs),
-    /// Check the parallel kernels under mpirun: `mpirun -np 3 tdyn selftest comm`
-    Selftest {
-        /// Which kernel: `comm`, `rcb`, `contact` or `sph`.
-        kernel: String,
-        /// Seed of the random patterns.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
     /// Mesh a gmsh .geo file (cached): `tdyn mesh meshes/bar.geo -p N=80`
     Mesh {
         /// The .geo file.
@@ -406,7 +398,6 @@ fn main() -> ExitCode {
         Cmd::Compare(a) => compare(a, &petsc_args),
         Cmd::Crosscheck(a) => crosscheck(a),
         Cmd::Validate(a) => validate(a),
-        Cmd::Selftest { kernel, seed } => selftest(&kernel, seed),
         Cmd::Mesh { geo, params } => mesh(&geo, params),
     }
 }
@@ -632,40 +623,6 @@ fn validate(a: ValidateArgs) -> ExitCode {
     } else {
         eprintln!("tdyn validate: failed: {}", failed.join("; "));
         ExitCode::FAILURE
-    }
-}
-
-/// `tdyn selftest`: one parallel kernel's self-test on MPI's world; every rank agrees on the
-/// outcome, each failing rank says why.
-fn selftest(kernel: &str, seed: u64) -> ExitCode {
-    let Some(universe) = mpi::initialize() else {
-        eprintln!("tdyn: MPI could not be initialised");
-        return ExitCode::FAILURE;
-    };
-    let world = universe.world();
-    let res = match kernel {
-        "comm" => coupling::selftest::comm::selftest(&world, seed),
-        "rcb" => coupling::selftest::rcb::selftest(&world, seed),
-        "contact" => coupling::selftest::contact::selftest(&world, seed),
-        "sph" => coupling::selftest::sph::selftest(&world, seed),
-        k => Err(format!(
-            "unknown kernel {k:?} (expected comm, rcb, contact or sph)"
-        )),
-    };
-    // Every rank must agree on the outcome.
-    let failed = coupling::kernels::collective::max(&world, res.is_err() as i32 as f64) > 0.0;
-    match res {
-        Ok(msg) if !failed => {
-            if world.rank() == 0 {
-                println!("{msg}");
-            }
-            ExitCode::SUCCESS
-        }
-        Ok(_) => ExitCode::FAILURE,
-        Err(e) => {
-            eprintln!("tdyn selftest: rank {}: {e}", world.rank());
-            ExitCode::FAILURE
-        }
     }
 }
 

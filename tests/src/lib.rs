@@ -17,20 +17,29 @@ pub fn root() -> PathBuf {
 /// The release `tdyn` binary, built once if missing.
 pub fn tdyn() -> PathBuf {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let target = std::env::var("CARGO_TARGET_DIR")
-            .map(PathBuf::from)
-            .unwrap_or_else(|_| root().join("target"));
-        let bin = target.join("release").join("tdyn");
-        let st = Command::new(env!("CARGO"))
-            .args(["build", "--release", "-p", "tdyn", "--bins"])
-            .current_dir(root())
-            .status()
-            .expect("cargo build");
-        assert!(st.success(), "building tdyn failed");
-        bin
-    })
-    .clone()
+    BIN.get_or_init(|| release_bin("tdyn", "tdyn")).clone()
+}
+
+/// The release binary `tdyn_selftest` of this package (the kernels' and the output's MPI
+/// self-tests, kept out of `tdyn`), built on first use.
+pub fn selftest_bin() -> PathBuf {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| release_bin("tdyn-tests", "tdyn_selftest"))
+        .clone()
+}
+
+/// Builds package `package`'s release binaries and returns binary `name`'s path.
+fn release_bin(package: &str, name: &str) -> PathBuf {
+    let target = std::env::var("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| root().join("target"));
+    let st = Command::new(env!("CARGO"))
+        .args(["build", "--release", "-p", package, "--bins"])
+        .current_dir(root())
+        .status()
+        .expect("cargo build");
+    assert!(st.success(), "building {package} failed");
+    target.join("release").join(name)
 }
 
 /// A fresh directory for one test.
@@ -180,12 +189,12 @@ pub fn c_dilatational() -> f64 {
     (E * (1.0 - NU) / ((1.0 + NU) * (1.0 - 2.0 * NU)) / RHO).sqrt()
 }
 
-/// Runs `mpirun -np NP tdyn selftest KERNEL --seed SEED` and asserts it passed (the self-test
+/// Runs `mpirun -np NP tdyn_selftest KERNEL --seed SEED` and asserts it passed (the self-test
 /// itself compares with its references and says "passed").
 pub fn selftest(np: usize, kernel: &str, seed: u64, timeout_s: u32) {
     let o = mpirun(np, timeout_s)
-        .arg(tdyn())
-        .args(["selftest", kernel, "--seed", &seed.to_string()])
+        .arg(selftest_bin())
+        .args([kernel, "--seed", &seed.to_string()])
         .output()
         .expect("mpirun could not be started");
     let out = String::from_utf8_lossy(&o.stdout);

@@ -15,7 +15,7 @@ fn comm_plan_delivers_every_item_once_at_1_to_5_ranks() {
 
 #[test]
 fn rcb_balances_queries_and_rebalances_at_1_to_5_ranks() {
-    // Each run checks (see coupling/src/selftest/rcb.rs): every id owned once against the ids
+    // Each run checks (see tests/src/bin/tdyn_selftest/rcb.rs): every id owned once against the ids
     // handed in; unit-weight loads within one item; weighted loads within ceil(log2 P) x the
     // largest weight of the mean; each item inside its rank's box; point and box queries equal
     // a brute-force test of every rank's box; identical points, a plane, a line, 0 / 1 / P-1
@@ -29,7 +29,7 @@ fn rcb_balances_queries_and_rebalances_at_1_to_5_ranks() {
 
 #[test]
 fn parallel_contact_detection_equals_serial_at_1_to_4_ranks() {
-    // coupling/src/selftest/contact.rs: 400 random moving faces, 200 nodes crossing one of them
+    // tests/src/bin/tdyn_selftest/contact.rs: 400 random moving faces, 200 nodes crossing one of them
     // during the step, 200 flying at random, owners and face holders at random, 3 steps (the
     // later ones start from the previous cuts). The (node, face) pairs and depths found over all
     // ranks equal one serial box holding everything (1e-12 m; the contact crate checks that
@@ -44,7 +44,7 @@ fn parallel_contact_detection_equals_serial_at_1_to_4_ranks() {
 
 #[test]
 fn parallel_sph_equals_serial_and_computes_each_pair_once_at_1_to_4_ranks() {
-    // coupling/src/selftest/sph.rs: 512 jittered particles with random velocities (2 m/s, so
+    // tests/src/bin/tdyn_selftest/sph.rs: 512 jittered particles with random velocities (2 m/s, so
     // they cross rank boundaries), densities (pressures of both signs), smoothing lengths and
     // some fixed ones, gravity, viscosity and tensile correction, 10 steps; LIGGGHTS profile,
     // standard profile, and standard periodic in x and y. Against the sph crate's serial run

@@ -1,9 +1,9 @@
-//! Self-test of parallel RCB under mpirun (`tdyn selftest rcb`): every check compares with an
+//! Self-test of parallel RCB under mpirun (`tdyn_selftest rcb`): every check compares with an
 //! independent reference (the list of ids handed in, a brute-force test against every rank's
 //! box, the arithmetic bound on the balance).
-use crate::kernels::collective::first_error;
-use crate::kernels::rcb::{Rcb, RcbItem, RcbStats};
 use bytemuck::{Pod, Zeroable};
+use coupling::kernels::collective::first_error;
+use coupling::kernels::rcb::{Rcb, RcbItem, RcbStats};
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -74,7 +74,7 @@ fn check(
     let ids: Vec<u64> = items.iter().map(|t| t.id).collect();
     let mut counts = vec![0i32; p as usize];
     comm.all_gather_into(&(ids.len() as i32), &mut counts[..]);
-    let mut all = crate::kernels::collective::all_gather_varcount(comm, &ids);
+    let mut all = coupling::kernels::collective::all_gather_varcount(comm, &ids);
     all.sort_unstable();
     if all.len() as u64 != n_total || all.iter().enumerate().any(|(k, &id)| id != k as u64) {
         fail(format!(

@@ -1,11 +1,11 @@
-//! Self-test of the parallel SPH stage (`tdyn selftest sph`): a blob of jittered particles with
+//! Self-test of the parallel SPH stage (`tdyn_selftest sph`): a blob of jittered particles with
 //! random velocities and densities (pressures of both signs), run for several steps on the RCB
 //! decomposition at any rank count, against the serial reference of the `sph` crate (one box
 //! holding everything) on the same particles: the number of pairs computed over all ranks must
 //! equal the serial count (the COI rule computes each pair exactly once), positions, velocities,
 //! densities and pressures must agree to round-off, and total momentum must stay constant to
 //! round-off. Run for the LIGGGHTS and standard profiles, open and periodic.
-use crate::stages::sph::stage::SphStage;
+use coupling::stages::sph::stage::SphStage;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -86,7 +86,7 @@ fn gather(comm: &SimpleCommunicator, p: &Particles) -> Vec<[f64; 9]> {
             ]
         })
         .collect();
-    let all = crate::kernels::collective::all_gather_varcount(comm, &mine);
+    let all = coupling::kernels::collective::all_gather_varcount(comm, &mine);
     let mut rows: Vec<[f64; 9]> = all
         .chunks(9)
         .map(|c| std::array::from_fn(|k| c[k]))
@@ -185,7 +185,7 @@ pub fn selftest(comm: &SimpleCommunicator, seed: u64) -> Result<String, String> 
                 es.abs_momentum
             ));
         }
-        crate::kernels::collective::first_error(comm, err)?;
+        coupling::kernels::collective::first_error(comm, err)?;
         lines.push(format!(
             "{profile:?}{}: {} particles, {steps} steps, pairs = serial every step, worst difference {worst:.1e} of scale, {migrated} migrations",
             if periodic { " periodic x,y" } else { "" },

@@ -1,4 +1,4 @@
-//! Self-test of the parallel contact stage (`tdyn selftest contact`): random moving faces and
+//! Self-test of the parallel contact stage (`tdyn_selftest contact`): random moving faces and
 //! nodes (a third of the free ones SPH particles with a radius, plus a crowd of free
 //! particles), some crossing a face during the step, spread over the ranks at random; the
 //! particles change homes every step and the crowd gathers in one corner from step 6. The
@@ -6,11 +6,11 @@
 //! everything (whose search the `contact` crate checks against brute force), with the same
 //! depths and forces, and the forces must sum to zero (momentum); the kept decomposition must
 //! be rebuilt exactly when the skin (step 3) or the balance (step 7) asks for it.
-use crate::kernels::collective::first_error;
-use crate::stages::contact::stage::{ContactStage, FullFace};
 use contact::{
     push_back, search, ContactBox, FaceRecord, NodeRecord, PushBackParams, FLAG_PARTICLE,
 };
+use coupling::kernels::collective::first_error;
+use coupling::stages::contact::stage::{ContactStage, FullFace};
 
 /// Contact radius of the test's particles, m (a tenth of a face's half-width, about the
 /// crossing depths of the test).
@@ -150,7 +150,7 @@ fn gather_found(comm: &SimpleCommunicator, found: &[(u64, u64, f64)]) -> Vec<(u6
         .iter()
         .flat_map(|c| [c.0, c.1, c.2.to_bits()])
         .collect();
-    let all = crate::kernels::collective::all_gather_varcount(comm, &flat);
+    let all = coupling::kernels::collective::all_gather_varcount(comm, &flat);
     let mut out: Vec<(u64, u64, f64)> = all
         .chunks(3)
         .map(|c| (c[0], c[1], f64::from_bits(c[2])))

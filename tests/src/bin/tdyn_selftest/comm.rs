@@ -1,10 +1,10 @@
-//! The unstructured-communication plan's self-test under mpirun (`tdyn selftest comm`).
-use crate::kernels::comm::CommPlan;
+//! The unstructured-communication plan's self-test under mpirun (`tdyn_selftest comm`).
+use coupling::kernels::comm::CommPlan;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
-/// Self-test under mpirun (`tdyn selftest comm`): random send patterns including empty ranks,
+/// Self-test under mpirun (`tdyn_selftest comm`): random send patterns including empty ranks,
 /// self-sends and all-to-one; every item arrives exactly once where it was sent, `reverse`
 /// returns each item's own value, and a gather then scatter-add round trip sums exactly.
 /// Returns a description of the first failure.

@@ -13,7 +13,8 @@ fn output_round_trip_is_exact_at_1_2_3_ranks() {
         let _ = std::fs::remove_dir_all(&dir);
         let o = Command::new("timeout")
             .args([RUN_TIMEOUT_S, "mpirun", "-np", &np.to_string()])
-            .arg(env!("CARGO_BIN_EXE_tdyn_selftest_output"))
+            .arg(env!("CARGO_BIN_EXE_tdyn_selftest"))
+            .arg("output")
             .arg(&dir)
             .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
             .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")

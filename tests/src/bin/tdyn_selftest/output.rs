@@ -1,10 +1,10 @@
-//! Self-test of the output under mpirun (`tdyn_selftest_output DIR`): a small hex grid and a
+//! Self-test of the output under mpirun (`tdyn_selftest output DIR`): a small hex grid and a
 //! few particles, scattered over the ranks in an order unrelated to their ids, written as two
 //! frames; rank 0 then reads `fields.h5` back and checks every row by id (exact equality), the
 //! `time` attributes, that `fields.xmf` is balanced XML whose every data path exists in
 //! `fields.h5` with the dimensions it states, the history CSV round trip and `report.json`.
-use crate::output::Values;
-use crate::output::{
+use coupling::output::Values;
+use coupling::output::{
     Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame, OutputError,
     ParticleFrame, Report, StageStats,
 };
