@@ -1,6 +1,6 @@
 //! Sums whose value does not depend on the order of their terms: the energies and momenta of
 //! history.csv, the FE nodal forces' energy terms and the SPH pair sums are the same bits at any
-//! rank count and with any element kernel (SCENE.md, "One answer").
+//! rank count and with any element kernel (docs/scene.md, "One answer").
 //!
 //! A floating-point sum depends on the order of its terms (each addition rounds), and the order
 //! follows the partition: each rank sums its own nodes, and the ranks' partial sums are added in

@@ -3,7 +3,7 @@
 //! Hexahedra use the VTK (and gmsh) node order: `0-1-2-3` the bottom face counter-clockwise seen
 //! from above, `4-5-6-7` the top face above them. A face of the mesh is a *boundary* face when
 //! exactly one hexahedron of the whole mesh uses it (one used by two is interior). A *body* is a
-//! connected set of elements, two elements being connected when they share a node (SCENE.md).
+//! connected set of elements, two elements being connected when they share a node (docs/scene.md).
 
 use std::collections::HashMap;
 

@@ -3,7 +3,7 @@
 //!
 //! Each scene case takes a valid scene from `scenes/`, applies one to three random mutations
 //! (a line deleted, duplicated or swapped, a value replaced by a hostile one, a key renamed, a
-//! stray character, the text cut short) and parses it. The contract (SCENE.md "Exit status"):
+//! stray character, the text cut short) and parses it. The contract (docs/scene.md "Exit status"):
 //! no panic, only `Ok` or a `SceneError` whose key and message are not empty, on one line.
 //! Each mesh case takes a gmsh mesh of a bundled `.geo` (msh 2.2), mutates it the same way (and
 //! swaps nodes within an element row, writes hostile numbers into a row) and checks it: no

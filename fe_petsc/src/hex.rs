@@ -23,7 +23,7 @@ pub const NODE_XI: [[f64; 3]; 8] = [
     [-1.0, 1.0, 1.0],
 ];
 
-/// Hourglass and bulk-viscosity coefficients (SCENE.md `run.hourglass`, `run.bulk_viscosity`).
+/// Hourglass and bulk-viscosity coefficients (docs/scene.md `run.hourglass`, `run.bulk_viscosity`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HexControls {
     /// Hourglass control (default: physical stabilisation, see [`crate::hourglass`]).

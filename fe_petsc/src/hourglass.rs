@@ -66,7 +66,7 @@ pub const GAMMA: [[f64; 8]; 4] = {
     g
 };
 
-/// The hourglass control (SCENE.md `run.hourglass`).
+/// The hourglass control (docs/scene.md `run.hourglass`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Hourglass {
     /// Assumed-strain physical stabilisation with the material's current tangent; `scale`

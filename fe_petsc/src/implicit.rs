@@ -17,7 +17,7 @@
 //! **Element.** The nodal forces f(u(n+1)) come from [`hex::update`] itself (mean-gradient
 //! hexahedron, hourglass control, Hughes-Winget incremental rotation), given
 //! the trial positions x(n) + du and the step's mean velocity du/dt, starting from the element
-//! state at t(n): the two modes differ only in time integration. Bulk viscosity is off (SCENE.md:
+//! state at t(n): the two modes differ only in time integration. Bulk viscosity is off (docs/scene.md:
 //! explicit only).
 //!
 //! **Tangent** (per element, 24 x 24): K = V S^T C S + K_hg, with K_hg the hourglass control's

@@ -1,7 +1,7 @@
 //! The grids of the pair sums: each particle's force, energy rate and density (rate) are summed
 //! exactly ([`binsum`], binned summation), so they do not depend on the order of the pairs, on
 //! which rank computed a pair (the centre-of-interaction rule) or on how the ghosts' partial sums
-//! are added to their owners: the same bits at any rank count (SCENE.md, "One answer").
+//! are added to their owners: the same bits at any rank count (docs/scene.md, "One answer").
 //!
 //! Why exact sums and not a fixed order: a fixed order (each particle's terms sorted by the
 //! partner's id) would need every pair term sent to the owner one by one, where today a ghost

@@ -37,7 +37,7 @@ use crate::params::{DensityMode, Params, Profile};
 use crate::particles::Particles;
 use crate::passes::update_eos;
 
-/// Courant factor of the SPH stable step (SCENE.md): dt = 0.3 min h/(c + |v|).
+/// Courant factor of the SPH stable step (docs/scene.md): dt = 0.3 min h/(c + |v|).
 pub const CFL_FACTOR: f64 = 0.3;
 
 /// The SPH stable step over the owned particles, 0.3 min h/(c + |v|) (infinite when there are

@@ -1,7 +1,7 @@
 //! The energies of a run over time, and the block `tdyn run` ends with.
 //!
 //! [`plot`] draws `energies.png` and `energies.svg` in an output folder from its `history.csv`
-//! (SCENE.md's energy columns): kinetic, internal, hourglass and contact energy, the external
+//! (docs/scene.md's energy columns): kinetic, internal, hourglass and contact energy, the external
 //! work, and their balance `K + I + H + C - W`, which stays at the initial energy E(0) when the
 //! run conserves energy; below, the balance's relative error over time. `tdyn run` calls it at
 //! the end of a run, `tdyn plot OUT_DIR` for an existing folder. [`closing`] is the text that
@@ -121,7 +121,7 @@ fn read_history(path: &Path) -> Result<History, String> {
     }
     let work = term("external_work");
     let balance: Vec<f64> = energy.iter().zip(&work).map(|(e, w)| e - w).collect();
-    // SCENE.md: |E(t) - E(0) - W(t)| / max(E(0) + |W(t)|, 1e-30); history.csv has it, but a
+    // docs/scene.md: |E(t) - E(0) - W(t)| / max(E(0) + |W(t)|, 1e-30); history.csv has it, but a
     // particle-only history may not: the same formula from the columns.
     let error = column("energy_error").unwrap_or_else(|| {
         energy

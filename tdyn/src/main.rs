@@ -142,7 +142,7 @@ enum Cmd {
 /// The arguments of `tdyn run`.
 #[derive(clap::Args)]
 struct RunArgs {
-    /// The scene file (TOML, see SCENE.md).
+    /// The scene file (TOML, see docs/scene.md).
     scene: PathBuf,
     /// Output directory (default: out/<scene name>).
     #[arg(long)]
@@ -233,7 +233,7 @@ struct SweepArgs {
 /// The arguments of `tdyn compare`.
 #[derive(clap::Args)]
 struct CompareArgs {
-    /// The scene file (TOML, see SCENE.md; an optional [compare] table says what to measure).
+    /// The scene file (TOML, see docs/scene.md; an optional [compare] table says what to measure).
     scene: PathBuf,
     /// Modes to run, comma-separated (default: explicit,implicit; explicit alone for a
     /// scene only the explicit integrator runs: particles, contact, meshed fluid).

@@ -222,7 +222,7 @@ pub fn parse_measure(spec: &str, probe_columns: &[String]) -> Result<Measure, St
         || column.starts_with("hourglass_energy.")
         || column.starts_with("internal_energy.")
     {
-        // the SCENE.md columns, and the per-block energies (`hourglass_energy.<group>`)
+        // the docs/scene.md columns, and the per-block energies (`hourglass_energy.<group>`)
         "history.csv"
     } else {
         return Err(format!(

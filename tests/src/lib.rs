@@ -96,7 +96,7 @@ pub fn run(np: usize, scene: &Path, out: &Path) -> Output {
 }
 
 /// Runs with `extra` arguments after the scene (e.g. `--param H=0.025`) and insists on success;
-/// a run with contact must keep SCENE.md's promise that contact never gives energy back
+/// a run with contact must keep docs/scene.md's promise that contact never gives energy back
 /// ([`assert_contact_energy_never_falls`], the model's mass from report.json).
 pub fn run_ok_args(np: usize, scene: &Path, out: &Path, extra: &[&str]) {
     let o = launch(np, scene, out, extra);
@@ -111,7 +111,7 @@ pub fn run_ok(np: usize, scene: &Path, out: &Path) {
 }
 
 /// [`run_ok`] for a run whose `contact_energy` may fall by up to `limit` of the energy scale
-/// between rows (SCENE.md's 1e-3 elsewhere): only for a case the caller measured and explains.
+/// between rows (docs/scene.md's 1e-3 elsewhere): only for a case the caller measured and explains.
 pub fn run_ok_with_contact_fall(np: usize, scene: &Path, out: &Path, limit: f64) {
     assert_ran(&run(np, scene, out), &format!("at np {np}"));
     assert_contact_energy_falls_at_most(out, limit);
@@ -254,7 +254,7 @@ pub fn validate_fast(cases: &str, np: usize, tag: &str) -> (bool, String) {
     (o.status.success(), report)
 }
 
-/// SCENE.md "Contact never gives energy back": between consecutive rows of `out`'s
+/// docs/scene.md "Contact never gives energy back": between consecutive rows of `out`'s
 /// history.csv, `contact_energy` falls by at most `1e-3` of the run's energy scale there, the
 /// largest of |E(0)| + |W_external|, the kinetic and internal (plus hourglass) energies reached
 /// so far, and the floor `0.5 mass (1 mm/s)^2` (`mass`: the model's, kg, from its geometry).

@@ -1,4 +1,4 @@
-//! Each documented scene mistake (SCENE.md) gives one clear line naming the key, a non-zero exit,
+//! Each documented scene mistake (docs/scene.md) gives one clear line naming the key, a non-zero exit,
 //! and no hang, at np 2.
 use std::path::{Path, PathBuf};
 use tdyn_tests::*;
@@ -203,7 +203,7 @@ fn tetrahedral_meshes_are_refused_with_a_reason() {
 }
 
 /// One case of issue 16: a scene (and its arguments) that once hung a rank or ran on silently,
-/// and what its one line must say (SCENE.md "Exit status": the file, the key or the element
+/// and what its one line must say (docs/scene.md "Exit status": the file, the key or the element
 /// and its place, what was expected).
 struct Case {
     name: String,

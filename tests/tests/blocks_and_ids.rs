@@ -18,7 +18,7 @@ fn raw_column(path: &Path, name: &str) -> Vec<String> {
         .collect()
 }
 
-/// `step` and `contacts` are written as integers (SCENE.md): digits only, and `step` counts
+/// `step` and `contacts` are written as integers (docs/scene.md): digits only, and `step` counts
 /// 0, 1, 2, ... (history every step).
 fn assert_integer_columns(history: &Path, with_contacts: bool) {
     let steps = raw_column(history, "step");
@@ -26,14 +26,14 @@ fn assert_integer_columns(history: &Path, with_contacts: bool) {
         assert_eq!(
             s,
             &k.to_string(),
-            "history.csv row {k}: step written as the integer {k} (SCENE.md), got {s:?}"
+            "history.csv row {k}: step written as the integer {k} (docs/scene.md), got {s:?}"
         );
     }
     if with_contacts {
         for c in raw_column(history, "contacts") {
             assert!(
                 !c.is_empty() && c.bytes().all(|b| b.is_ascii_digit()),
-                "contacts written as an integer (SCENE.md), got {c:?}"
+                "contacts written as an integer (docs/scene.md), got {c:?}"
             );
         }
     }
@@ -58,11 +58,11 @@ fn resting_cube_scene(dir: &Path, run: &str) -> std::path::PathBuf {
 
 #[test]
 fn block_resting_on_a_fixed_support_under_gravity_runs_past_step_100() {
-    // Reference: energy conservation. Starting from rest (E0 = 0), SCENE.md's energy error
+    // Reference: energy conservation. Starting from rest (E0 = 0), docs/scene.md's energy error
     // |E - W_ext| / |W_ext| divides round-off-sized energies in the first steps (the issue's
     // block on a plate stopped at step 1 with 9.6e-2); it is checked from step 100. With the
     // default max_energy_error (0.05) the run must reach its end (over 300 steps), its
-    // SCENE.md error from step 100 on must stay under that default (measured 1.1e-2, at the
+    // docs/scene.md error from step 100 on must stay under that default (measured 1.1e-2, at the
     // top of the elastic oscillation gravity starts, where W_ext is smallest), and the
     // absolute balance |KE + IE + HG - W_ext| from step 100 on must stay under 1e-3 of the
     // largest |W_ext| so far (5e-3: velocity Verlet's energy oscillates by O((omega dt)^2) in
@@ -106,7 +106,7 @@ fn block_resting_on_a_fixed_support_under_gravity_runs_past_step_100() {
         );
         assert!(
             late < 0.05,
-            "np {np}: SCENE.md energy error from step 100 {late:e} (default max_energy_error 0.05)"
+            "np {np}: docs/scene.md energy error from step 100 {late:e} (default max_energy_error 0.05)"
         );
         assert!(
             balance < 5e-3,
@@ -291,7 +291,7 @@ fn write_particle_file(path: &Path) -> Vec<(u64, [f64; 3])> {
 fn particle_ids_are_the_files_and_lattice_ids_follow_the_largest() {
     // Reference: the scene's own particle file. fields.h5's particles/id holds the file's ids
     // (100, 107, ..., 282), each at the position the file gives it at t = 0 (exactly), and the
-    // 2 x 2 x 2 lattice particles get 283..290 (after the largest file id, SCENE.md); the
+    // 2 x 2 x 2 lattice particles get 283..290 (after the largest file id, docs/scene.md); the
     // LIGGGHTS-style dump prints the same ids. Both drivers: particles only, and with a mesh
     // (a bar far away). np 1 and 3.
     for with_mesh in [false, true] {

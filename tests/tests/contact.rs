@@ -105,7 +105,7 @@ fn bars_meeting_head_on_exchange_velocities_after_2l_over_c() {
         );
         histories.push(rows);
     }
-    // The SCENE.md columns (the contact stage's balance and bytes after them depend on the
+    // The docs/scene.md columns (the contact stage's balance and bytes after them depend on the
     // rank count by nature).
     let physics = 13;
     let scale = histories[0]
@@ -561,7 +561,7 @@ fn flat_block_on_a_plate_never_lets_a_node_through_whatever_the_alignment() {
     //   two (asserted: the largest motion between frames is under half the plate).
     // - momentum: nothing holds the bodies, so it stays the cube's initial m v to 1e-12 of it.
     // - rank independence: every frame's node and element values in fields.h5 the same bits at
-    //   np 1, 2, 3 (SCENE.md "One answer"), and so the contact count and step of every row;
+    //   np 1, 2, 3 (docs/scene.md "One answer"), and so the contact count and step of every row;
     //   the history's energy sums (reduced in rank order) within 1e-10 of their largest value.
     // The check itself is checked: the last frame with the cube moved down until its lowest
     // node is half an element below the plate's top shows a node over a quarter element deep.

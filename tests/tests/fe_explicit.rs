@@ -293,7 +293,7 @@ fn taylor_impact_hourglass_share_and_momentum() {
     assert!(err < 0.01, "energy error {err:e} (1 %)");
     let ke0 = rows[0][h.iter().position(|c| c == "kinetic_energy").unwrap()];
     // 1/2 m v^2 of the quarter bar, less the nodes on the wall: the symmetry plane acts on the
-    // initial velocities (SCENE.md), and the lumped mass of the wall's nodes is half an element
+    // initial velocities (docs/scene.md), and the lumped mass of the wall's nodes is half an element
     // layer, m / (2 N) with N = 30 elements along the bar.
     let m = 8930.0 * 0.0254 * 0.0038 * 0.0038;
     let expect = 0.5 * m * (1.0 - 1.0 / 60.0) * 190.0 * 190.0;
@@ -510,7 +510,7 @@ fn a_mesh_file_in_random_order_gives_the_same_history() {
 fn every_element_kernel_gives_the_same_bits() {
     // `tdyn run --kernel`: the copper Taylor bar (J2 plasticity, large distortion) at np 2 with
     // the scalar kernel (one element at a time), four lanes and, where the CPU has AVX-512F,
-    // eight. Reference: the scalar kernel's run; the property is exact equality (SCENE.md, "One
+    // eight. Reference: the scalar kernel's run; the property is exact equality (docs/scene.md, "One
     // answer": history.csv but the run's measurements, probes.csv and every frame's values in
     // fields.h5 the same bytes with any `--kernel`): one kernel source, the same IEEE
     // operations in the same order in every lane and width, no fused multiply-adds.

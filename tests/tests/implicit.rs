@@ -26,7 +26,7 @@ const N: usize = 20;
 const L: f64 = 1.0;
 /// Initial velocity, m/s.
 const V0: f64 = 1.0;
-/// Linear bulk-viscosity coefficient (SCENE.md default): it lowers the explicit estimate.
+/// Linear bulk-viscosity coefficient (docs/scene.md default): it lowers the explicit estimate.
 const BV_LINEAR: f64 = 0.06;
 
 /// The explicit stable limit the driver reports for this mesh (FB estimate for a cube of side

@@ -1,4 +1,4 @@
-//! One answer at any rank count (SCENE.md "One answer"): the same bits, not the same to a
+//! One answer at any rank count (docs/scene.md "One answer"): the same bits, not the same to a
 //! tolerance. The reference is the run on one rank; the property is exact equality, which no
 //! tolerance can hide.
 use tdyn_tests::*;

@@ -18,7 +18,7 @@ fn scene_variant(name: &str, dir: &std::path::Path, edits: &[(&str, &str)]) -> s
     path
 }
 
-/// Final values of the SCENE.md energy columns and the probe columns.
+/// Final values of the docs/scene.md energy columns and the probe columns.
 fn finals(out: &std::path::Path) -> Vec<(String, f64)> {
     let mut v = Vec::new();
     let (h, rows) = read_csv(&out.join("history.csv"));
@@ -93,7 +93,7 @@ fn container_crush_coarse_at_1_and_3_ranks() {
     //   elements deeper than 1e-3 of the wall (6 um) below its skin (self-contact: no wall
     //   passes through another), nor inside the rigid wall (the independent check of
     //   tests/src/frames.rs, the one the tube test uses);
-    // - energy: the balance (SCENE.md) within 2 % throughout (issue 7);
+    // - energy: the balance (docs/scene.md) within 2 % throughout (issue 7);
     // - np 1 and np 3: final energies and probe values equal within 1 % of the largest energy
     //   (issue 7; measured 1e-11: the contacts here never share a face across boxes).
     let wall_t = 0.006;
@@ -210,7 +210,7 @@ fn container_crush_np2_lanes4_keeps_contact_energy_and_matches_np3_bits() {
     // step inside a face out at its depth over dt, through a face resting on the fixed wall:
     // kinetic energy 18.6 kJ -> 47.2 kJ, contact_energy 8.6 J -> -30.9 kJ, and the energy check
     // stopped the run. References: the energy balance (error under 1e-3: measured 1.4e-5 over
-    // the whole run) and SCENE.md's contact energy, which never falls by more than 1e-3 of the
+    // the whole run) and docs/scene.md's contact energy, which never falls by more than 1e-3 of the
     // energy scale between rows (checked by `run_ok_args`), to 0.65 ms.
     let dir = workdir("container_np2_lanes4");
     let out = dir.join("out");
@@ -229,7 +229,7 @@ fn container_crush_np2_lanes4_keeps_contact_energy_and_matches_np3_bits() {
         Some(0),
         "the bound alone keeps the energy: the guard never acted"
     );
-    // One answer (SCENE.md): the same run on 3 ranks with the default kernel (eight lanes where
+    // One answer (docs/scene.md): the same run on 3 ranks with the default kernel (eight lanes where
     // the CPU has AVX-512F) gives the same bytes: fields, probes and history but the run's
     // measurements.
     let other = dir.join("np3_auto");

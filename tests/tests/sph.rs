@@ -12,7 +12,7 @@ fn sod_shock_tube_plateau_within_3_percent_at_1_to_4_ranks() {
     // masses), periodic across the tube, Wendland kernel, summation density, h = 1.8 (m/rho)^(1/3),
     // energy equation, Monaghan alpha 1, beta 2. Probes at t = 0.2 left of the contact (x = 0.1)
     // and between the contact and the shock (x = 0.27): pressure and velocity within 3 % of the
-    // exact p*, u*; the probes and the history at np 2, 3, 4 the same bits as np 1's (SCENE.md,
+    // exact p*, u*; the probes and the history at np 2, 3, 4 the same bits as np 1's (docs/scene.md,
     // "One answer": the pair sums are exact, whichever rank computes a pair of a periodic image).
     let mut base: Option<std::path::PathBuf> = None;
     for np in 1..=4 {

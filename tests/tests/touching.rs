@@ -1,12 +1,12 @@
 //! Bodies that touch from the start (`contact::pushback`, "Only the step's own penetration";
-//! SCENE.md "Contact never gives energy back"): a tank of five touching parts held at its outer
+//! docs/scene.md "Contact never gives energy back"): a tank of five touching parts held at its outer
 //! faces, the same tank with water falling in, and a cube resting on a plate. Each stays as it
 //! is, with no spurious impulse, no inversion and no energy out of contact.
 //!
 //! References: statics (a held steel tank or a cube on a held plate under gravity deflects by
 //! rho g L^2 / E ~ 1e-10 m: asserted under 1e-6 m); the energy balance (error under 2 %, the
 //! issue's bound); the contact energy, which kinematic contact can only increase (falls under
-//! 1e-3 of the energy scale between rows: SCENE.md); mass conservation of the water (every
+//! 1e-3 of the energy scale between rows: docs/scene.md); mass conservation of the water (every
 //! particle inside the tank's interior, x, y in [-L/2, L/2] and z >= 0, to a tenth of the
 //! particle spacing).
 use tdyn_tests::frames::*;

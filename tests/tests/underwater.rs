@@ -68,7 +68,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
         // push-back against the start velocity, and the products pressed on the cavity from
         // rest hold the second half-kick's kinetic energy, sum m (a dt/2)^2 / 2, which
         // contact books as its own (docs/scene.md, `[contact]`). Allowed here up to
-        // 3e-3 (SCENE.md: 1e-3); issue 27 keeps it open.
+        // 3e-3 (docs/scene.md: 1e-3); issue 27 keeps it open.
         run_ok_with_contact_fall(
             np,
             &root().join("scenes/underwater_explosion.toml"),
@@ -76,7 +76,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
             3e-3,
         );
         let m = measure(&out);
-        // SCENE.md's energy error, the products' JWL internal energy (7 GJ/m^3 at t = 0)
+        // docs/scene.md's energy error, the products' JWL internal energy (7 GJ/m^3 at t = 0)
         // included: measured 1.46 % (almost all of it in the first steps of the detonated
         // charge against its walls).
         assert!(

@@ -1,6 +1,6 @@
 //! A mesh node against a face: the node is a point (contact radius 0).
 //!
-//! Rules (SCENE.md, "Contact"): pairs between different bodies are always searched (in one pass,
+//! Rules (docs/scene.md, "Contact"): pairs between different bodies are always searched (in one pass,
 //! only the other body's nodes against a master body's faces); pairs within one body only with
 //! `self_contact`; a node never contacts a face it is a corner of (compared by global id, so a
 //! box's copies cannot defeat the rule).

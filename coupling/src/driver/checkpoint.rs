@@ -1,4 +1,4 @@
-//! Checkpoint and restart (SCENE.md "Runs, restarts and earlier results").
+//! Checkpoint and restart (docs/scene.md "Runs, restarts and earlier results").
 //!
 //! A checkpoint is a folder `checkpoint/` in the run's output folder: one file per rank,
 //! `rank-RRRRRR-step-SSSSSSSSSS.bin`, holding that rank's state as named arrays

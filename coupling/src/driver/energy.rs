@@ -1,9 +1,9 @@
 //! The energy balance: the check that stops a run whose energy error passes
-//! `run.max_energy_error` (SCENE.md), and the watch on each block's hourglass energy.
+//! `run.max_energy_error` (docs/scene.md), and the watch on each block's hourglass energy.
 use crate::input::scene::Scene;
 use fe_petsc::explicit::ExplicitFe;
 
-/// `run.max_energy_error` is checked from this step on (SCENE.md). The measure is relative to
+/// `run.max_energy_error` is checked from this step on (docs/scene.md). The measure is relative to
 /// E(0) + |W_external|: a body starting from rest (E0 = 0) under gravity has, in its first
 /// steps, velocity Verlet's O(dt^2) energy error against energies of round-off size (a steel
 /// block resting on a plate: 9.6e-2 at step 1), while by step 100 the external work dominates
@@ -148,7 +148,7 @@ pub fn early_note(step: u64) -> String {
 /// while an instability, which grows geometrically, passes it within a few steps.
 pub const FLOOR_SPEED: f64 = 1e-3;
 
-/// The energy scale `S(t)` the energy error is measured against (SCENE.md "Energies"): the
+/// The energy scale `S(t)` the energy error is measured against (docs/scene.md "Energies"): the
 /// largest of `|E(0)| + |W_external(t)|`, the largest kinetic energy and the largest internal
 /// (plus hourglass) energy reached so far, and the floor `0.5 M FLOOR_SPEED^2` of the model's
 /// mass `M`. It exists when E(0) = 0: a scene at rest does not stop on round-off.
@@ -193,7 +193,7 @@ impl EnergyScale {
     }
 }
 
-/// Relative energy error (SCENE.md): |E - E0 - W| / S, with E the total energy (kinetic,
+/// Relative energy error (docs/scene.md): |E - E0 - W| / S, with E the total energy (kinetic,
 /// internal, hourglass, contact), E0 its value at t = 0, W the external work and S the run's
 /// energy scale ([`EnergyScale::value`]).
 pub fn energy_error(e: f64, e0: f64, w: f64, scale: f64) -> f64 {
@@ -213,7 +213,7 @@ mod tests {
         b
     }
 
-    /// SCENE.md: max_energy_error from step 100; before it only a blow-up (an error over 10,
+    /// docs/scene.md: max_energy_error from step 100; before it only a blow-up (an error over 10,
     /// or over max_energy_error when that is larger).
     #[test]
     fn energy_error_limit_from_step_100() {

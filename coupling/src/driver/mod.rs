@@ -661,7 +661,7 @@ fn check_fixed_dt(
 }
 
 /// The energy balance over the run: E(0), the largest errors, the per-block hourglass watch, and
-/// the stop when the error passes `run.max_energy_error` (SCENE.md).
+/// the stop when the error passes `run.max_energy_error` (docs/scene.md).
 struct EnergyCheck {
     file: String,
     e0: f64,

@@ -1,4 +1,4 @@
-//! Where a run writes, without destroying an earlier run (SCENE.md "Runs, restarts and earlier
+//! Where a run writes, without destroying an earlier run (docs/scene.md "Runs, restarts and earlier
 //! results"): a folder that already holds a run's files is refused unless the user asked for it
 //! to be replaced (`--overwrite`); without `--out` the default `out/<scene>` is kept and the run
 //! goes to the first free `out/<scene>-2`, `-3`, ... instead.
@@ -144,7 +144,7 @@ mod tests {
         d
     }
 
-    /// SCENE.md: a run never destroys an earlier run's results without being asked.
+    /// docs/scene.md: a run never destroys an earlier run's results without being asked.
     #[test]
     fn an_earlier_run_is_kept_unless_overwrite_is_asked() {
         let base = tmp("keep");

@@ -1,4 +1,4 @@
-//! The run's files while it runs (SCENE.md "Output"): `fields.h5` + `fields.xmf` frames of
+//! The run's files while it runs (docs/scene.md "Output"): `fields.h5` + `fields.xmf` frames of
 //! every stage, `history.csv` rows summed over the stages, `probes.csv`, particle dumps.
 use super::setup::Model;
 use crate::input::scene::Scene;
@@ -12,10 +12,10 @@ use mpi::traits::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The columns history.csv writes as integers (SCENE.md).
+/// The columns history.csv writes as integers (docs/scene.md).
 pub const HISTORY_INTEGER_COLUMNS: [&str; 2] = ["step", "contacts"];
 
-/// Columns of history.csv, in order (SCENE.md).
+/// Columns of history.csv, in order (docs/scene.md).
 pub const HISTORY_COLUMNS: [&str; 13] = [
     "step",
     "time",
@@ -37,7 +37,7 @@ pub const HISTORY_COLUMNS: [&str; 13] = [
 /// to point (all ranks, RCB included), both of the step.
 pub const CONTACT_HISTORY_COLUMNS: [&str; 2] = ["contact_imbalance", "contact_bytes"];
 
-/// history.csv's per-block columns, after the SCENE.md ones: `hourglass_energy.<group>` and
+/// history.csv's per-block columns, after the docs/scene.md ones: `hourglass_energy.<group>` and
 /// `internal_energy.<group>` for each `[[block]]` in scene order.
 pub fn block_history_columns(scene: &Scene) -> Vec<String> {
     scene

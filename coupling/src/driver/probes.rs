@@ -4,7 +4,7 @@
 //! global id that contains it (to within 1e-9 m). The owning rank evaluates it; one sum over the
 //! ranks gathers every probe's values (non-owners contribute zero). In a run with SPH particles,
 //! a probe outside the mesh is a particle probe: Shepard-interpolated from the particles
-//! (SCENE.md "Probes").
+//! (docs/scene.md "Probes").
 use crate::input::scene::{Probe, ProbeField};
 use crate::kernels::collective::first_error;
 use crate::stages::sph::stage::SphStage;
@@ -14,7 +14,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
-/// Distance within which a point counts as inside an element, m (SCENE.md).
+/// Distance within which a point counts as inside an element, m (docs/scene.md).
 const LOCATE_TOL_M: f64 = 1e-9;
 
 /// A probe located on this rank (or not).

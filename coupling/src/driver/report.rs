@@ -1,4 +1,4 @@
-//! report.json at the end of a run (SCENE.md): the counts, each stage's section (written by the
+//! report.json at the end of a run (docs/scene.md): the counts, each stage's section (written by the
 //! stage), the output's cost, the energy balance, and the run's timing.
 use super::energy::HourglassWatch;
 use super::setup::Model;

@@ -1,8 +1,8 @@
 //! The run's clock: when the run ends, the size of the next step, and when a history row or a
-//! field frame is due (SCENE.md: at t >= k * every - 1e-6 dt, and at the end).
+//! field frame is due (docs/scene.md: at t >= k * every - 1e-6 dt, and at the end).
 use crate::input::scene::Scene;
 
-/// Tolerance on frame and row times, in steps (SCENE.md: t >= k * every - 1e-6 dt).
+/// Tolerance on frame and row times, in steps (docs/scene.md: t >= k * every - 1e-6 dt).
 pub const TIME_EPS_STEPS: f64 = 1e-6;
 
 /// The clock of a run.

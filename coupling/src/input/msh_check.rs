@@ -1,4 +1,4 @@
-//! The input mesh checked on rank 0 before anything reads it collectively (SCENE.md "Exit
+//! The input mesh checked on rank 0 before anything reads it collectively (docs/scene.md "Exit
 //! status"; issue 16).
 //!
 //! PETSc's gmsh reader runs on rank 0 inside a collective call: when it fails (a truncated file,

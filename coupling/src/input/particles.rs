@@ -4,7 +4,7 @@
 //! Two numberings. Inside the run a particle has a dense index 0..N (`ParticleSeed::id`, the
 //! SPH stage's `id`: rows of `fields.h5`, tie-breaks, contact node ids): particles read from
 //! files first, in ascending order of the file's ids, then generated particles, entry by entry
-//! in scene order, lattice points in x-fastest order. What the user sees (SCENE.md: `fields.h5`'s
+//! in scene order, lattice points in x-fastest order. What the user sees (docs/scene.md: `fields.h5`'s
 //! `particles/id`, the LIGGGHTS dumps) are the particle file's own ids (CSV `id` column, or the
 //! LIGGGHTS data file's atom ids), and for lattice particles the ids after the largest file id
 //! (0, 1, ... without files), in the same order: [`ParticleIds`] maps one to the other, and

@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::Path;
 
 /// The columns written, after `ITEM: ATOMS`. `id` is the particle's id as `fields.h5` writes it
-/// (SCENE.md): for particles read from a LIGGGHTS data file, LIGGGHTS's own atom ids; `type` is 1 for a moving particle
+/// (docs/scene.md): for particles read from a LIGGGHTS data file, LIGGGHTS's own atom ids; `type` is 1 for a moving particle
 /// and 2 for a fixed one (the peer decks' fluid and boundary types); `fx..fz` is the force
 /// m a in N as LIGGGHTS dumps it; `mass` is ours (LIGGGHTS's decks do not dump it).
 pub const DUMP_COLUMNS: &str = "id type x y z vx vy vz fx fy fz rho p mass";

@@ -3,7 +3,7 @@
 //! Rows are ordered by global id (row r holds id r), so that `elements/connectivity`, which holds
 //! node ids, indexes `nodes/position` directly and ParaView draws the mesh from the `.xmf`.
 //! Particles are ordered by their dense index and `particles/id` holds the ids the user gave
-//! (`ParticleFrame::labels`: the particle file's, SCENE.md).
+//! (`ParticleFrame::labels`: the particle file's, docs/scene.md).
 //! Before writing, each field is moved to the rank that owns its id range, which then writes
 //! its contiguous hyperslab, a bounded number of rows at a time ([`super::by_id`]).
 use super::by_id::{Plan, RowFn, CHUNK_ROWS};

@@ -9,7 +9,7 @@ const FLUSH_EVERY_ROWS: usize = 64;
 
 /// A CSV file with a header row; numbers are written in Rust's shortest round-trip form, so a
 /// value read back is bit-identical. Columns marked integer (`integer_columns`: history.csv's
-/// `step` and `contacts`, SCENE.md) are written as integers (`12`, not `12.0`).
+/// `step` and `contacts`, docs/scene.md) are written as integers (`12`, not `12.0`).
 pub struct History {
     out: Option<BufWriter<std::fs::File>>,
     rows: usize,

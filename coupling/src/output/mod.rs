@@ -1,4 +1,4 @@
-//! The run's output (SCENE.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
+//! The run's output (docs/scene.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
 //! parallel, `history.csv` and `probes.csv` by rank 0, `report.json`.
 mod by_id;
 mod dump;

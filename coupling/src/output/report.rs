@@ -32,7 +32,7 @@ impl StageStats {
     }
 }
 
-/// The run's report (SCENE.md).
+/// The run's report (docs/scene.md).
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     /// MPI ranks.

@@ -13,7 +13,7 @@
 //! `mul_add`, `mul_sub` and `neg_mul_add` round twice (a multiply, then an add), `recip` and
 //! `rsqrt` are the IEEE quotient and square root: the same operations, in the same order, as
 //! the four lanes (the kernel's source is one, `batch/hex.rs`), so the eight-lane results are
-//! the four-lane results bit for bit (SCENE.md, "One answer": the same bits with any
+//! the four-lane results bit for bit (docs/scene.md, "One answer": the same bits with any
 //! `--kernel`). Fused multiply-adds and the 14-bit reciprocal estimates with Newton steps were
 //! faster (the divider is one per core) but gave other bits than every CPU without AVX-512.
 //!

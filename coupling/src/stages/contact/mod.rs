@@ -153,7 +153,7 @@ pub const ENERGY_TOL: f64 = 1e-9;
 /// ([`energy_guard`]).
 pub const ENERGY_INJECTION_BUDGET: f64 = 1e-6;
 
-/// Contact never gives energy back (SCENE.md; `contact::pushback`, "Only the step's own
+/// Contact never gives energy back (docs/scene.md; `contact::pushback`, "Only the step's own
 /// penetration"). The push-back is an impulse on the half-step velocities `v(n+1/2)` that the
 /// drift moved the nodes with; for its forces scaled by `alpha` it changes their kinetic
 /// energy by `dK(alpha) = alpha A + alpha^2 B` (`A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 /

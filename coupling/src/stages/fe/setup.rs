@@ -1,5 +1,5 @@
 //! From a scene and a distributed mesh to the FE stage's set-up: materials per element, initial
-//! velocities, and nodal constraints (with the scene errors SCENE.md lists for shared nodes).
+//! velocities, and nodal constraints (with the scene errors docs/scene.md lists for shared nodes).
 use crate::input::scene::{BoundaryKind, Scene};
 use crate::kernels::collective::first_error;
 use fe_petsc::explicit::Constraint;

@@ -105,7 +105,7 @@ impl Sph {
         Ok(())
     }
 
-    /// The owned particles as a field frame (the particle file's ids, SCENE.md); `ranks` and
+    /// The owned particles as a field frame (the particle file's ids, docs/scene.md); `ranks` and
     /// `labels` are its storage.
     pub fn frame<'a>(
         &'a self,

@@ -1,0 +1,581 @@
+//! The scene's checks: every table in the order docs/scene.md documents it, the first mistake
+//! reported with the file, the key and what was expected.
+use super::*;
+
+mod stages;
+pub use stages::validate_groups;
+use stages::*;
+
+/// Model keys by model (besides `name`, `model`, `density`, `eos`).
+const MODEL_KEYS: &[(&str, &[&str])] = &[
+    ("elastic", &["youngs_modulus", "poisson_ratio"]),
+    (
+        "j2_plastic",
+        &[
+            "youngs_modulus",
+            "poisson_ratio",
+            "yield_stress",
+            "hardening_modulus",
+        ],
+    ),
+    (
+        "johnson_cook",
+        &[
+            "youngs_modulus",
+            "poisson_ratio",
+            "a",
+            "b",
+            "n",
+            "c",
+            "eps_dot0",
+        ],
+    ),
+    ("fluid", &[]),
+];
+
+/// Names the scene file in every error.
+struct Ctx {
+    file: String,
+}
+
+impl Ctx {
+    /// An error at `key`.
+    fn err(&self, key: &str, message: String) -> SceneError {
+        SceneError {
+            file: self.file.clone(),
+            key: key.to_string(),
+            message,
+        }
+    }
+}
+
+/// A number as a message shows it: plain when short, in exponent form when very large or
+/// very small.
+pub fn num_text(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A positive finite number.
+fn pos(v: f64) -> bool {
+    v > 0.0 && v.is_finite()
+}
+
+/// Parses scene text; `file` names it in errors and anchors relative paths. The tables are
+/// checked in the order they are documented (docs/scene.md); the first mistake is reported.
+pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
+    let cx = Ctx {
+        file: file.display().to_string(),
+    };
+    let raw = deserialize(&cx, text)?;
+    let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
+    check_run(&cx, &raw.run)?;
+    let meshes = check_meshes(&cx, &dir, &raw.mesh, raw.particles.is_empty())?;
+    let materials = check_materials(&cx, &raw.material)?;
+    check_blocks(&cx, &raw.block, &materials)?;
+    let boundaries = check_boundaries(&cx, &raw.boundary)?;
+    check_particles(&cx, &raw.particles, &materials)?;
+    if let Some(s) = &raw.sph {
+        check_sph(&cx, s)?;
+    }
+    if let Some(c) = &raw.contact {
+        check_contact(&cx, c)?;
+    }
+    check_probes(&cx, &raw.probe)?;
+    check_output(&cx, &raw.output)?;
+    if let Some(c) = &raw.compare {
+        check_compare(&cx, c, &raw.probe)?;
+    }
+    Ok(Scene {
+        file: file.to_path_buf(),
+        dir,
+        title: raw.title,
+        gravity: raw.gravity,
+        run: raw.run,
+        meshes,
+        materials,
+        blocks: raw.block,
+        boundaries,
+        particles: raw.particles,
+        sph: raw.sph,
+        contact: raw.contact,
+        probes: raw.probe,
+        output: raw.output,
+        compare: raw.compare,
+        sweep: raw.sweep,
+    })
+}
+
+/// The TOML text into the raw tables (serde: unknown keys and wrong types refused, with their
+/// path).
+fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
+    let de = toml::Deserializer::new(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        // One line (toml's parse messages run over several).
+        let mut msg = inner
+            .message()
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
+        if msg.is_empty() {
+            // toml says nothing at some ends of input (`model = ` as the last line).
+            msg = "invalid TOML (a value missing?)".into();
+        }
+        if let Some(r) = inner.span() {
+            let (line, column) = line_column(text, r.start);
+            msg = format!("{msg} (line {line}, column {column})");
+        }
+        let key = if path.is_empty() || path == "." {
+            "(scene)".to_string()
+        } else {
+            path
+        };
+        cx.err(&key, msg)
+    })
+}
+
+/// The 1-based line and column (in characters) of byte `at` of `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[start..].chars().count() + 1)
+}
+
+/// `[run]`: times, step, intervals, energy limit, bulk viscosity and hourglass control.
+fn check_run(cx: &Ctx, r: &Run) -> Result<(), SceneError> {
+    if !pos(r.end_time) {
+        return Err(cx.err(
+            "run.end_time",
+            format!("expected a positive number of seconds, got {}", r.end_time),
+        ));
+    }
+    if !(r.dt_safety > 0.0 && r.dt_safety <= 1.0) {
+        return Err(cx.err(
+            "run.dt_safety",
+            format!("expected a fraction in (0, 1], got {}", r.dt_safety),
+        ));
+    }
+    if let Some(dt) = r.dt {
+        if !pos(dt) {
+            return Err(cx.err(
+                "run.dt",
+                format!("expected a positive step in seconds, got {dt}"),
+            ));
+        }
+    } else if r.mode == Mode::Implicit {
+        return Err(cx.err(
+            "run.dt",
+            "mode = \"implicit\" needs a fixed step run.dt (seconds)".into(),
+        ));
+    }
+    if let Some(o) = r.output_every {
+        if !pos(o) {
+            return Err(cx.err(
+                "run.output_every",
+                format!("expected a positive interval in seconds, got {o}"),
+            ));
+        }
+    }
+    if !(r.history_every >= 0.0 && r.history_every.is_finite()) {
+        return Err(cx.err(
+            "run.history_every",
+            format!("expected seconds >= 0, got {}", r.history_every),
+        ));
+    }
+    if !pos(r.max_energy_error) {
+        return Err(cx.err(
+            "run.max_energy_error",
+            format!("expected a positive fraction, got {}", r.max_energy_error),
+        ));
+    }
+    for (k, v) in [
+        ("run.bulk_viscosity.linear", r.bulk_viscosity.linear),
+        ("run.bulk_viscosity.quadratic", r.bulk_viscosity.quadratic),
+        (
+            "run.hourglass.coefficient",
+            r.hourglass.coefficient.unwrap_or(0.0),
+        ),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(cx.err(k, format!("expected a coefficient >= 0, got {v}")));
+        }
+    }
+    if !HOURGLASS_KINDS.contains(&r.hourglass.kind.as_str()) {
+        return Err(cx.err(
+            "run.hourglass.kind",
+            format!(
+                "expected one of {}, got \"{}\"",
+                HOURGLASS_KINDS.join(", "),
+                r.hourglass.kind
+            ),
+        ));
+    }
+    if !(r.max_steps >= 1.0 && r.max_steps.is_finite()) {
+        return Err(cx.err(
+            "run.max_steps",
+            format!("expected a number of steps >= 1, got {}", r.max_steps),
+        ));
+    }
+    work_bounds(cx, r, r.dt)
+}
+
+/// The work a run asks for, refused with its numbers before it starts (docs/scene.md "Exit
+/// status"): more than `run.max_steps` steps, more than [`MAX_FRAMES`] frames or [`MAX_ROWS`]
+/// rows, or intervals [`MAX_OUTPUTS_PER_STEP`] times shorter than the step. `dt` is the step
+/// when known (a fixed `run.dt`, or the first step the run takes); the scene check passes the
+/// fixed one, the run the one it starts with ([`check_work`]).
+fn work_bounds(cx: &Ctx, r: &Run, dt: Option<f64>) -> Result<(), SceneError> {
+    let end = r.end_time;
+    if let Some(dt) = dt {
+        let steps = end / dt;
+        if !(steps <= r.max_steps) {
+            let (key, step) = match r.dt {
+                Some(_) => ("run.dt", "run.dt"),
+                None => ("run.end_time", "the stable step times run.dt_safety"),
+            };
+            return Err(cx.err(
+                key,
+                format!(
+                    "run.end_time = {end:e} s in steps of {dt:.3e} s ({step}) is {steps:.3e} steps, more than run.max_steps = {:e}: check the units (SI: m, kg, s) and the values; raise run.max_steps to run it anyway",
+                    r.max_steps
+                ),
+            ));
+        }
+    }
+    let intervals = [
+        ("run.output_every", "frames", r.output_every, MAX_FRAMES),
+        (
+            "run.history_every",
+            "rows",
+            Some(r.history_every).filter(|h| *h > 0.0),
+            MAX_ROWS,
+        ),
+    ];
+    for (key, what, every, max) in intervals {
+        let Some(every) = every else { continue };
+        let every_step = if what == "rows" {
+            " (history_every = 0 writes a row every step)"
+        } else {
+            ""
+        };
+        let count = end / every;
+        if count > max {
+            return Err(cx.err(
+                key,
+                format!(
+                    "{every:e} s over run.end_time = {end:e} s is {count:.3e} {what}, more than the {max:e} a run may write: use a longer interval{every_step}"
+                ),
+            ));
+        }
+        if let Some(dt) = dt.filter(|dt| every * MAX_OUTPUTS_PER_STEP < *dt) {
+            return Err(cx.err(
+                key,
+                format!(
+                    "{every:e} s is {:.3e} times shorter than the step {dt:e} s: {what} come at most once a step; use an interval of at least the step{every_step}",
+                    dt / every
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The work bounds of `work_bounds` at the step the run starts with (`dt`: the fixed step,
+/// or the safety factor times the stable step), once it is known.
+pub fn check_work(scene: &Scene, dt: f64) -> Result<(), SceneError> {
+    let cx = Ctx {
+        file: scene.file.display().to_string(),
+    };
+    work_bounds(&cx, &scene.run, Some(dt))
+}
+
+/// `[[mesh]]`: each file a .geo or .msh that exists (relative to the scene's directory); a
+/// scene needs a mesh unless it has particles.
+fn check_meshes(
+    cx: &Ctx,
+    dir: &Path,
+    raw: &[RawMesh],
+    no_particles: bool,
+) -> Result<Vec<MeshDef>, SceneError> {
+    let mut meshes = Vec::new();
+    for (i, m) in raw.iter().enumerate() {
+        let f = dir.join(&m.file);
+        let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if ext != "geo" && ext != "msh" {
+            return Err(cx.err(
+                &format!("mesh[{i}].file"),
+                format!("expected a .geo or .msh file, got {}", m.file.display()),
+            ));
+        }
+        if !f.exists() {
+            return Err(cx.err(
+                &format!("mesh[{i}].file"),
+                format!("no such file: {}", f.display()),
+            ));
+        }
+        let def = MeshDef {
+            file: f,
+            params: m.params.clone(),
+            translate: m.translate,
+        };
+        crate::input::gmsh::check_params(&def)
+            .map_err(|(name, why)| cx.err(&format!("mesh[{i}].params.{name}"), why))?;
+        meshes.push(def);
+    }
+    if meshes.is_empty() && no_particles {
+        return Err(cx.err(
+            "mesh",
+            "a scene needs at least one [[mesh]] or [[particles]]".into(),
+        ));
+    }
+    Ok(meshes)
+}
+
+/// `[[material]]`: each table checked against its model's keys and built once (a fluid is
+/// built when a block meshes it: [`check_blocks`]).
+fn check_materials(cx: &Ctx, raw: &[toml::Table]) -> Result<Vec<MaterialSpec>, SceneError> {
+    let mut materials: Vec<MaterialSpec> = Vec::new();
+    for (i, t) in raw.iter().enumerate() {
+        let spec = check_material(cx, i, t, &materials)?;
+        if spec.model != "fluid" {
+            if let Err(e) = fe_petsc::material::build_material(&spec) {
+                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+            }
+        }
+        materials.push(spec);
+    }
+    Ok(materials)
+}
+
+/// One `[[material]]` table (the `i`-th): name (unique among `earlier`), model, density, the
+/// model's keys, and a fluid's `eos`.
+fn check_material(
+    cx: &Ctx,
+    i: usize,
+    t: &toml::Table,
+    earlier: &[MaterialSpec],
+) -> Result<MaterialSpec, SceneError> {
+    let key = |k: &str| format!("material[{i}].{k}");
+    let name = match t.get("name") {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(_) => return Err(cx.err(&key("name"), "expected a string".into())),
+        None => return Err(cx.err(&key("name"), "missing (every material needs a name)".into())),
+    };
+    if earlier.iter().any(|m| m.name == name) {
+        return Err(cx.err(
+            &key("name"),
+            format!("material \"{name}\" is defined twice"),
+        ));
+    }
+    let model = match t.get("model") {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(_) => return Err(cx.err(&key("model"), "expected a string".into())),
+        None => {
+            return Err(cx.err(
+                &key("model"),
+                "missing (elastic, j2_plastic, johnson_cook or fluid)".into(),
+            ))
+        }
+    };
+    let Some((_, keys)) = MODEL_KEYS.iter().find(|(m, _)| *m == model) else {
+        return Err(cx.err(&key("model"), format!("unknown model \"{model}\" (expected one of elastic, j2_plastic, johnson_cook, fluid)")));
+    };
+    let density = match t.get("density").map(number) {
+        Some(Ok(d)) if pos(d) => d,
+        Some(Ok(d)) => {
+            return Err(cx.err(
+                &key("density"),
+                format!("expected a positive density in kg/m^3, got {d}"),
+            ))
+        }
+        Some(Err(e)) => return Err(cx.err(&key("density"), e)),
+        None => return Err(cx.err(&key("density"), "missing (kg/m^3)".into())),
+    };
+    let mut params = BTreeMap::new();
+    let mut eos = None;
+    for (k, v) in t {
+        match k.as_str() {
+            "name" | "model" | "density" => {}
+            "eos" if model == "fluid" => eos = Some(check_eos(cx, i, v)?),
+            _ => {
+                if !keys.contains(&k.as_str()) {
+                    let mut all: Vec<&str> = vec!["name", "model", "density"];
+                    all.extend(keys.iter());
+                    if model == "fluid" {
+                        all.push("eos");
+                    }
+                    return Err(cx.err(
+                        &key(k),
+                        format!(
+                            "unknown key for model {model} (expected one of {})",
+                            all.join(", ")
+                        ),
+                    ));
+                }
+                let x = number(v).map_err(|e| cx.err(&key(k), e))?;
+                params.insert(k.clone(), x);
+            }
+        }
+    }
+    for need in keys.iter() {
+        if !params.contains_key(*need) {
+            return Err(cx.err(
+                &key(need),
+                format!("missing (model {model} needs {})", keys.join(", ")),
+            ));
+        }
+    }
+    if model == "fluid" && eos.is_none() {
+        return Err(cx.err(
+            &key("eos"),
+            "missing: a fluid needs eos = { kind = ..., ... }".into(),
+        ));
+    }
+    Ok(MaterialSpec {
+        name,
+        model,
+        density,
+        params,
+        eos,
+    })
+}
+
+/// The `eos` table of fluid material `i`: a kind from the eos crate's name table and exactly
+/// that kind's keys, each a number.
+fn check_eos(cx: &Ctx, i: usize, v: &toml::Value) -> Result<EosSpec, SceneError> {
+    let key = |k: &str| format!("material[{i}].{k}");
+    let Some(et) = v.as_table() else {
+        return Err(cx.err(&key("eos"), "expected a table { kind = ..., ... }".into()));
+    };
+    let kind = et
+        .get("kind")
+        .and_then(|k| k.as_str())
+        .unwrap_or("")
+        .to_string();
+    // the equation-of-state keys by kind: the eos crate's table
+    let Some(ek) = ::eos::kind(&kind).map(|k| k.keys) else {
+        return Err(cx.err(
+            &key("eos.kind"),
+            format!(
+                "unknown or missing eos kind \"{kind}\" (expected one of {})",
+                ::eos::kind_names()
+            ),
+        ));
+    };
+    let mut ep = BTreeMap::new();
+    for (ekk, ev) in et {
+        if ekk == "kind" {
+            continue;
+        }
+        if !ek.contains(&ekk.as_str()) {
+            return Err(cx.err(
+                &key(&format!("eos.{ekk}")),
+                format!("unknown key for eos {kind} (expected {})", ek.join(", ")),
+            ));
+        }
+        let x = number(ev).map_err(|e| cx.err(&key(&format!("eos.{ekk}")), e))?;
+        ep.insert(ekk.clone(), x);
+    }
+    for need in ek.iter() {
+        if !ep.contains_key(*need) {
+            return Err(cx.err(
+                &key(&format!("eos.{need}")),
+                format!("missing (eos {kind} needs {})", ek.join(", ")),
+            ));
+        }
+    }
+    Ok(EosSpec { kind, params: ep })
+}
+
+/// The material names, for messages.
+fn material_names(materials: &[MaterialSpec]) -> String {
+    materials
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `[[block]]`: each names a defined material; a fluid meshed by a block is built here (its
+/// EOS keys and values checked); particles take their EOS from the SPH side.
+fn check_blocks(cx: &Ctx, blocks: &[Block], materials: &[MaterialSpec]) -> Result<(), SceneError> {
+    for (i, b) in blocks.iter().enumerate() {
+        if let Some(j) = blocks[..i].iter().position(|o| o.group == b.group) {
+            return Err(cx.err(
+                &format!("block[{i}].group"),
+                format!(
+                    "group \"{}\" already has a block (block[{j}]): one [[block]] per physical volume",
+                    b.group
+                ),
+            ));
+        }
+        if !materials.iter().any(|m| m.name == b.material) {
+            return Err(cx.err(
+                &format!("block[{i}].material"),
+                format!(
+                    "no material named \"{}\" (materials: {})",
+                    b.material,
+                    material_names(materials)
+                ),
+            ));
+        }
+    }
+    for (i, m) in materials.iter().enumerate() {
+        if m.model == "fluid" && blocks.iter().any(|b| b.material == m.name) {
+            if let Err(e) = fe_petsc::material::build_material(m) {
+                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `[[boundary]]`: the kind, and a velocity exactly when the kind is `velocity`.
+fn check_boundaries(cx: &Ctx, raw: &[RawBoundary]) -> Result<Vec<Boundary>, SceneError> {
+    let mut boundaries = Vec::new();
+    for (i, b) in raw.iter().enumerate() {
+        let kind = match (b.kind.as_str(), b.velocity) {
+            ("fixed", None) => BoundaryKind::Fixed,
+            ("symmetry", None) => BoundaryKind::Symmetry,
+            ("velocity", Some(v)) => BoundaryKind::Velocity(v),
+            ("velocity", None) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].velocity"),
+                    "missing: kind = \"velocity\" needs velocity = [vx, vy, vz]".into(),
+                ))
+            }
+            ("fixed" | "symmetry", Some(_)) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].velocity"),
+                    format!(
+                        "only kind = \"velocity\" takes a velocity (this boundary is \"{}\")",
+                        b.kind
+                    ),
+                ))
+            }
+            (k, _) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].kind"),
+                    format!("unknown kind \"{k}\" (expected fixed, velocity or symmetry)"),
+                ))
+            }
+        };
+        boundaries.push(Boundary {
+            group: b.group.clone(),
+            kind,
+        });
+    }
+    Ok(boundaries)
+}

@@ -1,0 +1,341 @@
+//! The checks of the SPH, contact, probe, output and tool tables, and of the mesh's physical
+//! groups against the names the scene gives.
+use super::*;
+
+/// `[[particles]]`: a material with an eos, a positive spacing and h factor, `liggghts_type`
+/// only with a data file.
+pub(super) fn check_particles(
+    cx: &Ctx,
+    particles: &[ParticlesDef],
+    materials: &[MaterialSpec],
+) -> Result<(), SceneError> {
+    for (i, p) in particles.iter().enumerate() {
+        match materials.iter().find(|m| m.name == p.material) {
+            None => {
+                return Err(cx.err(
+                    &format!("particles[{i}].material"),
+                    format!(
+                        "no material named \"{}\" (materials: {})",
+                        p.material,
+                        material_names(materials)
+                    ),
+                ))
+            }
+            Some(m) if m.eos.is_none() => {
+                return Err(cx.err(
+                    &format!("particles[{i}].material"),
+                    format!(
+                        "material \"{}\" has no eos: particles need a fluid material with an eos",
+                        p.material
+                    ),
+                ))
+            }
+            _ => {}
+        }
+        if !pos(p.spacing) {
+            return Err(cx.err(
+                &format!("particles[{i}].spacing"),
+                format!("expected a positive spacing in m, got {}", p.spacing),
+            ));
+        }
+        if !pos(p.h_factor) {
+            return Err(cx.err(
+                &format!("particles[{i}].h_factor"),
+                format!("expected a positive factor, got {}", p.h_factor),
+            ));
+        }
+        check_region(cx, i, p)?;
+        if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
+            return Err(cx.err(
+                &format!("particles[{i}].liggghts_type"),
+                "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A lattice region: a box with min < max, a positive radius, a non-zero axis, and no more than
+/// [`MAX_PARTICLES`] lattice points to visit at the entry's spacing (counted before anything
+/// is allocated).
+pub(super) fn check_region(cx: &Ctx, i: usize, p: &ParticlesDef) -> Result<(), SceneError> {
+    let key = |k: &str| format!("particles[{i}].region.{k}");
+    match &p.region {
+        Region::Box { min, max } => {
+            if let Some(d) = (0..3).find(|&d| !(min[d] < max[d])) {
+                return Err(cx.err(
+                    &key("box"),
+                    format!(
+                        "expected min < max on every axis, got min[{d}] = {} and max[{d}] = {}",
+                        num_text(min[d]),
+                        num_text(max[d])
+                    ),
+                ));
+            }
+        }
+        Region::Sphere { radius, .. } if !pos(*radius) => {
+            return Err(cx.err(
+                &key("sphere.radius"),
+                format!("expected a positive radius in m, got {radius}"),
+            ));
+        }
+        Region::Cylinder { radius, .. } if !pos(*radius) => {
+            return Err(cx.err(
+                &key("cylinder.radius"),
+                format!("expected a positive radius in m, got {radius}"),
+            ));
+        }
+        Region::Cylinder { axis, .. } if axis.iter().all(|a| *a == 0.0) => {
+            return Err(cx.err(
+                &key("cylinder.axis"),
+                "expected a non-zero axis (from the base to the top, m)".into(),
+            ));
+        }
+        _ => {}
+    }
+    let n = crate::input::particles::lattice_points_bound(&p.region, p.spacing);
+    if !(n <= MAX_PARTICLES) {
+        return Err(cx.err(
+            &format!("particles[{i}].spacing"),
+            format!(
+                "the region at a spacing of {:e} m is a lattice of {n:.3e} points, more than the {MAX_PARTICLES:e} particles a run may hold: use a larger spacing or a smaller region",
+                p.spacing
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `[sph]`: positive optional coefficients, coefficients >= 0, and known names.
+pub(super) fn check_sph(cx: &Ctx, s: &SphDef) -> Result<(), SceneError> {
+    let av = s.artificial_viscosity.as_ref();
+    for (k, v) in [
+        ("sph.artificial_viscosity.alpha", av.map(|a| a.alpha)),
+        ("sph.artificial_viscosity.beta", av.map(|a| a.beta)),
+        (
+            "sph.tensile_correction.epsilon",
+            s.tensile_correction.as_ref().map(|t| t.epsilon),
+        ),
+    ] {
+        if let Some(v) = v.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            return Err(cx.err(k, format!("expected a coefficient >= 0, got {v}")));
+        }
+    }
+    for (k, v) in [
+        ("sph.adaptive_h", s.adaptive_h),
+        ("sph.conductivity", s.conductivity),
+    ] {
+        if let Some(v) = v {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(cx.err(k, format!("expected a positive number, got {v}")));
+            }
+        }
+    }
+    for (k, v, ok) in [
+        ("sph.kernel", &s.kernel, &["cubic_spline", "wendland"][..]),
+        ("sph.density", &s.density, &["continuity", "summation"][..]),
+        ("sph.profile", &s.profile, &["standard", "liggghts"][..]),
+    ] {
+        if !ok.contains(&v.as_str()) {
+            return Err(cx.err(
+                k,
+                format!("unknown value \"{v}\" (expected one of {})", ok.join(", ")),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[contact]`: one pass with master bodies or two without, a Coulomb coefficient >= 0.
+pub(super) fn check_contact(cx: &Ctx, c: &ContactDef) -> Result<(), SceneError> {
+    match c.passes {
+        1 if c.master.is_empty() => {
+            return Err(cx.err(
+                "contact.master",
+                "passes = 1 needs the master bodies: master = [\"<physical volume>\", ...] \
+                 (the other bodies' nodes are searched against their faces)"
+                    .into(),
+            ))
+        }
+        2 if !c.master.is_empty() => {
+            return Err(cx.err(
+                "contact.master",
+                "a master is only read with passes = 1 (two passes search every pair of \
+                 bodies both ways)"
+                    .into(),
+            ))
+        }
+        1 | 2 => {}
+        n => {
+            return Err(cx.err(
+                "contact.passes",
+                format!(
+                    "expected 1 (one pass, master/slave) or 2 (both ways, the default), got {n}"
+                ),
+            ))
+        }
+    }
+    if !(c.friction >= 0.0 && c.friction.is_finite()) {
+        return Err(cx.err(
+            "contact.friction",
+            format!("expected Coulomb's coefficient >= 0, got {}", c.friction),
+        ));
+    }
+    Ok(())
+}
+
+/// `[[probe]]`: unique names, at least one field each.
+pub(super) fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError> {
+    let mut names: Vec<&str> = Vec::new();
+    for (i, p) in probes.iter().enumerate() {
+        if names.contains(&p.name.as_str()) {
+            return Err(cx.err(
+                &format!("probe[{i}].name"),
+                format!("probe \"{}\" is defined twice", p.name),
+            ));
+        }
+        names.push(&p.name);
+        if p.fields.is_empty() {
+            return Err(cx.err(
+                &format!("probe[{i}].fields"),
+                "expected at least one field".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[output]`: a positive checkpoint interval, known field names.
+pub(super) fn check_output(cx: &Ctx, output: &OutputDef) -> Result<(), SceneError> {
+    if let Some(c) = output.checkpoint_every {
+        if !(c > 0.0 && c.is_finite()) {
+            return Err(cx.err(
+                "output.checkpoint_every",
+                format!("expected a positive interval in seconds, got {c}"),
+            ));
+        }
+    }
+    for (i, f) in output.fields.iter().enumerate() {
+        if !OUTPUT_FIELDS.contains(&f.as_str()) {
+            return Err(cx.err(
+                &format!("output.fields[{i}]"),
+                format!(
+                    "unknown field \"{f}\" (expected one of {})",
+                    OUTPUT_FIELDS.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[compare]`: a known measure, a quantity that is a probe column, a positive period.
+pub(super) fn check_compare(cx: &Ctx, c: &CompareDef, probes: &[Probe]) -> Result<(), SceneError> {
+    if !COMPARE_MEASURES.contains(&c.measure.as_str()) {
+        return Err(cx.err(
+            "compare.measure",
+            format!(
+                "unknown value \"{}\" (expected one of {})",
+                c.measure,
+                COMPARE_MEASURES.join(", ")
+            ),
+        ));
+    }
+    if let Some(q) = &c.quantity {
+        let known = probes.iter().flat_map(Probe::columns).any(|col| &col == q);
+        if !known {
+            return Err(cx.err(
+                "compare.quantity",
+                format!("\"{q}\" is not a probe column (expected probe.field of a [[probe]])"),
+            ));
+        }
+    }
+    if let Some(t) = c.reference_period {
+        if !pos(t) {
+            return Err(cx.err(
+                "compare.reference_period",
+                format!("expected a positive period in seconds, got {t}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A material's number: an integer or a finite float; anything else named by its type.
+pub(super) fn number(v: &toml::Value) -> Result<f64, String> {
+    match v {
+        toml::Value::Float(f) if f.is_finite() => Ok(*f),
+        toml::Value::Float(f) => Err(format!("expected a finite number, got {f}")),
+        toml::Value::Integer(i) => Ok(*i as f64),
+        toml::Value::String(s) => Err(format!(
+            "expected a number, got a string (\"{s}\": write it without quotes)"
+        )),
+        other => Err(format!("expected a number, got {}", other.type_str())),
+    }
+}
+
+/// Checks that every group the scene names exists in the mesh.
+pub fn validate_groups(
+    scene: &Scene,
+    volumes: &[String],
+    surfaces: &[String],
+) -> Result<(), SceneError> {
+    let file = scene.file.display().to_string();
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    for (i, b) in scene.blocks.iter().enumerate() {
+        if !volumes.contains(&b.group) {
+            return Err(SceneError {
+                file,
+                key: format!("block[{i}].group"),
+                message: format!(
+                    "no physical volume \"{}\" in the mesh (physical volumes: {})",
+                    b.group,
+                    list(volumes)
+                ),
+            });
+        }
+    }
+    for (i, b) in scene.boundaries.iter().enumerate() {
+        if !surfaces.contains(&b.group) {
+            return Err(SceneError {
+                file,
+                key: format!("boundary[{i}].group"),
+                message: format!(
+                    "no physical surface \"{}\" in the mesh (physical surfaces: {})",
+                    b.group,
+                    list(surfaces)
+                ),
+            });
+        }
+    }
+    if let Some(c) = &scene.contact {
+        for (i, s) in c.surfaces.iter().enumerate() {
+            if s != "exterior" && !surfaces.contains(s) {
+                return Err(SceneError {
+                    file,
+                    key: format!("contact.surfaces[{i}]"),
+                    message: format!("no physical surface \"{s}\" in the mesh (physical surfaces: {}; or \"exterior\")", list(surfaces)),
+                });
+            }
+        }
+        for (i, m) in c.master.iter().enumerate() {
+            if !volumes.contains(m) {
+                return Err(SceneError {
+                    file,
+                    key: format!("contact.master[{i}]"),
+                    message: format!(
+                        "no physical volume \"{m}\" in the mesh (physical volumes: {})",
+                        list(volumes)
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
