@@ -1,0 +1,96 @@
+//! The particles a kept contact decomposition holds in a step: their own box beside the kept
+//! mesh box, refreshed in place while they stay.
+use super::*;
+
+/// The particles a kept box holds this step (`pgot`), searched against its faces in a box of
+/// their own: the particles owned, every node of the kept box as copies, the same faces. The
+/// same particles as at the last step, in the same order: that box is updated in place and its
+/// candidate lists kept while their skin covers; others: a new box and lists (skin
+/// `cand_skin`). Returns the candidate lists built.
+pub(super) fn refresh_particle_box(
+    st: &mut Sticky,
+    pgot: &[CNode],
+    params: &SearchParams,
+    cand_skin: f64,
+) -> u64 {
+    let same_particles = match &st.pbox {
+        Some((gids, _, _)) => {
+            gids.len() == pgot.len() && gids.iter().zip(pgot).all(|(g, c)| *g == c.rec.gid)
+        }
+        None => pgot.is_empty(),
+    };
+    if !same_particles {
+        st.pbox = particle_box(&st.b, pgot).map(|pb| {
+            let pc = Candidates::build(&pb, params, cand_skin);
+            (pgot.iter().map(|c| c.rec.gid).collect(), pb, pc)
+        });
+        return u64::from(st.pbox.is_some());
+    }
+    let Some((_, pb, pc)) = &mut st.pbox else {
+        return 0;
+    };
+    let np = pgot.len();
+    let q = &mut pb.nodes;
+    for (i, c) in pgot.iter().enumerate() {
+        q.mass[i] = c.rec.mass;
+        q.radius[i] = c.rec.radius;
+        q.x0[i] = c.rec.x0;
+        q.x1[i] = c.rec.x1;
+        q.v[i] = c.rec.v;
+    }
+    let n = &st.b.nodes;
+    q.mass[np..].copy_from_slice(&n.mass);
+    q.radius[np..].copy_from_slice(&n.radius);
+    q.x0[np..].copy_from_slice(&n.x0);
+    q.x1[np..].copy_from_slice(&n.x1);
+    q.v[np..].copy_from_slice(&n.v);
+    if pc.still_valid(pb, params) {
+        return 0;
+    }
+    *pc = Candidates::build(pb, params, cand_skin);
+    1
+}
+
+pub(super) fn is_particle(r: &NodeRecord) -> bool {
+    r.flags & contact::FLAG_PARTICLE != 0
+}
+
+/// The box in which a kept decomposition searches the particles it holds this step: the
+/// particles owned, then every node of the kept box `b` as a copy, and `b`'s faces. `None`
+/// without particles.
+pub(super) fn particle_box(b: &ContactBox, particles: &[CNode]) -> Option<ContactBox> {
+    if particles.is_empty() {
+        return None;
+    }
+    let mut pb = ContactBox::default();
+    for c in particles {
+        pb.nodes.push(&c.rec);
+    }
+    let np = particles.len();
+    pb.nodes.n_owned = np;
+    let n = &b.nodes;
+    let q = &mut pb.nodes;
+    q.gid.extend_from_slice(&n.gid);
+    q.body.extend_from_slice(&n.body);
+    q.mass.extend_from_slice(&n.mass);
+    q.radius.extend_from_slice(&n.radius);
+    q.particle.extend_from_slice(&n.particle);
+    q.master.extend_from_slice(&n.master);
+    q.x0.extend_from_slice(&n.x0);
+    q.x1.extend_from_slice(&n.x1);
+    q.v.extend_from_slice(&n.v);
+    pb.faces.gid = b.faces.gid.clone();
+    pb.faces.node_gid = b.faces.node_gid.clone();
+    pb.faces.body = b.faces.body.clone();
+    pb.faces.nodes = b
+        .faces
+        .nodes
+        .iter()
+        .map(|c| c.map(|i| i + np as u32))
+        .collect();
+    Some(pb)
+}
+
+pub(super) fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}

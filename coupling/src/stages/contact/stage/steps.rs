@@ -1,0 +1,275 @@
+//! The contact stage's two kinds of step: on the kept decomposition, and the rebuild (the
+//! paper's Fig. 10 in full).
+use super::*;
+
+impl ContactStage {
+    /// A step on the kept decomposition (see [`ContactStage::step`]).
+    pub(super) fn sticky_step(
+        &mut self,
+        nodes: &[NodeRecord],
+        (motion, any_particles): (f64, bool),
+        dt: f64,
+        t0: Instant,
+    ) -> Result<ContactOutcome, String> {
+        let comm = &self.comm;
+        let me = comm.rank();
+        let st = self.sticky.as_mut().expect("a kept decomposition");
+        let tree = self
+            .tree
+            .as_ref()
+            .expect("the cut tree of the last rebuild");
+        let mut bytes = 0u64;
+        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
+        // 1 (and 3, 5-6). The mesh nodes' records straight to the boxes holding them, written
+        // in place.
+        let tt = Instant::now();
+        let (fe_inputs, sent) = send_mesh_records(st, nodes);
+        bytes += sent;
+        t_bytes += sent;
+        // Particles (never face corners) to the box their predicted position falls in: the
+        // ghost skin's bound holds for a node inside its box's region.
+        let (pitems, pplan, pgot) = if any_particles {
+            let (items, plan, got) = particles_to_boxes(comm, tree, nodes, me);
+            bytes += plan.bytes_sent;
+            t_bytes += plan.bytes_sent;
+            (items, Some(plan), got)
+        } else {
+            (Vec::new(), None, Vec::new())
+        };
+        t_s += tt.elapsed().as_secs_f64();
+        // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
+        if !st.cands.still_valid(&st.b, &self.params) {
+            let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+            st.cands = Candidates::build(&st.b, &self.params, cand_skin);
+            self.rebuilds.candidates += 1;
+        }
+        let contacts = search_candidates(&st.b, &self.params, &st.cands);
+        let n_owned = st.b.nodes.n_owned;
+        let mut owned_gids: Vec<u64> = st.b.nodes.gid[..n_owned].to_vec();
+        let (_, cand_skin) = skins(motion, st.face_size, self.skins);
+        self.rebuilds.candidates += refresh_particle_box(st, &pgot, &self.params, cand_skin);
+        let pcontacts = match &st.pbox {
+            Some((_, pb, pc)) => {
+                owned_gids.extend(pgot.iter().map(|c| c.rec.gid));
+                search_candidates(pb, &self.params, pc)
+            }
+            None => Vec::new(),
+        };
+        let mut parts = vec![Part {
+            b: &mut st.b,
+            cands: &st.cands,
+            contacts,
+        }];
+        if let Some((_, pb, pc)) = &mut st.pbox {
+            parts.push(Part {
+                b: pb,
+                cands: pc,
+                contacts: pcontacts,
+            });
+        }
+        let settled = solve_rechecked(
+            comm,
+            Some(tree),
+            &mut parts,
+            &owned_gids,
+            dt,
+            (self.friction, &self.params),
+        )?;
+        let mut parts = parts.into_iter();
+        let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        bytes += settled.bytes;
+        // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
+        // of ranks, the particles' back along their plan.
+        let tt = Instant::now();
+        let (mut force, back_bytes) =
+            mesh_forces_home(st, &owned_force[..n_owned], &fe_inputs, nodes.len());
+        bytes += back_bytes;
+        t_bytes += back_bytes;
+        if let Some(mut plan) = pplan {
+            let before = plan.bytes_sent;
+            let back = plan.reverse(&owned_force[n_owned..]);
+            for (item, f) in pitems.iter().zip(&back) {
+                force[item.home_idx as usize] = *f;
+            }
+            bytes += plan.bytes_sent - before;
+            t_bytes += plan.bytes_sent - before;
+        }
+        t_s += tt.elapsed().as_secs_f64();
+        let work_items = st.work_items + pgot.len() as f64;
+        let mut all_contacts = contacts;
+        all_contacts.extend(pcontacts);
+        self.outcome(OutcomeParts {
+            pushback,
+            force,
+            contacts: &all_contacts,
+            pb_work,
+            bytes,
+            work_items,
+            t_bytes,
+            t_s,
+            rcb: RcbStats::default(),
+            t0,
+        })
+    }
+
+    /// A step that rebuilds the decomposition: the paper's Fig. 10 in full.
+    pub(super) fn full_step(
+        &mut self,
+        nodes: &[NodeRecord],
+        faces: Vec<FullFace>,
+        (motion, radius): (f64, f64),
+        dt: f64,
+        t0: Instant,
+    ) -> Result<ContactOutcome, String> {
+        // Set up a kept decomposition for the next steps?
+        let keep_next = self.sticky_enabled && self.step_count >= self.retry_at;
+        let me = self.comm.rank();
+        let mut bytes = 0u64;
+        let items = home_items(nodes, me);
+        // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
+        // owners to contact owners and back): their bytes and time.
+        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
+        // 1. To last step's contact owners.
+        let tt = Instant::now();
+        let (items, sent) = to_owners(&self.comm, self.tree.as_ref(), items);
+        bytes += sent;
+        t_bytes += sent;
+        t_s += tt.elapsed().as_secs_f64();
+        // 2. RCB over nodes and particles, from the previous cuts.
+        let (mine, rcb_stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
+        bytes += rcb_stats.bytes_sent;
+        let tree = self.rcb.tree().clone();
+        let comm = &self.comm;
+        // 3. Faces with their nodes to the contact owner of their first node.
+        let tt = Instant::now();
+        let (my_faces, sent) = faces_to_owners(comm, &tree, &faces);
+        bytes += sent;
+        t_bytes += sent;
+        t_s += tt.elapsed().as_secs_f64();
+        // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
+        // influence: the largest node motion of the step and the largest particle radius (the
+        // face's search box), and the skin the kept decomposition needs (at least the motion).
+        let (skin, cand_skin, face_size) = if keep_next {
+            let face = mean_face_diameter(comm, &my_faces);
+            let (a, b) = skins(motion, face, self.skins);
+            (a, b, face)
+        } else {
+            (motion, 0.0, 0.0)
+        };
+        let (held, ghost_bytes) = ghost_faces(comm, &tree, &my_faces, &self.params, radius, skin);
+        bytes += ghost_bytes;
+
+        // 7. The local search: owned nodes first, then copies of face nodes not owned here.
+        let (recs, index, face_recs) = box_records(&mine, &held);
+        let n_owned = mine.len();
+        let work_items = (n_owned + face_recs.len()) as f64;
+        let mut b = box_on_every_rank(comm, &recs, n_owned, &face_recs)?;
+        let cands = Candidates::build(&b, &self.params, cand_skin);
+        let contacts = search_candidates(&b, &self.params, &cands);
+
+        // 7b. The push-back, solved in cells where the contacts are (`cells`): contacts that
+        // share nodes but were found in different boxes (a touching pair found from both sides
+        // by the two passes) are rows of one Gauss-Seidel whose order the cells fix, so the
+        // forces are those of one box holding everything, at any rank count.
+        let owned_gids: Vec<u64> = recs[..n_owned].iter().map(|r| r.gid).collect();
+        let mut parts = [Part {
+            b: &mut b,
+            cands: &cands,
+            contacts,
+        }];
+        let settled = solve_rechecked(
+            comm,
+            Some(&tree),
+            &mut parts,
+            &owned_gids,
+            dt,
+            (self.friction, &self.params),
+        )?;
+        let [Part { contacts, .. }] = parts;
+        let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
+        bytes += settled.bytes;
+        let tt = Instant::now();
+        let owned_home: Vec<(i32, u64)> =
+            mine.iter().map(|n| (n.home as i32, n.home_idx)).collect();
+        let (force, back_bytes) = send_home(comm, &owned_force, &owned_home, nodes.len());
+        bytes += back_bytes;
+        t_bytes += back_bytes;
+        t_s += tt.elapsed().as_secs_f64();
+
+        // The plan for the steps that keep this decomposition.
+        self.sticky = None;
+        if keep_next {
+            let (st, setup_bytes) = build_sticky(
+                comm,
+                &tree,
+                nodes,
+                &mine,
+                &index,
+                SetupBox {
+                    b: &b,
+                    params: &self.params,
+                    skin,
+                    cand_skin,
+                    face_size,
+                    max_radius: radius,
+                },
+            )?;
+            bytes += setup_bytes;
+            self.sticky = st.map(Box::new);
+        }
+        self.tree = Some(tree);
+        self.outcome(OutcomeParts {
+            pushback,
+            force,
+            contacts: &contacts,
+            pb_work,
+            bytes,
+            work_items,
+            t_bytes,
+            t_s,
+            rcb: rcb_stats,
+            t0,
+        })
+    }
+}
+
+/// Step 1 (and 3, 5-6) on a kept decomposition: the mesh nodes' records straight to the boxes
+/// holding them along the kept plan, written in place (collective). Returns the input index
+/// of each mesh input and the bytes sent.
+fn send_mesh_records(st: &mut Sticky, nodes: &[NodeRecord]) -> (Vec<u32>, u64) {
+    let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
+        .filter(|&i| !is_particle(&nodes[i as usize]))
+        .collect();
+    st.send_buf.clear();
+    st.send_buf.extend(
+        st.send_idx
+            .iter()
+            .map(|&k| nodes[fe_inputs[k as usize] as usize]),
+    );
+    let before = st.plan.bytes_sent;
+    let got = st.plan.exchange(&st.send_buf);
+    let sent = st.plan.bytes_sent - before;
+    let n = &mut st.b.nodes;
+    for (r, &slot) in got.iter().zip(&st.recv_slot) {
+        n.set_motion(slot as usize, r);
+    }
+    (fe_inputs, sent)
+}
+
+/// Step 3 of a rebuild: each face with its nodes to the contact owner of its first node in the
+/// new cuts `tree` (collective). Returns the faces this rank now holds and the bytes it sent.
+fn faces_to_owners(
+    comm: &Rc<SimpleCommunicator>,
+    tree: &CutTree,
+    faces: &[FullFace],
+) -> (Vec<FullFace>, u64) {
+    let dest: Vec<i32> = faces
+        .iter()
+        .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
+        .collect();
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let my_faces = plan.exchange(faces);
+    (my_faces, plan.bytes_sent)
+}
