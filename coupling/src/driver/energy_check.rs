@@ -1,0 +1,174 @@
+//! The energy balance the run keeps: E(0), the largest errors, the hourglass watch, and the stop
+//! when the error passes `run.max_energy_error`.
+use super::*;
+
+/// The energy balance over the run: E(0), the largest errors, the per-block hourglass watch, and
+/// the stop when the error passes `run.max_energy_error` (docs/scene.md).
+pub(super) struct EnergyCheck {
+    pub(super) file: String,
+    pub(super) e0: f64,
+    pub(super) max_energy_error: f64,
+    pub(super) forced: bool,
+    pub(super) stable0: f64,
+    pub(super) err_max: f64,
+    pub(super) err_max_checked: f64,
+    pub(super) hourglass: energy::HourglassWatch,
+    pub(super) scale: energy::EnergyScale,
+    /// The external work after the last step, J.
+    pub(super) external_last: f64,
+}
+
+impl EnergyCheck {
+    pub(super) fn new(
+        world: &SimpleCommunicator,
+        scene: &Scene,
+        model: &Model,
+        forced: bool,
+        stable0: f64,
+    ) -> EnergyCheck {
+        EnergyCheck {
+            scale: energy::EnergyScale::new(model_mass(world, model)),
+            external_last: 0.0,
+            file: scene.file.display().to_string(),
+            e0: sum_energies(model).total(),
+            max_energy_error: scene.run.max_energy_error,
+            forced,
+            stable0,
+            err_max: 0.0,
+            err_max_checked: 0.0,
+            hourglass: energy::HourglassWatch::new(scene),
+        }
+    }
+
+    /// The energy scale after the last step, J (`energy::EnergyScale::value`).
+    pub(super) fn scale_now(&self) -> f64 {
+        self.scale.value(self.e0, self.external_last)
+    }
+
+    /// The state a checkpoint keeps.
+    pub(super) fn state(&self) -> checkpoint::CheckState {
+        checkpoint::CheckState {
+            e0: self.e0,
+            err_max: self.err_max,
+            err_max_checked: self.err_max_checked,
+            hourglass: self.hourglass.clone(),
+            scale: self.scale,
+            external_last: self.external_last,
+        }
+    }
+
+    /// Continues from a checkpoint's state.
+    pub(super) fn restore(&mut self, s: &checkpoint::CheckState) {
+        self.e0 = s.e0;
+        self.err_max = s.err_max;
+        self.err_max_checked = s.err_max_checked;
+        self.hourglass = s.hourglass.clone();
+        if s.scale.floor > 0.0 {
+            self.scale = s.scale;
+            self.external_last = s.external_last;
+        }
+    }
+
+    /// A history row now.
+    pub(super) fn row(
+        &self,
+        clock: &schedule::Clock,
+        model: &Model,
+        err: f64,
+    ) -> outputs::HistoryRow {
+        outputs::HistoryRow {
+            step: clock.step,
+            time: clock.time,
+            dt: clock.dt,
+            energies: sum_energies(model),
+            energy_error: err,
+        }
+    }
+
+    /// A failed step's error as the run's: a forced run's failures are its instability.
+    pub(super) fn failure(&self, e: StageError) -> RunFailure {
+        let kind = if e.unstable || self.forced {
+            FailureKind::Unstable
+        } else {
+            FailureKind::Failed
+        };
+        RunFailure::new(kind, e.message)
+    }
+
+    /// After a step: the energy error, the hourglass watch, and the stop (with the row written
+    /// first) when the energy is not finite or the error passes the limit.
+    pub(super) fn after_step(
+        &mut self,
+        world: &SimpleCommunicator,
+        clock: &schedule::Clock,
+        model: &Model,
+        outputs: &mut outputs::Outputs,
+    ) -> Result<f64, RunFailure> {
+        let en = sum_energies(model);
+        let contact = model.contact.as_ref().map_or(0.0, |c| c.energy);
+        let total = en.total() + contact;
+        let external = en.external_work;
+        self.scale.observe(en.kinetic, en.internal + en.hourglass);
+        let scale = self.scale.value(self.e0, external);
+        self.external_last = external;
+        let err = energy::energy_error(total, self.e0, external, scale);
+        let (t, step, dt, file) = (clock.time, clock.step, clock.dt, &self.file);
+        let blow_up = if self.forced {
+            format!(
+                "the explicit run is unstable: run.dt = {dt:e} s is {:.3} times the stable limit {:e} s (forced with run.force_dt = true)",
+                dt / self.stable0,
+                self.stable0
+            )
+        } else {
+            "the run is unstable or under-resolved; reduce run.dt or run.dt_safety".to_string()
+        };
+        if !total.is_finite() || !external.is_finite() {
+            return Err(RunFailure::new(
+                FailureKind::Unstable,
+                format!("{file}: non-finite energy at t = {t:e} s, step {step}: {blow_up}"),
+            ));
+        }
+        self.err_max = self.err_max.max(err);
+        if let Some(fe) = &model.fe {
+            for line in self
+                .hourglass
+                .check(t, step, &fe.state().block_energies, scale)
+            {
+                if world.rank() == 0 {
+                    eprintln!("{line}");
+                }
+            }
+        }
+        if step >= ENERGY_CHECK_FROM_STEP {
+            self.err_max_checked = self.err_max_checked.max(err);
+        }
+        // Before step 100 a blow-up is measured against the start scale (energy.rs,
+        // EARLY_BLOW_UP_ERROR); err <= early always (S(t) >= the start scale).
+        let early = energy::energy_error(
+            total,
+            self.e0,
+            external,
+            self.scale.start_value(self.e0, external),
+        );
+        let measured = if step >= ENERGY_CHECK_FROM_STEP {
+            err
+        } else {
+            early
+        };
+        if measured > energy_error_limit(step, self.max_energy_error) {
+            let err = measured;
+            let _ = outputs.history_row(model, &self.row(clock, model, err));
+            outputs.flush();
+            return Err(RunFailure::new(
+                FailureKind::Unstable,
+                format!(
+                    "{file}: energy error {err:.3e} passed run.max_energy_error = {}{} at t = {t:e} s, step {step} (E = {total:e} J, E0 = {:e} J, external work {external:e} J): {blow_up}",
+                    self.max_energy_error,
+                    early_note(step),
+                    self.e0
+                ),
+            ));
+        }
+        Ok(err)
+    }
+}

@@ -1,0 +1,130 @@
+//! The implicit step's tangent: 4 M / dt^2 + K assembled at the trial state, elements and
+//! hourglass control.
+use super::*;
+
+impl ImplicitFe {
+    /// Assembles 4 M / dt^2 + K at the current trial state (see the module comment).
+    pub(super) fn assemble_tangent(&mut self) -> Result<(), PetscError> {
+        let t0 = Instant::now();
+        let dt = self.dt;
+        self.matrix.zero()?;
+        let stride = self.mat_stride;
+        let mut ke = [0.0; 576];
+        for (e, conn) in self.fe.elems.iter().enumerate() {
+            let xe = gather(&self.x_trial, conn);
+            let due = gather(&self.du, conn);
+            let mat = &*self.fe.materials[self.fe.elem_material[e]];
+            let (b, vol) = hex::gradient(&xe);
+            // The strain increment of the step, for the material tangent.
+            let mut deps = [0.0; 6];
+            for k in 0..8 {
+                let (d, bk) = (due[k], b[k]);
+                deps[0] += d[0] * bk[0];
+                deps[1] += d[1] * bk[1];
+                deps[2] += d[2] * bk[2];
+                deps[3] += 0.5 * (d[0] * bk[1] + d[1] * bk[0]);
+                deps[4] += 0.5 * (d[1] * bk[2] + d[2] * bk[1]);
+                deps[5] += 0.5 * (d[2] * bk[0] + d[0] * bk[2]);
+            }
+            let c = material_tangent(
+                mat,
+                &self.fe.state.stress(e),
+                &self.fe.mat_state[e * stride..(e + 1) * stride],
+                &deps,
+                dt,
+            );
+            // S_I (6 x 3): engineering strain from node I's displacement.
+            let s: [[[f64; 3]; 6]; 8] = std::array::from_fn(|k| {
+                let [x, y, z] = b[k];
+                [
+                    [x, 0.0, 0.0],
+                    [0.0, y, 0.0],
+                    [0.0, 0.0, z],
+                    [y, x, 0.0],
+                    [0.0, z, y],
+                    [z, 0.0, x],
+                ]
+            });
+            // C S_J, then V S_I^T (C S_J).
+            let cs: [[[f64; 3]; 6]; 8] = std::array::from_fn(|j| {
+                std::array::from_fn(|p| {
+                    std::array::from_fn(|bb| (0..6).map(|q| c[p][q] * s[j][q][bb]).sum())
+                })
+            });
+            let hg = self.hourglass_tangent(mat, &xe, &b, vol, self.fe.vol0[e]);
+            let proj: [Option<[[f64; 3]; 3]>; 8] =
+                std::array::from_fn(|k| self.dofs[conn[k] as usize].matrix());
+            for i in 0..8 {
+                for j in 0..8 {
+                    let mut kij = [[0.0; 3]; 3];
+                    for a in 0..3 {
+                        for bb in 0..3 {
+                            let mut v = 0.0;
+                            for p in 0..6 {
+                                v += s[i][p][a] * cs[j][p][bb];
+                            }
+                            kij[a][bb] = vol * v + hg[3 * i + a][3 * j + bb];
+                        }
+                    }
+                    if let Some(p) = proj[i] {
+                        kij = mat3_mul(&p, &kij);
+                    }
+                    if let Some(p) = proj[j] {
+                        kij = mat3_mul(&kij, &p);
+                    }
+                    for a in 0..3 {
+                        for bb in 0..3 {
+                            ke[(3 * i + a) * 24 + 3 * j + bb] = kij[a][bb];
+                        }
+                    }
+                }
+            }
+            let rows: [i32; 8] = std::array::from_fn(|k| conn[k] as i32);
+            self.matrix.add_local(&rows, &ke)?;
+        }
+        let c_mass = 4.0 / (dt * dt);
+        for &n in &self.owned_nodes {
+            let d = c_mass * self.fe.mass[n];
+            let blk = [d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d];
+            self.matrix.add_local(&[n as i32], &blk)?;
+        }
+        self.matrix.assemble()?;
+        self.stats.assemblies += 1;
+        self.stats.assembly_s += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The hourglass tangent of an element (`hourglass::Hourglass::tangent`: the elastic
+    /// physical stiffness, or the FB forms, the viscous part as c / dt).
+    pub(super) fn hourglass_tangent(
+        &self,
+        mat: &dyn Material,
+        x: &[[f64; 3]; 8],
+        b: &[[f64; 3]; 8],
+        vol: f64,
+        vol0: f64,
+    ) -> Box<[[f64; 24]; 24]> {
+        let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
+        let rho = mat.density() * vol0 / vol;
+        let mu = mat.shear_modulus();
+        let hm = HourglassMaterial {
+            mu,
+            nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
+            rho,
+            c: (mat.dilatational_modulus() / rho).sqrt(),
+            tangent_ratio: 1.0,
+            yield_stress: None,
+            stress: [0.0; 6],
+        };
+        let zero = [[0.0; 3]; 8];
+        let step = HourglassStep {
+            x,
+            v: &zero,
+            b,
+            bb,
+            vol,
+            dt: self.dt,
+        };
+        self.controls.hourglass.tangent(&step, &hm, self.dt)
+    }
+}
