@@ -599,6 +599,39 @@ fn corrections(impulse: &[V3], inv_m: &[f64]) -> Vec<V3> {
         .collect()
 }
 
+/// The rows re-linearised on the geometry corrected by `dx` (contacts whose row holds
+/// nodes): each node-on-node row's gap left, each node-on-face row regauged on its face; all
+/// bounded again (`bounded` marks those cut). Returns the largest penetration left, m.
+fn relinearise(
+    b: &ContactBox,
+    contacts: &[Contact],
+    rows: &mut [Row],
+    bounded: &mut [bool],
+    dx: &[V3],
+    dt: f64,
+) -> f64 {
+    let mut left = 0.0f64;
+    for (k, c) in contacts.iter().enumerate() {
+        if rows[k].len == 0 {
+            continue;
+        }
+        let row = if rows[k].node_on_node {
+            let mut r = std::mem::replace(&mut rows[k], Row::inert());
+            r.depth = r.gap_left(b, dx);
+            r
+        } else if let Some((xi, normal, pen)) = regauge(b, c, dx) {
+            Row::new(b, c, xi, normal, pen)
+        } else {
+            continue;
+        };
+        let (row, cut) = row.bounded(b, dx, dt);
+        bounded[k] |= cut;
+        left = left.max(row.depth);
+        rows[k] = row;
+    }
+    left
+}
+
 /// One part of a push-back spread over ranks (module documentation, "Sweeps in cells"): the
 /// contacts of this part's cells, `cell[k]` the cell of contact `k` (of its anchor), the
 /// neighbours through `ex`. With [`Alone`] and every contact's cell it is [`push_back`]. The
@@ -662,25 +695,7 @@ pub fn push_back_in(
         }
         // Measure the penetration left on the corrected geometry; re-linearise there.
         let dx = corrections(&impulse, &inv_m);
-        let mut left = 0.0f64;
-        for (k, c) in contacts.iter().enumerate() {
-            if rows[k].len == 0 {
-                continue;
-            }
-            let row = if rows[k].node_on_node {
-                let mut r = std::mem::replace(&mut rows[k], Row::inert());
-                r.depth = r.gap_left(b, &dx);
-                r
-            } else if let Some((xi, normal, pen)) = regauge(b, c, &dx) {
-                Row::new(b, c, xi, normal, pen)
-            } else {
-                continue;
-            };
-            let (row, cut) = row.bounded(b, &dx, params.dt);
-            bounded[k] |= cut;
-            left = left.max(row.depth);
-            rows[k] = row;
-        }
+        let left = relinearise(b, contacts, &mut rows, &mut bounded, &dx, params.dt);
         max_residual = ex.max(left);
         if max_residual <= limit {
             break;

@@ -278,16 +278,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut clock = schedule::Clock::new(&scene, stable0);
     scene::check_work(&scene, clock.dt).map_err(|e| e.to_string())?;
     if opts.setup_only {
+        let wall_s = collective::max(world, wall0.elapsed().as_secs_f64());
         return Ok(RunSummary {
             out: opts.out.clone().unwrap_or(default_out),
-            mode: scene.run.mode,
-            steps: 0,
-            energy_error_max: 0.0,
-            ns_per_element_cycle: 0.0,
-            dt_stable: stable0,
-            dt_min: clock.dt,
-            wall_s: collective::max(world, wall0.elapsed().as_secs_f64()),
-            loop_s: 0.0,
+            wall_s,
+            ..RunSummary::set_up(scene.run.mode, stable0, clock.dt)
         });
     }
     let hash = checkpoint::scene_hash(
@@ -295,38 +290,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         &format!("{:?}", opts.overrides),
     );
     let mut check = EnergyCheck::new(world, &scene, &model, forced, stable0);
-    let restart = match &opts.restart {
-        Some(dir) => {
-            if opts.out.as_ref().is_some_and(|o| o != dir) {
-                return Err(format!(
-                    "--restart {} continues that run in its own folder: leave out --out",
-                    dir.display()
-                )
-                .into());
-            }
-            let (meta, saved) =
-                checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
-            let restored = restore(world, &mut model, &saved);
-            collective::first_error(world, restored.err())?;
-            clock.restore(&meta.clock);
-            check.restore(&meta.check);
-            Some(meta)
-        }
-        None => None,
-    };
-    let (out_dir, note) = match &opts.restart {
-        Some(dir) => (dir.clone(), None),
-        None => outdir::resolve(
-            world,
-            opts.out.as_deref(),
-            &default_out,
-            opts.overwrite,
-            false,
-        )?,
-    };
-    if let (Some(n), true) = (note, world.rank() == 0 && !opts.quiet) {
-        eprintln!("tdyn: {n}");
-    }
+    let restart = restart_from(
+        world, opts, &hash, &scene, &mut model, &mut clock, &mut check,
+    )?;
+    let out_dir = out_dir_of(world, opts, &default_out)?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut outputs = outputs::Outputs::create(world, &out_dir, &scene, &model, restart.as_ref())?;
     let mut ctx = LoopCtx {
@@ -395,21 +362,95 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     )?;
     res?;
     let elements = model.fe.as_ref().map_or(0, |f| f.mesh.local.global_elems);
+    let cycles = elements as f64 * clock.step as f64;
     Ok(RunSummary {
         out: out_dir,
-        mode: scene.run.mode,
         steps: clock.step,
         energy_error_max: check.err_max,
-        ns_per_element_cycle: if elements > 0 && clock.step > 0 {
-            loop_s * 1e9 * world.size() as f64 / (elements as f64 * clock.step as f64)
+        ns_per_element_cycle: if cycles > 0.0 {
+            loop_s * 1e9 * world.size() as f64 / cycles
         } else {
             0.0
         },
-        dt_stable: stable0,
         dt_min: clock.dt_min,
         wall_s,
         loop_s,
+        ..RunSummary::set_up(scene.run.mode, stable0, clock.dt)
     })
+}
+
+/// `--restart DIR`: the checkpoint's state set into `model`, `clock` and `check` (collective;
+/// `hash` the scene's, which the checkpoint must match). Returns its metadata (`None` without
+/// `--restart`).
+fn restart_from(
+    world: &SimpleCommunicator,
+    opts: &RunOptions,
+    hash: &str,
+    scene: &Scene,
+    model: &mut Model,
+    clock: &mut schedule::Clock,
+    check: &mut EnergyCheck,
+) -> Result<Option<checkpoint::Meta>, RunFailure> {
+    Ok(match &opts.restart {
+        Some(dir) => {
+            if opts.out.as_ref().is_some_and(|o| o != dir) {
+                return Err(format!(
+                    "--restart {} continues that run in its own folder: leave out --out",
+                    dir.display()
+                )
+                .into());
+            }
+            let (meta, saved) =
+                checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
+            let restored = restore(world, model, &saved);
+            collective::first_error(world, restored.err())?;
+            clock.restore(&meta.clock);
+            check.restore(&meta.check);
+            Some(meta)
+        }
+        None => None,
+    })
+}
+
+impl RunSummary {
+    /// A run that only set up (`--setup-only`): no steps; `dt_stable` the stable step found,
+    /// `dt` the first step.
+    fn set_up(mode: scene::Mode, dt_stable: f64, dt: f64) -> RunSummary {
+        RunSummary {
+            out: PathBuf::new(),
+            mode,
+            steps: 0,
+            energy_error_max: 0.0,
+            ns_per_element_cycle: 0.0,
+            dt_stable,
+            dt_min: dt,
+            wall_s: 0.0,
+            loop_s: 0.0,
+        }
+    }
+}
+
+/// The run's folder: `--restart`'s, else `--out` or the default (`outdir::resolve`: a folder
+/// holding an earlier run's results needs `--overwrite`), its note printed once (collective).
+fn out_dir_of(
+    world: &SimpleCommunicator,
+    opts: &RunOptions,
+    default_out: &std::path::Path,
+) -> Result<PathBuf, RunFailure> {
+    let (out_dir, note) = match &opts.restart {
+        Some(dir) => (dir.clone(), None),
+        None => outdir::resolve(
+            world,
+            opts.out.as_deref(),
+            default_out,
+            opts.overwrite,
+            false,
+        )?,
+    };
+    if let (Some(n), true) = (note, world.rank() == 0 && !opts.quiet) {
+        eprintln!("tdyn: {n}");
+    }
+    Ok(out_dir)
 }
 
 /// What the time loop needs besides the model, clock and files.

@@ -167,28 +167,7 @@ impl Rcb {
     pub fn balance<T: RcbItem>(&mut self, items: Vec<T>) -> Result<(Vec<T>, RcbStats), RcbError> {
         let t0 = Instant::now();
         let me = self.comm.rank();
-        // Refuse non-finite input on every rank alike (the median search would never settle).
-        let bad = items.iter().find(|it| {
-            let x = it.position();
-            let w = it.weight();
-            !(x.iter().all(|c| c.is_finite()) && w.is_finite() && w >= 0.0)
-        });
-        let flag = bad.map(|b| b.id()).unwrap_or(u64::MAX);
-        let mut first_bad = u64::MAX;
-        self.comm
-            .all_reduce_into(&flag, &mut first_bad, SystemOperation::min());
-        if first_bad != u64::MAX {
-            let (x, w) = items
-                .iter()
-                .find(|it| it.id() == first_bad)
-                .map(|it| (it.position(), it.weight()))
-                .unwrap_or(([f64::NAN; 3], f64::NAN));
-            return Err(RcbError::BadItem {
-                id: first_bad,
-                x,
-                w,
-            });
-        }
+        self.refuse_bad_items(&items)?;
         let prev = self.has_cuts.then(|| self.tree.clone());
         let mut items = items;
         let mut origin: Vec<i32> = vec![me; items.len()];
@@ -291,6 +270,35 @@ impl Rcb {
                 iterations: maxes[2] as u64,
             },
         ))
+    }
+
+    /// Refuses non-finite positions and negative or non-finite weights on every rank alike
+    /// (the median search would never settle): the error names the lowest such id over the
+    /// ranks (collective).
+    fn refuse_bad_items<T: RcbItem>(&self, items: &[T]) -> Result<(), RcbError> {
+        // Refuse non-finite input on every rank alike (the median search would never settle).
+        let bad = items.iter().find(|it| {
+            let x = it.position();
+            let w = it.weight();
+            !(x.iter().all(|c| c.is_finite()) && w.is_finite() && w >= 0.0)
+        });
+        let flag = bad.map(|b| b.id()).unwrap_or(u64::MAX);
+        let mut first_bad = u64::MAX;
+        self.comm
+            .all_reduce_into(&flag, &mut first_bad, SystemOperation::min());
+        if first_bad != u64::MAX {
+            let (x, w) = items
+                .iter()
+                .find(|it| it.id() == first_bad)
+                .map(|it| (it.position(), it.weight()))
+                .unwrap_or(([f64::NAN; 3], f64::NAN));
+            return Err(RcbError::BadItem {
+                id: first_bad,
+                x,
+                w,
+            });
+        }
+        Ok(())
     }
 
     /// The paper's "expand": each cut is known to its group; the first rank of each group

@@ -447,56 +447,7 @@ impl Contact {
         ex.insert("contact_bytes_per_step".into(), (c.bytes / n_steps).into());
         ex.insert("contact_s_per_step".into(), (wall / n_steps).into());
         ex.insert("contact_rcb_migrated".into(), c.rcb_migrated.into());
-        // Push-back solves per step (1 + the rounds after rechecks that found contacts; 0 in
-        // steps without contacts) and the contacts those rechecks added.
-        ex.insert(
-            "contact_pushback_solves_per_step".into(),
-            (c.solves_total as f64 / n_steps).into(),
-        );
-        ex.insert("contact_pushback_solves_max".into(), c.solves_max.into());
-        ex.insert("contacts_rechecked_total".into(), c.rechecked_total.into());
-        // Contacts by pass: a node of a later body (bodies numbered by their lowest element
-        // id) in a face of an earlier one (the only pass of a one-pass search without
-        // masters), the other way, self-contact, particles; and the contacts touching a node
-        // another rank's cells touch (what the push-back exchanges between ranks).
-        let k = c.kinds_total;
-        ex.insert("contacts_later_on_earlier_total".into(), k[0].into());
-        ex.insert("contacts_earlier_on_later_total".into(), k[1].into());
-        ex.insert("contacts_self_total".into(), k[2].into());
-        ex.insert("contacts_particle_total".into(), k[3].into());
-        ex.insert(
-            "contacts_coupled_across_boxes_total".into(),
-            c.coupled_total.into(),
-        );
-        // The push-back's own cost (step 7b, solved in cells where the contacts are): bytes
-        // per step over all ranks and on the busiest rank, Gauss-Seidel sweeps per step, and
-        // the contacts the busiest rank solved per step.
-        ex.insert(
-            "contact_pushback_bytes_per_step".into(),
-            (c.pushback_bytes / n_steps).into(),
-        );
-        ex.insert(
-            "contact_pushback_bytes_per_rank_step_max".into(),
-            (c.pushback_bytes_max_sum / n_steps).into(),
-        );
-        ex.insert(
-            "contact_pushback_sweeps_per_step".into(),
-            (c.sweeps_total as f64 / n_steps).into(),
-        );
-        ex.insert(
-            "contact_pushback_rows_per_rank_step_max".into(),
-            (c.pushback_rows_max_sum / n_steps).into(),
-        );
-        // The push-back's energy guards (`contact::pushback`): contacts between two
-        // prescribed surfaces (skipped), contacts that started the step inside their face
-        // (only the step's own penetration closed), and steps whose impulses were scaled down
-        // because they would have added kinetic energy.
-        ex.insert("contacts_immovable_total".into(), c.immovable_total.into());
-        ex.insert("contacts_bounded_total".into(), c.bounded_total.into());
-        ex.insert(
-            "contact_energy_limited_steps".into(),
-            c.energy_limited_steps.into(),
-        );
+        pushback_figures(c, n_steps, ex);
         if let Search::Dynamic(stage) = &self.search {
             // Steps that rebuilt the decomposition, and candidate-list rebuilds summed over
             // ranks (the other steps kept them: the skins in `stage`).
@@ -529,4 +480,63 @@ impl Contact {
         let masters = self.fe_side.master_body.iter().filter(|&&m| m).count();
         ex.insert("contact_master_bodies".into(), masters.into());
     }
+}
+
+/// The push-back's figures in the report's extra section: solves and rechecks per step, the
+/// contacts by pass, its bytes, sweeps and rows per step, and its energy guards' counts.
+fn pushback_figures(
+    c: &ContactStats,
+    n_steps: f64,
+    ex: &mut serde_json::Map<String, serde_json::Value>,
+) {
+    // Push-back solves per step (1 + the rounds after rechecks that found contacts; 0 in
+    // steps without contacts) and the contacts those rechecks added.
+    ex.insert(
+        "contact_pushback_solves_per_step".into(),
+        (c.solves_total as f64 / n_steps).into(),
+    );
+    ex.insert("contact_pushback_solves_max".into(), c.solves_max.into());
+    ex.insert("contacts_rechecked_total".into(), c.rechecked_total.into());
+    // Contacts by pass: a node of a later body (bodies numbered by their lowest element
+    // id) in a face of an earlier one (the only pass of a one-pass search without
+    // masters), the other way, self-contact, particles; and the contacts touching a node
+    // another rank's cells touch (what the push-back exchanges between ranks).
+    let k = c.kinds_total;
+    ex.insert("contacts_later_on_earlier_total".into(), k[0].into());
+    ex.insert("contacts_earlier_on_later_total".into(), k[1].into());
+    ex.insert("contacts_self_total".into(), k[2].into());
+    ex.insert("contacts_particle_total".into(), k[3].into());
+    ex.insert(
+        "contacts_coupled_across_boxes_total".into(),
+        c.coupled_total.into(),
+    );
+    // The push-back's own cost (step 7b, solved in cells where the contacts are): bytes
+    // per step over all ranks and on the busiest rank, Gauss-Seidel sweeps per step, and
+    // the contacts the busiest rank solved per step.
+    ex.insert(
+        "contact_pushback_bytes_per_step".into(),
+        (c.pushback_bytes / n_steps).into(),
+    );
+    ex.insert(
+        "contact_pushback_bytes_per_rank_step_max".into(),
+        (c.pushback_bytes_max_sum / n_steps).into(),
+    );
+    ex.insert(
+        "contact_pushback_sweeps_per_step".into(),
+        (c.sweeps_total as f64 / n_steps).into(),
+    );
+    ex.insert(
+        "contact_pushback_rows_per_rank_step_max".into(),
+        (c.pushback_rows_max_sum / n_steps).into(),
+    );
+    // The push-back's energy guards (`contact::pushback`): contacts between two
+    // prescribed surfaces (skipped), contacts that started the step inside their face
+    // (only the step's own penetration closed), and steps whose impulses were scaled down
+    // because they would have added kinetic energy.
+    ex.insert("contacts_immovable_total".into(), c.immovable_total.into());
+    ex.insert("contacts_bounded_total".into(), c.bounded_total.into());
+    ex.insert(
+        "contact_energy_limited_steps".into(),
+        c.energy_limited_steps.into(),
+    );
 }
