@@ -401,7 +401,7 @@ fn restart_from(
                 .into());
             }
             let (meta, saved) =
-                checkpoint::read(world, dir, &hash, &scene.file.display().to_string())?;
+                checkpoint::read(world, dir, hash, &scene.file.display().to_string())?;
             let restored = restore(world, model, &saved);
             collective::first_error(world, restored.err())?;
             clock.restore(&meta.clock);
