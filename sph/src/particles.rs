@@ -62,6 +62,10 @@ pub struct Particles {
     pub mat: Vec<u16>,
     /// Boundary particle: its density (and energy) evolve, it never moves.
     pub fixed: Vec<bool>,
+    /// The unit outward normal of the immovable faces holding this particle in the current
+    /// step (set by the contact push-back, used and cleared after the step's closing kick by
+    /// the parallel layer); zero when none. Carried when the particle migrates within a step.
+    pub hold: Vec<[f64; 3]>,
     /// The exact sums a pass adds to, one per entry (sized by the passes' resets; not carried).
     pub sums: Vec<PairSums>,
 }
@@ -94,6 +98,8 @@ pub struct ParticleRecord {
     pub mat: u32,
     /// 1 for a fixed (boundary) particle.
     pub fixed: u32,
+    /// See [`Particles::hold`].
+    pub hold: [f64; 3],
 }
 
 /// What a pass added to an entry, as exact sums ([`crate::exact`]); a ghost copy's go to its
@@ -187,6 +193,7 @@ macro_rules! for_each_field {
         $mac!($p.e_half);
         $mac!($p.mat);
         $mac!($p.fixed);
+        $mac!($p.hold);
     }};
 }
 
@@ -280,6 +287,7 @@ impl Particles {
         self.e_half.push(r.e_half);
         self.mat.push(r.mat as u16);
         self.fixed.push(r.fixed != 0);
+        self.hold.push(r.hold);
     }
 
     /// Entry `i` packed (its real position, its shift, every other field).
@@ -304,6 +312,7 @@ impl Particles {
             e_half: self.e_half[i],
             mat: self.mat[i] as u32,
             fixed: self.fixed[i] as u32,
+            hold: self.hold[i],
         }
     }
 
@@ -404,6 +413,7 @@ impl Particles {
             + b(&self.e_half)
             + b(&self.mat)
             + b(&self.fixed)
+            + b(&self.hold)
             + b(&self.sums)
     }
 

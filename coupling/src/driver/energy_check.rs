@@ -105,7 +105,7 @@ impl EnergyCheck {
         outputs: &mut outputs::Outputs,
     ) -> Result<f64, RunFailure> {
         let en = sum_energies(model);
-        let contact = model.contact.as_ref().map_or(0.0, |c| c.energy);
+        let contact = model.contact_energy();
         let total = en.total() + contact;
         let external = en.external_work;
         self.scale.observe(en.kinetic, en.internal + en.hourglass);

@@ -285,7 +285,7 @@ impl Outputs {
             e.internal,
             e.hourglass,
             e.external_work,
-            model.contact.as_ref().map_or(0.0, |c| c.energy),
+            model.contact_energy(),
             row.energy_error,
             e.momentum[0],
             e.momentum[1],

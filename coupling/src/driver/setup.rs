@@ -28,6 +28,13 @@ pub struct Model {
 }
 
 impl Model {
+    /// history.csv's `contact_energy`, J: what the push-back has taken (the contact stage's
+    /// sum) and the immovable faces' hold on particles (`SphStage::hold_on_faces`).
+    pub fn contact_energy(&self) -> f64 {
+        let held = self.sph.as_ref().map_or(0.0, |s| s.contact_held);
+        self.contact.as_ref().map_or(0.0, |c| c.energy + held)
+    }
+
     /// The stages that move material, in the order of Fig. 3 (FE, then SPH).
     pub fn stages(&self) -> Vec<&dyn Stage> {
         let mut v: Vec<&dyn Stage> = Vec::new();

@@ -201,6 +201,8 @@ impl BaselineStage {
         pushback.rows = maxes[3] as u64;
         let mean = sums[3] / p as f64;
         Ok(ContactOutcome {
+            // The baseline searches mesh nodes only: no particle is held.
+            held: vec![false; force.len()],
             force,
             contacts: sums[0] as u64,
             found: contacts

@@ -348,7 +348,8 @@ impl Contact {
             (dt, budget),
         );
         let mut w = vec![state.apply_contact(&f, dt)];
-        w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, dt)));
+        let held = &out.held[n_fe..];
+        w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, held, dt)));
         let flat = fe_petsc::exact::flatten(&w);
         let mut g = vec![0.0f64; flat.len()];
         world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());

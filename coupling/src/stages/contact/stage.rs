@@ -110,6 +110,9 @@ struct Back {
 pub struct ContactOutcome {
     /// Push-back force on each input node (aligned with the `nodes` given), N.
     pub force: Vec<[f64; 3]>,
+    /// Each input node that is a particle held by immovable faces only in this step
+    /// (`held_particles`; aligned with `force`, false for mesh nodes).
+    pub held: Vec<bool>,
     /// Contacts found, over all ranks.
     pub contacts: u64,
     /// The contacts found on this rank: (node gid, face gid, depth).
@@ -506,6 +509,7 @@ impl ContactStage {
         }
         Ok(ContactOutcome {
             force: p.force,
+            held: p.held,
             pushback,
             contacts: sums[0] as u64,
             found: p
@@ -532,6 +536,7 @@ impl ContactStage {
 /// What a step's statistics are made from.
 struct OutcomeParts<'a> {
     force: Vec<[f64; 3]>,
+    held: Vec<bool>,
     pushback: PushbackCounts,
     contacts: &'a [Contact],
     pb_work: f64,

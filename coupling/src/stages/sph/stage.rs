@@ -107,6 +107,9 @@ pub struct SphStage {
     /// The grids of the energy and momentum sums ([`fe_petsc::exact`]), from the particles'
     /// mass at the start (`Sph::new`).
     pub grids: SumGrids,
+    /// This step's change of kinetic energy by `hold_on_faces` on this rank's particles (<= 0),
+    /// J, as sum parts on `grids.energy`.
+    pub hold_work: Folds,
     /// Wall time of the last drift, s.
     drift_s: f64,
     /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
@@ -175,6 +178,7 @@ impl SphStage {
             x_start: Vec::new(),
             contact_rho: Vec::new(),
             grids: SumGrids::for_mass(1.0),
+            hold_work: [0.0; 3],
             drift_s: 0.0,
             pair_count: Vec::new(),
             balanced_once: false,
@@ -369,6 +373,7 @@ impl SphStage {
             self.evaluate(true);
         }
         second_half(&mut self.parts, dt, &self.params);
+        self.hold_on_faces(dt);
         self.finish_stats(t0, self.drift_s);
         self.check_partners()
     }

@@ -87,11 +87,23 @@ impl ContactStage {
             mesh_forces_home(st, &owned_force[..n_owned], &fe_inputs, nodes.len());
         bytes += back_bytes;
         t_bytes += back_bytes;
+        let mut held = vec![false; nodes.len()];
         if let Some(mut plan) = pplan {
             let before = plan.bytes_sent;
-            let back = plan.reverse(&owned_force[n_owned..]);
+            // Each particle's force and whether immovable faces alone hold it (1 or 0).
+            let flags = match &st.pbox {
+                Some((_, pb, _)) => held_particles(pb, &pcontacts, pgot.len()),
+                None => vec![false; pgot.len()],
+            };
+            let out: Vec<[f64; 4]> = owned_force[n_owned..]
+                .iter()
+                .zip(&flags)
+                .map(|(f, &h)| [f[0], f[1], f[2], f64::from(u8::from(h))])
+                .collect();
+            let back = plan.reverse(&out);
             for (item, f) in pitems.iter().zip(&back) {
-                force[item.home_idx as usize] = *f;
+                force[item.home_idx as usize] = [f[0], f[1], f[2]];
+                held[item.home_idx as usize] = f[3] != 0.0;
             }
             bytes += plan.bytes_sent - before;
             t_bytes += plan.bytes_sent - before;
@@ -103,6 +115,7 @@ impl ContactStage {
         self.outcome(OutcomeParts {
             pushback,
             force,
+            held,
             contacts: &all_contacts,
             pb_work,
             bytes,
@@ -193,7 +206,9 @@ impl ContactStage {
         let tt = Instant::now();
         let owned_home: Vec<(i32, u64)> =
             mine.iter().map(|n| (n.home as i32, n.home_idx)).collect();
-        let (force, back_bytes) = send_home(comm, &owned_force, &owned_home, nodes.len());
+        let flags = held_particles(&b, &contacts, n_owned);
+        let (force, held, back_bytes) =
+            send_home(comm, &owned_force, &owned_home, (&flags, nodes.len()));
         bytes += back_bytes;
         t_bytes += back_bytes;
         t_s += tt.elapsed().as_secs_f64();
@@ -223,6 +238,7 @@ impl ContactStage {
         self.outcome(OutcomeParts {
             pushback,
             force,
+            held,
             contacts: &contacts,
             pb_work,
             bytes,

@@ -133,24 +133,39 @@ pub(super) fn send_home(
     comm: &Rc<SimpleCommunicator>,
     owned_force: &[[f64; 3]],
     owned_home: &[(i32, u64)],
-    n_home: usize,
-) -> (Vec<[f64; 3]>, u64) {
+    (held, n_home): (&[bool], usize),
+) -> (Vec<[f64; 3]>, Vec<bool>, u64) {
     let mut dest = Vec::new();
     let mut back = Vec::new();
-    for (f, &(home, idx)) in owned_force.iter().zip(owned_home) {
+    for (i, (f, &(home, idx))) in owned_force.iter().zip(owned_home).enumerate() {
         if f.iter().any(|c| *c != 0.0) {
             dest.push(home);
-            back.push(Back { key: idx, f: *f });
+            // A particle held by immovable faces only (`held_particles`): the key's top bit.
+            let flag = if held.get(i).copied().unwrap_or(false) {
+                HELD_BIT
+            } else {
+                0
+            };
+            back.push(Back {
+                key: idx | flag,
+                f: *f,
+            });
         }
     }
     let mut plan = CommPlan::new_shared(comm, &dest);
     let got = plan.exchange(&back);
     let mut force = vec![[0.0; 3]; n_home];
+    let mut held_home = vec![false; n_home];
     for bk in &got {
-        let f = &mut force[bk.key as usize];
-        for k in 0..3 {
-            f[k] += bk.f[k];
+        let k = (bk.key & !HELD_BIT) as usize;
+        held_home[k] |= bk.key & HELD_BIT != 0;
+        let f = &mut force[k];
+        for c in 0..3 {
+            f[c] += bk.f[c];
         }
     }
-    (force, plan.bytes_sent)
+    (force, held_home, plan.bytes_sent)
 }
+
+/// The top bit of a [`Back`] record's key: the node is a particle held by immovable faces only.
+const HELD_BIT: u64 = 1 << 63;

@@ -80,7 +80,8 @@ impl SphStage {
     /// change of kinetic energy beyond what the pair and gravity work count (velocity Verlet
     /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m),
     /// summed over this rank's particles.
-    pub fn apply_contact(&mut self, force: &[[f64; 3]], dt: f64) -> Folds {
+    /// `held`: the particles immovable faces alone hold in this step (see `hold_on_faces`).
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], held: &[bool], dt: f64) -> Folds {
         let p = &mut self.parts;
         let grid = self.grids.energy;
         let mut work = [0.0; 3];
@@ -107,7 +108,47 @@ impl SphStage {
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];
+            if held.get(i).copied().unwrap_or(false) {
+                p.hold[i] = n;
+            }
         }
         work
+    }
+
+    /// After the step's closing half-kick: a particle that immovable faces alone held in the
+    /// step (`apply_contact`'s `held`, outward normal `n`) loses the part of that kick that
+    /// points into the faces, `dv = -min(0, (dt/2) a . n) n`, `a = f / m`: the faces cannot give
+    /// way, and their reaction over the second half-step is what stops it (the push-back, which
+    /// acts between the kicks, stops only the first half's). Without it a particle at rest
+    /// pressed on a fixed face ends each step with the velocity `a dt/2` into the face, its
+    /// kinetic energy `m (a dt/2)^2 / 2` made by no motion, and contact books that energy as
+    /// given back at the step the pressing starts. The change of kinetic energy (<= 0) is the
+    /// faces' reaction's work, contact's: `hold_work`, which `contact_energy` takes
+    /// (`Sph::contact_held`). Momentum: the faces' nodes are prescribed (infinite mass), so
+    /// the impulse goes to their constraint, as a push-back on them does.
+    pub(super) fn hold_on_faces(&mut self, dt: f64) {
+        let p = &mut self.parts;
+        let grid = self.grids.energy;
+        let mut w = [0.0; 3];
+        for i in 0..p.n_owned {
+            let n = p.hold[i];
+            if n == [0.0; 3] {
+                continue;
+            }
+            p.hold[i] = [0.0; 3];
+            let k = (0..3)
+                .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
+                .sum::<f64>();
+            if p.fixed[i] || k >= 0.0 {
+                continue;
+            }
+            for c in 0..3 {
+                let v0 = p.v[i][c];
+                let v1 = v0 - k * n[c];
+                grid.add(&mut w, 0.5 * p.m[i] * (v1 * v1 - v0 * v0));
+                p.v[i][c] = v1;
+            }
+        }
+        self.hold_work = w;
     }
 }
