@@ -448,9 +448,9 @@ fn blend_tied_normals(
 /// from outside): each face's centre lies in front of the other's tangent plane at its contact
 /// point. Only there does leaving one face leave the node behind the other; at a convex edge the
 /// node is behind both planes yet needs to leave one face only, and a second contact would push
-/// it out of both (measured: a block landing on a plate node for node, each plate node under the
-/// block's lower edge also "behind" the block's side face, pushed sideways with the block: its
-/// top moved 15 % less than over offset meshes).
+/// it out of both (a block landing on a plate node for node: each plate node under the block's
+/// lower edge is also "behind" the block's side face and would be pushed sideways with the
+/// block, its top moving 15 % less than over offset meshes).
 pub(crate) fn valley(
     b: &ContactBox,
     (k, g): (&pair::Hit, usize),
@@ -463,20 +463,20 @@ pub(crate) fn valley(
 
 /// Whether faces `g` and `f` bound different bodies: a node must then be outside both (it is
 /// inside their union when behind either), so each is a contact of its own, at any angle.
-/// Measured on `rod_wall` without this rule: a brick node at the rod's front face, next to
-/// the neighbouring brick's side face ("convex" to the valley test, which reads two faces as
-/// one body's surface), was pushed out of the brick's face and left 2.7e-5 m behind the rod's,
-/// past the capture tolerance; 1.3 mm inside the rod 0.2 ms later.
+/// Without this rule, on `rod_wall`, a brick node at the rod's front face, next to the
+/// neighbouring brick's side face ("convex" to the valley test, which reads two faces as one
+/// body's surface), is pushed out of the brick's face and left 2.7e-5 m behind the rod's, past
+/// the capture tolerance, and 1.3 mm inside the rod 0.2 ms later.
 ///
 /// "At any angle" includes the angles [`SAME_NORMAL_COS`] reads as one surface, so this rule
 /// is asked first: two bodies' faces with opposite normals are the two sides of a squeeze (a
 /// node of the rod in the gap between two bricks' facing sides, a brick's corner between the
 /// rod's face and the next brick's front at a junction of bodies), and keeping the deeper only
-/// pushes the node out of one body by its depth there, into the other. Measured on `rod_wall`
-/// (np 2) when the |cos| rule came first: about 800 such opposite pairs and 290 parallel ones
-/// (two bricks' coplanar sides) dropped over the run, left to the recheck after the push-back
-/// (1,190 rechecked contacts; 529 with this rule first), and the deepest node inside another
-/// body over frames 10 us apart 7.3e-7 m (9.4e-8 m with this rule first).
+/// pushes the node out of one body by its depth there, into the other. On `rod_wall` (np 2),
+/// asking the |cos| rule first drops about 800 such opposite pairs and 290 parallel ones (two
+/// bricks' coplanar sides) over the run, left to the recheck after the push-back: 1,190
+/// rechecked contacts against 529 with this rule first, and the deepest node inside another
+/// body (frames 10 us apart) 7.3e-7 m against 9.4e-8 m.
 pub(crate) fn apart(b: &ContactBox, g: usize, f: usize) -> bool {
     b.faces.body[g] != b.faces.body[f]
 }

@@ -112,7 +112,7 @@ fn node_behind_the_bottom_of_a_dimple_is_found() {
 
 #[test]
 fn node_pressed_on_a_plate_node_stays_outside_step_after_step() {
-    // The failure of issue 15 in miniature: a heavy node lands exactly on a node of a light
+    // A contact failure in miniature: a heavy node lands exactly on a node of a light
     // 4 x 4 plate and keeps pressing it for 40 steps, while the plate's spring pulls the hit
     // node back up each step (its neighbours stay put), so the dimple under the node renews
     // every step. Reference: the non-penetration constraint. After each step's push-back the

@@ -1,4 +1,4 @@
-//! Fuzzing what a user hands the code before any rank computes (issue 16): the scene parser
+//! Fuzzing what a user hands the code before any rank computes: the scene parser
 //! and the mesh checks.
 //!
 //! Each scene case takes a valid scene from `scenes/`, applies one to three random mutations

@@ -6,7 +6,7 @@
 use fe_petsc::hex::{self, HexControls, HexState};
 use fe_petsc::material::{build_material, EosSpec, Material, MaterialSpec};
 
-/// Water as issue 7's scene uses it (Tait: rho0 1000 kg/m^3, c0 1480 m/s, gamma 7).
+/// Water as the underwater explosion's scene uses it (Tait: rho0 1000 kg/m^3, c0 1480 m/s, gamma 7).
 const RHO_W: f64 = 1000.0;
 const C_W: f64 = 1480.0;
 const GAMMA_W: f64 = 7.0;

@@ -8,11 +8,11 @@ use fe_petsc::hourglass::Hourglass;
 use fe_petsc::material::{build_material, Material, MaterialSpec};
 use fe_petsc::states::HexStates;
 
-/// Relative agreement required. Four lanes do the scalar kernel's IEEE operations in the same
-/// order (measured difference: 0). Eight lanes fuse each multiply-add into one rounding, so
-/// they differ at round-off (measured up to 1e-13 relative over the 12 yielding steps, in the
-/// hourglass amplitudes that the yield bound rescales). A transcription error shows at 1e-8 or
-/// more.
+/// Relative agreement required. Every width runs the same IEEE operations in the same order
+/// (no fused multiply-adds), so four and eight lanes give the same bits as each other; both
+/// form the geometry in mode space and `hex::update` node by node, so they differ from it at
+/// round-off (at most 2e-13 relative over the 12 yielding steps, in the hourglass amplitudes
+/// that the yield bound rescales). A transcription error shows at 1e-8 or more.
 const TOL: f64 = 1e-12;
 
 /// A small deterministic generator (LCG, Knuth's constants) so tests need no rand crate.

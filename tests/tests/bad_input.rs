@@ -202,7 +202,7 @@ fn tetrahedral_meshes_are_refused_with_a_reason() {
     );
 }
 
-/// One case of issue 16: a scene (and its arguments) that once hung a rank or ran on silently,
+/// One bad-input case: a scene (and its arguments) that once hung a rank or ran on silently,
 /// and what its one line must say (docs/scene.md "Exit status": the file, the key or the element
 /// and its place, what was expected).
 struct Case {
@@ -212,7 +212,7 @@ struct Case {
     needles: Vec<String>,
 }
 
-/// Longest a bad case may take to exit at any rank count (issue 16: "within 10 s").
+/// Longest a bad case may take to exit at any rank count ("within 10 s").
 const EXIT_WITHIN_S: f64 = 10.0;
 /// mpirun is killed after this long: a case that reaches it hung.
 const HANG_KILL_S: u32 = 40;
@@ -237,7 +237,7 @@ fn with_line(text: &str, i: usize, line: &str) -> String {
 }
 
 /// A gmsh mesh of the test bar (4 hexahedra along x), msh 2.2, and its variants broken the ways
-/// issue 16 lists; each variant with what its message must name, found from the text here.
+/// the bad-input cases list; each variant with what its message must name, found from the text here.
 fn broken_meshes(dir: &Path) -> Vec<(&'static str, String, Vec<String>)> {
     let msh = dir.join("bar.msh");
     let o = std::process::Command::new("gmsh")
@@ -305,7 +305,7 @@ fn broken_meshes(dir: &Path) -> Vec<(&'static str, String, Vec<String>)> {
     ]
 }
 
-/// Every case of issue 16 (its hangs and its silent inputs), written into `dir`.
+/// Every bad-input case (its hangs and its silent inputs), written into `dir`.
 fn issue_16_cases(dir: &Path) -> Vec<Case> {
     let base_dir = dir.join("base");
     std::fs::create_dir_all(&base_dir).unwrap();

@@ -1,5 +1,5 @@
 //! Per-block energies, the energy check from step 100, integer history columns, and particle ids
-//! as the particle file gives them (issue 13).
+//! as the particle file gives them.
 use std::path::Path;
 use tdyn_tests::*;
 

@@ -1,4 +1,4 @@
-//! The contact stage in a run (issue 5): two elastic bars meeting head on.
+//! The contact stage in a run: two elastic bars meeting head on.
 use tdyn_tests::frames::*;
 use tdyn_tests::*;
 
@@ -465,7 +465,7 @@ fn static_decomposition_baseline_finds_the_same_contacts() {
 
 #[test]
 fn rcb_balances_the_contact_work_where_the_static_decomposition_cannot() {
-    // The benchmark's aim (issue 5): contact work imbalance (max/mean over ranks of nodes +
+    // The benchmark's aim: contact work imbalance (max/mean over ranks of nodes +
     // faces searched) under 1.1 with the dynamic RCB decomposition on a scene where the static FE
     // decomposition exceeds 2. scenes/bricks_pedestal.toml: 64 bricks lifting off a tall
     // column whose top only is a contact surface; METIS cuts the column across its height, so
@@ -662,7 +662,7 @@ fn the_order_of_the_bodies_in_the_mesh_does_not_change_the_answer() {
     // before its plate sank 2 mm into it). Two passes (the default) search both ways.
     // Reference: the same run with the cube meshed second; meshed first (-p BLOCK_FIRST=1: its
     // elements, nodes and body number come first), the final z-displacement of the cube's top
-    // differs by under 1 % (issue 15's limit; measured under 1e-5, and 1.3 %, 0.4 %, 0.8 % and
+    // differs by under 1 % (measured under 1e-5, and 1.3 %, 0.4 %, 0.8 % and
     // 0.4 % one-pass before, aligned to offset), for each alignment, at np 2. Then one pass,
     // explicitly (`passes = 1`, `master = ["plate"]`): the report says so and the cube's nodes
     // are still kept out of the plate (5 um, as above).

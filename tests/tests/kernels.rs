@@ -1,4 +1,4 @@
-//! The parallel kernels (issue 3) under mpirun at 1 to 5 ranks.
+//! The parallel kernels under mpirun at 1 to 5 ranks.
 use tdyn_tests::*;
 
 #[test]

@@ -1,4 +1,4 @@
-//! The paper's scenes (issue 7) at a coarse resolution, at np 1 and 3: conservation, energy
+//! The paper's scenes at a coarse resolution, at np 1 and 3: conservation, energy
 //! balance, agreement between rank counts, and for the container no wall through another.
 use tdyn_tests::frames::*;
 use tdyn_tests::*;
@@ -93,9 +93,9 @@ fn container_crush_coarse_at_1_and_3_ranks() {
     //   elements deeper than 1e-3 of the wall (6 um) below its skin (self-contact: no wall
     //   passes through another), nor inside the rigid wall (the independent check of
     //   tests/src/frames.rs, the one the tube test uses);
-    // - energy: the balance (docs/scene.md) within 2 % throughout (issue 7);
+    // - energy: the balance (docs/scene.md) within 2 % throughout;
     // - np 1 and np 3: final energies and probe values equal within 1 % of the largest energy
-    //   (issue 7; measured 1e-11: the contacts here never share a face across boxes).
+    //   (measured 1e-11: the contacts here never share a face across boxes).
     let wall_t = 0.006;
     let mut runs = Vec::new();
     for np in [1, 3] {
@@ -167,7 +167,7 @@ fn rod_wall_coarse_at_1_and_3_ranks() {
     // (no external force: only contact and internal forces act, both equal and opposite) equal
     // to its initial value M v = 211.95 kg m/s within 1e-10 in x and zero within 1e-10 M v
     // across; the energy balance within 2 %; np 1 and np 3 final energies and probes equal
-    // within 1 % (issue 7; the push-back of all contacts is solved together, so the bricks'
+    // within 1 % (the push-back of all contacts is solved together, so the bricks'
     // flight does not depend on the decomposition either: per box, one brick's velocity
     // differed by 9 %).
     let mv = 7850.0 * 0.03 * 0.03 * 0.3 * 100.0;

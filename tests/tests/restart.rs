@@ -1,4 +1,4 @@
-//! Nothing lost, and restart (issue 16; docs/scene.md "Runs, restarts and earlier results"): a run
+//! Nothing lost, and restart (docs/scene.md "Runs, restarts and earlier results"): a run
 //! stopped with SIGTERM (as mpirun passes on Ctrl-C) and continued with `--restart` ends as the
 //! run without a stop; a run killed with SIGKILL leaves whole CSV rows and readable frames; an
 //! earlier run's results are never replaced unless asked.

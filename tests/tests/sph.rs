@@ -1,4 +1,4 @@
-//! The SPH stage in a run (issue 4): Sod's shock tube against the exact Riemann solution.
+//! The SPH stage in a run: Sod's shock tube against the exact Riemann solution.
 use tdyn_tests::*;
 
 #[test]

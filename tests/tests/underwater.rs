@@ -1,4 +1,4 @@
-//! The underwater explosion (issue 7): a TNT charge (JWL SPH particles) in a cavity of meshed
+//! The underwater explosion: a TNT charge (JWL SPH particles) in a cavity of meshed
 //! water (Tait fluid) beneath a clamped steel plate with a plug, quarter model
 //! (`scenes/underwater_explosion.toml`), at np 1 and 3.
 use tdyn_tests::*;
@@ -69,7 +69,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
         // the faces, sum m (a dt/2)^2 / 2 of kinetic energy that contact books as given back.
         // On the fixed faces standing in for the symmetry planes the hold removes it
         // (`SphStage::hold_on_faces`: 231 J before it); on the movable water faces it
-        // remains. Allowed here up to 1.5e-3 (docs/scene.md: 1e-3); issue 27 keeps it open.
+        // remains. Allowed here up to 1.5e-3 (docs/scene.md: 1e-3) (a known limit, docs/status.md).
         run_ok_with_contact_fall(
             np,
             &root().join("scenes/underwater_explosion.toml"),

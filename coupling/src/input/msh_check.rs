@@ -1,5 +1,5 @@
 //! The input mesh checked on rank 0 before anything reads it collectively (docs/scene.md "Exit
-//! status"; issue 16).
+//! status").
 //!
 //! PETSc's gmsh reader runs on rank 0 inside a collective call: when it fails (a truncated file,
 //! a face element that is no longer a face of any element because a hexahedron repeats or

@@ -226,8 +226,8 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
     })
 }
 
-/// a0 b0 + a1 b1 + a2 b2 summed left to right, each product added by `F::mul_add` (fused in
-/// the eight-lane build, two roundings in the four-lane one, as the scalar kernel).
+/// a0 b0 + a1 b1 + a2 b2 summed left to right, each product added by `F::mul_add` (two
+/// roundings in every width, as the scalar kernel).
 #[inline(always)]
 pub(super) fn dot3(a0: F, b0: F, a1: F, b1: F, a2: F, b2: F) -> F {
     a2.mul_add(b2, a1.mul_add(b1, a0 * b0))

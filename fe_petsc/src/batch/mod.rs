@@ -3,9 +3,12 @@
 //! lane and the scalar kernel's branches as masked lane operations. Each lane computes what
 //! [`crate::hex::update`] computes for its element, the geometry in mode space (`modes.rs`: the
 //! volume, its gradient and the nodal forces through the Walsh-Hadamard transform of the nodal
-//! values) and the rest in the scalar kernel's order; both widths agree with it to round-off
-//! (eight lanes fuse their multiply-adds, `F::mul_add`). The scalar
-//! kernel stays the reference the tests hold both to (`tests/lanes.rs`, 1e-12 relative).
+//! values) and the rest in the scalar kernel's order. Every width runs the same IEEE operations
+//! in the same order (no fused multiply-adds: `F::mul_add` rounds twice; IEEE division and
+//! square root), so one, four and eight lanes (`--kernel scalar|lanes4|lanes8`) give the same
+//! bits. The node-by-node [`crate::hex::update`] forms the geometry otherwise and agrees to
+//! round-off; it stays the reference the tests hold every width to (`tests/lanes.rs`, 1e-12
+//! relative).
 //!
 //! The kernel is written once (`hex.rs`, `hourglass.rs`, `law.rs` in this folder, on a lane
 //! type `F`, its mask `M` and the group size `LANES` taken from the parent module) and compiled
@@ -14,11 +17,11 @@
 //!   AVX2 when the CPU has it (chosen at run time) and for the baseline x86-64 (SSE2) otherwise;
 //! - [`w8`] (x86-64): eight lanes in one AVX-512 register (`lanes8.rs`, intrinsics), used when
 //!   the CPU has AVX-512F. Eight lanes halve the instructions per element, the 32 vector
-//!   registers of AVX-512 spill less than AVX2's 16, and the multiply-adds are fused.
+//!   registers of AVX-512 spill less than AVX2's 16.
 //!
 //! In the kernel, no `std::array::from_fn` or other library generic taking a closure: those
-//! are not inlined into the target-feature builds, and each lane operation inside them became
-//! a call (measured: the eight-lane update went from 200 to 360 ns per element).
+//! are not inlined into the target-feature builds, and each lane operation inside them becomes
+//! a call (the eight-lane update then takes 360 ns per element instead of 200).
 //!
 //! [`widest`] picks the width for this CPU; [`Batch`] is what the element loop and the tests
 //! see of either.

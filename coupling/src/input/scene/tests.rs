@@ -17,7 +17,7 @@ fn refused(text: &str) -> SceneError {
     parse(text, Path::new("scene.toml")).expect_err("must be refused")
 }
 
-/// Each silent input of issue 16 and each new bound: the key and what the message must say
+/// Each silent input a scene could hold and each new bound: the key and what the message must say
 /// (docs/scene.md: the file, the key, what was expected; one line).
 #[test]
 fn silent_inputs_and_absurd_work_are_refused_by_key() {
