@@ -241,8 +241,8 @@ impl EnergyChart {
         (e_scale, e_prefix, y)
     }
 
-    /// The upper panel: each energy, the blocks' shares of the internal energy (dashed in its
-    /// colour) and the balance (dashed, black).
+    /// The upper panel: each energy, the blocks' shares of the internal energy (dashed, each
+    /// block in its own colour, after the energies' colours) and the balance (dashed, black).
     fn energies<DB: DrawingBackend>(
         &self,
         area: &DrawingArea<DB, Shift>,
@@ -282,7 +282,8 @@ impl EnergyChart {
             if *label != CURVES[INTERNAL].1 {
                 continue;
             }
-            for (name, v) in &h.blocks {
+            for (j, (name, v)) in h.blocks.iter().enumerate() {
+                let c = chart::colour(h.curves.len() + j);
                 let s = ch
                     .draw_series(DashedLineSeries::new(
                         line(v),

@@ -10,6 +10,7 @@ mod chart;
 mod compare;
 mod crosscheck;
 mod energies;
+mod force_chart;
 mod launch;
 mod scaling;
 mod sweep;
@@ -95,9 +96,20 @@ enum Cmd {
     /// Draw a run's energies over time from its output folder: `tdyn plot out/slug_on_plate`
     /// writes energies.png and energies.svg there from history.csv (what `tdyn run` draws at
     /// the end of a run). No MPI.
+    ///
+    /// With `--force NAME --displacement PROBE` it draws force_displacement.png and .svg
+    /// instead: the force column NAME of reactions.csv or contact_forces.csv (a stem such as
+    /// `wall`, its largest component, or a whole column `wall.force_z`) against the probe
+    /// PROBE's displacement in probes.csv (`gauge`, or `gauge.displacement_z`), row by row.
     Plot {
         /// The run's output folder (holding history.csv).
         dir: PathBuf,
+        /// A force: a reactions.csv or contact_forces.csv column, or its stem.
+        #[arg(long, requires = "displacement")]
+        force: Option<String>,
+        /// A probe's displacement: a probes.csv column, or the probe's name.
+        #[arg(long, requires = "force")]
+        displacement: Option<String>,
     },
     /// Chart a scaling study (scripts/scaling.sh): reads DIR/<series>_np<P>/report.json
     /// (series `strong`, `weak`), writes DIR/scaling.csv, scaling.png and scaling.svg: time per
@@ -393,7 +405,12 @@ fn main() -> ExitCode {
     match Cli::parse_from(ours).cmd {
         Cmd::Run(a) => run(a, &petsc_args),
         Cmd::Sweep(a) => sweep(a, &petsc_args),
-        Cmd::Plot { dir } => plot(&dir),
+        Cmd::Plot {
+            dir,
+            force: Some(f),
+            displacement: Some(d),
+        } => force_plot(&dir, &f, &d),
+        Cmd::Plot { dir, .. } => plot(&dir),
         Cmd::ChartScaling { dir, title } => chart_scaling(&dir, &title),
         Cmd::Compare(a) => compare(a, &petsc_args),
         Cmd::Crosscheck(a) => crosscheck(a),
@@ -522,6 +539,24 @@ fn plot(dir: &Path) -> ExitCode {
     }
 }
 
+/// `tdyn plot DIR --force NAME --displacement PROBE`: the force-displacement chart. No MPI.
+fn force_plot(dir: &Path, force: &str, displacement: &str) -> ExitCode {
+    match crate::force_chart::plot(dir, force, displacement) {
+        Ok(png) => {
+            println!(
+                "tdyn plot: {} and {}",
+                png.display(),
+                png.with_extension("svg").display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("tdyn plot: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 /// `tdyn chart-scaling`: the study in `dir` as a table, scaling.csv and the charts. No MPI.
 fn chart_scaling(dir: &Path, title: &str) -> ExitCode {
     match crate::scaling::chart_scaling(dir, title) {
@@ -614,6 +649,7 @@ fn validate(a: ValidateArgs) -> ExitCode {
         .filter(|r| r.failed())
         .map(|r| format!("{} {} {}", r.case, r.rung, r.measure))
         .collect();
+    print!("{}", case_lines(&o.rows));
     println!("tdyn validate: {}", o.report.display());
     if !o.skipped.is_empty() {
         println!("tdyn validate: skipped (--fast): {}", o.skipped.join(", "));
@@ -624,6 +660,32 @@ fn validate(a: ValidateArgs) -> ExitCode {
         eprintln!("tdyn validate: failed: {}", failed.join("; "));
         ExitCode::FAILURE
     }
+}
+
+/// One line per validation case, `PASS` when every judged measure of every rung passed and every
+/// run ran, `FAIL` with the failed measures otherwise, in the order the cases ran; then the total.
+fn case_lines(rows: &[crate::validate::Row]) -> String {
+    let mut cases: Vec<(&str, Vec<String>)> = Vec::new();
+    for r in rows {
+        if cases.last().is_none_or(|c| c.0 != r.case) {
+            cases.push((&r.case, Vec::new()));
+        }
+        if r.failed() {
+            let c = cases.last_mut().expect("pushed above");
+            c.1.push(format!("{} {}", r.rung, r.measure));
+        }
+    }
+    let mut out = String::new();
+    for (case, failed) in &cases {
+        if failed.is_empty() {
+            out += &format!("PASS  {case}\n");
+        } else {
+            out += &format!("FAIL  {case}: {}\n", failed.join("; "));
+        }
+    }
+    let passed = cases.iter().filter(|c| c.1.is_empty()).count();
+    out += &format!("tdyn validate: {passed} of {} cases passed\n", cases.len());
+    out
 }
 
 /// `tdyn mesh`: meshes `geo` with gmsh (cached beside it) and prints the .msh path. No MPI.
