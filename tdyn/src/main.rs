@@ -523,25 +523,17 @@ fn sweep(a: SweepArgs, petsc_args: &[String]) -> ExitCode {
 
 /// `tdyn plot`: the energies chart of the run in `dir`. No MPI.
 fn plot(dir: &Path) -> ExitCode {
-    match crate::energies::plot(dir) {
-        Ok(png) => {
-            println!(
-                "tdyn plot: {} and {}",
-                png.display(),
-                png.with_extension("svg").display()
-            );
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("tdyn plot: error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    chart_written(crate::energies::plot(dir))
 }
 
 /// `tdyn plot DIR --force NAME --displacement PROBE`: the force-displacement chart. No MPI.
 fn force_plot(dir: &Path, force: &str, displacement: &str) -> ExitCode {
-    match crate::force_chart::plot(dir, force, displacement) {
+    chart_written(crate::force_chart::plot(dir, force, displacement))
+}
+
+/// Names the PNG and SVG `tdyn plot` wrote, or its error.
+fn chart_written(r: Result<PathBuf, String>) -> ExitCode {
+    match r {
         Ok(png) => {
             println!(
                 "tdyn plot: {} and {}",
