@@ -540,3 +540,46 @@ fn a_killed_run_leaves_whole_rows_and_readable_frames_and_earlier_results_are_ke
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["status"], "finished");
 }
+
+#[test]
+fn restarting_a_finished_run_is_refused_unless_overwrite_runs_it_again() {
+    // The example bar with a checkpoint every 20 us: its run writes one at its end (40 us). A
+    // restart from it has nothing to continue: refused with one line naming the folder; with
+    // --overwrite the run is made again from t = 0 in that folder, and (the same scene, the
+    // same ranks) its history is the first run's bit for bit.
+    let dir = workdir("restart_finished");
+    let text = std::fs::read_to_string(scene_copy("scenes/example_bar.toml", &dir)).unwrap();
+    let scene = dir.join("bar_checkpointed.toml");
+    std::fs::write(
+        &scene,
+        text.replace("[output]\n", "[output]\ncheckpoint_every = 2.0e-5\n"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    run_ok(1, &scene, &out);
+    let first = std::fs::read(out.join("history.csv")).unwrap();
+    let o = mpirun(1, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--restart")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("that run is finished") && err.contains("--overwrite"),
+        "a finished run's restart says so:\n{err}"
+    );
+    assert_eq!(
+        std::fs::read(out.join("history.csv")).unwrap(),
+        first,
+        "the refused restart leaves the results"
+    );
+    restart_ok(1, &scene, &out, &["--overwrite"]);
+    assert_eq!(
+        std::fs::read(out.join("history.csv")).unwrap(),
+        first,
+        "run again from t = 0: the same history"
+    );
+}

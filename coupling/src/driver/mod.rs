@@ -270,6 +270,11 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let mut scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
     opts.overrides.apply(&mut scene)?;
     setup::check_scene(&scene)?;
+    if world.rank() == 0 {
+        for w in scene::unit_warnings(&scene) {
+            eprintln!("tdyn: warning: {w}");
+        }
+    }
     let default_out = PathBuf::from("out").join(scene.file.file_stem().unwrap_or_default());
     let t_setup = Instant::now();
     let mut model = setup::build(world, &scene, &opts.algorithms)?;
@@ -293,7 +298,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let restart = restart_from(
         world, opts, &hash, &scene, &mut model, &mut clock, &mut check,
     )?;
-    let out_dir = out_dir_of(world, opts, &default_out)?;
+    let out_dir = out_dir_of(world, opts, &default_out, restart.is_some())?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut outputs = outputs::Outputs::create(world, &out_dir, &scene, &model, restart.as_ref())?;
     let mut ctx = LoopCtx {
@@ -402,6 +407,28 @@ fn restart_from(
             }
             let (meta, saved) =
                 checkpoint::read(world, dir, hash, &scene.file.display().to_string())?;
+            // A run that reached its end time has nothing to continue (the same scene: the
+            // checkpoint matched it, so the same end time).
+            let mut at = clock.clone();
+            at.restore(&meta.clock);
+            if at.at_end() {
+                if !opts.overwrite {
+                    return Err(format!(
+                        "--restart {}: that run is finished (step {}, t = {:e} s, its run.end_time): nothing to continue; --overwrite runs it again from t = 0 in that folder, replacing its results",
+                        dir.display(),
+                        meta.clock.step,
+                        meta.clock.time
+                    )
+                    .into());
+                }
+                if world.rank() == 0 && !opts.quiet {
+                    eprintln!(
+                        "tdyn: {}: that run is finished; --overwrite: running it again from t = 0",
+                        dir.display()
+                    );
+                }
+                return Ok(None);
+            }
             let restored = restore(world, model, &saved);
             collective::first_error(world, restored.err())?;
             clock.restore(&meta.clock);
@@ -436,9 +463,12 @@ fn out_dir_of(
     world: &SimpleCommunicator,
     opts: &RunOptions,
     default_out: &std::path::Path,
+    restarted: bool,
 ) -> Result<PathBuf, RunFailure> {
     let (out_dir, note) = match &opts.restart {
-        Some(dir) => (dir.clone(), None),
+        Some(dir) if restarted => (dir.clone(), None),
+        // A finished run's folder, run again (`--restart DIR --overwrite`).
+        Some(dir) => outdir::resolve(world, Some(dir), default_out, true, false)?,
         None => outdir::resolve(
             world,
             opts.out.as_deref(),
@@ -537,7 +567,14 @@ fn time_loop(
                 ),
             ));
         }
-        progress.update(clock.step, clock.time, clock.fraction(), dt, err);
+        progress.update(
+            clock.step,
+            clock.time,
+            clock.fraction(),
+            dt,
+            scene.run.end_time,
+            err,
+        );
     }
     progress.finish();
     Ok(())

@@ -62,7 +62,7 @@ impl Progress {
         let steps = info.end_time / info.dt;
         if active {
             eprintln!(
-                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s, about {} steps to {:.3e} s",
+                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s at this step (the step shrinks as elements deform; the progress lines update the count)",
                 info.scene,
                 info.elements,
                 info.nodes,
@@ -78,7 +78,9 @@ impl Progress {
         }
         if warn && steps > STEPS_WARNING {
             eprintln!(
-                "tdyn: warning: about {} steps expected (dt = {:.3e} s): check the scene's units (SI: m, kg, s, Pa, kg/m^3; a density of 7.85e-9 is steel in t/mm^3)",
+                "tdyn: warning: {}: run.end_time = {:e} s takes about {} steps at dt = {:.3e} s: check the scene's units (SI: m, kg, s, Pa, kg/m^3; a density of 7.85e-9 is steel in t/mm^3) or the end time",
+                info.scene,
+                info.end_time,
                 steps_text(steps),
                 info.dt
             );
@@ -86,8 +88,18 @@ impl Progress {
         p
     }
 
-    /// After a step: redraws or logs when due.
-    pub fn update(&mut self, step: u64, time: f64, fraction: f64, dt: f64, energy_error: f64) {
+    /// After a step: redraws or logs when due. `end_time` (s): the steps still to come are
+    /// estimated at the current `dt`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update(
+        &mut self,
+        step: u64,
+        time: f64,
+        fraction: f64,
+        dt: f64,
+        end_time: f64,
+        energy_error: f64,
+    ) {
         if !self.active {
             return;
         }
@@ -101,13 +113,18 @@ impl Progress {
             return;
         }
         self.last = el;
-        let eta = if fraction > 0.0 {
-            format!("{:.0} s", el * (1.0 - fraction) / fraction)
+        // The steps to come at the current step size, and the time they take at the mean
+        // wall time per step so far (the step shrinks as elements deform: a time fraction
+        // would promise too early an end).
+        let total = step as f64 + ((end_time - time) / dt).max(0.0).ceil();
+        let eta = if step > 0 {
+            format!("{:.0} s", el * (total - step as f64) / step as f64)
         } else {
             "?".into()
         };
         let line = format!(
-            "tdyn: step {step}, t = {time:.4e} s ({:.1} %), dt = {dt:.3e} s, energy error {energy_error:.2e}, elapsed {el:.0} s, ETA {eta}",
+            "tdyn: step {step} of about {}, t = {time:.4e} s ({:.1} %), dt = {dt:.3e} s, energy error {energy_error:.2e}, elapsed {el:.0} s, ETA {eta}",
+            steps_text(total),
             100.0 * fraction
         );
         let mut e = std::io::stderr().lock();

@@ -6,6 +6,7 @@ use crate::input::scene::Scene;
 pub const TIME_EPS_STEPS: f64 = 1e-6;
 
 /// The clock of a run.
+#[derive(Clone)]
 pub struct Clock {
     /// Steps taken.
     pub step: u64,

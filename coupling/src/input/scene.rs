@@ -669,7 +669,10 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 }
 
 mod check;
-pub use check::{check_work, num_text, parse, validate_groups};
+pub use check::{
+    check_work, num_text, parse, unit_warnings, validate_groups, LOW_SOLID_DENSITY,
+    LOW_YOUNGS_MODULUS,
+};
 
 #[cfg(test)]
 mod tests;

@@ -579,3 +579,35 @@ fn check_boundaries(cx: &Ctx, raw: &[RawBoundary]) -> Result<Vec<Boundary>, Scen
     }
     Ok(boundaries)
 }
+
+/// A solid's density below this is almost always a unit slip (steel in t/mm^3 is 7.85e-9;
+/// the lightest structural foams are about 30 kg/m^3): a warning, not an error.
+pub const LOW_SOLID_DENSITY: f64 = 50.0;
+
+/// A Young's modulus below this is almost always a unit slip (steel in MPa is 2e5; the
+/// softest rubbers are about 1e6 Pa): a warning, not an error.
+pub const LOW_YOUNGS_MODULUS: f64 = 1e6;
+
+/// The scene's likely unit slips, one warning line each naming the key (docs/scene.md, "Units"):
+/// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`].
+pub fn unit_warnings(scene: &Scene) -> Vec<String> {
+    let file = scene.file.display();
+    let mut out = Vec::new();
+    for (i, m) in scene.materials.iter().enumerate() {
+        if m.model != "fluid" && m.density < LOW_SOLID_DENSITY {
+            out.push(format!(
+                "{file}: material[{i}].density = {:e} kg/m^3 ({:?}) is below {LOW_SOLID_DENSITY} kg/m^3 for a solid: check the units (SI: kg/m^3; 7.85e-9 is steel in t/mm^3)",
+                m.density, m.name
+            ));
+        }
+        if let Some(&e) = m.params.get("youngs_modulus") {
+            if e < LOW_YOUNGS_MODULUS {
+                out.push(format!(
+                    "{file}: material[{i}].youngs_modulus = {e:e} Pa ({:?}) is below {LOW_YOUNGS_MODULUS:e} Pa: check the units (SI: Pa; 2e5 is steel in MPa)",
+                    m.name
+                ));
+            }
+        }
+    }
+    out
+}

@@ -139,3 +139,26 @@ fn an_error_is_one_line_whatever_the_scene_holds() {
     assert!(e.to_string().contains("b\\nar.geo"), "{e}");
     assert!(!e.to_string().contains('\n'), "{e}");
 }
+
+/// The unit slips a scene in t/mm/s or MPa would hold warn by key (issue 31: steel's density in
+/// t/mm^3 is 7.85e-9, its modulus in MPa 2e5); SI values and a gas's density do not.
+#[test]
+fn unit_slips_warn_by_key_and_si_values_do_not() {
+    let si = parse(&base(), Path::new("scene.toml")).unwrap();
+    assert!(unit_warnings(&si).is_empty(), "{:?}", unit_warnings(&si));
+    let slipped = base()
+        .replace("density = 7850.0", "density = 7.85e-9")
+        .replace("youngs_modulus = 200.0e9", "youngs_modulus = 2.0e5");
+    let w = unit_warnings(&parse(&slipped, Path::new("scene.toml")).unwrap());
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w[0].contains("material[0].density = 7.85e-9") && w[0].contains("50 kg/m^3"));
+    assert!(w[1].contains("material[0].youngs_modulus = 2e5") && w[1].contains("1e6 Pa"));
+    let air = "[[material]]\nname = \"air\"\nmodel = \"fluid\"\ndensity = 1.2\n\
+               eos = { kind = \"ideal_gas\", gamma = 1.4, e0 = 2.5e5 }\n";
+    let gas = parse(&format!("{}{air}", base()), Path::new("scene.toml")).unwrap();
+    assert!(
+        unit_warnings(&gas).is_empty(),
+        "a gas is light: {:?}",
+        unit_warnings(&gas)
+    );
+}
