@@ -3,8 +3,8 @@
 use super::setup::Model;
 use crate::input::scene::Scene;
 use crate::output::{
-    write_particle_dump, Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
-    Values,
+    exact_forces, write_particle_dump, Connectivity, ElementFrame, FieldWriter, ForceHistory,
+    GlobalCounts, History, NodeFrame, Values,
 };
 use crate::stages::StageEnergies;
 use mpi::topology::SimpleCommunicator;
@@ -65,6 +65,10 @@ pub struct Outputs {
     writer: FieldWriter,
     history: History,
     probes: History,
+    /// reactions.csv (a run with FE) and contact_forces.csv (a run with contact).
+    reactions: Option<ForceHistory>,
+    /// See `reactions`.
+    contact_forces: Option<ForceHistory>,
     mesh: Option<MeshLayout>,
     particle_ranks: Vec<i32>,
     particle_labels: Vec<u64>,
@@ -140,10 +144,14 @@ impl Outputs {
         .map_err(|e| e.to_string());
         crate::kernels::collective::first_error(world, opened.as_ref().err().cloned())?;
         let (history, probes) = opened?;
+        let (reactions, contact_forces) =
+            open_force_files(world, out_dir, model, restart.map(|m| m.history_rows))?;
         Ok(Outputs {
             writer,
             history: history.integer_columns(&HISTORY_INTEGER_COLUMNS),
             probes,
+            reactions,
+            contact_forces,
             mesh,
             particle_ranks: Vec::new(),
             particle_labels: Vec::new(),
@@ -171,7 +179,39 @@ impl Outputs {
             .flush()
             .map_err(|e| self.named("history.csv", e));
         let probes = self.probes.flush().map_err(|e| self.named("probes.csv", e));
-        history.and(probes)
+        let forces = self.flush_forces();
+        history.and(probes).and(forces)
+    }
+
+    /// Flushes reactions.csv and contact_forces.csv.
+    fn flush_forces(&mut self) -> Result<(), String> {
+        let r = self.reactions.as_mut().map_or(Ok(()), |f| f.flush());
+        let r = r.map_err(|e| self.named(REACTIONS_FILE, e));
+        let c = self.contact_forces.as_mut().map_or(Ok(()), |f| f.flush());
+        let c = c.map_err(|e| self.named(CONTACT_FORCES_FILE, e));
+        r.and(c)
+    }
+
+    /// The rows of reactions.csv and contact_forces.csv at `time` (collective: the forces are
+    /// summed over ranks; rank 0 writes). The error is this rank's own.
+    pub fn force_rows(
+        &mut self,
+        world: &SimpleCommunicator,
+        model: &Model,
+        time: f64,
+    ) -> Result<(), String> {
+        let mut res = Ok(());
+        if let (Some(file), Some(fe)) = (self.reactions.as_mut(), model.fe.as_ref()) {
+            // The FE boundary groups' entries first (docs/output.md).
+            let forces = exact_forces(world, &fe.reaction_terms());
+            res = file.row(time, &forces).map_err(|e| (REACTIONS_FILE, e));
+        }
+        if let (Some(file), Some(c)) = (self.contact_forces.as_mut(), model.contact.as_ref()) {
+            let forces = c.pair_forces(world);
+            let r = file.row(time, &forces);
+            res = res.and(r.map_err(|e| (CONTACT_FORCES_FILE, e)));
+        }
+        res.map_err(|(name, e)| self.named(name, e))
     }
 
     /// Writes a frame of every stage at `time` (collective).
@@ -266,7 +306,8 @@ impl Outputs {
             .probes
             .row(&pr)
             .map_err(|e| self.named("probes.csv", e));
-        history.and(probes)
+        let forces = self.force_rows(world, model, row.time);
+        history.and(probes).and(forces)
     }
 
     /// A write error of the run's file `name` as the line to print.
@@ -312,6 +353,7 @@ impl Outputs {
     pub fn flush(&mut self) {
         let _ = self.history.flush();
         let _ = self.probes.flush();
+        let _ = self.flush_forces();
     }
 
     /// Closes the files; returns the bytes of fields.h5 this rank wrote.
@@ -322,6 +364,41 @@ impl Outputs {
         self.writer.finish().map_err(|e| e.to_string())?;
         rows.map(|_| written)
     }
+}
+
+/// The force histories' file names (docs/output.md).
+pub const REACTIONS_FILE: &str = "reactions.csv";
+/// See [`REACTIONS_FILE`].
+pub const CONTACT_FORCES_FILE: &str = "contact_forces.csv";
+
+/// Opens reactions.csv (a run with FE: its `fixed` and `velocity` groups) and
+/// contact_forces.csv (a run with contact: its pairs of blocks), created or, with `rows` (a
+/// restart), reopened keeping that many rows (collective: one agreed error).
+#[allow(clippy::type_complexity)]
+fn open_force_files(
+    world: &SimpleCommunicator,
+    out_dir: &Path,
+    model: &Model,
+    rows: Option<usize>,
+) -> Result<(Option<ForceHistory>, Option<ForceHistory>), String> {
+    let open = |name: &str, names: &[String]| {
+        let path = out_dir.join(name);
+        ForceHistory::open(world, &path, names, rows)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    };
+    let reaction_names: Option<Vec<String>> = model
+        .fe
+        .as_ref()
+        .map(|fe| fe.reaction_groups.iter().map(|g| g.name.clone()).collect());
+    let reactions = reaction_names.map(|n| open(REACTIONS_FILE, &n)).transpose();
+    let pairs = model
+        .contact
+        .as_ref()
+        .map(|c| open(CONTACT_FORCES_FILE, &c.force_pair_names))
+        .transpose();
+    let err = reactions.as_ref().err().or(pairs.as_ref().err()).cloned();
+    crate::kernels::collective::first_error(world, err)?;
+    Ok((reactions?, pairs?))
 }
 
 /// What one history.csv row says besides the stages' own columns.

@@ -17,6 +17,7 @@ use std::time::Instant;
 
 pub mod baseline;
 mod cells;
+pub mod pairs;
 pub mod stage;
 
 /// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
@@ -225,6 +226,17 @@ pub struct Contact {
     pub energy_scale: f64,
     /// What it found and cost.
     pub stats: ContactStats,
+    /// contact_forces.csv's pairs: (block a, block b), a < b in scene order, and their names.
+    force_pairs: Vec<(usize, usize)>,
+    /// See `force_pairs`.
+    pub force_pair_names: Vec<String>,
+    /// The scene's blocks.
+    n_blocks: usize,
+    /// The last step's push-back force on each owned contact node (`fe_side.nodes`' order,
+    /// as applied: after the energy guard), N.
+    last_force: Vec<[f64; 3]>,
+    /// The pairs of bodies this rank's contacts touched in the last step.
+    last_pairs: Vec<(u32, u32)>,
 }
 
 impl Contact {
@@ -232,7 +244,7 @@ impl Contact {
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
-        def: &ContactDef,
+        (def, blocks): (&ContactDef, &[String]),
         groups: &Groups,
         fe: &Fe,
         with_particles: bool,
@@ -258,7 +270,25 @@ impl Contact {
             .iter()
             .filter_map(|m| groups.volumes.get(m).copied())
             .collect();
-        let fe_side = FeContact::build(world, local, bits, &master);
+        let block_tags: Vec<i32> = blocks
+            .iter()
+            .map(|b| groups.volumes.get(b).copied().unwrap_or(i32::MIN))
+            .collect();
+        let fe_side = FeContact::build(world, local, bits, &master, &block_tags);
+        // contact_forces.csv: every pair of blocks with contact faces, in scene order.
+        let mut force_pairs = Vec::new();
+        let in_contact = &fe_side.block_in_contact;
+        for a in 0..blocks.len() {
+            for b in a + 1..blocks.len() {
+                if in_contact[a] && in_contact[b] {
+                    force_pairs.push((a, b));
+                }
+            }
+        }
+        let force_pair_names = force_pairs
+            .iter()
+            .map(|&(a, b)| format!("{}-{}", blocks[a], blocks[b]))
+            .collect();
         if fe_side.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
@@ -288,7 +318,47 @@ impl Contact {
                 last_imbalance: 1.0,
                 ..ContactStats::default()
             },
+            force_pairs,
+            force_pair_names,
+            n_blocks: blocks.len(),
+            last_force: Vec::new(),
+            last_pairs: Vec::new(),
         })
+    }
+
+    /// contact_forces.csv's row: the force on block a from block b for each pair of
+    /// `force_pair_names` in the last step, N ([`pairs`]; collective: each block's total summed
+    /// exactly over ranks, the touching pairs agreed by a maximum over ranks).
+    pub fn pair_forces(&self, world: &SimpleCommunicator) -> Vec<[f64; 3]> {
+        let nb = self.n_blocks;
+        let mut terms = vec![Vec::new(); 3 * nb];
+        for (&(_, body), f) in self.fe_side.nodes.iter().zip(&self.last_force) {
+            let b = self.fe_side.body_block[body as usize] as usize;
+            if b < nb {
+                for c in 0..3 {
+                    terms[3 * b + c].push(f[c]);
+                }
+            }
+        }
+        let total = crate::output::exact_forces(world, &terms);
+        let mut touched = vec![0u8; nb * nb];
+        for &(p, q) in &self.last_pairs {
+            let (a, b) = (
+                self.fe_side.body_block[p as usize] as usize,
+                self.fe_side.body_block[q as usize] as usize,
+            );
+            if a < nb && b < nb && a != b {
+                touched[a.min(b) * nb + a.max(b)] = 1;
+            }
+        }
+        let mut all = vec![0u8; nb * nb];
+        world.all_reduce_into(&touched[..], &mut all[..], SystemOperation::max());
+        let t: Vec<bool> = self
+            .force_pairs
+            .iter()
+            .map(|&(a, b)| all[a * nb + b] != 0)
+            .collect();
+        pairs::pair_forces(&total, &self.force_pairs, &t)
     }
 
     /// Steps 4-5 of Fig. 3 after the drift: detection on the contact decomposition, push-back
@@ -347,6 +417,11 @@ impl Contact {
             (&mut f, &mut sph_force),
             (dt, budget),
         );
+        // contact_forces.csv's: the forces as applied on the owned contact nodes.
+        self.last_force.clear();
+        self.last_force
+            .extend(self.fe_side.nodes.iter().map(|&(n, _)| f[n as usize]));
+        self.last_pairs = out.body_pairs.clone();
         let mut w = vec![state.apply_contact(&f, dt)];
         let held = &out.held[n_fe..];
         w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, held, dt)));

@@ -78,6 +78,8 @@ impl ContactStage {
         let mut parts = parts.into_iter();
         let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
         let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        drop(parts);
+        let pairs = body_pairs(&st.b, &contacts);
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
@@ -117,6 +119,7 @@ impl ContactStage {
             force,
             held,
             contacts: &all_contacts,
+            body_pairs: pairs,
             pb_work,
             bytes,
             work_items,
@@ -201,6 +204,7 @@ impl ContactStage {
             (self.friction, &self.params),
         )?;
         let [Part { contacts, .. }] = parts;
+        let pairs = body_pairs(&b, &contacts);
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         let tt = Instant::now();
@@ -240,6 +244,7 @@ impl ContactStage {
             force,
             held,
             contacts: &contacts,
+            body_pairs: pairs,
             pb_work,
             bytes,
             work_items,
