@@ -121,7 +121,10 @@ fn hanging_bar_reaction_carries_its_weight_at_np_1_and_3() {
             "np {np}: mean support force {mean} N against the weight {weight} N (1 %)"
         );
         // Its sign: the support pulls the bar up (+x) against gravity.
-        assert!(r.iter().all(|&f| f > -1e-9 * weight), "np {np}: the support pulls");
+        assert!(
+            r.iter().all(|&f| f > -1e-9 * weight),
+            "np {np}: the support pulls"
+        );
     }
 }
 
@@ -176,7 +179,10 @@ fn contact_force_integrates_to_the_block_momentum_change_at_np_1_and_3() {
             if c == 2 {
                 // The plate took most of the block's approach (40 m/s * m; corner, then
                 // edge: the block is still turning at the end).
-                assert!(dp > 20.0 * BLOCK_MASS, "np {np}: the plate stopped the block ({dp})");
+                assert!(
+                    dp > 20.0 * BLOCK_MASS,
+                    "np {np}: the plate stopped the block ({dp})"
+                );
             }
             let rx = out.join("reactions.csv");
             let total: Vec<f64> = ["plate_top", "plate_bottom", "plate_sides"]
@@ -224,6 +230,65 @@ fn contact_force_of_a_resting_block_is_its_weight_at_np_1_and_3() {
         assert!(
             (mean + weight).abs() <= 0.02 * weight,
             "np {np}: mean contact force on the plate {mean} N against the cube's weight -{weight} N (2 %)"
+        );
+        // `tdyn plot --force --displacement` reads the file (docs/cli.md).
+        let o = std::process::Command::new(tdyn())
+            .arg("plot")
+            .arg(&out)
+            .args([
+                "--force",
+                "plate-block",
+                "--displacement",
+                "block_top.displacement_z",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success() && out.join("force_displacement.png").exists(),
+            "tdyn plot --force plate-block: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
+
+#[test]
+fn implicit_hanging_bar_reaction_balances_momentum_and_weight_at_np_1_and_3() {
+    // The hanging bar of `hanging_bar_reaction_carries_its_weight_at_np_1_and_3` in implicit
+    // mode (Newmark average acceleration, dt = 20 us, 342 steps): the reaction is the residual
+    // of the equation of motion at the held nodes. Newmark changes the momentum over a step by
+    // dt/2 (F(n) + F(n+1)) as central differences do, so the trapezoid of the reaction equals
+    // the momentum change plus M g t to 1e-3 of the weight's impulse M g t (a conservation
+    // law; the Newton tolerance is the only error), and its mean is the weight within 1 %.
+    let weight = RHO * 0.05 * 0.05 * 1.0 * 9.81;
+    for np in [1, 3] {
+        let dir = workdir(&format!("reaction_implicit_np{np}"));
+        let scene = bar(
+            &dir,
+            "end_time = 6.84e-3\nmode = \"implicit\"\ndt = 2.0e-5",
+            "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
+        );
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "title = \"test bar\"\n",
+            "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let t = col(&out.join("reactions.csv"), "time");
+        let r = col(&out.join("reactions.csv"), "right.force_x");
+        let p = col(&out.join("history.csv"), "momentum_x");
+        let span = t[t.len() - 1] - t[0];
+        let impulse = trapezoid(&t, &r);
+        let dp = p[p.len() - 1] - p[0];
+        assert!(
+            (impulse - weight * span - dp).abs() <= 1e-3 * weight * span,
+            "np {np}: reaction impulse {impulse} N s - M g t {} against the momentum change {dp} kg m/s (1e-3 of M g t)",
+            weight * span
+        );
+        let mean = impulse / span;
+        assert!(
+            (mean - weight).abs() <= 0.01 * weight,
+            "np {np}: mean support force {mean} N against the weight {weight} N (1 %)"
         );
     }
 }
