@@ -207,7 +207,7 @@ impl Outputs {
             res = file.row(time, &forces).map_err(|e| (REACTIONS_FILE, e));
         }
         if let (Some(file), Some(c)) = (self.contact_forces.as_mut(), model.contact.as_ref()) {
-            let forces = c.pair_forces(world);
+            let forces = c.pair_forces.row(world);
             let r = file.row(time, &forces);
             res = res.and(r.map_err(|e| (CONTACT_FORCES_FILE, e)));
         }
@@ -394,7 +394,7 @@ fn open_force_files(
     let pairs = model
         .contact
         .as_ref()
-        .map(|c| open(CONTACT_FORCES_FILE, &c.force_pair_names))
+        .map(|c| open(CONTACT_FORCES_FILE, &c.pair_forces.names))
         .transpose();
     let err = reactions.as_ref().err().or(pairs.as_ref().err()).cloned();
     crate::kernels::collective::first_error(world, err)?;

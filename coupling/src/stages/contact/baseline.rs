@@ -211,6 +211,8 @@ impl BaselineStage {
                 .map(|c| (c.node_gid, c.face_gid, c.depth))
                 .collect(),
             body_pairs,
+            // mesh nodes only
+            particle_faces: Vec::new(),
             work: sums[1],
             imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
             work_items_max: maxes[0],

@@ -226,17 +226,8 @@ pub struct Contact {
     pub energy_scale: f64,
     /// What it found and cost.
     pub stats: ContactStats,
-    /// contact_forces.csv's pairs: (block a, block b), a < b in scene order, and their names.
-    force_pairs: Vec<(usize, usize)>,
-    /// See `force_pairs`.
-    pub force_pair_names: Vec<String>,
-    /// The scene's blocks.
-    n_blocks: usize,
-    /// The last step's push-back force on each owned contact node (`fe_side.nodes`' order,
-    /// as applied: after the energy guard), N.
-    last_force: Vec<[f64; 3]>,
-    /// The pairs of bodies this rank's contacts touched in the last step.
-    last_pairs: Vec<(u32, u32)>,
+    /// contact_forces.csv's columns and the last step's forces ([`pairs`]).
+    pub pair_forces: pairs::PairForces,
 }
 
 impl Contact {
@@ -244,7 +235,7 @@ impl Contact {
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
-        (def, blocks): (&ContactDef, &[String]),
+        (def, blocks, particle_sets): (&ContactDef, &[String], &[String]),
         groups: &Groups,
         fe: &Fe,
         with_particles: bool,
@@ -275,20 +266,12 @@ impl Contact {
             .map(|b| groups.volumes.get(b).copied().unwrap_or(i32::MIN))
             .collect();
         let fe_side = FeContact::build(world, local, bits, &master, &block_tags);
-        // contact_forces.csv: every pair of blocks with contact faces, in scene order.
-        let mut force_pairs = Vec::new();
-        let in_contact = &fe_side.block_in_contact;
-        for a in 0..blocks.len() {
-            for b in a + 1..blocks.len() {
-                if in_contact[a] && in_contact[b] {
-                    force_pairs.push((a, b));
-                }
-            }
-        }
-        let force_pair_names = force_pairs
-            .iter()
-            .map(|&(a, b)| format!("{}-{}", blocks[a], blocks[b]))
-            .collect();
+        // contact_forces.csv: every pair of blocks with contact faces, in scene order, then
+        // each block with the particle sets, where particles take part.
+        let particles = def.particles && with_particles && !choice.static_decomposition;
+        let sets = if particles { particle_sets } else { &[] };
+        let pair_forces =
+            pairs::PairForces::new(blocks, &fe_side.block_in_contact, &fe_side.body_block, sets);
         if fe_side.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
@@ -309,7 +292,7 @@ impl Contact {
             fe_side,
             search,
             node_gid: local.node_id.clone(),
-            particles: def.particles && with_particles && !choice.static_decomposition,
+            particles,
             particle_gid_offset: local.global_nodes,
             passes: def.passes,
             energy: 0.0,
@@ -318,47 +301,8 @@ impl Contact {
                 last_imbalance: 1.0,
                 ..ContactStats::default()
             },
-            force_pairs,
-            force_pair_names,
-            n_blocks: blocks.len(),
-            last_force: Vec::new(),
-            last_pairs: Vec::new(),
+            pair_forces,
         })
-    }
-
-    /// contact_forces.csv's row: the force on block a from block b for each pair of
-    /// `force_pair_names` in the last step, N ([`pairs`]; collective: each block's total summed
-    /// exactly over ranks, the touching pairs agreed by a maximum over ranks).
-    pub fn pair_forces(&self, world: &SimpleCommunicator) -> Vec<[f64; 3]> {
-        let nb = self.n_blocks;
-        let mut terms = vec![Vec::new(); 3 * nb];
-        for (&(_, body), f) in self.fe_side.nodes.iter().zip(&self.last_force) {
-            let b = self.fe_side.body_block[body as usize] as usize;
-            if b < nb {
-                for c in 0..3 {
-                    terms[3 * b + c].push(f[c]);
-                }
-            }
-        }
-        let total = crate::output::exact_forces(world, &terms);
-        let mut touched = vec![0u8; nb * nb];
-        for &(p, q) in &self.last_pairs {
-            let (a, b) = (
-                self.fe_side.body_block[p as usize] as usize,
-                self.fe_side.body_block[q as usize] as usize,
-            );
-            if a < nb && b < nb && a != b {
-                touched[a.min(b) * nb + a.max(b)] = 1;
-            }
-        }
-        let mut all = vec![0u8; nb * nb];
-        world.all_reduce_into(&touched[..], &mut all[..], SystemOperation::max());
-        let t: Vec<bool> = self
-            .force_pairs
-            .iter()
-            .map(|&(a, b)| all[a * nb + b] != 0)
-            .collect();
-        pairs::pair_forces(&total, &self.force_pairs, &t)
     }
 
     /// Steps 4-5 of Fig. 3 after the drift: detection on the contact decomposition, push-back
@@ -417,11 +361,29 @@ impl Contact {
             (&mut f, &mut sph_force),
             (dt, budget),
         );
-        // contact_forces.csv's: the forces as applied on the owned contact nodes.
-        self.last_force.clear();
-        self.last_force
-            .extend(self.fe_side.nodes.iter().map(|&(n, _)| f[n as usize]));
-        self.last_pairs = out.body_pairs.clone();
+        // contact_forces.csv's: the forces as applied on the owned contact nodes and particles.
+        let (pf, offset) = (&mut self.pair_forces, self.particle_gid_offset);
+        let vertex = |gid: u64| {
+            let entry = sph.as_ref().and_then(|s| s.ids.entry(gid - offset));
+            pf.particle_vertex(entry)
+        };
+        let fe_nodes = self.fe_side.nodes.iter().map(|&(n, b)| (b, f[n as usize]));
+        let held_by: Vec<(usize, u32)> = out
+            .particle_faces
+            .iter()
+            .map(|&(g, b)| (vertex(g), b))
+            .collect();
+        let on_particles: Vec<(usize, [f64; 3])> = nodes[n_fe..]
+            .iter()
+            .zip(&sph_force)
+            .map(|(r, &fc)| (vertex(r.gid), fc))
+            .collect();
+        pf.record(
+            fe_nodes,
+            on_particles.into_iter(),
+            &out.body_pairs,
+            held_by.into_iter(),
+        );
         let mut w = vec![state.apply_contact(&f, dt)];
         let held = &out.held[n_fe..];
         w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, held, dt)));

@@ -20,21 +20,152 @@
 //! of the part's first body is dropped and that phi set to 0 (the dropped balance holds to
 //! round-off as the part's forces sum to zero). On a tree this is the unique solution.
 
-/// The force on body a from body b for each pair (a, b) of `pairs` (a < b), N, given each
-/// body's total contact force `total` and whether each pair touched (`touched`, aligned with
-/// `pairs`); zero for a pair that did not touch.
-pub fn pair_forces(
-    total: &[[f64; 3]],
-    pairs: &[(usize, usize)],
-    touched: &[bool],
-) -> Vec<[f64; 3]> {
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::CommunicatorCollectives;
+
+/// contact_forces.csv's bookkeeping. Its bodies ("vertices") are the scene's blocks, then its
+/// `[[particles]]` entries (where particles take part in contact), then one for particles of
+/// failed elements (no column); its columns the pairs (block, block) of blocks with contact
+/// faces, then (block, particles entry), each in scene order.
+#[derive(Debug, Clone, Default)]
+pub struct PairForces {
+    /// The columns' pairs of vertices, and their names.
+    pairs: Vec<(usize, usize)>,
+    /// See `pairs`.
+    pub names: Vec<String>,
+    /// Blocks + particle entries + 1.
+    n_vertices: usize,
+    /// The vertex of each contact body (its block).
+    body_vertex: Vec<usize>,
+    /// The first particle entry's vertex (the number of blocks) and the entries.
+    first_entry: usize,
+    /// See `first_entry`.
+    n_entries: usize,
+    /// The last step's nonzero push-back forces on this rank's owned contact nodes and
+    /// particles, by vertex, N.
+    last_forces: Vec<(usize, [f64; 3])>,
+    /// The pairs of vertices (a < b) this rank's contacts touched in the last step.
+    last_edges: Vec<(usize, usize)>,
+}
+
+impl PairForces {
+    /// The columns of a scene's `blocks` (those with contact faces: `in_contact`) and, where
+    /// particles take part, its `particle_sets`; `body_block`: each contact body's block.
+    pub fn new(
+        blocks: &[String],
+        in_contact: &[bool],
+        body_block: &[u32],
+        particle_sets: &[String],
+    ) -> PairForces {
+        let nb = blocks.len();
+        let mut pairs = Vec::new();
+        let mut names = Vec::new();
+        let with_faces = (0..nb).filter(|&a| in_contact[a]);
+        for a in with_faces.clone() {
+            for b in a + 1..nb {
+                if in_contact[b] {
+                    pairs.push((a, b));
+                    names.push(format!("{}-{}", blocks[a], blocks[b]));
+                }
+            }
+        }
+        for a in with_faces {
+            for (k, set) in particle_sets.iter().enumerate() {
+                pairs.push((a, nb + k));
+                names.push(format!("{}-{set}", blocks[a]));
+            }
+        }
+        PairForces {
+            pairs,
+            names,
+            n_vertices: nb + particle_sets.len() + 1,
+            // a body outside every block (not in a scene) counts with the failed particles
+            body_vertex: body_block
+                .iter()
+                .map(|&b| (b as usize).min(nb + particle_sets.len()))
+                .collect(),
+            first_entry: nb,
+            n_entries: particle_sets.len(),
+            ..PairForces::default()
+        }
+    }
+
+    /// The vertex of a particle of `[[particles]]` entry `entry` (`None`: a failed element's).
+    pub fn particle_vertex(&self, entry: Option<u32>) -> usize {
+        match entry {
+            Some(k) if (k as usize) < self.n_entries => self.first_entry + k as usize,
+            _ => self.first_entry + self.n_entries,
+        }
+    }
+
+    /// Keeps a step's forces and touching pairs: `nodes` the owned contact nodes' (body,
+    /// force as applied), `particles` the owned particles' (vertex, force), `body_pairs` and
+    /// `particle_faces` (a particle's vertex, the face's body) the pairs this rank's contacts
+    /// touched.
+    pub fn record(
+        &mut self,
+        nodes: impl Iterator<Item = (u32, [f64; 3])>,
+        particles: impl Iterator<Item = (usize, [f64; 3])>,
+        body_pairs: &[(u32, u32)],
+        particle_faces: impl Iterator<Item = (usize, u32)>,
+    ) {
+        let bv = &self.body_vertex;
+        self.last_forces.clear();
+        self.last_forces.extend(
+            nodes
+                .map(|(b, f)| (bv[b as usize], f))
+                .chain(particles)
+                .filter(|(_, f)| *f != [0.0; 3]),
+        );
+        self.last_edges.clear();
+        let mesh = body_pairs
+            .iter()
+            .map(|&(p, q)| (bv[p as usize], bv[q as usize]));
+        let held = particle_faces.map(|(v, q)| (v, bv[q as usize]));
+        self.last_edges.extend(
+            mesh.chain(held)
+                .filter(|(a, b)| a != b)
+                .map(|(a, b)| (a.min(b), a.max(b))),
+        );
+        self.last_edges.sort_unstable();
+        self.last_edges.dedup();
+    }
+
+    /// The row: the force on a from b for each column's pair (a, b) in the last step, N
+    /// (collective: each vertex's total summed exactly over ranks, the touching pairs agreed by
+    /// a maximum over ranks).
+    pub fn row(&self, world: &SimpleCommunicator) -> Vec<[f64; 3]> {
+        let nv = self.n_vertices;
+        let mut terms = vec![Vec::new(); 3 * nv];
+        for (v, f) in &self.last_forces {
+            for c in 0..3 {
+                terms[3 * v + c].push(f[c]);
+            }
+        }
+        let total = crate::output::exact_forces(world, &terms);
+        let mut touched = vec![0u8; nv * nv];
+        for &(a, b) in &self.last_edges {
+            touched[a * nv + b] = 1;
+        }
+        let mut all = vec![0u8; nv * nv];
+        world.all_reduce_into(&touched[..], &mut all[..], SystemOperation::max());
+        let edges: Vec<(usize, usize)> = (0..nv * nv)
+            .filter(|&k| all[k] != 0)
+            .map(|k| (k / nv, k % nv))
+            .collect();
+        let f = pair_forces(&total, &edges);
+        self.pairs
+            .iter()
+            .map(|p| edges.binary_search(p).map_or([0.0; 3], |k| f[k]))
+            .collect()
+    }
+}
+
+/// The force on body a from body b for each pair (a, b) of `edges` (a < b, each once: the
+/// pairs that touched), N, given each body's total contact force `total`.
+pub fn pair_forces(total: &[[f64; 3]], edges: &[(usize, usize)]) -> Vec<[f64; 3]> {
     let n = total.len();
-    let edges: Vec<(usize, usize)> = pairs
-        .iter()
-        .zip(touched)
-        .filter(|(_, &t)| t)
-        .map(|(p, _)| *p)
-        .collect();
     // The connected parts of the touching graph, each body labelled by its part's first body.
     let mut part: Vec<usize> = (0..n).collect();
     fn root(part: &mut [usize], mut a: usize) -> usize {
@@ -43,7 +174,7 @@ pub fn pair_forces(
         }
         a
     }
-    for &(a, b) in &edges {
+    for &(a, b) in edges {
         let (ra, rb) = (root(&mut part, a), root(&mut part, b));
         part[ra.max(rb)] = ra.min(rb);
     }
@@ -61,7 +192,7 @@ pub fn pair_forces(
         let idx = |a: usize| rest.iter().position(|&m| m == a);
         let k = rest.len();
         let mut l = vec![vec![0.0; k]; k];
-        for &(a, b) in &edges {
+        for &(a, b) in edges {
             if root(&mut part, a) != r {
                 continue;
             }
@@ -83,16 +214,9 @@ pub fn pair_forces(
             phi[a] = xa;
         }
     }
-    pairs
+    edges
         .iter()
-        .zip(touched)
-        .map(|(&(a, b), &t)| {
-            if t {
-                std::array::from_fn(|c| phi[a][c] - phi[b][c])
-            } else {
-                [0.0; 3]
-            }
-        })
+        .map(|&(a, b)| std::array::from_fn(|c| phi[a][c] - phi[b][c]))
         .collect()
 }
 
@@ -136,21 +260,19 @@ mod tests {
     /// Two bodies: the pair's force is the first body's total.
     #[test]
     fn two_bodies() {
-        let f = pair_forces(&[[1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]], &[(0, 1)], &[true]);
+        let f = pair_forces(&[[1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]], &[(0, 1)]);
         assert_eq!(f, vec![[1.0, 2.0, 3.0]]);
     }
 
-    /// A stack (0 on 1 on 2): the balances give each pair's force; an untouched pair is zero.
+    /// A stack (0 on 1 on 2) and a body touching nothing: the balances give each pair's force.
     #[test]
     fn stack() {
         // f01 = 1 (on 0 from 1), f12 = 3 (on 1 from 2): F0 = 1, F1 = -1 + 3, F2 = -3.
-        let pairs = [(0, 1), (0, 2), (1, 2)];
         let f = pair_forces(
-            &[[1.0; 3], [2.0; 3], [-3.0; 3]],
-            &pairs,
-            &[true, false, true],
+            &[[1.0; 3], [2.0; 3], [-3.0; 3], [0.0; 3]],
+            &[(0, 1), (1, 2)],
         );
-        assert_eq!(f, vec![[1.0; 3], [0.0; 3], [3.0; 3]]);
+        assert_eq!(f, vec![[1.0; 3], [3.0; 3]]);
     }
 
     /// A ring of three: the balances hold and the solution is the least-squares one (a
@@ -159,7 +281,7 @@ mod tests {
     fn ring_balances() {
         let total = [[1.0, 0.0, 0.5], [2.0, -1.0, 0.0], [-3.0, 1.0, -0.5]];
         let pairs = [(0, 1), (0, 2), (1, 2)];
-        let f = pair_forces(&total, &pairs, &[true; 3]);
+        let f = pair_forces(&total, &pairs);
         for c in 0..3 {
             let f0 = f[0][c] + f[1][c];
             let f1 = -f[0][c] + f[2][c];

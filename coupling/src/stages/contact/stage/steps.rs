@@ -80,6 +80,10 @@ impl ContactStage {
         let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
         drop(parts);
         let pairs = body_pairs(&st.b, &contacts);
+        let held_by = match &st.pbox {
+            Some((_, pb, _)) => particle_faces(pb, &pcontacts),
+            None => Vec::new(),
+        };
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
@@ -120,6 +124,7 @@ impl ContactStage {
             held,
             contacts: &all_contacts,
             body_pairs: pairs,
+            particle_faces: held_by,
             pb_work,
             bytes,
             work_items,
@@ -205,6 +210,7 @@ impl ContactStage {
         )?;
         let [Part { contacts, .. }] = parts;
         let pairs = body_pairs(&b, &contacts);
+        let held_by = particle_faces(&b, &contacts);
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         let tt = Instant::now();
@@ -245,6 +251,7 @@ impl ContactStage {
             held,
             contacts: &contacts,
             body_pairs: pairs,
+            particle_faces: held_by,
             pb_work,
             bytes,
             work_items,
