@@ -292,3 +292,50 @@ fn implicit_hanging_bar_reaction_balances_momentum_and_weight_at_np_1_and_3() {
         );
     }
 }
+
+#[test]
+fn particles_on_a_held_plate_reactions_and_contact_forces_at_np_1_and_3() {
+    // scenes/cloud_on_plate.toml to 0.5 ms: a water cloud (SPH, contact.particles = true)
+    // falls on a steel plate held at its edges, under gravity. The bodies' momentum (plate and
+    // particles, history.csv) changes by the edges' reaction impulse (trapezoid, every step a
+    // row) minus M g t, to 1e-3 of the gravity impulse M g t (a conservation law; the report's
+    // `mass` is M). contact_forces.csv has the block-particles column, `plate-cloud`, whose z
+    // force is the water pushing the plate down; both files byte-identical at np 1 and 3.
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("particles_forces_np{np}"));
+        let text = std::fs::read_to_string(root().join("scenes/cloud_on_plate.toml"))
+            .unwrap()
+            .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+            .replace("end_time = 2.0e-3", "end_time = 5.0e-4");
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let rx = out.join("reactions.csv");
+        let t = col(&rx, "time");
+        let r = col(&rx, "edges.force_z");
+        let p = col(&out.join("history.csv"), "momentum_z");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        let mass = report["mass"].as_f64().unwrap();
+        let span = t[t.len() - 1] - t[0];
+        let gravity_impulse = mass * 9.81 * span;
+        let dp = p[p.len() - 1] - p[0];
+        let impulse = trapezoid(&t, &r) - gravity_impulse;
+        assert!(
+            (impulse - dp).abs() <= 1e-3 * gravity_impulse,
+            "np {np}: reaction impulse less M g t {impulse} N s against the momentum change {dp} kg m/s (1e-3 of {gravity_impulse})"
+        );
+        let f = col(&out.join("contact_forces.csv"), "plate-cloud.force_z");
+        let pushed = step_impulse(&t, &f);
+        assert!(
+            pushed < 0.0,
+            "np {np}: the water pushes the plate down ({pushed} N s)"
+        );
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "contact_forces.csv");
+    same_text(&outs[0], &outs[1], "reactions.csv");
+}
