@@ -201,9 +201,8 @@ impl Outputs {
         time: f64,
     ) -> Result<(), String> {
         let mut res = Ok(());
-        if let (Some(file), Some(fe)) = (self.reactions.as_mut(), model.fe.as_ref()) {
-            // The FE boundary groups' entries first (docs/output.md).
-            let forces = exact_forces(world, &fe.reaction_terms());
+        if let Some(file) = self.reactions.as_mut() {
+            let forces = reaction_forces(world, model);
             res = file.row(time, &forces).map_err(|e| (REACTIONS_FILE, e));
         }
         if let (Some(file), Some(c)) = (self.contact_forces.as_mut(), model.contact.as_ref()) {
@@ -371,6 +370,27 @@ pub const REACTIONS_FILE: &str = "reactions.csv";
 /// See [`REACTIONS_FILE`].
 pub const CONTACT_FORCES_FILE: &str = "contact_forces.csv";
 
+/// reactions.csv's entries, in order: the FE stage's `fixed` and `velocity` groups in scene
+/// order (docs/output.md); another constraint adds its entries after them, here and in
+/// [`reaction_forces`] alike.
+fn reaction_names(model: &Model) -> Vec<String> {
+    let mut names = Vec::new();
+    if let Some(fe) = &model.fe {
+        names.extend(fe.reaction_groups.iter().map(|g| g.name.clone()));
+    }
+    names
+}
+
+/// The force of each of [`reaction_names`]' entries now, N, summed over ranks exactly
+/// (collective).
+fn reaction_forces(world: &SimpleCommunicator, model: &Model) -> Vec<[f64; 3]> {
+    let mut forces = Vec::new();
+    if let Some(fe) = &model.fe {
+        forces.extend(exact_forces(world, &fe.reaction_terms()));
+    }
+    forces
+}
+
 /// Opens reactions.csv (a run with FE: its `fixed` and `velocity` groups) and
 /// contact_forces.csv (a run with contact: its pairs of blocks), created or, with `rows` (a
 /// restart), reopened keeping that many rows (collective: one agreed error).
@@ -386,11 +406,10 @@ fn open_force_files(
         ForceHistory::open(world, &path, names, rows)
             .map_err(|e| format!("{}: {e}", path.display()))
     };
-    let reaction_names: Option<Vec<String>> = model
-        .fe
-        .as_ref()
-        .map(|fe| fe.reaction_groups.iter().map(|g| g.name.clone()).collect());
-    let reactions = reaction_names.map(|n| open(REACTIONS_FILE, &n)).transpose();
+    let names = reaction_names(model);
+    let reactions = (model.fe.is_some() || !names.is_empty())
+        .then(|| open(REACTIONS_FILE, &names))
+        .transpose();
     let pairs = model
         .contact
         .as_ref()
