@@ -64,12 +64,52 @@ impl ForceHistory {
 }
 
 /// Each force's sum over ranks from every rank's terms (`terms[3 k + c]`: this rank's terms of
-/// component c of force k), exact (binned on a grid from the reduced largest term and count:
-/// `fe_petsc::exact::totals`), so the same bits at any rank count. Collective.
-pub fn exact_forces(comm: &SimpleCommunicator, terms: &[Vec<f64>]) -> Vec<[f64; 3]> {
-    if terms.is_empty() {
-        return Vec::new();
+/// component c of force k), exact, so the same bits at any rank count, and the maximum over
+/// ranks of each of `flags`; two reductions in all (collective; every rank passes as many
+/// sums and flags). Each sum is binned on the grid covering its largest term (reduced) times
+/// [`MAX_TERMS`] (`fe_petsc::exact`: three folds, the lowest quantum 2^-104 of the grid's top,
+/// so 2^-76 of the largest term): a bound on the terms of a sum that every rank count shares,
+/// where `fe_petsc::exact::totals` reduces the count itself in a third reduction.
+pub fn exact_forces(
+    comm: &SimpleCommunicator,
+    terms: &[Vec<f64>],
+    flags: &[f64],
+) -> (Vec<[f64; 3]>, Vec<f64>) {
+    use fe_petsc::exact::{flatten, values, Folds, Grid, MAX_TERMS};
+    use mpi::collective::{CommunicatorCollectives, SystemOperation};
+    if terms.is_empty() && flags.is_empty() {
+        return (Vec::new(), Vec::new());
     }
-    let t = fe_petsc::exact::totals(comm, terms);
-    t.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    let n = terms.len();
+    let mine: Vec<f64> = terms
+        .iter()
+        .map(|t| t.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+        .chain(flags.iter().copied())
+        .collect();
+    let mut big = vec![0.0f64; mine.len()];
+    comm.all_reduce_into(&mine[..], &mut big[..], SystemOperation::max());
+    let folds: Vec<Folds> = terms
+        .iter()
+        .zip(&big)
+        .map(|(t, &b)| {
+            assert!(
+                t.len() as u64 <= MAX_TERMS,
+                "at most MAX_TERMS terms per sum"
+            );
+            let grid = Grid::covering(b * MAX_TERMS as f64);
+            let mut f = [0.0; 3];
+            for &x in t {
+                grid.add(&mut f, x);
+            }
+            f
+        })
+        .collect();
+    let flat = flatten(&folds);
+    let mut red = vec![0.0; flat.len()];
+    if !flat.is_empty() {
+        comm.all_reduce_into(&flat[..], &mut red[..], SystemOperation::sum());
+    }
+    let sums = values(&red);
+    let forces = sums.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    (forces, big[n..].to_vec())
 }

@@ -20,10 +20,6 @@
 //! of the part's first body is dropped and that phi set to 0 (the dropped balance holds to
 //! round-off as the part's forces sum to zero). On a tree this is the unique solution.
 
-use mpi::collective::SystemOperation;
-use mpi::topology::SimpleCommunicator;
-use mpi::traits::CommunicatorCollectives;
-
 /// contact_forces.csv's bookkeeping. Its bodies ("vertices") are the scene's blocks, then its
 /// `[[particles]]` entries (where particles take part in contact), then one for particles of
 /// failed elements (no column); its columns the pairs (block, block) of blocks with contact
@@ -132,10 +128,10 @@ impl PairForces {
         self.last_edges.dedup();
     }
 
-    /// The row: the force on a from b for each column's pair (a, b) in the last step, N
-    /// (collective: each vertex's total summed exactly over ranks, the touching pairs agreed by
-    /// a maximum over ranks).
-    pub fn row(&self, world: &SimpleCommunicator) -> Vec<[f64; 3]> {
+    /// This rank's terms of each vertex's total force (`terms[3 v + c]`, component c of
+    /// vertex v) and its flags of the pairs of vertices touched (`flags[a n + b]`, 1 for a
+    /// pair this rank's contacts touched), for [`crate::output::exact_forces`].
+    pub fn terms(&self) -> (Vec<Vec<f64>>, Vec<f64>) {
         let nv = self.n_vertices;
         let mut terms = vec![Vec::new(); 3 * nv];
         for (v, f) in &self.last_forces {
@@ -143,18 +139,22 @@ impl PairForces {
                 terms[3 * v + c].push(f[c]);
             }
         }
-        let total = crate::output::exact_forces(world, &terms);
-        let mut touched = vec![0u8; nv * nv];
+        let mut touched = vec![0.0; nv * nv];
         for &(a, b) in &self.last_edges {
-            touched[a * nv + b] = 1;
+            touched[a * nv + b] = 1.0;
         }
-        let mut all = vec![0u8; nv * nv];
-        world.all_reduce_into(&touched[..], &mut all[..], SystemOperation::max());
+        (terms, touched)
+    }
+
+    /// The row: the force on a from b for each column's pair (a, b) in the last step, N, from
+    /// the vertices' totals and the pairs touched on any rank ([`PairForces::terms`] reduced).
+    pub fn row(&self, total: &[[f64; 3]], touched: &[f64]) -> Vec<[f64; 3]> {
+        let nv = self.n_vertices;
         let edges: Vec<(usize, usize)> = (0..nv * nv)
-            .filter(|&k| all[k] != 0)
+            .filter(|&k| touched[k] != 0.0)
             .map(|k| (k / nv, k % nv))
             .collect();
-        let f = pair_forces(&total, &edges);
+        let f = pair_forces(total, &edges);
         self.pairs
             .iter()
             .map(|p| edges.binary_search(p).map_or([0.0; 3], |k| f[k]))

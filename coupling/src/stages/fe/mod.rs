@@ -103,7 +103,7 @@ impl Fe {
 
     /// This rank's terms of each reaction group's force ([`Fe::reaction_groups`]): for group
     /// k, `terms[3 k + c]` holds component c of the constraint reaction of each owned node of
-    /// the group, now (after the last step), N. Summed exactly over ranks by the caller.
+    /// the group, now (after the last step), N. Summed exactly over ranks by the caller (`output::exact_forces`).
     pub fn reaction_terms(&self) -> Vec<Vec<f64>> {
         let r: Vec<(u32, [f64; 3])> = match &self.integrator {
             Integrator::Explicit(fe) => fe.constraint_reactions().collect(),
