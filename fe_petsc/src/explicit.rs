@@ -166,6 +166,9 @@ pub struct ExplicitFe {
     constrained_force: Vec<[f64; 3]>,
     reaction: Vec<[f64; 3]>,
     reaction_old: Vec<[f64; 3]>,
+    /// The force each constraint (in `constraints`' order) took from this step's contact
+    /// push-back ([`ExplicitFe::apply_contact`]), N: zero between steps without contact.
+    contact_reaction: Vec<[f64; 3]>,
     /// Start positions of the step, where a contact stage reads them
     /// ([`ExplicitFe::set_contact_stage`]).
     x_old: Vec<[f64; 3]>,
@@ -335,6 +338,7 @@ impl ExplicitFe {
             constrained_force: Vec::new(),
             reaction: vec![[0.0; 3]; nn],
             reaction_old: vec![[0.0; 3]; nn],
+            contact_reaction: vec![[0.0; 3]; setup.constraints.len()],
             x_old: m.coords.clone(),
             contact: true,
             kick_dt: 0.0,
@@ -423,6 +427,38 @@ impl ExplicitFe {
         }
     }
 
+    /// The force each constraint applies to its node at the end of the last step, N, for the
+    /// constrained local nodes in `constraints`' order (the explicit mode's; the implicit
+    /// integrator has its own, `ImplicitFe::constraint_reactions`).
+    ///
+    /// Central differences at a constrained node n (mass m, element force f: stress, hourglass
+    /// and bulk viscosity, gravity g): m a(n+1) = f(n+1) + m g + R(n+1), and the constraint
+    /// prescribes a(n+1) (0 for `fixed` and `velocity`, its tangential part for symmetry
+    /// planes), so R = m a_prescribed - f - m g = m (a_constrained - a_free), a_free = f/m + g
+    /// (`finish_step` keeps it). The contact push-back between the kicks adds the impulse
+    /// F_c dt, of which the constraint removes the part it does not allow: its force over the
+    /// step is m (dv_constrained - dv_free) / dt (-F_c at a fixed node), added here
+    /// ([`ExplicitFe::apply_contact`]). With R at every step, the bodies' momentum changes over
+    /// a step by dt/2 (R(n) + R(n+1)) summed over nodes, plus M g dt (velocity Verlet's two
+    /// half kicks; the element forces sum to zero): the trapezoid rule over the rows of
+    /// reactions.csv integrates the reactions exactly.
+    pub fn constraint_reactions(&self) -> impl Iterator<Item = (u32, [f64; 3])> + '_ {
+        self.constraints
+            .iter()
+            .zip(&self.contact_reaction)
+            .map(|((n, _), rc)| {
+                let i = *n as usize;
+                // Before the first step: the initial state's (`new`: a(0) constrained).
+                let r = if self.step == 0 {
+                    let (m, a, f, g) = (self.mass[i], self.a[i], self.force[i], self.gravity);
+                    std::array::from_fn(|c| m * (a[c] - g[c]) - f[c])
+                } else {
+                    self.reaction[i]
+                };
+                (*n, std::array::from_fn(|c| r[c] + rc[c]))
+            })
+    }
+
     /// Number of local nodes.
     pub fn n_nodes(&self) -> usize {
         self.x.len()
@@ -474,6 +510,7 @@ impl ExplicitFe {
             wide,
         );
         self.forces_zeroed = zero;
+        self.contact_reaction.fill([0.0; 3]);
         self.constrain_velocities();
         for ((n, _), x0) in self.constraints.iter().zip(&self.constrained_start) {
             let n = *n as usize;

@@ -363,6 +363,16 @@ impl ImplicitFe {
         std::array::from_fn(|c| r[c] - free[c])
     }
 
+    /// The force each constraint applies to its node in the accepted state, N, for the
+    /// constrained local nodes in node order: the residual of the equation of motion at the
+    /// constrained degrees of freedom, (I - P)(M (a(n+1) - g) - f(u(n+1))) (Newmark's
+    /// M a = f + M g + R solved for R where P removes the constrained directions).
+    pub fn constraint_reactions(&self) -> impl Iterator<Item = (u32, [f64; 3])> + '_ {
+        (0..self.n_nodes())
+            .filter(|&n| !matches!(self.dofs[n], NodeDof::Free))
+            .map(|n| (n as u32, self.reaction_n[n]))
+    }
+
     /// Number of local nodes.
     pub fn n_nodes(&self) -> usize {
         self.fe.x.len()

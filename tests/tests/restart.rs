@@ -146,7 +146,10 @@ fn stop_and_restart(rel: &str, np: usize, rows: usize, except: &[&str]) {
     run_ok(np, &scene, &a);
     stop_after_rows(np, &scene, &b, rows, &[]);
     restart_ok(np, &scene, &b, &[]);
-    for f in ["history.csv", "probes.csv"] {
+    // The force histories too, where the run writes them (docs/output.md).
+    let forces = ["reactions.csv", "contact_forces.csv"];
+    let present = forces.into_iter().filter(|f| a.join(f).exists());
+    for f in ["history.csv", "probes.csv"].into_iter().chain(present) {
         if let Err(e) = same_csv(&a.join(f), &b.join(f), except) {
             panic!("{rel} np {np}: {f} after a stop and restart differs from the run without a stop: {e}");
         }

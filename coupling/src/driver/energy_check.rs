@@ -158,6 +158,7 @@ impl EnergyCheck {
         if measured > energy_error_limit(step, self.max_energy_error) {
             let err = measured;
             let _ = outputs.history_row(model, &self.row(clock, model, err));
+            let _ = outputs.force_rows(world, model, clock.time);
             outputs.flush();
             return Err(RunFailure::new(
                 FailureKind::Unstable,

@@ -8,10 +8,12 @@ use mpi::traits::*;
 use std::path::{Path, PathBuf};
 
 /// The files and folders a run writes in its output folder.
-pub const RUN_FILES: [&str; 10] = [
+pub const RUN_FILES: [&str; 12] = [
     "report.json",
     "history.csv",
     "probes.csv",
+    "reactions.csv",
+    "contact_forces.csv",
     "fields.h5",
     "fields.xmf",
     "energies.png",

@@ -3,8 +3,8 @@
 use super::setup::Model;
 use crate::input::scene::Scene;
 use crate::output::{
-    write_particle_dump, Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
-    Values,
+    exact_forces, write_particle_dump, Connectivity, ElementFrame, FieldWriter, ForceHistory,
+    GlobalCounts, History, NodeFrame, Values,
 };
 use crate::stages::StageEnergies;
 use mpi::topology::SimpleCommunicator;
@@ -65,6 +65,10 @@ pub struct Outputs {
     writer: FieldWriter,
     history: History,
     probes: History,
+    /// reactions.csv (a run with FE) and contact_forces.csv (a run with contact).
+    reactions: Option<ForceHistory>,
+    /// See `reactions`.
+    contact_forces: Option<ForceHistory>,
     mesh: Option<MeshLayout>,
     particle_ranks: Vec<i32>,
     particle_labels: Vec<u64>,
@@ -140,10 +144,14 @@ impl Outputs {
         .map_err(|e| e.to_string());
         crate::kernels::collective::first_error(world, opened.as_ref().err().cloned())?;
         let (history, probes) = opened?;
+        let (reactions, contact_forces) =
+            open_force_files(world, out_dir, model, restart.map(|m| m.history_rows))?;
         Ok(Outputs {
             writer,
             history: history.integer_columns(&HISTORY_INTEGER_COLUMNS),
             probes,
+            reactions,
+            contact_forces,
             mesh,
             particle_ranks: Vec::new(),
             particle_labels: Vec::new(),
@@ -171,7 +179,48 @@ impl Outputs {
             .flush()
             .map_err(|e| self.named("history.csv", e));
         let probes = self.probes.flush().map_err(|e| self.named("probes.csv", e));
-        history.and(probes)
+        let forces = self.flush_forces();
+        history.and(probes).and(forces)
+    }
+
+    /// Flushes reactions.csv and contact_forces.csv.
+    fn flush_forces(&mut self) -> Result<(), String> {
+        let r = self.reactions.as_mut().map_or(Ok(()), |f| f.flush());
+        let r = r.map_err(|e| self.named(REACTIONS_FILE, e));
+        let c = self.contact_forces.as_mut().map_or(Ok(()), |f| f.flush());
+        let c = c.map_err(|e| self.named(CONTACT_FORCES_FILE, e));
+        r.and(c)
+    }
+
+    /// The rows of reactions.csv and contact_forces.csv at `time` (collective: the forces are
+    /// summed over ranks; rank 0 writes). The error is this rank's own.
+    pub fn force_rows(
+        &mut self,
+        world: &SimpleCommunicator,
+        model: &Model,
+        time: f64,
+    ) -> Result<(), String> {
+        let t0 = Instant::now();
+        // Both files' sums in one exact reduction (two collectives): the reactions' entries,
+        // then each contact body's total force and the pairs touched.
+        let (mut terms, n_reactions) = reaction_terms(model);
+        let (contact_terms, touched) = match &model.contact {
+            Some(c) => c.pair_forces.terms(),
+            None => (Vec::new(), Vec::new()),
+        };
+        terms.extend(contact_terms);
+        let (forces, touched) = exact_forces(world, &terms, &touched);
+        let (reactions, totals) = forces.split_at(n_reactions);
+        let mut res = Ok(());
+        if let Some(file) = self.reactions.as_mut() {
+            res = file.row(time, reactions).map_err(|e| (REACTIONS_FILE, e));
+        }
+        if let (Some(file), Some(c)) = (self.contact_forces.as_mut(), model.contact.as_ref()) {
+            let r = file.row(time, &c.pair_forces.row(totals, &touched));
+            res = res.and(r.map_err(|e| (CONTACT_FORCES_FILE, e)));
+        }
+        self.wall_s += t0.elapsed().as_secs_f64();
+        res.map_err(|(name, e)| self.named(name, e))
     }
 
     /// Writes a frame of every stage at `time` (collective).
@@ -266,7 +315,8 @@ impl Outputs {
             .probes
             .row(&pr)
             .map_err(|e| self.named("probes.csv", e));
-        history.and(probes)
+        let forces = self.force_rows(world, model, row.time);
+        history.and(probes).and(forces)
     }
 
     /// A write error of the run's file `name` as the line to print.
@@ -312,6 +362,7 @@ impl Outputs {
     pub fn flush(&mut self) {
         let _ = self.history.flush();
         let _ = self.probes.flush();
+        let _ = self.flush_forces();
     }
 
     /// Closes the files; returns the bytes of fields.h5 this rank wrote.
@@ -322,6 +373,62 @@ impl Outputs {
         self.writer.finish().map_err(|e| e.to_string())?;
         rows.map(|_| written)
     }
+}
+
+/// The force histories' file names (docs/output.md).
+pub const REACTIONS_FILE: &str = "reactions.csv";
+/// See [`REACTIONS_FILE`].
+pub const CONTACT_FORCES_FILE: &str = "contact_forces.csv";
+
+/// reactions.csv's entries, in order: the FE stage's `fixed` and `velocity` groups in scene
+/// order (docs/output.md); another constraint adds its entries after them, here and in
+/// [`reaction_terms`] alike.
+fn reaction_names(model: &Model) -> Vec<String> {
+    let mut names = Vec::new();
+    if let Some(fe) = &model.fe {
+        names.extend(fe.reaction_groups.iter().map(|g| g.name.clone()));
+    }
+    names
+}
+
+/// This rank's terms of the force of each of [`reaction_names`]' entries now
+/// (`terms[3 k + c]`: component c of entry k; [`exact_forces`] sums them), and the entries.
+fn reaction_terms(model: &Model) -> (Vec<Vec<f64>>, usize) {
+    let mut terms = Vec::new();
+    if let Some(fe) = &model.fe {
+        terms.extend(fe.reaction_terms());
+    }
+    let n = terms.len() / 3;
+    (terms, n)
+}
+
+/// Opens reactions.csv (a run with FE: its `fixed` and `velocity` groups) and
+/// contact_forces.csv (a run with contact: its pairs of blocks), created or, with `rows` (a
+/// restart), reopened keeping that many rows (collective: one agreed error).
+#[allow(clippy::type_complexity)]
+fn open_force_files(
+    world: &SimpleCommunicator,
+    out_dir: &Path,
+    model: &Model,
+    rows: Option<usize>,
+) -> Result<(Option<ForceHistory>, Option<ForceHistory>), String> {
+    let open = |name: &str, names: &[String]| {
+        let path = out_dir.join(name);
+        ForceHistory::open(world, &path, names, rows)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    };
+    let names = reaction_names(model);
+    let reactions = (model.fe.is_some() || !names.is_empty())
+        .then(|| open(REACTIONS_FILE, &names))
+        .transpose();
+    let pairs = model
+        .contact
+        .as_ref()
+        .map(|c| open(CONTACT_FORCES_FILE, &c.pair_forces.names))
+        .transpose();
+    let err = reactions.as_ref().err().or(pairs.as_ref().err()).cloned();
+    crate::kernels::collective::first_error(world, err)?;
+    Ok((reactions?, pairs?))
 }
 
 /// What one history.csv row says besides the stages' own columns.

@@ -144,11 +144,13 @@ pub fn build(
         fe.as_ref().map(|f| f.state()),
         sph.is_some(),
     )?;
+    let block_names: Vec<String> = scene.blocks.iter().map(|b| b.group.clone()).collect();
+    let particle_names: Vec<String> = scene.particles.iter().map(|p| p.name.clone()).collect();
     let contact = match (&scene.contact, &fe) {
         (Some(def), Some(fe)) => Some(Contact::new(
             world,
             &file,
-            def,
+            (def, &block_names, &particle_names),
             &groups,
             fe,
             sph.is_some(),

@@ -22,6 +22,11 @@ pub struct ParticleIds {
     file_ids: Vec<u64>,
     /// The id of the first generated particle: one past the largest file id, 0 without files.
     first_generated: u64,
+    /// The scene's `[[particles]]` entry of the dense indices, as runs: (first dense index,
+    /// entry), ascending; past the last seeded particle (particles of failed elements) none.
+    entry_runs: Vec<(u64, u32)>,
+    /// Seeded particles (dense indices below it have an entry).
+    seeded: u64,
 }
 
 impl ParticleIds {
@@ -32,6 +37,16 @@ impl ParticleIds {
             Some(&id) => id,
             None => self.first_generated + (dense - self.file_ids.len() as u64),
         }
+    }
+
+    /// The `[[particles]]` entry (scene order) that seeded dense index `dense`; `None` for a
+    /// particle made later (a failed element's).
+    pub fn entry(&self, dense: u64) -> Option<u32> {
+        if dense >= self.seeded {
+            return None;
+        }
+        let k = self.entry_runs.partition_point(|r| r.0 <= dense);
+        k.checked_sub(1).map(|k| self.entry_runs[k].1)
     }
 }
 
@@ -339,9 +354,11 @@ pub fn particles(
     // Dense indices 0..N: file particles in ascending file id, then the generated ones; the
     // file ids are kept in `ParticleIds` (what fields.h5 and the dumps write).
     from_files.sort_by_key(|s| s.id);
-    let ids = ParticleIds {
+    let mut ids = ParticleIds {
         first_generated: ids.last().map_or(0, |&m| m + 1),
         file_ids: ids,
+        entry_runs: Vec::new(),
+        seeded: 0,
     };
     for (k, s) in from_files.iter_mut().enumerate() {
         s.id = k as u64;
@@ -372,6 +389,12 @@ pub fn particles(
         }
     }
     let n = all.len();
+    for s in &all {
+        if ids.entry_runs.last().is_none_or(|r| r.1 != s.entry as u32) {
+            ids.entry_runs.push((s.id, s.entry as u32));
+        }
+    }
+    ids.seeded = n as u64;
     let (a, b) = (n * rank / nranks, n * (rank + 1) / nranks);
     Ok((all[a..b].to_vec(), ids))
 }
@@ -386,11 +409,26 @@ mod tests {
         let ids = ParticleIds {
             file_ids: vec![5, 7, 10],
             first_generated: 11,
+            ..Default::default()
         };
         let got: Vec<u64> = (0..5).map(|d| ids.id(d)).collect();
         assert_eq!(got, [5, 7, 10, 11, 12], "file ids, then max + 1 onwards");
         let none = ParticleIds::default();
         assert_eq!(none.id(3), 3, "no file: lattice ids from 0");
+    }
+
+    /// The entries of dense indices: runs, and none past the seeded particles.
+    #[test]
+    fn entries_of_dense_indices() {
+        let ids = ParticleIds {
+            entry_runs: vec![(0, 1), (3, 0), (4, 2)],
+            seeded: 6,
+            ..Default::default()
+        };
+        let got: Vec<Option<u32>> = (0..7).map(|d| ids.entry(d)).collect();
+        let want = [1, 1, 1, 0, 2, 2].map(Some);
+        assert_eq!(&got[..6], &want[..]);
+        assert_eq!(got[6], None, "a failed element's particle");
     }
 
     /// Counts against the lattice arithmetic: a 0.2 x 0.1 x 0.2 box at spacing 0.01 holds

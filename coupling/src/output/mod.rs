@@ -4,6 +4,7 @@ mod by_id;
 mod dump;
 mod fields;
 mod history;
+mod reactions;
 mod report;
 pub mod state;
 
@@ -12,6 +13,7 @@ pub use fields::{
     Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame, Values,
 };
 pub use history::History;
+pub use reactions::{exact_forces, force_columns, ForceHistory};
 pub use report::{Report, StageStats};
 
 /// Output errors.

@@ -43,6 +43,11 @@ pub struct FeContact {
     pub n_bodies: u32,
     /// Whether each body is a master of the one-pass search (all false with two passes).
     pub master_body: Vec<bool>,
+    /// Each body's block (index in `block_tags` of `build`: the scene's `[[block]]` order):
+    /// the first block in that order among its elements' (contact_forces.csv).
+    pub body_block: Vec<u32>,
+    /// Whether each block has a contact face (its pairs are columns of contact_forces.csv).
+    pub block_in_contact: Vec<bool>,
 }
 
 fn gatherv_u64(comm: &SimpleCommunicator, mine: &[u64]) -> (Vec<u64>, Vec<i32>, Vec<i32>) {
@@ -103,11 +108,15 @@ impl FeContact {
     /// Finds the contact faces and nodes (collective). `surface_bits`: the bits (in
     /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`. `master_volumes`:
     /// the gmsh tags of the physical volumes whose bodies are masters (`[contact] master`).
+    ///
+    /// `block_tags`: the gmsh tag of each scene block, in scene order (an element of another
+    /// volume counts in no block).
     pub fn build(
         comm: &SimpleCommunicator,
         mesh: &LocalMesh,
         surface_bits: Option<u32>,
         master_volumes: &[i32],
+        block_tags: &[i32],
     ) -> FeContact {
         let me = comm.rank();
         // Elements: (elem gid, 8 node gids); owned nodes: (gid, surface bits).
@@ -128,6 +137,13 @@ impl FeContact {
             .iter()
             .map(|t| master_volumes.contains(t) as u64)
             .collect();
+        let nb = block_tags.len();
+        let in_block: Vec<u64> = mesh
+            .elem_block
+            .iter()
+            .map(|t| block_tags.iter().position(|b| b == t).unwrap_or(nb) as u64)
+            .collect();
+        let (all_block, _, _) = gatherv_u64(comm, &in_block);
         let (all_e, counts_e, _) = gatherv_u64(comm, &elems);
         let (all_master, _, _) = gatherv_u64(comm, &in_master);
         let (all_n, counts_n, _) = gatherv_u64(comm, &nodes);
@@ -135,6 +151,8 @@ impl FeContact {
         let mut n_bodies = 0u32;
         let mut master_body: Vec<u64> = Vec::new();
         let mut global_faces = 0u64;
+        let mut body_block: Vec<u64> = Vec::new();
+        let mut block_in_contact = vec![0u64; nb];
         if me == 0 {
             let p = comm.size() as usize;
             // Element k of the gathered list came from rank elem_rank[k].
@@ -165,8 +183,11 @@ impl FeContact {
             let surf = contact::surfaces(&hexes, |_| true);
             n_bodies = surf.n_bodies;
             master_body = vec![0u64; n_bodies as usize];
+            body_block = vec![nb as u64; n_bodies as usize];
             for (e, &k) in order.iter().enumerate() {
-                master_body[surf.element_body[e] as usize] |= all_master[k];
+                let body = surf.element_body[e] as usize;
+                master_body[body] |= all_master[k];
+                body_block[body] = body_block[body].min(all_block[k]);
             }
             // Keep a face when all four nodes share a named surface bit.
             let mut kept = Vec::new();
@@ -188,6 +209,12 @@ impl FeContact {
             // Deterministic face gids: by (element gid, side), independent of the rank count.
             kept.sort_by_key(|f| (elem_gid[f.element], f.side));
             global_faces = kept.len() as u64;
+            for f in &kept {
+                let b = all_block[order[f.element]] as usize;
+                if b < nb {
+                    block_in_contact[b] = 1;
+                }
+            }
             // Per rank: faces (gid, elem gid, side, 4 node gids, body) then contact nodes of
             // that rank (gid, body), after a marker.
             per_rank = vec![Vec::new(); p];
@@ -216,6 +243,10 @@ impl FeContact {
         comm.process_at_rank(0).broadcast_into(&mut gf[..]);
         master_body.resize(gf[1] as usize, 0);
         comm.process_at_rank(0).broadcast_into(&mut master_body[..]);
+        body_block.resize(gf[1] as usize, 0);
+        comm.process_at_rank(0).broadcast_into(&mut body_block[..]);
+        comm.process_at_rank(0)
+            .broadcast_into(&mut block_in_contact[..]);
         let local: HashMap<u64, u32> = mesh
             .node_id
             .iter()
@@ -230,6 +261,8 @@ impl FeContact {
             global_faces: gf[0],
             n_bodies: gf[1] as u32,
             master_body: master_body.iter().map(|&m| m != 0).collect(),
+            body_block: body_block.iter().map(|&b| b as u32).collect(),
+            block_in_contact: block_in_contact.iter().map(|&b| b != 0).collect(),
             ..Default::default()
         };
         for c in mine[..split].chunks(8) {

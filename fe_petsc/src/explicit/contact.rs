@@ -112,7 +112,13 @@ impl ExplicitFe {
                 f[2] * dt / self.mass[n],
             ];
             if let Some(i) = cons[n] {
+                // The constraint removes what it does not allow of the correction: it applies
+                // m (dv_constrained - dv_free) / dt to the node over the step (-F for a fixed
+                // node), the push-back's share of its reaction (`constraint_reactions`).
+                let free = dv;
                 apply(&self.constraints[i].1, &mut dv, false);
+                let m_dt = self.mass[n] / dt;
+                self.contact_reaction[i] = std::array::from_fn(|c| m_dt * (dv[c] - free[c]));
             }
             let a_n = self.acceleration(n);
             if self.owned[n] {

@@ -162,6 +162,7 @@ impl BaselineStage {
             (self.friction, &self.params),
         )?;
         let [Part { contacts, .. }] = parts;
+        let body_pairs = crate::stages::contact::stage::body_pairs(&b, &contacts);
         let (force, pb_work, mut pushback) = (settled.force, settled.work, settled.counts);
         let local_kinds = pushback.kinds;
         bytes += settled.bytes;
@@ -209,6 +210,9 @@ impl BaselineStage {
                 .iter()
                 .map(|c| (c.node_gid, c.face_gid, c.depth))
                 .collect(),
+            body_pairs,
+            // mesh nodes only
+            particle_faces: Vec::new(),
             work: sums[1],
             imbalance: if mean > 0.0 { maxes[0] / mean } else { 1.0 },
             work_items_max: maxes[0],

@@ -17,6 +17,7 @@ use std::time::Instant;
 
 pub mod baseline;
 mod cells;
+pub mod pairs;
 pub mod stage;
 
 /// Where contact is searched: the dynamic RCB decomposition (Fig. 10), or, for benchmarks only
@@ -225,6 +226,8 @@ pub struct Contact {
     pub energy_scale: f64,
     /// What it found and cost.
     pub stats: ContactStats,
+    /// contact_forces.csv's columns and the last step's forces ([`pairs`]).
+    pub pair_forces: pairs::PairForces,
 }
 
 impl Contact {
@@ -232,7 +235,7 @@ impl Contact {
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
-        def: &ContactDef,
+        (def, blocks, particle_sets): (&ContactDef, &[String], &[String]),
         groups: &Groups,
         fe: &Fe,
         with_particles: bool,
@@ -258,7 +261,17 @@ impl Contact {
             .iter()
             .filter_map(|m| groups.volumes.get(m).copied())
             .collect();
-        let fe_side = FeContact::build(world, local, bits, &master);
+        let block_tags: Vec<i32> = blocks
+            .iter()
+            .map(|b| groups.volumes.get(b).copied().unwrap_or(i32::MIN))
+            .collect();
+        let fe_side = FeContact::build(world, local, bits, &master, &block_tags);
+        // contact_forces.csv: every pair of blocks with contact faces, in scene order, then
+        // each block with the particle sets, where particles take part.
+        let particles = def.particles && with_particles && !choice.static_decomposition;
+        let sets = if particles { particle_sets } else { &[] };
+        let pair_forces =
+            pairs::PairForces::new(blocks, &fe_side.block_in_contact, &fe_side.body_block, sets);
         if fe_side.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
@@ -279,7 +292,7 @@ impl Contact {
             fe_side,
             search,
             node_gid: local.node_id.clone(),
-            particles: def.particles && with_particles && !choice.static_decomposition,
+            particles,
             particle_gid_offset: local.global_nodes,
             passes: def.passes,
             energy: 0.0,
@@ -288,6 +301,7 @@ impl Contact {
                 last_imbalance: 1.0,
                 ..ContactStats::default()
             },
+            pair_forces,
         })
     }
 
@@ -346,6 +360,29 @@ impl Contact {
             sph.as_deref(),
             (&mut f, &mut sph_force),
             (dt, budget),
+        );
+        // contact_forces.csv's: the forces as applied on the owned contact nodes and particles.
+        let (pf, offset) = (&mut self.pair_forces, self.particle_gid_offset);
+        let vertex = |gid: u64| {
+            let entry = sph.as_ref().and_then(|s| s.ids.entry(gid - offset));
+            pf.particle_vertex(entry)
+        };
+        let fe_nodes = self.fe_side.nodes.iter().map(|&(n, b)| (b, f[n as usize]));
+        let held_by: Vec<(usize, u32)> = out
+            .particle_faces
+            .iter()
+            .map(|&(g, b)| (vertex(g), b))
+            .collect();
+        let on_particles: Vec<(usize, [f64; 3])> = nodes[n_fe..]
+            .iter()
+            .zip(&sph_force)
+            .map(|(r, &fc)| (vertex(r.gid), fc))
+            .collect();
+        pf.record(
+            fe_nodes,
+            on_particles.into_iter(),
+            &out.body_pairs,
+            held_by.into_iter(),
         );
         let mut w = vec![state.apply_contact(&f, dt)];
         let held = &out.held[n_fe..];

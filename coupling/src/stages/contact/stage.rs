@@ -117,6 +117,12 @@ pub struct ContactOutcome {
     pub contacts: u64,
     /// The contacts found on this rank: (node gid, face gid, depth).
     pub found: Vec<(u64, u64, f64)>,
+    /// The pairs of different bodies (node's, face's) this rank's contacts touch, each once
+    /// ([`body_pairs`]).
+    pub body_pairs: Vec<(u32, u32)>,
+    /// The particles (gid) this rank's contacts hold against faces, with the face's body
+    /// ([`particle_faces`]).
+    pub particle_faces: Vec<(u64, u32)>,
     /// Work of the push-back forces, over all ranks, J.
     pub work: f64,
     /// Max over ranks of (owned nodes + faces held) over the mean: the balance of the search.
@@ -517,6 +523,8 @@ impl ContactStage {
                 .iter()
                 .map(|c| (c.node_gid, c.face_gid, c.depth))
                 .collect(),
+            body_pairs: p.body_pairs,
+            particle_faces: p.particle_faces,
             work: sums[1],
             imbalance,
             work_items_max: maxes[0],
@@ -539,6 +547,8 @@ struct OutcomeParts<'a> {
     held: Vec<bool>,
     pushback: PushbackCounts,
     contacts: &'a [Contact],
+    body_pairs: Vec<(u32, u32)>,
+    particle_faces: Vec<(u64, u32)>,
     pb_work: f64,
     bytes: u64,
     work_items: f64,

@@ -39,6 +39,8 @@ pub struct Fe {
     /// The stage's own wall time in the time loop (drift, element forces, exchange, nodal
     /// updates, its reduction), s.
     wall_s: f64,
+    /// The `fixed` and `velocity` groups of reactions.csv, in scene order.
+    pub reaction_groups: Vec<setup::ReactionGroup>,
 }
 
 impl Fe {
@@ -52,7 +54,8 @@ impl Fe {
         implicit_dt: Option<f64>,
     ) -> Result<Fe, String> {
         let file = scene.file.display().to_string();
-        let inputs = setup::prepare(world, scene, groups, &mut mesh)?;
+        let mut inputs = setup::prepare(world, scene, groups, &mut mesh)?;
+        let reaction_groups = std::mem::take(&mut inputs.reaction_groups);
         let controls = HexControls {
             hourglass: scene.run.hourglass.control(),
             bv_linear: scene.run.bulk_viscosity.linear,
@@ -94,7 +97,30 @@ impl Fe {
             mesh,
             file,
             wall_s: 0.0,
+            reaction_groups,
         })
+    }
+
+    /// This rank's terms of each reaction group's force ([`Fe::reaction_groups`]): for group
+    /// k, `terms[3 k + c]` holds component c of the constraint reaction of each owned node of
+    /// the group, now (after the last step), N. Summed exactly over ranks by the caller (`output::exact_forces`).
+    pub fn reaction_terms(&self) -> Vec<Vec<f64>> {
+        let r: Vec<(u32, [f64; 3])> = match &self.integrator {
+            Integrator::Explicit(fe) => fe.constraint_reactions().collect(),
+            Integrator::Implicit(imp) => imp.constraint_reactions().collect(),
+        };
+        let mut terms = vec![Vec::new(); 3 * self.reaction_groups.len()];
+        for (k, g) in self.reaction_groups.iter().enumerate() {
+            for n in &g.nodes {
+                // Both lists are in ascending node order; a group node is always constrained.
+                if let Ok(i) = r.binary_search_by_key(n, |e| e.0) {
+                    for c in 0..3 {
+                        terms[3 * k + c].push(r[i].1[c]);
+                    }
+                }
+            }
+        }
+        terms
     }
 
     /// Sets the element kernel every rank runs (collective). `Auto` takes the widest group

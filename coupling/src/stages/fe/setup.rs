@@ -29,6 +29,19 @@ pub struct FeInputs {
     pub velocity: Vec<[f64; 3]>,
     /// Constraints on local nodes.
     pub constraints: Vec<(u32, Constraint)>,
+    /// The `fixed` and `velocity` groups whose reactions reactions.csv writes.
+    pub reaction_groups: Vec<ReactionGroup>,
+}
+
+/// A `fixed` or `velocity` `[[boundary]]` group, for reactions.csv: its name and the owned
+/// local nodes whose reactions it sums. A node in several such groups counts in the first of
+/// them in scene order (docs/output.md), so that the groups' forces add up to the total.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReactionGroup {
+    /// The physical surface's name.
+    pub name: String,
+    /// Owned local nodes, ascending.
+    pub nodes: Vec<u32>,
 }
 
 /// Builds materials, per-element material indices, initial velocities and constraints.
@@ -137,13 +150,45 @@ pub fn prepare(
         .collect();
 
     let constraints = constraints(comm, scene, groups, &dm.local)?;
+    let reaction_groups = reaction_groups(scene, groups, &dm.local);
     Ok(FeInputs {
         elem_material,
         elem_block,
         materials,
         velocity,
         constraints,
+        reaction_groups,
     })
+}
+
+/// The `fixed` and `velocity` groups in scene order (each name once), each with the owned
+/// local nodes no earlier such group took.
+fn reaction_groups(scene: &Scene, groups: &Groups, m: &LocalMesh) -> Vec<ReactionGroup> {
+    let mut taken = vec![false; m.coords.len()];
+    let mut out: Vec<ReactionGroup> = Vec::new();
+    for b in &scene.boundaries {
+        if matches!(b.kind, BoundaryKind::Symmetry) || out.iter().any(|g| g.name == b.group) {
+            continue;
+        }
+        let tag = groups.surfaces[&b.group];
+        let bit = m
+            .surface_tags
+            .iter()
+            .position(|&t| t == tag)
+            .map_or(0, |k| 1u32 << k);
+        let nodes: Vec<u32> = (0..m.coords.len())
+            .filter(|&n| m.owned[n] && m.node_surfaces[n] & bit != 0 && !taken[n])
+            .map(|n| n as u32)
+            .collect();
+        for &n in &nodes {
+            taken[n as usize] = true;
+        }
+        out.push(ReactionGroup {
+            name: b.group.clone(),
+            nodes,
+        });
+    }
+    out
 }
 
 fn constraints(

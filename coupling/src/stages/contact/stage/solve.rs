@@ -21,6 +21,33 @@ pub(crate) fn kinds(b: &ContactBox, contacts: &[Contact]) -> [u64; 4] {
     k
 }
 
+/// The pairs of bodies (node's body, face's body) that `contacts` found in `b` touch, each
+/// once, sorted; particles (no body) and a body's contacts with itself left out
+/// (contact_forces.csv, `contact::pairs`).
+pub(crate) fn body_pairs(b: &ContactBox, contacts: &[Contact]) -> Vec<(u32, u32)> {
+    let mut out: Vec<(u32, u32)> = contacts
+        .iter()
+        .map(|c| (b.nodes.body[c.node as usize], b.faces.body[c.face as usize]))
+        .filter(|&(n, f)| n != f && n != u32::MAX && f != u32::MAX)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The particles (node gid) that `contacts` found in `b` hold against a face, with the face's
+/// body, each pair once, sorted (contact_forces.csv).
+pub(crate) fn particle_faces(b: &ContactBox, contacts: &[Contact]) -> Vec<(u64, u32)> {
+    let mut out: Vec<(u64, u32)> = contacts
+        .iter()
+        .filter(|c| b.nodes.particle[c.node as usize])
+        .map(|c| (c.node_gid, b.faces.body[c.face as usize]))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// Step 7b with its rechecks: the push-back of every contact, solved in cells where the
 /// contacts are (`cells::solve_in_cells`); then each box tests its nodes again on the corrected
 /// positions (`contact::recheck`: the crossings the corrections made, a node pushed out of one

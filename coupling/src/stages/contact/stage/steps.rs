@@ -78,6 +78,12 @@ impl ContactStage {
         let mut parts = parts.into_iter();
         let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
         let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+        drop(parts);
+        let pairs = body_pairs(&st.b, &contacts);
+        let held_by = match &st.pbox {
+            Some((_, pb, _)) => particle_faces(pb, &pcontacts),
+            None => Vec::new(),
+        };
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
@@ -117,6 +123,8 @@ impl ContactStage {
             force,
             held,
             contacts: &all_contacts,
+            body_pairs: pairs,
+            particle_faces: held_by,
             pb_work,
             bytes,
             work_items,
@@ -201,6 +209,8 @@ impl ContactStage {
             (self.friction, &self.params),
         )?;
         let [Part { contacts, .. }] = parts;
+        let pairs = body_pairs(&b, &contacts);
+        let held_by = particle_faces(&b, &contacts);
         let (owned_force, pb_work, pushback) = (settled.force, settled.work, settled.counts);
         bytes += settled.bytes;
         let tt = Instant::now();
@@ -240,6 +250,8 @@ impl ContactStage {
             force,
             held,
             contacts: &contacts,
+            body_pairs: pairs,
+            particle_faces: held_by,
             pb_work,
             bytes,
             work_items,

@@ -1,0 +1,341 @@
+//! Force histories (docs/output.md): reactions.csv and contact_forces.csv against the laws
+//! they must obey. Momentum: the bodies' momentum (history.csv) changes by the time integral
+//! of the external forces; statics: a resting body's support carries its weight; one answer:
+//! both files byte-identical at np 1 and 3.
+use std::path::{Path, PathBuf};
+use tdyn_tests::*;
+
+/// The steel block's mass in meshes/block_plate.geo and block_flat.geo (A = 0.02 m cube), kg.
+const BLOCK_MASS: f64 = RHO * 0.02 * 0.02 * 0.02;
+
+/// Rows of a CSV file and a named column.
+fn col(path: &Path, name: &str) -> Vec<f64> {
+    let (h, rows) = read_csv(path);
+    column(&h, &rows, name)
+}
+
+/// The trapezoid rule over the rows (t, f).
+fn trapezoid(t: &[f64], f: &[f64]) -> f64 {
+    (1..t.len())
+        .map(|i| 0.5 * (t[i] - t[i - 1]) * (f[i] + f[i - 1]))
+        .sum()
+}
+
+/// The rectangle rule that matches the contact push-back: each row's force acts over the
+/// step that ends at the row (the push-back is an impulse over that step).
+fn step_impulse(t: &[f64], f: &[f64]) -> f64 {
+    (1..t.len()).map(|i| (t[i] - t[i - 1]) * f[i]).sum()
+}
+
+/// Asserts that `file` is the same text in runs `a` and `b`.
+fn same_text(a: &Path, b: &Path, file: &str) {
+    let (ta, tb) = (
+        std::fs::read_to_string(a.join(file)).unwrap(),
+        std::fs::read_to_string(b.join(file)).unwrap(),
+    );
+    assert!(ta.lines().count() > 2, "{file} has rows");
+    assert!(
+        ta == tb,
+        "{file} differs between {} and {}: {:?}",
+        a.display(),
+        b.display(),
+        csv_columns_differ(a, b, file, &[])
+    );
+}
+
+/// A steel bar along x (meshes/bar.geo, L = 1 m, 0.05 m square, N = 20, lateral symmetry
+/// planes: uniaxial strain) with `extra` keys, every step a row.
+fn bar(dir: &Path, run: &str, extra: &str) -> PathBuf {
+    bar_scene(dir, 20, run, extra)
+}
+
+#[test]
+fn fixed_end_reaction_integrates_to_the_momentum_change_at_np_1_and_3() {
+    // A bar moving at -2 m/s along x strikes its held end x = 0 ("left", fixed from t = 0):
+    // the wave runs to the free end and back (2 L / c = 342 us) and the bar rebounds. The
+    // only x force on the bodies is the fixed group's reaction (the symmetry planes act
+    // along y and z), so p_x(t) - p_x(0) = integral of left.force_x (a conservation law).
+    // Central differences change the momentum over a step by dt/2 (R(n) + R(n+1)): the
+    // trapezoid over every step's row is exact to round-off; the bound 1e-3 of |dp|.
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("reaction_momentum_np{np}"));
+        let scene = bar(
+            &dir,
+            "end_time = 5.0e-4\nhistory_every = 0.0",
+            "[[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n",
+        );
+        // the bar's velocity (bar_scene's block has none)
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "material = \"steel\"\n",
+            "material = \"steel\"\nvelocity = [-2.0, 0.0, 0.0]\n",
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let t = col(&out.join("reactions.csv"), "time");
+        let r = col(&out.join("reactions.csv"), "left.force_x");
+        let p = col(&out.join("history.csv"), "momentum_x");
+        assert_eq!(t, col(&out.join("history.csv"), "time"), "the same rows");
+        let dp = p[p.len() - 1] - p[0];
+        let impulse = trapezoid(&t, &r);
+        // The bar started with p = 7850 * 0.0025 * -2 = -39.25 kg m/s and has rebounded.
+        assert!(dp > 10.0, "np {np}: the bar pushed back (dp = {dp} kg m/s)");
+        assert!(
+            (impulse - dp).abs() <= 1e-3 * dp.abs(),
+            "np {np}: integral of the reaction {impulse} N s against the momentum change {dp} kg m/s (1e-3)"
+        );
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "reactions.csv");
+}
+
+#[test]
+fn hanging_bar_reaction_carries_its_weight_at_np_1_and_3() {
+    // A bar hanging from x = L ("right", fixed) under gravity -9.81 m/s^2 along x, released
+    // from rest: its free vibration about the static state (period 4 L / c = 683 us) swings
+    // the support's force between 0 and twice the weight; its mean over whole periods is the
+    // weight m g = 7850 * 0.0025 * 9.81 = 192.52 N (statics: the mean acceleration vanishes).
+    // Ten periods; 1 % (the discrete bar's period differs from 4 L / c by a fraction of a
+    // percent, which leaves a part of a swing in the window).
+    let weight = RHO * 0.05 * 0.05 * 1.0 * 9.81;
+    for np in [1, 3] {
+        let dir = workdir(&format!("reaction_weight_np{np}"));
+        let scene = bar(
+            &dir,
+            "end_time = 6.83e-3",
+            "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
+        );
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "title = \"test bar\"\n",
+            "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let t = col(&out.join("reactions.csv"), "time");
+        let r = col(&out.join("reactions.csv"), "right.force_x");
+        let mean = trapezoid(&t, &r) / (t[t.len() - 1] - t[0]);
+        assert!(
+            (mean - weight).abs() <= 0.01 * weight,
+            "np {np}: mean support force {mean} N against the weight {weight} N (1 %)"
+        );
+        // Its sign: the support pulls the bar up (+x) against gravity.
+        assert!(
+            r.iter().all(|&f| f > -1e-9 * weight),
+            "np {np}: the support pulls"
+        );
+    }
+}
+
+/// meshes/block_plate.geo's tilted block striking a plate that is held everywhere (its top,
+/// bottom and sides fixed: every plate node that can move is inside it and stays at rest), so
+/// the bodies' momentum is the block's.
+fn block_on_held_plate(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("scenes/block_drop.toml"))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+        .replace("end_time = 1.5e-4", "end_time = 1.0e-4")
+        .replace("[contact]", "[[boundary]]\ngroup = \"plate_top\"\nkind = \"fixed\"\n\n[[boundary]]\ngroup = \"plate_bottom\"\nkind = \"fixed\"\n\n[[boundary]]\ngroup = \"plate_sides\"\nkind = \"fixed\"\n\n[contact]");
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn contact_force_integrates_to_the_block_momentum_change_at_np_1_and_3() {
+    // The block strikes the held plate at 40 m/s and bounces: the force on it is the contact
+    // force from the plate (no gravity), so its momentum change is the integral of
+    // -plate-block.force (the column is the force on the plate from the block), each row's
+    // force over the step ending at it (the push-back's impulse), to 1e-3 of |dp| (a
+    // conservation law). The held plate passes the force to its supports: the constraints'
+    // reactions sum to minus the contact force on the plate.
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("contact_force_momentum_np{np}"));
+        let scene = block_on_held_plate(&dir);
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let cf = out.join("contact_forces.csv");
+        let t = col(&cf, "time");
+        let h = out.join("history.csv");
+        assert_eq!(t, col(&h, "time"), "the same rows");
+        // The largest contact force component (the normal's: the plate's top is flat and
+        // the contact frictionless), the scale of round-off in the reactions.
+        let peak = ["x", "y", "z"]
+            .iter()
+            .flat_map(|d| col(&cf, &format!("plate-block.force_{d}")))
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for (c, dir_name) in ["x", "y", "z"].iter().enumerate() {
+            let f = col(&cf, &format!("plate-block.force_{dir_name}"));
+            let p = col(&h, &format!("momentum_{dir_name}"));
+            let dp = p[p.len() - 1] - p[0];
+            let impulse = -step_impulse(&t, &f);
+            let scale = if c == 2 { dp.abs() } else { 40.0 * BLOCK_MASS };
+            assert!(
+                (impulse - dp).abs() <= 1e-3 * scale,
+                "np {np}: {dir_name}: contact impulse on the block {impulse} N s against its momentum change {dp} kg m/s (1e-3 of {scale})"
+            );
+            if c == 2 {
+                // The plate took most of the block's approach (40 m/s * m; corner, then
+                // edge: the block is still turning at the end).
+                assert!(
+                    dp > 20.0 * BLOCK_MASS,
+                    "np {np}: the plate stopped the block ({dp})"
+                );
+            }
+            let rx = out.join("reactions.csv");
+            let total: Vec<f64> = ["plate_top", "plate_bottom", "plate_sides"]
+                .iter()
+                .map(|g| col(&rx, &format!("{g}.force_{dir_name}")))
+                .fold(vec![0.0; t.len()], |a, g| {
+                    a.iter().zip(&g).map(|(x, y)| x + y).collect()
+                });
+            for (k, (r, fk)) in total.iter().zip(&f).enumerate() {
+                assert!(
+                    (r + fk).abs() <= 1e-9 * peak,
+                    "np {np}: row {k}: the supports' reactions {r} N against the contact force on the plate {fk} N"
+                );
+            }
+        }
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "contact_forces.csv");
+    same_text(&outs[0], &outs[1], "reactions.csv");
+}
+
+#[test]
+fn contact_force_of_a_resting_block_is_its_weight_at_np_1_and_3() {
+    // scenes/cube_on_plate_rest.toml (the cube set on the held plate, touching from t = 0,
+    // gravity) run to 1 ms: the cube settles into a small vibration about its resting state,
+    // and the mean contact force on the plate over the last half is its weight, downward:
+    // -m g = -0.6161 N, within 2 % (statics).
+    let weight = BLOCK_MASS * 9.81;
+    for np in [1, 3] {
+        let dir = workdir(&format!("contact_force_rest_np{np}"));
+        let text = std::fs::read_to_string(root().join("scenes/cube_on_plate_rest.toml"))
+            .unwrap()
+            .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+            .replace("end_time = 1.0e-4", "end_time = 1.0e-3")
+            .replace("output_every = 2.5e-6", "output_every = 1.0e-3");
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let cf = out.join("contact_forces.csv");
+        let t = col(&cf, "time");
+        let f = col(&cf, "plate-block.force_z");
+        let half = t.len() / 2;
+        let mean = step_impulse(&t[half..], &f[half..]) / (t[t.len() - 1] - t[half]);
+        assert!(
+            (mean + weight).abs() <= 0.02 * weight,
+            "np {np}: mean contact force on the plate {mean} N against the cube's weight -{weight} N (2 %)"
+        );
+        // `tdyn plot --force --displacement` reads the file (docs/cli.md).
+        let o = std::process::Command::new(tdyn())
+            .arg("plot")
+            .arg(&out)
+            .args([
+                "--force",
+                "plate-block",
+                "--displacement",
+                "block_top.displacement_z",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success() && out.join("force_displacement.png").exists(),
+            "tdyn plot --force plate-block: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
+
+#[test]
+fn implicit_hanging_bar_reaction_balances_momentum_and_weight_at_np_1_and_3() {
+    // The hanging bar of `hanging_bar_reaction_carries_its_weight_at_np_1_and_3` in implicit
+    // mode (Newmark average acceleration, dt = 20 us, 342 steps): the reaction is the residual
+    // of the equation of motion at the held nodes. Newmark changes the momentum over a step by
+    // dt/2 (F(n) + F(n+1)) as central differences do, so the trapezoid of the reaction equals
+    // the momentum change plus M g t to 1e-3 of the weight's impulse M g t (a conservation
+    // law; the Newton tolerance is the only error), and its mean is the weight within 1 %.
+    let weight = RHO * 0.05 * 0.05 * 1.0 * 9.81;
+    for np in [1, 3] {
+        let dir = workdir(&format!("reaction_implicit_np{np}"));
+        let scene = bar(
+            &dir,
+            "end_time = 6.84e-3\nmode = \"implicit\"\ndt = 2.0e-5",
+            "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
+        );
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "title = \"test bar\"\n",
+            "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let t = col(&out.join("reactions.csv"), "time");
+        let r = col(&out.join("reactions.csv"), "right.force_x");
+        let p = col(&out.join("history.csv"), "momentum_x");
+        let span = t[t.len() - 1] - t[0];
+        let impulse = trapezoid(&t, &r);
+        let dp = p[p.len() - 1] - p[0];
+        assert!(
+            (impulse - weight * span - dp).abs() <= 1e-3 * weight * span,
+            "np {np}: reaction impulse {impulse} N s - M g t {} against the momentum change {dp} kg m/s (1e-3 of M g t)",
+            weight * span
+        );
+        let mean = impulse / span;
+        assert!(
+            (mean - weight).abs() <= 0.01 * weight,
+            "np {np}: mean support force {mean} N against the weight {weight} N (1 %)"
+        );
+    }
+}
+
+#[test]
+fn particles_on_a_held_plate_reactions_and_contact_forces_at_np_1_and_3() {
+    // scenes/cloud_on_plate.toml to 0.5 ms: a water cloud (SPH, contact.particles = true)
+    // falls on a steel plate held at its edges, under gravity. The bodies' momentum (plate and
+    // particles, history.csv) changes by the edges' reaction impulse (trapezoid, every step a
+    // row) minus M g t, to 1e-3 of the gravity impulse M g t (a conservation law; the report's
+    // `mass` is M). contact_forces.csv has the block-particles column, `plate-cloud`, whose z
+    // force is the water pushing the plate down; both files byte-identical at np 1 and 3.
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("particles_forces_np{np}"));
+        let text = std::fs::read_to_string(root().join("scenes/cloud_on_plate.toml"))
+            .unwrap()
+            .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+            .replace("end_time = 2.0e-3", "end_time = 5.0e-4");
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let rx = out.join("reactions.csv");
+        let t = col(&rx, "time");
+        let r = col(&rx, "edges.force_z");
+        let p = col(&out.join("history.csv"), "momentum_z");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        let mass = report["mass"].as_f64().unwrap();
+        let span = t[t.len() - 1] - t[0];
+        let gravity_impulse = mass * 9.81 * span;
+        let dp = p[p.len() - 1] - p[0];
+        let impulse = trapezoid(&t, &r) - gravity_impulse;
+        assert!(
+            (impulse - dp).abs() <= 1e-3 * gravity_impulse,
+            "np {np}: reaction impulse less M g t {impulse} N s against the momentum change {dp} kg m/s (1e-3 of {gravity_impulse})"
+        );
+        let f = col(&out.join("contact_forces.csv"), "plate-cloud.force_z");
+        let pushed = step_impulse(&t, &f);
+        assert!(
+            pushed < 0.0,
+            "np {np}: the water pushes the plate down ({pushed} N s)"
+        );
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "contact_forces.csv");
+    same_text(&outs[0], &outs[1], "reactions.csv");
+}
