@@ -307,6 +307,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let frame = outputs.frame(0.0, &model);
         let dump = outputs.dump(world, 0, false, &model);
         let rows = outputs.rows(world, &model, &check.row(&clock, &model, 0.0));
+        row_written(&mut model, clock.time);
         collective::first_error(world, frame.and(dump).and(rows).err())?;
     } else if world.rank() == 0 && !opts.quiet {
         eprintln!(
@@ -484,7 +485,7 @@ fn time_loop(
         c.energy_scale = check.scale_now();
     }
     while let Some(dt) = clock.next_step() {
-        let next = step::step(world, model, dt).map_err(|e| check.failure(e))?;
+        let next = step::step(world, model, clock.time, dt).map_err(|e| check.failure(e))?;
         clock.advance();
         if let (true, Some(fe)) = (clock.fixed(), model.fe.as_mut()) {
             fe.set_time(clock.time);
@@ -499,6 +500,7 @@ fn time_loop(
             out_err = outputs
                 .rows(world, model, &check.row(clock, model, err))
                 .err();
+            row_written(model, clock.time);
         }
         if clock.frame_due() {
             out_err = out_err.or(outputs.frame(clock.time, model).err());
@@ -541,6 +543,14 @@ fn time_loop(
     }
     progress.finish();
     Ok(())
+}
+
+/// A history row (and its reactions.csv row) was written at `time`: the walls' impulses start
+/// again from zero.
+fn row_written(model: &mut Model, time: f64) {
+    if let Some(w) = model.walls.as_mut() {
+        w.row_written(time);
+    }
 }
 
 /// The step's one agreement (collective): whether any rank was asked to stop, and, when any
@@ -587,6 +597,10 @@ fn restore(
     };
     if let (Some(c), Some(state)) = (model.contact.as_mut(), contact_state) {
         res = res.and(c.restore(state));
+    }
+    // The walls' state is global too.
+    if let (Some(w), Some(state)) = (model.walls.as_mut(), contact_state) {
+        res = res.and(w.restore(state));
     }
     res
 }

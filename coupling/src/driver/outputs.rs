@@ -4,7 +4,7 @@ use super::setup::Model;
 use crate::input::scene::Scene;
 use crate::output::{
     write_particle_dump, Connectivity, ElementFrame, FieldWriter, GlobalCounts, History, NodeFrame,
-    Values,
+    Reactions, Values,
 };
 use crate::stages::StageEnergies;
 use mpi::topology::SimpleCommunicator;
@@ -65,6 +65,8 @@ pub struct Outputs {
     writer: FieldWriter,
     history: History,
     probes: History,
+    /// reactions.csv, where the run has entries for it (rigid walls).
+    reactions: Option<Reactions>,
     mesh: Option<MeshLayout>,
     particle_ranks: Vec<i32>,
     particle_labels: Vec<u64>,
@@ -140,10 +142,13 @@ impl Outputs {
         .map_err(|e| e.to_string());
         crate::kernels::collective::first_error(world, opened.as_ref().err().cloned())?;
         let (history, probes) = opened?;
+        let reactions = open_reactions(world, out_dir, model, restart);
+        crate::kernels::collective::first_error(world, reactions.as_ref().err().cloned())?;
         Ok(Outputs {
             writer,
             history: history.integer_columns(&HISTORY_INTEGER_COLUMNS),
             probes,
+            reactions: reactions?,
             mesh,
             particle_ranks: Vec::new(),
             particle_labels: Vec::new(),
@@ -171,7 +176,11 @@ impl Outputs {
             .flush()
             .map_err(|e| self.named("history.csv", e));
         let probes = self.probes.flush().map_err(|e| self.named("probes.csv", e));
-        history.and(probes)
+        let reactions = match &mut self.reactions {
+            Some(r) => r.flush().map_err(|e| self.named("reactions.csv", e)),
+            None => Ok(()),
+        };
+        history.and(probes).and(reactions)
     }
 
     /// Writes a frame of every stage at `time` (collective).
@@ -303,9 +312,20 @@ impl Outputs {
                 r.extend([b.hourglass, b.internal]);
             }
         }
-        self.history
+        let history = self
+            .history
             .row(&r)
-            .map_err(|e| self.named("history.csv", e))
+            .map_err(|e| self.named("history.csv", e));
+        let reactions = match &mut self.reactions {
+            Some(w) => {
+                let forces: Vec<[f64; 3]> =
+                    model.reactions(row.time).into_iter().map(|e| e.1).collect();
+                w.row(row.time, &forces)
+                    .map_err(|e| self.named("reactions.csv", e))
+            }
+            None => Ok(()),
+        };
+        history.and(reactions)
     }
 
     /// Flushes history.csv (before a run stops with an error).
@@ -322,6 +342,27 @@ impl Outputs {
         self.writer.finish().map_err(|e| e.to_string())?;
         rows.map(|_| written)
     }
+}
+
+/// reactions.csv, created or (with `restart`) reopened at the checkpoint's row, where the model
+/// has entries for it (collective in its error only: the caller agrees).
+fn open_reactions(
+    world: &SimpleCommunicator,
+    out_dir: &Path,
+    model: &Model,
+    restart: Option<&super::checkpoint::Meta>,
+) -> Result<Option<Reactions>, String> {
+    let names: Vec<String> = model.reactions(0.0).into_iter().map(|e| e.0).collect();
+    if names.is_empty() {
+        return Ok(None);
+    }
+    let path = out_dir.join("reactions.csv");
+    match restart {
+        None => Reactions::create(world, &path, &names),
+        Some(m) => Reactions::reopen(world, &path, &names, m.history_rows),
+    }
+    .map(Some)
+    .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// What one history.csv row says besides the stages' own columns.

@@ -1,9 +1,10 @@
 //! The run's output (docs/scene.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
-//! parallel, `history.csv` and `probes.csv` by rank 0, `report.json`.
+//! parallel, `history.csv`, `probes.csv` and `reactions.csv` by rank 0, `report.json`.
 mod by_id;
 mod dump;
 mod fields;
 mod history;
+pub mod reactions;
 mod report;
 pub mod state;
 
@@ -12,6 +13,7 @@ pub use fields::{
     Connectivity, ElementFrame, FieldWriter, GlobalCounts, NodeFrame, ParticleFrame, Values,
 };
 pub use history::History;
+pub use reactions::Reactions;
 pub use report::{Report, StageStats};
 
 /// Output errors.
