@@ -735,9 +735,13 @@ fn model_mass(world: &SimpleCommunicator, model: &Model) -> f64 {
     fe_petsc::exact::total(world, &m)
 }
 
-/// The stages' energies and momentum summed (FE, then SPH).
+/// The stages' energies and momentum summed (FE, then SPH), and the moving walls' work in the
+/// external work.
 fn sum_energies(model: &Model) -> StageEnergies {
-    let mut s = StageEnergies::default();
+    let mut s = StageEnergies {
+        external_work: model.walls.as_ref().map_or(0.0, |w| w.work),
+        ..StageEnergies::default()
+    };
     for stage in model.stages() {
         let e = stage.energies();
         s.kinetic += e.kinetic;

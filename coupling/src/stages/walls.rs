@@ -12,12 +12,17 @@
 //!
 //! The correction goes through the stages' own push-back interfaces
 //! (`ExplicitFe::apply_contact`, `SphStage::apply_contact`), which apply a node's constraints
-//! and book the step's energy: the change of kinetic energy beyond what the element, pair and
-//! gravity work count, `m dv . (v(n+1/2) + dv/2 - a(n) dt/2)`, goes to `contact_energy` (with
-//! its sign: energy the walls took; a moving wall that pushes gives energy, counted negative).
-//! The wall's reaction, the force it applies to the bodies, is the impulse it gives,
-//! `sum m dv` over owned nodes and particles on the momentum grids (exact: the same bits at any
-//! rank count); reactions.csv shows its mean over each row's interval (`Walls::forces`).
+//! and return the step's change of kinetic energy beyond what the element, pair and gravity
+//! work count, `dK = sum m dv . (v(n+1/2) + dv/2 - a(n) dt/2)`. The wall's reaction, the force
+//! it applies to the bodies, is the impulse it gives, `J = sum m dv` over owned nodes and
+//! particles on the momentum grids (exact: the same bits at any rank count); reactions.csv
+//! shows its mean over each row's interval (`Walls::forces`).
+//!
+//! Energy: a wall moving at `W` does the work `W . J` on the bodies in the step (in the wall's
+//! frame it does none: there `dK' = dK - W . J`, the kinetic energy of the relative motion the
+//! inelastic correction removed, `<= 0`). That work is the prescribed motion's, like a velocity
+//! boundary's, and goes to `external_work`; what the correction dissipated, `W . J - dK`, goes
+//! to `contact_energy` (`>= 0`: energy the walls took). A wall at rest does no work.
 use super::fe::Fe;
 use super::sph::Sph;
 use crate::input::scene::RigidWallDef;
@@ -34,9 +39,11 @@ pub struct Walls {
     walls: Vec<Wall>,
     /// The walls' names, in scene order (reactions.csv's columns).
     pub names: Vec<String>,
-    /// Energy the walls took from the bodies so far, J (the change of kinetic energy their
-    /// corrections made beyond the element, pair and gravity work, negated).
+    /// Energy the walls took from the bodies so far, J: their work less the change of kinetic
+    /// energy their corrections made beyond the element, pair and gravity work.
     pub energy: f64,
+    /// The moving walls' work on the bodies so far, `sum W . J`, J.
+    pub work: f64,
     /// The impulse each wall gave to the bodies since the last history row, N s (global).
     impulse: Vec<[f64; 3]>,
     /// The time of the last history row, s.
@@ -81,6 +88,7 @@ impl Walls {
                 .collect(),
             names: defs.iter().map(|d| d.name.clone()).collect(),
             energy: 0.0,
+            work: 0.0,
             impulse: vec![[0.0; 3]; defs.len()],
             row_time: 0.0,
             wall_s: 0.0,
@@ -113,13 +121,17 @@ impl Walls {
         let mut g = vec![0.0f64; flat.len()];
         world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
         let g = exact_sum::values(&g);
-        self.energy -= g[0] + g[1];
-        for (k, imp) in self.impulse.iter_mut().enumerate() {
+        let mut work = 0.0;
+        for (k, (imp, wall)) in self.impulse.iter_mut().zip(&self.walls).enumerate() {
             let s = &g[2 + 6 * k..8 + 6 * k];
             for c in 0..3 {
-                imp[c] += s[c] + s[3 + c];
+                let j = s[c] + s[3 + c];
+                imp[c] += j;
+                work += wall.velocity[c] * j;
             }
         }
+        self.work += work;
+        self.energy += work - (g[0] + g[1]);
         self.wall_s += t0.elapsed().as_secs_f64();
     }
 
@@ -198,10 +210,10 @@ impl Walls {
         }
     }
 
-    /// Writes the walls' state (global values, the same on every rank): the energy, the last
-    /// row's time and the impulses since. The planes are a function of time.
+    /// Writes the walls' state (global values, the same on every rank): the energy, the work,
+    /// the last row's time and the impulses since. The planes are a function of time.
     pub fn save(&self, w: &mut StateWriter) {
-        let mut s = vec![self.energy, self.row_time];
+        let mut s = vec![self.energy, self.work, self.row_time];
         s.extend(self.impulse.iter().flatten());
         w.put("rigid_walls.state", &s);
     }
@@ -209,13 +221,14 @@ impl Walls {
     /// Sets the state `save` wrote.
     pub fn restore(&mut self, r: &StateReader) -> Result<(), String> {
         let s: Vec<f64> = r.get("rigid_walls.state")?;
-        if s.len() != 2 + 3 * self.impulse.len() {
+        if s.len() != 3 + 3 * self.impulse.len() {
             return Err("checkpoint: rigid_walls.state".into());
         }
         self.energy = s[0];
-        self.row_time = s[1];
+        self.work = s[1];
+        self.row_time = s[2];
         for (k, i) in self.impulse.iter_mut().enumerate() {
-            *i = [s[2 + 3 * k], s[3 + 3 * k], s[4 + 3 * k]];
+            *i = [s[3 + 3 * k], s[4 + 3 * k], s[5 + 3 * k]];
         }
         Ok(())
     }
