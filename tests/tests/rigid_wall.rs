@@ -337,3 +337,55 @@ fn bad_walls_are_refused_by_key() {
         );
     }
 }
+
+#[test]
+fn a_block_sliding_on_a_rough_floor_slows_at_mu_g() {
+    // A free steel block (0.1 x 0.05 x 0.05 m, meshes/bar.geo) resting on a floor with
+    // friction 0.3 under gravity, sliding at 2 m/s along it: Coulomb's law gives the
+    // deceleration mu g, so over t the block's momentum along x changes by -mu M g t, and
+    // friction's work mu M g v t (the speed stays within 0.3 % of v) goes to contact_energy.
+    // Both within 1 % (measured 0.07 % and 0.1 %), np 1 and 3: the normal impulse per step
+    // averages the weight's M g dt over the block's elastic ringing.
+    let (mu, g, v0, t_end) = (0.3, 9.81, 2.0, 2.0e-3);
+    let mass = RHO * 0.1 * 0.05 * 0.05;
+    let dir = workdir("rigid_wall_slide");
+    let meshes = root().join("meshes").display().to_string();
+    let scene = dir.join("slide.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "title = \"a block sliding on a rough floor\"\ngravity = [0.0, 0.0, -{g}]\n\
+             [run]\nend_time = {t_end:e}\n\
+             [[mesh]]\nfile = \"{meshes}/bar.geo\"\nparams = {{ L = 0.1, A = 0.05, N = 4, M = 2 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = {RHO:e}\n\
+             youngs_modulus = {E:e}\npoisson_ratio = {NU}\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\nvelocity = [{v0:e}, 0.0, 0.0]\n\
+             [[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n\
+             friction = {mu}\n"
+        ),
+    )
+    .unwrap();
+    for np in [1, 3] {
+        let out = dir.join(format!("np{np}"));
+        run_ok(np, &scene, &out);
+        let (h, rows) = read_csv(&out.join("history.csv"));
+        let (t, px) = (column(&h, &rows, "time"), column(&h, &rows, "momentum_x"));
+        let dp = px.last().unwrap() - px[0];
+        let expect = -mu * mass * g * t.last().unwrap();
+        assert!(
+            (dp - expect).abs() < 0.01 * expect.abs(),
+            "np {np}: momentum change {dp:e} kg m/s vs -mu M g t = {expect:e} (1 %)"
+        );
+        let j = impulse(&out, "floor.force_x");
+        assert!(
+            (j - dp).abs() < 1e-3 * dp.abs(),
+            "np {np}: the floor's impulse {j:e} N s is the momentum change {dp:e} (1e-3)"
+        );
+        let heat = column(&h, &rows, "contact_energy").last().copied().unwrap();
+        let work = mu * mass * g * v0 * t.last().unwrap();
+        assert!(
+            (heat - work).abs() < 0.01 * work,
+            "np {np}: contact_energy {heat:e} J vs friction's work mu M g v t = {work:e} J (1 %)"
+        );
+    }
+}
