@@ -136,7 +136,8 @@ impl Walls {
     }
 
     /// The FE nodes' corrections: work into `folds[0]`, wall k's impulse into
-    /// `folds[2 + 6k..5 + 6k]` (owned nodes; the constrained velocity change `m dv`).
+    /// `folds[2 + 6k..5 + 6k]`: `m (v' - v)` over the owned nodes it touched, the velocity
+    /// change `apply_contact` made (its constraints applied: a fixed node takes none).
     fn fe_step(&self, fe: &mut Fe, (t1, dt): (f64, f64), folds: &mut [Folds]) {
         let state = fe.state_mut();
         let grid = state.grids.momentum;
@@ -145,22 +146,25 @@ impl Walls {
             let Some(f) = forces_of(wall, (t1, dt), nodes, state.n_nodes()) else {
                 continue;
             };
-            for (n, fn_) in f.iter().enumerate() {
-                if *fn_ == [0.0; 3] || !state.owned[n] {
-                    continue;
-                }
-                let dv = state.contact_dv(n, *fn_, dt);
-                for c in 0..3 {
-                    grid.add(&mut folds[2 + 6 * k + c], state.mass[n] * dv[c]);
-                }
-            }
+            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+                .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
+                .map(|n| (n, state.v[n]))
+                .collect();
             let w = state.apply_contact(&f, dt);
             exact_sum::merge(&mut folds[0], &w);
+            for (n, v0) in touched {
+                for c in 0..3 {
+                    grid.add(
+                        &mut folds[2 + 6 * k + c],
+                        state.mass[n] * (state.v[n][c] - v0[c]),
+                    );
+                }
+            }
         }
     }
 
     /// The owned moving particles' corrections: work into `folds[1]`, wall k's impulse into
-    /// `folds[5 + 6k..8 + 6k]`.
+    /// `folds[5 + 6k..8 + 6k]`, `m (v' - v)`.
     fn sph_step(&self, sph: &mut Sph, (t1, dt): (f64, f64), folds: &mut [Folds]) {
         let stage = &mut sph.stage;
         let grid = stage.grids.momentum;
@@ -172,15 +176,18 @@ impl Walls {
             let Some(f) = forces_of(wall, (t1, dt), nodes, p.n_owned) else {
                 continue;
             };
-            for (i, fi) in f.iter().enumerate() {
-                for c in 0..3 {
-                    // The velocity change as `apply_contact` forms it.
-                    let dv = fi[c] * dt / p.m[i];
-                    grid.add(&mut folds[5 + 6 * k + c], p.m[i] * dv);
-                }
-            }
+            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+                .filter(|&i| f[i] != [0.0; 3])
+                .map(|i| (i, p.v[i]))
+                .collect();
             let w = stage.apply_contact(&f, &[], dt);
             exact_sum::merge(&mut folds[1], &w);
+            let p = &stage.parts;
+            for (i, v0) in touched {
+                for c in 0..3 {
+                    grid.add(&mut folds[5 + 6 * k + c], p.m[i] * (p.v[i][c] - v0[c]));
+                }
+            }
         }
     }
 

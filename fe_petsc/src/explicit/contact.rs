@@ -72,7 +72,7 @@ impl ExplicitFe {
     }
 
     /// Node `n`'s velocity correction for contact force `f` over `dt`, its constraints applied.
-    pub fn contact_dv(&self, n: usize, f: [f64; 3], dt: f64) -> [f64; 3] {
+    fn contact_dv(&self, n: usize, f: [f64; 3], dt: f64) -> [f64; 3] {
         let mut dv = [
             f[0] * dt / self.mass[n],
             f[1] * dt / self.mass[n],
