@@ -294,9 +294,12 @@ fn a_moving_wall_drives_a_bar_at_rho_c_v() {
 
 #[test]
 fn bad_walls_are_refused_by_key() {
-    // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit.
+    // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit; a
+    // wall in implicit mode is refused (the walls act between the explicit drift and forces).
     let dir = workdir("rigid_wall_bad");
     let good = "[[rigid_wall]]\nname = \"w\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n";
+    let explicit = "end_time = 1.0e-5";
+    let implicit = "end_time = 1.0e-5\nmode = \"implicit\"\ndt = 1.0e-6";
     let cases = [
         (
             "zero_normal",
@@ -320,10 +323,20 @@ fn bad_walls_are_refused_by_key() {
             good.replace("point = [0.0, 0.0, 0.0]", "point = [0.0, 0.0]"),
             "rigid_wall[0].point",
         ),
+        (
+            "implicit",
+            good.to_string(),
+            "rigid_wall: rigid walls act in explicit mode only",
+        ),
     ];
     for (name, wall, key) in cases {
         let d = mkdir(&dir, name);
-        let scene = bar_scene(&d, 4, "end_time = 1.0e-5", &wall);
+        let run_keys = if name == "implicit" {
+            implicit
+        } else {
+            explicit
+        };
+        let scene = bar_scene(&d, 4, run_keys, &wall);
         let o = run(2, &scene, &d.join("out"));
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{name}: must fail");
