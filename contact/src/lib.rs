@@ -22,6 +22,7 @@
 //!   node's contacts chosen deterministically (the deepest, and those on faces at an angle).
 //! - [`push_back()`]: kinematic contact (Taylor and Flanagan), momentum-conserving to round-off.
 //! - [`surfaces()`]: boundary faces and bodies of a hexahedral mesh.
+//! - [`wall`]: a rigid wall (an infinite plane, moving or not), its push-back in closed form.
 //!
 //! Units are SI. Determinism: results depend only on geometry and global ids, never on the order
 //! in which nodes or faces are stored.
@@ -36,6 +37,7 @@ pub mod recheck;
 pub mod search;
 pub mod surfaces;
 mod vec3;
+pub mod wall;
 
 pub use data::{
     Aabb, Config, ContactBox, ContactFaces, ContactNodes, FaceRecord, NodeRecord, FLAG_MASTER,
@@ -53,6 +55,7 @@ pub use search::{
 };
 pub use surfaces::{bodies, face_key, surfaces, BoundaryFace, Surfaces, HEX_FACES};
 pub use vec3::V3;
+pub use wall::Wall;
 
 /// Errors building a box.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

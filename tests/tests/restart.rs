@@ -199,6 +199,16 @@ fn sph_run_stopped_and_restarted_ends_bit_identical_at_np_1_and_3() {
 }
 
 #[test]
+fn rigid_wall_run_stopped_and_restarted_ends_bit_identical_at_np_1_and_3() {
+    // Water on a rigid floor (scenes/water_on_floor.toml, a history row every few steps): the
+    // walls' energy, work and the impulse since the last row continue from the checkpoint,
+    // reactions.csv included; the plane itself is a function of time.
+    for np in [1, 3] {
+        stop_and_restart("scenes/water_on_floor.toml", np, 64, &[]);
+    }
+}
+
+#[test]
 fn contact_run_stopped_and_restarted_ends_bit_identical_at_np_2() {
     // The block dropped on a plate: the physics columns bit for bit; the contact stage's cost
     // columns differ after the restart because its decomposition is rebuilt there.

@@ -136,6 +136,9 @@ pub fn write(
     if let Some(c) = &model.contact {
         c.save(&mut w);
     }
+    if let Some(walls) = &model.walls {
+        walls.save(&mut w);
+    }
     let step = meta.clock.step;
     let path = rank_file(&dir, rank, step);
     let res = std::fs::write(&path, w.into_bytes())

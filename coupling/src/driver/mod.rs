@@ -312,6 +312,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let frame = outputs.frame(0.0, &model);
         let dump = outputs.dump(world, 0, false, &model);
         let rows = outputs.rows(world, &model, &check.row(&clock, &model, 0.0));
+        row_written(&mut model, clock.time);
         collective::first_error(world, frame.and(dump).and(rows).err())?;
     } else if world.rank() == 0 && !opts.quiet {
         eprintln!(
@@ -514,7 +515,7 @@ fn time_loop(
         c.energy_scale = check.scale_now();
     }
     while let Some(dt) = clock.next_step() {
-        let next = step::step(world, model, dt).map_err(|e| check.failure(e))?;
+        let next = step::step(world, model, clock.time, dt).map_err(|e| check.failure(e))?;
         clock.advance();
         if let (true, Some(fe)) = (clock.fixed(), model.fe.as_mut()) {
             fe.set_time(clock.time);
@@ -529,6 +530,7 @@ fn time_loop(
             out_err = outputs
                 .rows(world, model, &check.row(clock, model, err))
                 .err();
+            row_written(model, clock.time);
         }
         if clock.frame_due() {
             out_err = out_err.or(outputs.frame(clock.time, model).err());
@@ -580,6 +582,14 @@ fn time_loop(
     Ok(())
 }
 
+/// A history row (and its reactions.csv row) was written at `time`: the walls' impulses start
+/// again from zero.
+fn row_written(model: &mut Model, time: f64) {
+    if let Some(w) = model.walls.as_mut() {
+        w.row_written(time);
+    }
+}
+
 /// The step's one agreement (collective): whether any rank was asked to stop, and, when any
 /// rank's output failed this step, the lowest such rank's message on every rank. Output may
 /// fail on one rank alone (rank 0 writes the CSV rows and the dumps; a full disk): agreed
@@ -624,6 +634,10 @@ fn restore(
     };
     if let (Some(c), Some(state)) = (model.contact.as_mut(), contact_state) {
         res = res.and(c.restore(state));
+    }
+    // The walls' state is global too.
+    if let (Some(w), Some(state)) = (model.walls.as_mut(), contact_state) {
+        res = res.and(w.restore(state));
     }
     res
 }
@@ -758,9 +772,13 @@ fn model_mass(world: &SimpleCommunicator, model: &Model) -> f64 {
     fe_petsc::exact::total(world, &m)
 }
 
-/// The stages' energies and momentum summed (FE, then SPH).
+/// The stages' energies and momentum summed (FE, then SPH), and the moving walls' work in the
+/// external work.
 fn sum_energies(model: &Model) -> StageEnergies {
-    let mut s = StageEnergies::default();
+    let mut s = StageEnergies {
+        external_work: model.walls.as_ref().map_or(0.0, |w| w.work),
+        ..StageEnergies::default()
+    };
     for stage in model.stages() {
         let e = stage.energies();
         s.kinetic += e.kinetic;

@@ -211,9 +211,12 @@ impl Outputs {
         terms.extend(contact_terms);
         let (forces, touched) = exact_forces(world, &terms, &touched);
         let (reactions, totals) = forces.split_at(n_reactions);
+        // The rigid walls' forces after the FE groups' (already summed over ranks).
+        let mut reactions = reactions.to_vec();
+        reactions.extend(model.reactions(time).into_iter().map(|e| e.1));
         let mut res = Ok(());
         if let Some(file) = self.reactions.as_mut() {
-            res = file.row(time, reactions).map_err(|e| (REACTIONS_FILE, e));
+            res = file.row(time, &reactions).map_err(|e| (REACTIONS_FILE, e));
         }
         if let (Some(file), Some(c)) = (self.contact_forces.as_mut(), model.contact.as_ref()) {
             let r = file.row(time, &c.pair_forces.row(totals, &touched));
@@ -381,13 +384,14 @@ pub const REACTIONS_FILE: &str = "reactions.csv";
 pub const CONTACT_FORCES_FILE: &str = "contact_forces.csv";
 
 /// reactions.csv's entries, in order: the FE stage's `fixed` and `velocity` groups in scene
-/// order (docs/output.md); another constraint adds its entries after them, here and in
-/// [`reaction_terms`] alike.
+/// order (docs/output.md), then the rigid walls (`Model::reactions`, whose forces are
+/// summed over ranks already and join the row after the groups' in `force_rows`).
 fn reaction_names(model: &Model) -> Vec<String> {
     let mut names = Vec::new();
     if let Some(fe) = &model.fe {
         names.extend(fe.reaction_groups.iter().map(|g| g.name.clone()));
     }
+    names.extend(model.reactions(0.0).into_iter().map(|e| e.0));
     names
 }
 

@@ -98,6 +98,12 @@ pub fn write(
             skipped.insert("contact".into(), "no [contact]".into());
         }
     }
+    if let Some(w) = &model.walls {
+        // The walls' corrections: not a decomposition, a pass over the nodes and particles.
+        report.stages_run.push("rigid_walls".into());
+        let s = crate::kernels::collective::max(world, w.wall_s);
+        report.extra.insert("rigid_walls_s".into(), s.into());
+    }
     report.output = Some(StageStats::reduce(
         world,
         f.output_s,

@@ -9,6 +9,7 @@ use crate::kernels::collective::first_error;
 use crate::stages::contact::{Contact, SearchChoice};
 use crate::stages::fe::{setup::Groups, Fe};
 use crate::stages::sph::Sph;
+use crate::stages::walls::Walls;
 use crate::stages::Stage;
 use fe_petsc::mesh::DistributedMesh;
 use mpi::topology::SimpleCommunicator;
@@ -23,16 +24,28 @@ pub struct Model {
     pub sph: Option<Sph>,
     /// The contact stage (a scene with `[contact]`).
     pub contact: Option<Contact>,
+    /// The rigid walls (a scene with `[[rigid_wall]]`).
+    pub walls: Option<Walls>,
     /// The probes, located.
     pub probes: Probes,
 }
 
 impl Model {
     /// history.csv's `contact_energy`, J: what the push-back has taken (the contact stage's
-    /// sum) and the immovable faces' hold on particles (`SphStage::hold_on_faces`).
+    /// sum), the immovable faces' hold on particles (`SphStage::hold_on_faces`) and what the
+    /// rigid walls took.
     pub fn contact_energy(&self) -> f64 {
         let held = self.sph.as_ref().map_or(0.0, |s| s.contact_held);
-        self.contact.as_ref().map_or(0.0, |c| c.energy + held)
+        let walls = self.walls.as_ref().map_or(0.0, |w| w.energy);
+        self.contact.as_ref().map_or(0.0, |c| c.energy + held) + walls
+    }
+
+    /// reactions.csv's entries for the row at `time`: each rigid wall's name and its force on
+    /// the bodies, N (`Walls::forces`).
+    pub fn reactions(&self, time: f64) -> Vec<(String, [f64; 3])> {
+        self.walls.as_ref().map_or(Vec::new(), |w| {
+            w.names.iter().cloned().zip(w.forces(time)).collect()
+        })
     }
 
     /// The stages that move material, in the order of Fig. 3 (FE, then SPH).
@@ -100,6 +113,11 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
             "{file}: mesh: the contact stage needs mesh faces: a scene of particles only cannot have a [contact] table"
         ));
     }
+    if implicit && !scene.rigid_walls.is_empty() {
+        return Err(format!(
+            "{file}: rigid_wall: rigid walls act in explicit mode only; use mode = \"explicit\" or remove the [[rigid_wall]] tables"
+        ));
+    }
     if implicit && scene.run.dt.is_none() {
         return Err(format!(
             "{file}: run.dt: mode = \"implicit\" needs a fixed step run.dt (seconds)"
@@ -162,14 +180,17 @@ pub fn build(
         )?),
         _ => None,
     };
-    if let (None, Some(fe)) = (&contact, &mut fe) {
-        // Only the contact stage reads the start positions and forces after the kick.
+    let walls = Walls::new(&scene.rigid_walls);
+    if let (None, None, Some(fe)) = (&contact, &walls, &mut fe) {
+        // Only the contact stage and the walls' push-back read the start-of-step forces after
+        // the kick (`ExplicitFe::apply_contact`'s work).
         fe.state_mut().set_contact_stage(false);
     }
     Ok(Model {
         fe,
         sph,
         contact,
+        walls,
         probes,
     })
 }

@@ -588,6 +588,26 @@ fn d_passes() -> i64 {
     2
 }
 
+/// `[[rigid_wall]]`: an infinite plane that no node and no particle passes.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigidWallDef {
+    /// Its name in reactions.csv (`<name>.force_x`, ...).
+    pub name: String,
+    /// A point of the plane at t = 0, m.
+    #[serde(deserialize_with = "vec3::exact")]
+    pub point: [f64; 3],
+    /// The normal, towards the bodies (a unit vector once the scene is checked).
+    #[serde(deserialize_with = "vec3::exact")]
+    pub normal: [f64; 3],
+    /// Coulomb's coefficient between the wall and everything on it (default 0).
+    #[serde(default)]
+    pub friction: f64,
+    /// The wall's velocity (a translation), m/s; default at rest.
+    #[serde(default, deserialize_with = "vec3::option")]
+    pub velocity: Option<[f64; 3]>,
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
@@ -611,6 +631,8 @@ struct RawScene {
     sph: Option<SphDef>,
     #[serde(default)]
     contact: Option<ContactDef>,
+    #[serde(default)]
+    rigid_wall: Vec<RigidWallDef>,
     #[serde(default)]
     probe: Vec<Probe>,
     #[serde(default)]
@@ -648,6 +670,8 @@ pub struct Scene {
     pub sph: Option<SphDef>,
     /// `[contact]`.
     pub contact: Option<ContactDef>,
+    /// `[[rigid_wall]]`, normals of unit length.
+    pub rigid_walls: Vec<RigidWallDef>,
     /// `[[probe]]`.
     pub probes: Vec<Probe>,
     /// `[output]`.

@@ -1,5 +1,5 @@
 //! The run's output (docs/scene.md "Output"): `fields.h5` + `fields.xmf` written by all ranks in
-//! parallel, `history.csv` and `probes.csv` by rank 0, `report.json`.
+//! parallel, `history.csv`, `probes.csv` and `reactions.csv` by rank 0, `report.json`.
 mod by_id;
 mod dump;
 mod fields;

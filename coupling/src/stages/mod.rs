@@ -5,7 +5,7 @@
 //! The FE and SPH stages move material and compute its forces; both implement [`Stage`], the
 //! interface the driver's step is written against. The contact stage works between them: it
 //! takes both stages' contact nodes after the drift and corrects them
-//! (`contact::Contact::step`).
+//! (`contact::Contact::step`). The rigid walls ([`walls`]) correct them after it.
 use crate::output::state::{StateReader, StateWriter};
 use crate::output::Report;
 use mpi::topology::SimpleCommunicator;
@@ -13,6 +13,7 @@ use mpi::topology::SimpleCommunicator;
 pub mod contact;
 pub mod fe;
 pub mod sph;
+pub mod walls;
 
 /// A stage's energies and momentum, summed over ranks (J, kg m/s).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -84,6 +84,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     if let Some(c) = &raw.contact {
         check_contact(&cx, c)?;
     }
+    let rigid_walls = check_rigid_walls(&cx, &raw.rigid_wall, &boundaries)?;
     check_probes(&cx, &raw.probe)?;
     check_output(&cx, &raw.output)?;
     if let Some(c) = &raw.compare {
@@ -102,6 +103,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         particles: raw.particles,
         sph: raw.sph,
         contact: raw.contact,
+        rigid_walls,
         probes: raw.probe,
         output: raw.output,
         compare: raw.compare,

@@ -162,3 +162,71 @@ fn unit_slips_warn_by_key_and_si_values_do_not() {
         unit_warnings(&gas)
     );
 }
+
+/// `[[rigid_wall]]`: the normal normalised on input, the defaults (at rest, no friction), and
+/// each mistake refused at its key in one line.
+#[test]
+fn rigid_walls_are_normalised_and_their_mistakes_refused_by_key() {
+    let wall =
+        "[[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0, 1.0]\nnormal = [0.0, 3.0, 4.0]\n";
+    let s = parse(&(base() + wall), Path::new("scene.toml")).unwrap();
+    let w = &s.rigid_walls[0];
+    assert_eq!(w.normal, [0.0, 0.6, 0.8], "normalised: (0, 3, 4) / 5");
+    assert_eq!(
+        (w.friction, w.velocity),
+        (0.0, None),
+        "defaults: frictionless, at rest"
+    );
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            wall.replace("[0.0, 3.0, 4.0]", "[0.0, 0.0, 0.0]"),
+            "rigid_wall[0].normal",
+            "length zero",
+        ),
+        (
+            wall.replace("[0.0, 3.0, 4.0]", "[0.0, 3.0]"),
+            "rigid_wall[0].normal",
+            "got 2 values",
+        ),
+        (
+            wall.to_string() + "friction = -1.0\n",
+            "rigid_wall[0].friction",
+            ">= 0",
+        ),
+        (
+            wall.to_string() + "velocity = [1.0, nan, 0.0]\n",
+            "rigid_wall[0].velocity",
+            "finite",
+        ),
+        (
+            wall.to_string() + "speed = 1.0\n",
+            "rigid_wall[0]",
+            "unknown field `speed`",
+        ),
+        (
+            wall.replace("\"floor\"", "\"left\""),
+            "rigid_wall[0].name",
+            "[[boundary]] group",
+        ),
+        (
+            wall.replace("\"floor\"", "\"\""),
+            "rigid_wall[0].name",
+            "not empty",
+        ),
+        (
+            format!("{wall}{wall}"),
+            "rigid_wall[1].name",
+            "another rigid wall",
+        ),
+    ];
+    for (w, key, needle) in cases {
+        let e = refused(&(base() + &w));
+        let line = e.to_string();
+        assert!(e.key.starts_with(key), "{key}: {line}");
+        assert!(
+            line.contains(needle),
+            "{key}: expected {needle:?} in {line:?}"
+        );
+        assert!(!line.contains('\n'), "one line: {line:?}");
+    }
+}

@@ -184,6 +184,66 @@ pub(super) fn check_contact(cx: &Ctx, c: &ContactDef) -> Result<(), SceneError> 
     Ok(())
 }
 
+/// `[[rigid_wall]]`: a name that no other wall and no boundary group has (they share
+/// reactions.csv's columns), a normal that is not zero (returned normalised), Coulomb's
+/// coefficient >= 0.
+pub(super) fn check_rigid_walls(
+    cx: &Ctx,
+    walls: &[RigidWallDef],
+    boundaries: &[Boundary],
+) -> Result<Vec<RigidWallDef>, SceneError> {
+    let mut out: Vec<RigidWallDef> = Vec::new();
+    for (i, w) in walls.iter().enumerate() {
+        let key = |k: &str| format!("rigid_wall[{i}].{k}");
+        if w.name.trim().is_empty() || w.name.contains(',') {
+            return Err(cx.err(
+                &key("name"),
+                format!(
+                    "expected a name for reactions.csv's columns (not empty, no comma), got \"{}\"",
+                    w.name
+                ),
+            ));
+        }
+        if out.iter().any(|o| o.name == w.name) {
+            return Err(cx.err(
+                &key("name"),
+                format!("\"{}\" names another rigid wall already", w.name),
+            ));
+        }
+        if boundaries.iter().any(|b| b.group == w.name) {
+            return Err(cx.err(
+                &key("name"),
+                format!(
+                    "\"{}\" is a [[boundary]] group's name, which reactions.csv uses too: name the wall otherwise",
+                    w.name
+                ),
+            ));
+        }
+        let n = w.normal;
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(cx.err(
+                &key("normal"),
+                format!(
+                    "expected a direction (the side the bodies are on), got [{}, {}, {}] of length zero",
+                    n[0], n[1], n[2]
+                ),
+            ));
+        }
+        if !(w.friction >= 0.0 && w.friction.is_finite()) {
+            return Err(cx.err(
+                &key("friction"),
+                format!("expected Coulomb's coefficient >= 0, got {}", w.friction),
+            ));
+        }
+        out.push(RigidWallDef {
+            normal: n.map(|c| c / len),
+            ..w.clone()
+        });
+    }
+    Ok(out)
+}
+
 /// `[[probe]]`: unique names, at least one field each.
 pub(super) fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError> {
     let mut names: Vec<&str> = Vec::new();

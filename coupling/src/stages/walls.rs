@@ -1,0 +1,242 @@
+//! The rigid walls of a scene (`[[rigid_wall]]`, docs/scene.md): infinite planes that no mesh
+//! node and no particle passes, applied after the drift (and after the contact stage's
+//! push-back, so that nothing the push-back moves ends behind a wall).
+//!
+//! Its own constraint, not the contact machinery: a wall is one plane known to every rank, and a
+//! node's correction ([`contact::Wall::correction`]) is a function of that node's own position
+//! and velocity alone. Every copy of a node shared between ranks holds the same bits (the FE
+//! stage integrates ghosts with the same summed force as their owner), so every copy takes the
+//! same correction with no exchange, no search and no decomposition; a particle has one owner.
+//! Through the contact stage the plane would need faces of finite size, a search over them, a
+//! move to the contact decomposition and back, and a `[contact]` table the scene may not have.
+//!
+//! The correction goes through the stages' own push-back interfaces
+//! (`ExplicitFe::apply_contact`, `SphStage::apply_contact`), which apply a node's constraints
+//! and return the step's change of kinetic energy beyond what the element, pair and gravity
+//! work count, `dK = sum m dv . (v(n+1/2) + dv/2 - a(n) dt/2)`. The wall's reaction, the force
+//! it applies to the bodies, is the impulse it gives, `J = sum m dv` over owned nodes and
+//! particles on the momentum grids (exact: the same bits at any rank count); reactions.csv
+//! shows its mean over each row's interval (`Walls::forces`).
+//!
+//! Energy: a wall moving at `W` does the work `W . J` on the bodies in the step (in the wall's
+//! frame it does none: there `dK' = dK - W . J`, the kinetic energy of the relative motion the
+//! inelastic correction removed, `<= 0`). That work is the prescribed motion's, like a velocity
+//! boundary's, and goes to `external_work`; what the correction dissipated, `W . J - dK`, goes
+//! to `contact_energy` (`>= 0`: energy the walls took). A wall at rest does no work.
+use super::fe::Fe;
+use super::sph::Sph;
+use crate::input::scene::RigidWallDef;
+use crate::output::state::{StateReader, StateWriter};
+use contact::Wall;
+use fe_petsc::exact::{self as exact_sum, Folds};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use std::time::Instant;
+
+/// The rigid walls of a run.
+pub struct Walls {
+    walls: Vec<Wall>,
+    /// The walls' names, in scene order (reactions.csv's columns).
+    pub names: Vec<String>,
+    /// Energy the walls took from the bodies so far, J: their work less the change of kinetic
+    /// energy their corrections made beyond the element, pair and gravity work.
+    pub energy: f64,
+    /// The moving walls' work on the bodies so far, `sum W . J`, J.
+    pub work: f64,
+    /// The impulse each wall gave to the bodies since the last history row, N s (global).
+    impulse: Vec<[f64; 3]>,
+    /// The time of the last history row, s.
+    row_time: f64,
+    /// Wall time of the walls' corrections on this rank, s.
+    pub wall_s: f64,
+}
+
+/// A wall's correction of every FE node (or particle) it pushes back, as the push-back forces
+/// `m dv / dt` (zero elsewhere) that `apply_contact` takes, or `None` when it touches none.
+fn forces_of(
+    wall: &Wall,
+    (t, dt): (f64, f64),
+    nodes: impl Iterator<Item = (usize, [f64; 3], [f64; 3], f64)>,
+    len: usize,
+) -> Option<Vec<[f64; 3]>> {
+    let mut f: Option<Vec<[f64; 3]>> = None;
+    for (i, x, v, m) in nodes {
+        if let Some(dv) = wall.correction(x, v, t, dt) {
+            let f = f.get_or_insert_with(|| vec![[0.0; 3]; len]);
+            f[i] = dv.map(|c| m * c / dt);
+        }
+    }
+    f
+}
+
+impl Walls {
+    /// The scene's walls (normals already of unit length), or `None` without any.
+    pub fn new(defs: &[RigidWallDef]) -> Option<Walls> {
+        if defs.is_empty() {
+            return None;
+        }
+        Some(Walls {
+            walls: defs
+                .iter()
+                .map(|d| Wall {
+                    point: d.point,
+                    normal: d.normal,
+                    velocity: d.velocity.unwrap_or([0.0; 3]),
+                    friction: d.friction,
+                })
+                .collect(),
+            names: defs.iter().map(|d| d.name.clone()).collect(),
+            energy: 0.0,
+            work: 0.0,
+            impulse: vec![[0.0; 3]; defs.len()],
+            row_time: 0.0,
+            wall_s: 0.0,
+        })
+    }
+
+    /// After the drift to `t1 = t + dt` (and the contact push-back): every FE node (all local
+    /// copies) and every owned moving particle behind a wall put back on it, wall by wall in
+    /// scene order; the energy and the impulses summed over ranks in one reduction
+    /// (collective).
+    pub fn step(
+        &mut self,
+        world: &SimpleCommunicator,
+        fe: Option<&mut Fe>,
+        sph: Option<&mut Sph>,
+        (t1, dt): (f64, f64),
+    ) {
+        let t0 = Instant::now();
+        let nw = self.walls.len();
+        // [FE work, particles' work, then per wall FE impulse x, y, z and particles' x, y, z]:
+        // each on its own stage's grid, added once reduced.
+        let mut folds: Vec<Folds> = vec![[0.0; 3]; 2 + 6 * nw];
+        if let Some(fe) = fe {
+            self.fe_step(fe, (t1, dt), &mut folds);
+        }
+        if let Some(sph) = sph {
+            self.sph_step(sph, (t1, dt), &mut folds);
+        }
+        let flat = exact_sum::flatten(&folds);
+        let mut g = vec![0.0f64; flat.len()];
+        world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+        let g = exact_sum::values(&g);
+        let mut work = 0.0;
+        for (k, (imp, wall)) in self.impulse.iter_mut().zip(&self.walls).enumerate() {
+            let s = &g[2 + 6 * k..8 + 6 * k];
+            for c in 0..3 {
+                let j = s[c] + s[3 + c];
+                imp[c] += j;
+                work += wall.velocity[c] * j;
+            }
+        }
+        self.work += work;
+        self.energy += work - (g[0] + g[1]);
+        self.wall_s += t0.elapsed().as_secs_f64();
+    }
+
+    /// The FE nodes' corrections: work into `folds[0]`, wall k's impulse into
+    /// `folds[2 + 6k..5 + 6k]`: `m (v' - v)` over the owned nodes it touched, the velocity
+    /// change `apply_contact` made (its constraints applied: a fixed node takes none).
+    fn fe_step(&self, fe: &mut Fe, (t1, dt): (f64, f64), folds: &mut [Folds]) {
+        let state = fe.state_mut();
+        let grid = state.grids.momentum;
+        for (k, wall) in self.walls.iter().enumerate() {
+            let nodes = (0..state.n_nodes()).map(|n| (n, state.x[n], state.v[n], state.mass[n]));
+            let Some(f) = forces_of(wall, (t1, dt), nodes, state.n_nodes()) else {
+                continue;
+            };
+            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+                .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
+                .map(|n| (n, state.v[n]))
+                .collect();
+            let w = state.apply_contact(&f, dt);
+            exact_sum::merge(&mut folds[0], &w);
+            for (n, v0) in touched {
+                for c in 0..3 {
+                    grid.add(
+                        &mut folds[2 + 6 * k + c],
+                        state.mass[n] * (state.v[n][c] - v0[c]),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The owned moving particles' corrections: work into `folds[1]`, wall k's impulse into
+    /// `folds[5 + 6k..8 + 6k]`, `m (v' - v)`.
+    fn sph_step(&self, sph: &mut Sph, (t1, dt): (f64, f64), folds: &mut [Folds]) {
+        let stage = &mut sph.stage;
+        let grid = stage.grids.momentum;
+        for (k, wall) in self.walls.iter().enumerate() {
+            let p = &stage.parts;
+            let nodes = (0..p.n_owned)
+                .filter(|&i| !p.fixed[i])
+                .map(|i| (i, p.x_real[i], p.v[i], p.m[i]));
+            let Some(f) = forces_of(wall, (t1, dt), nodes, p.n_owned) else {
+                continue;
+            };
+            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+                .filter(|&i| f[i] != [0.0; 3])
+                .map(|i| (i, p.v[i]))
+                .collect();
+            let w = stage.apply_contact(&f, &[], dt);
+            exact_sum::merge(&mut folds[1], &w);
+            let p = &stage.parts;
+            for (i, v0) in touched {
+                for c in 0..3 {
+                    grid.add(&mut folds[5 + 6 * k + c], p.m[i] * (p.v[i][c] - v0[c]));
+                }
+            }
+        }
+    }
+
+    /// Each wall's force on the bodies for the history row at `time`, N: the impulse it gave
+    /// since the last row over the time since then (the mean force over the row's interval,
+    /// so that the rows' forces times their intervals sum to the impulse exactly; a step's
+    /// impulse over dt when a row is written every step). Zero at the first row.
+    pub fn forces(&self, time: f64) -> Vec<[f64; 3]> {
+        let span = time - self.row_time;
+        self.impulse
+            .iter()
+            .map(|i| {
+                if span > 0.0 {
+                    i.map(|c| c / span)
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect()
+    }
+
+    /// A history row was written at `time`: the next row's impulses start from zero.
+    pub fn row_written(&mut self, time: f64) {
+        self.row_time = time;
+        for i in &mut self.impulse {
+            *i = [0.0; 3];
+        }
+    }
+
+    /// Writes the walls' state (global values, the same on every rank): the energy, the work,
+    /// the last row's time and the impulses since. The planes are a function of time.
+    pub fn save(&self, w: &mut StateWriter) {
+        let mut s = vec![self.energy, self.work, self.row_time];
+        s.extend(self.impulse.iter().flatten());
+        w.put("rigid_walls.state", &s);
+    }
+
+    /// Sets the state `save` wrote.
+    pub fn restore(&mut self, r: &StateReader) -> Result<(), String> {
+        let s: Vec<f64> = r.get("rigid_walls.state")?;
+        if s.len() != 3 + 3 * self.impulse.len() {
+            return Err("checkpoint: rigid_walls.state".into());
+        }
+        self.energy = s[0];
+        self.work = s[1];
+        self.row_time = s[2];
+        for (k, i) in self.impulse.iter_mut().enumerate() {
+            *i = [s[3 + 3 * k], s[4 + 3 * k], s[5 + 3 * k]];
+        }
+        Ok(())
+    }
+}
