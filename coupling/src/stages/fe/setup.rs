@@ -2,6 +2,7 @@
 //! velocities, and nodal constraints (with the scene errors docs/scene.md lists for shared nodes).
 use crate::input::scene::{BoundaryKind, Scene};
 use crate::kernels::collective::first_error;
+use fe_petsc::curve::Curve;
 use fe_petsc::explicit::Constraint;
 use fe_petsc::material::{build_material, Material};
 use fe_petsc::mesh::{DistributedMesh, LocalMesh};
@@ -29,6 +30,8 @@ pub struct FeInputs {
     pub velocity: Vec<[f64; 3]>,
     /// Constraints on local nodes.
     pub constraints: Vec<(u32, Constraint)>,
+    /// The curve of each constraint (by index), where its velocity boundary has one.
+    pub velocity_curves: Vec<Option<Curve>>,
 }
 
 /// Builds materials, per-element material indices, initial velocities and constraints.
@@ -136,13 +139,14 @@ pub fn prepare(
         })
         .collect();
 
-    let constraints = constraints(comm, scene, groups, &dm.local)?;
+    let (constraints, velocity_curves) = constraints(comm, scene, groups, &dm.local)?;
     Ok(FeInputs {
         elem_material,
         elem_block,
         materials,
         velocity,
         constraints,
+        velocity_curves,
     })
 }
 
@@ -151,7 +155,7 @@ fn constraints(
     scene: &Scene,
     groups: &Groups,
     m: &LocalMesh,
-) -> Result<Vec<(u32, Constraint)>, String> {
+) -> Result<(Vec<(u32, Constraint)>, Vec<Option<Curve>>), String> {
     let file = scene.file.display().to_string();
     let bit_of = |name: &str| -> u32 {
         let tag = groups.surfaces[name];
@@ -174,9 +178,10 @@ fn constraints(
             BoundaryKind::Velocity(v) => {
                 for &n in &nodes {
                     if let Some((w, j)) = vel[n] {
-                        if w != *v && err.is_none() {
+                        let same = w == *v && scene.boundaries[j].curve == b.curve;
+                        if !same && err.is_none() {
                             err = Some(format!(
-                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities",
+                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities (or curves)",
                                 m.node_id[n], scene.boundaries[j].group, b.group
                             ));
                         }
@@ -200,6 +205,7 @@ fn constraints(
         }
     }
     let mut out = Vec::new();
+    let mut curves = Vec::new();
     for n in 0..nn {
         if let Some((v, i)) = vel[n] {
             if fixed[n] && err.is_none() {
@@ -219,8 +225,10 @@ fn constraints(
                 }
             }
             out.push((n as u32, Constraint::Velocity(v)));
+            curves.push(scene.boundaries[i].curve.clone());
         } else if fixed[n] {
             out.push((n as u32, Constraint::Fixed));
+            curves.push(None);
         } else if !planes[n].is_empty() {
             // Orthonormalise the plane normals (Gram-Schmidt); parallel planes add nothing.
             let mut basis: Vec<[f64; 3]> = Vec::new();
@@ -238,8 +246,9 @@ fn constraints(
                 }
             }
             out.push((n as u32, Constraint::Planes(basis)));
+            curves.push(None);
         }
     }
     first_error(comm, err)?;
-    Ok(out)
+    Ok((out, curves))
 }
