@@ -77,11 +77,32 @@ impl Curve {
     /// piece it is s(t + dt/2), the half step's value; across a point it keeps the
     /// displacement exact. `s(t)` for `dt = 0`.
     pub fn mean(&self, t: f64, dt: f64) -> f64 {
-        if dt > 0.0 {
-            self.integral(t, t + dt) / dt
-        } else {
-            self.value(t)
+        let end = t + dt;
+        if !(dt > 0.0) {
+            return self.value(t);
         }
+        if self.points.iter().any(|p| p.0 > t && p.0 < end) {
+            self.integral(t, end) / dt
+        } else {
+            // One linear piece: the mean of its ends (a held value exactly).
+            0.5 * (self.value(t) + self.value(end))
+        }
+    }
+
+    /// ds/dt just after `t`, 1/s: the slope of the piece that starts at or holds `t`; 0
+    /// from the last point on (held). The slope at the run's start, where nothing comes
+    /// before.
+    pub fn slope_after(&self, t: f64) -> f64 {
+        let n = self.points.len();
+        if n < 2 || t >= self.points[n - 1].0 {
+            return 0.0;
+        }
+        if t < self.points[0].0 {
+            return 0.0;
+        }
+        let i = self.segment(t);
+        let ((t0, s0), (t1, s1)) = (self.points[i], self.points[i + 1]);
+        (s1 - s0) / (t1 - t0)
     }
 
     /// ds/dt at `t`, 1/s: the slope of the piece holding `t`; at a point between two pieces
@@ -160,6 +181,12 @@ mod tests {
         assert_eq!(c.slope(4.0), -0.25);
         assert_eq!(c.slope(-1.0), 0.0);
         assert_eq!(c.slope(5.0), 0.0);
+        // Just after: the piece starting there.
+        assert_eq!(c.slope_after(0.0), 0.5);
+        assert_eq!(c.slope_after(2.0), 0.0);
+        assert_eq!(c.slope_after(3.0), -0.5);
+        assert_eq!(c.slope_after(4.0), 0.0);
+        assert_eq!(c.slope_after(-1.0), 0.0);
     }
 
     #[test]

@@ -403,6 +403,7 @@ impl ExplicitFe {
             fe.a[n] = fe.gravity;
         }
         fe.constrain_accelerations();
+        fe.start_curved_velocities();
         fe.dt_stable_local = fe.initial_stable_dt();
         Ok(fe)
     }
@@ -523,6 +524,20 @@ impl ExplicitFe {
                 let both = old[c] + now[c];
                 e.add(&mut sums[2], (0.5 * both) * dx);
                 e.add(&mut sums[1], -(both * dx));
+            }
+        }
+    }
+
+    /// The velocity constraints with a curve at t = 0: their acceleration v ds/dt (the
+    /// slope just after the start), and the reaction that gives it (m a - m g: no element
+    /// force yet), the first step's trapezoid of the reaction's work starting from it.
+    fn start_curved_velocities(&mut self) {
+        for (i, v, c) in &self.velocity_curves {
+            let n = self.constraints[*i].0 as usize;
+            let rate = c.slope_after(0.0);
+            self.a[n] = v.map(|x| x * rate);
+            for k in 0..3 {
+                self.reaction[n][k] = self.mass[n] * (self.a[n][k] - self.gravity[k]);
             }
         }
     }

@@ -16,8 +16,7 @@ pub fn check(file: &str, key: &str, raw: &[Vec<f64>]) -> Result<Curve, SceneErro
     if raw.is_empty() {
         return Err(err(
             key.to_string(),
-            "expected at least one point: curve = [[t, s], ...] (t in s, s a scale factor)"
-                .into(),
+            "expected at least one point: curve = [[t, s], ...] (t in s, s a scale factor)".into(),
         ));
     }
     let mut points = Vec::with_capacity(raw.len());
@@ -45,9 +44,7 @@ pub fn check(file: &str, key: &str, raw: &[Vec<f64>]) -> Result<Curve, SceneErro
             if t <= t_prev {
                 return Err(err(
                     at,
-                    format!(
-                        "times must increase strictly: t = {t} s follows t = {t_prev} s"
-                    ),
+                    format!("times must increase strictly: t = {t} s follows t = {t_prev} s"),
                 ));
             }
         }

@@ -77,9 +77,7 @@ pub fn face_forces(x: &[[f64; 3]; 4], nodes: &[u32; 4], p: f64) -> [[f64; 3]; 4]
     let d1 = std::array::from_fn(|c| x[2][c] - x[0][c]);
     let d2 = std::array::from_fn(|c| x[3][c] - x[1][c]);
     let a = cross(d1, d2).map(|v| 0.5 * v);
-    let distinct = (0..4)
-        .filter(|&k| !nodes[..k].contains(&nodes[k]))
-        .count();
+    let distinct = (0..4).filter(|&k| !nodes[..k].contains(&nodes[k])).count();
     let mut out = [[0.0; 3]; 4];
     for k in 0..4 {
         let copies = nodes.iter().filter(|&&n| n == nodes[k]).count();

@@ -317,7 +317,10 @@ pub fn validate_groups(
     for (i, l) in scene.loads.iter().enumerate() {
         if !surfaces.contains(&l.group) {
             let what = if volumes.contains(&l.group) {
-                format!("\"{}\" is a physical volume; a [[load]] acts on a physical surface", l.group)
+                format!(
+                    "\"{}\" is a physical volume; a [[load]] acts on a physical surface",
+                    l.group
+                )
             } else {
                 format!("no physical surface \"{}\" in the mesh", l.group)
             };
