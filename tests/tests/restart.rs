@@ -540,3 +540,12 @@ fn a_killed_run_leaves_whole_rows_and_readable_frames_and_earlier_results_are_ke
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["status"], "finished");
 }
+
+#[test]
+fn pressure_load_run_stopped_mid_ramp_and_restarted_ends_bit_identical_at_np_2() {
+    // The clamped plate under a [[load]] ramped by a curve: stopped in the ramp (100 rows,
+    // t = 10 ms of its 36 ms ramp), the loads are evaluated again at the restored positions and
+    // time (a curve is a function of time, no state of its own) and the run ends as without
+    // a stop.
+    stop_and_restart("scenes/kirchhoff_plate.toml", 2, 100, &[]);
+}

@@ -150,12 +150,16 @@ pub fn prepare(
     })
 }
 
+/// The constraints on local nodes, and the curve of each (by index) where its velocity
+/// boundary has one.
+type Constraints = (Vec<(u32, Constraint)>, Vec<Option<Curve>>);
+
 fn constraints(
     comm: &SimpleCommunicator,
     scene: &Scene,
     groups: &Groups,
     m: &LocalMesh,
-) -> Result<(Vec<(u32, Constraint)>, Vec<Option<Curve>>), String> {
+) -> Result<Constraints, String> {
     let file = scene.file.display().to_string();
     let bit_of = |name: &str| -> u32 {
         let tag = groups.surfaces[name];

@@ -59,11 +59,11 @@ impl Sph {
     /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
     pub fn new(world: &SimpleCommunicator, scene: &Scene, kept_pairs: bool) -> Result<Sph, String> {
         let (mut params, map) = params_from_scene(scene)?;
-        let gravity_at = |t: f64| match &scene.gravity_curve {
-            Some(c) => scene.gravity.map(|g| g * c.value(t)),
-            None => scene.gravity,
-        };
-        params.gravity = gravity_at(0.0);
+        // Gravity at t = 0 (`gravity_curve`); `finish` sets it at each step's end.
+        if let Some(c) = &scene.gravity_curve {
+            let s = c.value(0.0);
+            params.gravity = scene.gravity.map(|g| g * s);
+        }
         let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
         crate::kernels::collective::first_error(world, seeds.as_ref().err().cloned())?;
         let (seeds, ids) = seeds.expect("checked");
