@@ -83,16 +83,27 @@ fn clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
 /// displacement is 2 m/s times the curve's integral (by hand: 0.05 + 0.05 + 0.0375 + 0.05 =
 /// 0.1875 ms), exact to round-off (1e-12 relative), since the prescribed velocity of each
 /// step is the curve's mean over it; the energy balance holds with the reaction's work.
+///
+/// The same in implicit mode (Newmark, a fixed step of 2 us: the prescribed increment is dt v
+/// times the curve's mean over the step).
 #[test]
 fn velocity_ramp_moves_the_driven_nodes_by_the_curves_integral() {
     let integral = 0.1875e-3;
     let v = 2.0;
-    for np in [1, 3] {
-        let dir = workdir(&format!("loads_velocity_np{np}"));
+    let modes = [
+        ("explicit", "end_time = 3.0e-4\nhistory_every = 1.0e-5"),
+        (
+            "implicit",
+            "end_time = 3.0e-4\nhistory_every = 1.0e-5\nmode = \"implicit\"\ndt = 2.0e-6",
+        ),
+    ];
+    for ((mode, run_keys), np) in modes.iter().flat_map(|m| [(m, 1), (m, 3)]) {
+        let np: usize = np;
+        let dir = workdir(&format!("loads_velocity_{mode}_np{np}"));
         let scene = bar_scene(
             &dir,
             20,
-            "end_time = 3.0e-4\nhistory_every = 1.0e-5",
+            run_keys,
             "[[boundary]]\ngroup = \"left\"\nkind = \"velocity\"\nvelocity = [2.0, 0.0, 0.0]\n\
              curve = [[0.0, 0.0], [1.0e-4, 1.0], [1.5e-4, 1.0], [2.0e-4, 0.5]]\n\n\
              [[probe]]\nname = \"end\"\npoint = [0.0, 0.025, 0.025]\nfields = [\"displacement_x\", \"velocity_x\"]\n",
@@ -103,13 +114,13 @@ fn velocity_ramp_moves_the_driven_nodes_by_the_curves_integral() {
         let want = v * integral;
         assert!(
             (u / want - 1.0).abs() < 1e-12,
-            "np {np}: driven end moved {u:e} m, v times the curve's integral {want:e} m (round-off expected)"
+            "{mode} np {np}: driven end moved {u:e} m, v times the curve's integral {want:e} m (round-off expected)"
         );
         // After the last point the velocity is held at 0.5 v.
         let vel = last(&out, "probes.csv", "end.velocity_x");
         assert!(
             (vel - 0.5 * v).abs() < 1e-12,
-            "np {np}: driven end's final velocity {vel} m/s, the curve's last value times v = {} m/s",
+            "{mode} np {np}: driven end's final velocity {vel} m/s, the curve's last value times v = {} m/s",
             0.5 * v
         );
         // From rest the energies grow from zero and the balance's start-up error falls as
@@ -123,7 +134,7 @@ fn velocity_ramp_moves_the_driven_nodes_by_the_curves_integral() {
             .fold(0.0f64, |m, (_, e)| m.max(*e));
         assert!(
             ee < 3e-3,
-            "np {np}: energy error {ee:e} after 50 us with the reaction's work (allowed 3e-3)"
+            "{mode} np {np}: energy error {ee:e} after 50 us with the reaction's work (allowed 3e-3)"
         );
     }
 }
