@@ -24,8 +24,8 @@ fn max_energy_error(dir: &Path) -> f64 {
 /// about eight periods and held: the mean of the centre's deflection over the hold against
 /// Kirchhoff's w = alpha q a^4 / D (validation/kirchhoff_plate/reference.toml: alpha = 0.00126,
 /// Timoshenko & Woinowsky-Krieger table 35) within 3 %; the load's work booked in
-/// external_work keeps the energy balance; and np 3 gives np 1's bits (history.csv and
-/// probes.csv: the faces' nodal forces summed in key order over the ranks sharing a node).
+/// external_work keeps the energy balance; and np 3 gives np 1's bits (history.csv, probes.csv
+/// and fields.h5: the faces' nodal forces summed in key order over the ranks sharing a node).
 #[test]
 fn clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
     let scene = root().join("scenes/kirchhoff_plate.toml");
@@ -67,6 +67,9 @@ fn clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
             "np {np}: energy error {ee:e} (the pressure's work is external work; allowed 1e-4)"
         );
         outs.push(out);
+    }
+    if let Err(e) = fields_differ(&outs[0], &outs[1]) {
+        panic!("np 3 against np 1: fields.h5 {e} (same bits expected)");
     }
     for file in ["history.csv", "probes.csv"] {
         let bad = csv_columns_differ(&outs[0], &outs[1], file, &[]);
