@@ -502,7 +502,7 @@ mod tests {
                 mass: &mass,
                 owned: &owned,
                 gravity: g,
-                gravity_work: g,
+                gravity_work: g.map(|x| 0.75 * x),
                 grids,
             };
             let mut sums = [[0.0; 3]; 6];
