@@ -140,14 +140,15 @@ unsafe fn multi_root(
 }
 
 impl Assembly {
-    /// The plan for elements `elems` (local node indices, 8 per element, in canonical order)
-    /// with canonical keys `elem_key`, over the node exchange `ex` (collective: every rank of
-    /// the mesh calls it).
-    pub fn new(
-        elems: &[[u32; 8]],
+    /// The plan for elements `elems` (local node indices, `N` per element: 8 for the hexahedra,
+    /// 4 for the faces of a pressure load; in canonical order) with canonical keys `elem_key`,
+    /// over the node exchange `ex` (collective: every rank of the mesh calls it).
+    pub fn new<const N: usize>(
+        elems: &[[u32; N]],
         elem_key: &[[u64; 3]],
         ex: &NodeExchange,
     ) -> Result<Self, PetscError> {
+        assert!(N <= 8, "at most 8 corners (one bit each)");
         let nv = ex.n_local_nodes;
         let mut leaf_of = vec![u32::MAX; nv];
         for (i, &l) in ex.shared_leaves.iter().enumerate() {

@@ -19,6 +19,7 @@
 use crate::assembly::Assembly;
 use crate::batch::{self, Batch, LaneMaterial, Width};
 use crate::blocks::BlockWork;
+use crate::curve::Curve;
 use crate::exact::{self as exact_sum, Folds};
 use crate::exact::{StepFolds, SumGrids};
 use crate::hex::{self, HexControls, HexState};
@@ -33,8 +34,10 @@ use mpi::traits::*;
 
 mod contact;
 mod elements;
+mod loads;
 mod queries;
 mod restart;
+pub use loads::{face_forces, PressureLoad};
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 
 /// A nodal constraint from a boundary condition.
@@ -128,6 +131,11 @@ pub struct ExplicitSetup<'a> {
     pub controls: HexControls,
     /// Gravity, m/s^2.
     pub gravity: [f64; 3],
+    /// The scale of gravity in time (none: 1).
+    pub gravity_curve: Option<Curve>,
+    /// The scale in time of each `Constraint::Velocity` in `constraints` (by index; empty or
+    /// `None`: constant).
+    pub velocity_curves: Vec<Option<Curve>>,
 }
 
 /// State and arrays of the explicit FE stage on one rank.
@@ -195,8 +203,16 @@ pub struct ExplicitFe {
     /// The materials.
     pub materials: Vec<Box<dyn Material>>,
     constraints: Vec<(u32, Constraint)>,
+    /// Each constraint's prescribed velocity and its scale in time, where it has a curve
+    /// (index into `constraints`).
+    velocity_curves: Vec<(usize, [f64; 3], Curve)>,
     controls: HexControls,
+    /// Gravity now (at `time`), m/s^2: `gravity0` times its curve's value.
     gravity: [f64; 3],
+    gravity0: [f64; 3],
+    gravity_curve: Option<Curve>,
+    /// The pressure loads, where the scene has any ([`ExplicitFe::set_loads`]).
+    loads: Option<loads::Loads>,
     /// Accumulated energies (global).
     pub energies: Energies,
     internal_plus_hg: f64,
@@ -351,9 +367,13 @@ impl ExplicitFe {
             vol0,
             elem_material: setup.elem_material,
             materials: setup.materials,
+            velocity_curves: scaled_velocities(&setup.constraints, setup.velocity_curves),
             constraints: setup.constraints,
             controls: setup.controls,
             gravity: setup.gravity,
+            gravity0: setup.gravity,
+            gravity_curve: setup.gravity_curve,
+            loads: None,
             energies: Energies::default(),
             internal_plus_hg: 0.0,
             block_energies: vec![BlockEnergy::default(); blocks.n_blocks()],
@@ -378,13 +398,16 @@ impl ExplicitFe {
         fe.constrained_nodes = (0..nn as u32)
             .filter(|&n| fe.constrained[n as usize])
             .collect();
-        // Boundary conditions act on the initial velocities; the initial acceleration is
-        // gravity (zero stress), constrained.
+        // Boundary conditions act on the initial velocities (a curve's value at t = 0); the
+        // initial acceleration is gravity (zero stress), constrained.
+        fe.gravity = fe.gravity_at(0.0);
+        fe.scale_velocities(0.0, 0.0);
         fe.constrain_velocities();
         for n in 0..nn {
             fe.a[n] = fe.gravity;
         }
         fe.constrain_accelerations();
+        fe.start_curved_velocities();
         fe.dt_stable_local = fe.initial_stable_dt();
         Ok(fe)
     }
@@ -411,6 +434,116 @@ impl ExplicitFe {
             ));
         }
         dt
+    }
+
+    /// Gravity at time `t`: the scene's times its curve's value, m/s^2.
+    fn gravity_at(&self, t: f64) -> [f64; 3] {
+        match &self.gravity_curve {
+            Some(c) => {
+                let s = c.value(t);
+                self.gravity0.map(|g| g * s)
+            }
+            None => self.gravity0,
+        }
+    }
+
+    /// Sets each velocity constraint with a curve to its velocity times the curve's mean
+    /// over the step `[t, t + dt]` (its value at `t` for `dt = 0`): in central differences
+    /// the velocity of the half step, which moves the node by exactly the curve's integral.
+    fn scale_velocities(&mut self, t: f64, dt: f64) {
+        for (i, v, c) in &self.velocity_curves {
+            let s = c.mean(t, dt);
+            self.constraints[*i].1 = Constraint::Velocity(v.map(|x| x * s));
+        }
+    }
+
+    /// The pressure loads of this rank (collective: every rank calls it, with the same
+    /// number of loads; none: nothing to do): their forces at the present positions and
+    /// time are added to the nodal forces the next kick reads.
+    pub fn set_loads(
+        &mut self,
+        sets: Vec<PressureLoad>,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), StepError> {
+        if sets.is_empty() {
+            return Ok(());
+        }
+        let mut l = loads::Loads::new(sets, self.x.len(), exchange)?;
+        l.evaluate(&self.x, self.time, exchange)?;
+        for &n in &l.nodes {
+            let n = n as usize;
+            for c in 0..3 {
+                self.force[n][c] += l.now[n][c];
+            }
+        }
+        self.loads = Some(l);
+        Ok(())
+    }
+
+    /// After a restart: the loads at the restored positions and time, as the step that
+    /// wrote the checkpoint left them (its forces, restored, already hold them); gravity at
+    /// the restored time (collective).
+    pub fn refresh_after_restart(&mut self, exchange: &mut NodeExchange) -> Result<(), StepError> {
+        self.gravity = self.gravity_at(self.time);
+        if let Some(l) = &mut self.loads {
+            l.evaluate(&self.x, self.time, exchange)?;
+        }
+        Ok(())
+    }
+
+    /// The loads at the step's end (time `t`, the present positions) added to the summed
+    /// element forces; the last step's kept for the work (collective).
+    fn add_loads(&mut self, t: f64, exchange: &mut NodeExchange) -> Result<(), PetscError> {
+        let Some(l) = &mut self.loads else {
+            return Ok(());
+        };
+        l.keep();
+        l.evaluate(&self.x, t, exchange)?;
+        for &n in &l.nodes {
+            let n = n as usize;
+            for c in 0..3 {
+                self.force[n][c] += l.now[n][c];
+            }
+        }
+        Ok(())
+    }
+
+    /// The loads' work over the step on the owned loaded nodes, with the displacement dt v
+    /// (`v` the half-step velocities): the trapezoid (L(n) + L(n+1))/2 . dx into the external
+    /// work, and the same forces' f . dx taken out of the element work's sum (the nodal
+    /// forces the kick and the closing pass summed include the loads).
+    fn load_work(&self, dt: f64, sums: &mut StepFolds) {
+        let Some(l) = &self.loads else {
+            return;
+        };
+        let e = &self.grids.energy;
+        for (old, &n) in l.old.iter().zip(&l.nodes) {
+            let n = n as usize;
+            if !self.owned[n] {
+                continue;
+            }
+            let now = l.now[n];
+            for c in 0..3 {
+                let dx = dt * self.v[n][c];
+                let both = old[c] + now[c];
+                e.add(&mut sums[2], (0.5 * both) * dx);
+                e.add(&mut sums[1], -(both * dx));
+            }
+        }
+    }
+
+    /// The velocity constraints with a curve at t = 0: their acceleration v ds/dt (the
+    /// slope just after the start), and the reaction that gives it (m a - m g: no element
+    /// force yet), the first step's trapezoid of the reaction's work starting from it.
+    fn start_curved_velocities(&mut self) {
+        for (i, v, c) in &self.velocity_curves {
+            let n = self.constraints[*i].0 as usize;
+            let rate = c.slope_after(0.0);
+            self.a[n] = v.map(|x| x * rate);
+            for k in 0..3 {
+                self.reaction[n][k] = self.mass[n] * (self.a[n][k] - self.gravity[k]);
+            }
+        }
     }
 
     fn constrain_velocities(&mut self) {
@@ -484,6 +617,8 @@ impl ExplicitFe {
         let x = &self.x;
         let starts = self.constraints.iter().map(|(n, _)| x[*n as usize]);
         self.constrained_start.extend(starts);
+        let t = self.time;
+        self.gravity = self.gravity_at(t);
         let x_old = self.contact.then_some(&mut self.x_old[..]);
         // The constrained owned nodes' forces, read below after the kick may have zeroed them.
         self.constrained_force.clear();
@@ -511,6 +646,7 @@ impl ExplicitFe {
         );
         self.forces_zeroed = zero;
         self.contact_reaction.fill([0.0; 3]);
+        self.scale_velocities(t, dt);
         self.constrain_velocities();
         for ((n, _), x0) in self.constraints.iter().zip(&self.constrained_start) {
             let n = *n as usize;
@@ -537,9 +673,19 @@ impl ExplicitFe {
     /// ([`StepFolds`]: [`ExplicitFe::accumulate`] scales them).
     pub fn finish_step(&mut self, dt: f64) -> StepFolds {
         let t0 = std::time::Instant::now();
+        // Gravity at the step's end; its work over the step with the mean of both ends
+        // (the trapezoid of m g . dx; g itself when it does not change).
+        let g_old = self.gravity;
+        self.gravity = self.gravity_at(self.time + dt);
         let g = self.gravity;
+        let gravity_work = if g == g_old {
+            g
+        } else {
+            std::array::from_fn(|c| 0.5 * (g_old[c] + g[c]))
+        };
         let h = 0.5 * dt;
         let mut sums = [[0.0; 3]; 6];
+        self.load_work(dt, &mut sums);
         let nn = self.x.len();
         // The arrays as slices of one length, borrowed field by field (the loops below index
         // them without bounds checks and keep the sums in registers: through `&self` methods
@@ -550,6 +696,7 @@ impl ExplicitFe {
             mass: &self.mass[..nn],
             owned: &self.owned[..nn],
             gravity: g,
+            gravity_work,
             grids: self.grids,
         };
         let constrained = &self.constrained[..nn];
@@ -566,10 +713,18 @@ impl ExplicitFe {
             a[n] = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
         }
         std::mem::swap(&mut self.reaction, &mut self.reaction_old);
-        for (node, con) in &self.constraints {
+        // A velocity with a curve: its acceleration v ds/dt at the step's end, so the
+        // reaction holds the force that changes the driven nodes' momentum.
+        let t1 = self.time + dt;
+        let mut curved = self.velocity_curves.iter().peekable();
+        for (i, (node, con)) in self.constraints.iter().enumerate() {
             let n = *node as usize;
             let free = a[n];
             apply(con, &mut a[n], false);
+            if let Some((_, v, curve)) = curved.next_if(|(k, _, _)| *k == i) {
+                let rate = curve.slope(t1);
+                a[n] = v.map(|x| x * rate);
+            }
             for c in 0..3 {
                 self.reaction[n][c] = read.mass[n] * (a[n][c] - free[c]);
             }
@@ -678,6 +833,22 @@ impl ExplicitFe {
             be.kinetic0 = 0.5 * g[4 + b];
         }
     }
+}
+
+/// Each velocity constraint with a curve: (index in `constraints`, velocity, curve), in
+/// index order.
+fn scaled_velocities(
+    constraints: &[(u32, Constraint)],
+    curves: Vec<Option<Curve>>,
+) -> Vec<(usize, [f64; 3], Curve)> {
+    curves
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, c)| match (&constraints[i].1, c) {
+            (Constraint::Velocity(v), Some(c)) => Some((i, *v, c)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Applies a constraint to a velocity (`is_velocity`) or an acceleration.

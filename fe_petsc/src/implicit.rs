@@ -50,6 +50,7 @@
 //! each step's displacement by the trapezoidal rule, W += (f(n) + f(n+1))/2 . du. The scheme's
 //! own identity du = dt (v(n) + v(n+1))/2 makes kinetic energy + that work balance exactly for
 //! any force law, so the energy error measures how well Newton and KSP converged.
+use crate::curve::Curve;
 use crate::explicit::{centroid, Constraint, ExplicitFe, ExplicitSetup, StepError};
 use crate::hex::{self, HexControls};
 use crate::hourglass::{self, HourglassMaterial, HourglassStep};
@@ -236,6 +237,10 @@ pub struct ImplicitFe {
     controls: HexControls,
     gravity: [f64; 3],
     dofs: Vec<NodeDof>,
+    /// The velocity constraints with a curve: (local node, velocity, curve); and each node's
+    /// index among them (`u32::MAX`: none).
+    curved: Vec<(usize, [f64; 3], Curve)>,
+    curve_of: Vec<u32>,
     mat_stride: usize,
     owned_nodes: Vec<usize>,
     matrix: BlockMatrix,
@@ -281,6 +286,14 @@ impl ImplicitFe {
         for (n, c) in &setup.constraints {
             dofs[*n as usize] = NodeDof::from_constraint(c);
         }
+        let mut curve_of = vec![u32::MAX; nn];
+        let mut curved = Vec::new();
+        for ((n, con), c) in setup.constraints.iter().zip(&setup.velocity_curves) {
+            if let (Constraint::Velocity(v), Some(c)) = (con, c) {
+                curve_of[*n as usize] = curved.len() as u32;
+                curved.push((*n as usize, *v, c.clone()));
+            }
+        }
         let fe = ExplicitFe::new(setup, exchange);
         // The agreement step before the collective numbering: a rank whose set-up failed
         // returns its error, the others [`ImplicitError::OtherRank`].
@@ -320,6 +333,8 @@ impl ImplicitFe {
             controls,
             gravity,
             dofs,
+            curved,
+            curve_of,
             mat_stride,
             matrix,
             solver,
@@ -426,6 +441,13 @@ impl ImplicitFe {
     ) -> Result<(), ImplicitError> {
         let dt = self.dt;
         let t0 = Instant::now();
+        // A velocity with a curve prescribes the increment dt v times the curve's mean over
+        // the step (the curve's integral: exact displacement).
+        let t = self.fe.time;
+        for (n, v, c) in &self.curved {
+            let s = c.mean(t, dt);
+            self.dofs[*n] = NodeDof::Prescribed(v.map(|x| x * s));
+        }
         // Predictor: a(n+1) = a(n).
         for n in 0..self.n_nodes() {
             let (v, a) = (self.fe.v[n], self.fe.a[n]);
@@ -639,6 +661,7 @@ impl ImplicitFe {
     fn accept(&mut self) -> Vec<f64> {
         let t0 = Instant::now();
         let dt = self.dt;
+        let t1 = self.fe.time + dt;
         let c_mass = 4.0 / (dt * dt);
         let g = self.gravity;
         let mut sums = [[0.0; 3]; 6];
@@ -646,12 +669,19 @@ impl ImplicitFe {
         for n in 0..self.n_nodes() {
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
             let a_raw: [f64; 3] = std::array::from_fn(|c| c_mass * (du[c] - dt * v[c]) - a[c]);
-            let a_new = self.dofs[n].free(a_raw);
+            let mut a_new = self.dofs[n].free(a_raw);
             let v_raw: [f64; 3] = std::array::from_fn(|c| v[c] + 0.5 * dt * (a[c] + a_new[c]));
-            let v_new = match self.dofs[n] {
+            let mut v_new = match self.dofs[n] {
                 NodeDof::Prescribed(p) => p,
                 ref dof => dof.free(v_raw),
             };
+            // A velocity with a curve: v s(t + dt) and its acceleration v ds/dt at the step's
+            // end (the reaction then holds the force that changes the node's momentum).
+            if let Some((_, pv, c)) = self.curved.get(self.curve_of[n] as usize) {
+                let (s, rate) = (c.value(t1), c.slope(t1));
+                v_new = pv.map(|x| x * s);
+                a_new = pv.map(|x| x * rate);
+            }
             self.reaction[n] = self.constraint_force(n, a_new, f);
             for c in 0..3 {
                 self.fe.x[n][c] += du[c];

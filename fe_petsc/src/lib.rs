@@ -12,6 +12,7 @@ pub mod agree;
 pub mod assembly;
 pub mod batch;
 pub mod blocks;
+pub mod curve;
 pub mod exact;
 pub mod explicit;
 pub mod hex;

@@ -27,6 +27,9 @@ pub(crate) struct NodalSums<'a> {
     pub mass: &'a [f64],
     pub owned: &'a [bool],
     pub gravity: [f64; 3],
+    /// The gravity whose work the sums count: the mean over the step (`gravity` when it does
+    /// not change).
+    pub gravity_work: [f64; 3],
     pub grids: SumGrids,
 }
 
@@ -56,7 +59,7 @@ impl NodalSums<'_> {
         if !self.owned[n] {
             return;
         }
-        let (g, m) = (self.gravity, self.mass[n]);
+        let (g, m) = (self.gravity_work, self.mass[n]);
         let f = self.force[n];
         let (e, p) = (&self.grids.energy, &self.grids.momentum);
         for c in 0..3 {
@@ -359,6 +362,7 @@ mod w8 {
         let nn = v.len();
         let whole = nn / 8 * 8;
         let (gp, idx) = (gravity_slots(r.gravity), slot_nodes());
+        let gw = gravity_slots(r.gravity_work);
         let (h, dt, one) = (
             _mm512_set1_pd(0.5 * r.dt),
             _mm512_set1_pd(r.dt),
@@ -392,7 +396,7 @@ mod w8 {
                     let dx = _mm512_mul_pd(dt, half);
                     bin(&mut ke, _mm512_mul_pd(mj, _mm512_mul_pd(vn, vn)), &ge, kc);
                     bin(&mut we, _mm512_mul_pd(f, dx), &ge, kc);
-                    let mg = _mm512_add_pd(zero, _mm512_mul_pd(mj, gp[j]));
+                    let mg = _mm512_add_pd(zero, _mm512_mul_pd(mj, gw[j]));
                     bin(&mut wx, _mm512_mul_pd(mg, dx), &ge, kc);
                     bin(&mut mo[j], _mm512_mul_pd(mj, vn), &gm, kc);
                 }
@@ -498,6 +502,7 @@ mod tests {
                 mass: &mass,
                 owned: &owned,
                 gravity: g,
+                gravity_work: g.map(|x| 0.75 * x),
                 grids,
             };
             let mut sums = [[0.0; 3]; 6];

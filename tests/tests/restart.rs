@@ -142,6 +142,13 @@ fn stop_and_restart(rel: &str, np: usize, rows: usize, except: &[&str]) {
         Path::new(rel).file_stem().unwrap().to_string_lossy()
     ));
     let scene = scene_copy(rel, &dir);
+    stop_and_restart_in(&dir, &scene, np, rows, except);
+}
+
+/// [`stop_and_restart`] of the scene file `scene`, the runs in `dir`.
+fn stop_and_restart_in(dir: &Path, scene: &Path, np: usize, rows: usize, except: &[&str]) {
+    let rel = scene.display().to_string();
+    let scene = scene.to_path_buf();
     let (a, b) = (dir.join("A"), dir.join("B"));
     run_ok(np, &scene, &a);
     stop_after_rows(np, &scene, &b, rows, &[]);
@@ -595,4 +602,25 @@ fn restarting_a_finished_run_is_refused_unless_overwrite_runs_it_again() {
         first,
         "run again from t = 0: the same history"
     );
+}
+
+#[test]
+fn pressure_load_run_stopped_mid_ramp_and_restarted_ends_bit_identical_at_np_2() {
+    // The clamped plate under a [[load]] ramped by a curve, shortened to 12 ms (the ramp to
+    // 20 ms) and with gravity ramped too: stopped in the ramps (40 rows, t = 4 ms), the loads
+    // and gravity are evaluated again at the restored positions and time (a curve is a
+    // function of time, no state of its own) and the run ends as without a stop.
+    let dir = workdir("restart_plate_load_np2");
+    let text = std::fs::read_to_string(root().join("scenes/kirchhoff_plate.toml"))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+        .replace("end_time = 0.048", "end_time = 0.012")
+        .replace("[0.036, 1.0]", "[0.02, 1.0]")
+        .replace(
+            "\n[run]",
+            "gravity = [0.0, 0.0, -1000.0]\ngravity_curve = [[0.0, 0.0], [0.01, 1.0]]\n\n[run]",
+        );
+    let scene = dir.join("plate.toml");
+    std::fs::write(&scene, text).unwrap();
+    stop_and_restart_in(&dir, &scene, 2, 40, &[]);
 }

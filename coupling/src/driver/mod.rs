@@ -515,6 +515,9 @@ fn time_loop(
         c.energy_scale = check.scale_now();
     }
     while let Some(dt) = clock.next_step() {
+        for stage in model.stages_mut() {
+            stage.set_clock(clock.time);
+        }
         let next = step::step(world, model, clock.time, dt).map_err(|e| check.failure(e))?;
         clock.advance();
         if let (true, Some(fe)) = (clock.fixed(), model.fe.as_mut()) {

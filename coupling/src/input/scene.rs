@@ -318,6 +318,28 @@ pub struct Boundary {
     pub group: String,
     /// The condition.
     pub kind: BoundaryKind,
+    /// `kind = "velocity"`: the velocity's scale in time (none: 1).
+    pub curve: Option<crate::input::curve::Curve>,
+}
+
+/// `[[load]]`: a pressure on a physical surface, following the deformed faces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load {
+    /// Physical surface name.
+    pub group: String,
+    /// Pressure, Pa (positive pushes into the body).
+    pub pressure: f64,
+    /// Its scale in time (none: 1).
+    pub curve: Option<crate::input::curve::Curve>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLoad {
+    group: String,
+    pressure: f64,
+    #[serde(default)]
+    curve: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -328,6 +350,8 @@ struct RawBoundary {
     #[serde(default)]
     #[serde(deserialize_with = "vec3::option")]
     velocity: Option<[f64; 3]>,
+    #[serde(default)]
+    curve: Option<Vec<Vec<f64>>>,
 }
 
 /// A probe field (docs/scene.md list).
@@ -616,6 +640,8 @@ struct RawScene {
     #[serde(default)]
     #[serde(deserialize_with = "vec3::exact")]
     gravity: [f64; 3],
+    #[serde(default)]
+    gravity_curve: Option<Vec<Vec<f64>>>,
     run: Run,
     #[serde(default)]
     mesh: Vec<RawMesh>,
@@ -625,6 +651,8 @@ struct RawScene {
     block: Vec<Block>,
     #[serde(default)]
     boundary: Vec<RawBoundary>,
+    #[serde(default)]
+    load: Vec<RawLoad>,
     #[serde(default)]
     particles: Vec<ParticlesDef>,
     #[serde(default)]
@@ -654,6 +682,8 @@ pub struct Scene {
     pub title: String,
     /// Gravity, m/s^2.
     pub gravity: [f64; 3],
+    /// `gravity_curve`: gravity's scale in time (none: 1).
+    pub gravity_curve: Option<crate::input::curve::Curve>,
     /// `[run]`.
     pub run: Run,
     /// `[[mesh]]`.
@@ -664,6 +694,8 @@ pub struct Scene {
     pub blocks: Vec<Block>,
     /// `[[boundary]]`.
     pub boundaries: Vec<Boundary>,
+    /// `[[load]]`.
+    pub loads: Vec<Load>,
     /// `[[particles]]`.
     pub particles: Vec<ParticlesDef>,
     /// `[sph]`.

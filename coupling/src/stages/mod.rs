@@ -77,6 +77,9 @@ pub trait Stage {
     /// Writes the stage's section and figures into the report (collective). `loop_s` is the
     /// time loop's wall time without output (max over ranks).
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64);
+    /// Tells the stage the time at the start of the next step, s (the driver's clock), where
+    /// it reads time-dependent input (a curve) without keeping its own clock. Default: nothing.
+    fn set_clock(&mut self, _t: f64) {}
     /// Writes this rank's restart state (`driver::checkpoint`).
     fn save(&self, w: &mut StateWriter);
     /// Sets the state `save` wrote, on the same ranks.

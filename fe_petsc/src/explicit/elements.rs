@@ -48,6 +48,8 @@ impl ExplicitFe {
         self.timers.elements += (t1 - t0).as_secs_f64();
         // The shared nodes' forces in canonical element order over all ranks holding them.
         self.assembly.finish(&mut self.force, exchange)?;
+        // The pressure loads at the step's end, added to the summed element forces.
+        self.add_loads(self.time + dt, exchange)?;
         self.timers.exchange += t1.elapsed().as_secs_f64();
         match sums.inverted {
             Some(e) => Err(e),

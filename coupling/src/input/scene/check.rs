@@ -76,7 +76,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let meshes = check_meshes(&cx, &dir, &raw.mesh, raw.particles.is_empty())?;
     let materials = check_materials(&cx, &raw.material)?;
     check_blocks(&cx, &raw.block, &materials)?;
+    let gravity_curve = raw
+        .gravity_curve
+        .as_ref()
+        .map(|c| crate::input::curve::check(&cx.file, "gravity_curve", c))
+        .transpose()?;
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
+    let loads = check_loads(&cx, &raw.load)?;
+    check_implicit_curves(&cx, &raw.run, &gravity_curve, &loads)?;
     check_particles(&cx, &raw.particles, &materials)?;
     if let Some(s) = &raw.sph {
         check_sph(&cx, s)?;
@@ -95,11 +102,13 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         dir,
         title: raw.title,
         gravity: raw.gravity,
+        gravity_curve,
         run: raw.run,
         meshes,
         materials,
         blocks: raw.block,
         boundaries,
+        loads,
         particles: raw.particles,
         sph: raw.sph,
         contact: raw.contact,
@@ -574,9 +583,27 @@ fn check_boundaries(cx: &Ctx, raw: &[RawBoundary]) -> Result<Vec<Boundary>, Scen
                 ))
             }
         };
+        let curve = match (&b.curve, &kind) {
+            (None, _) => None,
+            (Some(c), BoundaryKind::Velocity(_)) => Some(crate::input::curve::check(
+                &cx.file,
+                &format!("boundary[{i}].curve"),
+                c,
+            )?),
+            (Some(_), _) => {
+                return Err(cx.err(
+                    &format!("boundary[{i}].curve"),
+                    format!(
+                        "only kind = \"velocity\" takes a curve (this boundary is \"{}\")",
+                        b.kind
+                    ),
+                ))
+            }
+        };
         boundaries.push(Boundary {
             group: b.group.clone(),
             kind,
+            curve,
         });
     }
     Ok(boundaries)
@@ -612,4 +639,51 @@ pub fn unit_warnings(scene: &Scene) -> Vec<String> {
         }
     }
     out
+}
+
+/// `[[load]]`: a finite pressure and an optional curve (the group is checked against the
+/// mesh in `validate_groups`).
+fn check_loads(cx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>, SceneError> {
+    let mut loads = Vec::new();
+    for (i, l) in raw.iter().enumerate() {
+        if !l.pressure.is_finite() {
+            return Err(cx.err(
+                &format!("load[{i}].pressure"),
+                format!("expected a finite pressure in Pa, got {}", l.pressure),
+            ));
+        }
+        let curve = l
+            .curve
+            .as_ref()
+            .map(|c| crate::input::curve::check(&cx.file, &format!("load[{i}].curve"), c))
+            .transpose()?;
+        loads.push(Load {
+            group: l.group.clone(),
+            pressure: l.pressure,
+            curve,
+        });
+    }
+    Ok(loads)
+}
+
+/// The implicit integrator keeps gravity constant and has no pressure loads: a
+/// `gravity_curve` or a `[[load]]` with `mode = "implicit"` is refused (a velocity curve
+/// works in both modes).
+fn check_implicit_curves(
+    cx: &Ctx,
+    run: &Run,
+    gravity_curve: &Option<crate::input::curve::Curve>,
+    loads: &[Load],
+) -> Result<(), SceneError> {
+    if run.mode != Mode::Implicit {
+        return Ok(());
+    }
+    let why = "is explicit only: mode = \"implicit\" keeps gravity constant and takes no pressure loads (use mode = \"explicit\")";
+    if gravity_curve.is_some() {
+        return Err(cx.err("gravity_curve", format!("gravity_curve {why}")));
+    }
+    if !loads.is_empty() {
+        return Err(cx.err("load[0]", format!("[[load]] {why}")));
+    }
+    Ok(())
 }

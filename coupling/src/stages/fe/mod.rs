@@ -16,6 +16,7 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod loads;
 mod remap;
 pub mod setup;
 
@@ -71,6 +72,8 @@ impl Fe {
             constraints: inputs.constraints,
             controls,
             gravity: scene.gravity,
+            gravity_curve: scene.gravity_curve.clone(),
+            velocity_curves: inputs.velocity_curves,
         };
         let mut integrator = match implicit_dt {
             None => {
@@ -88,6 +91,11 @@ impl Fe {
                 Integrator::Implicit(Box::new(res.map_err(|e| e.to_string())?))
             }
         };
+        if let Integrator::Explicit(fe) = &mut integrator {
+            let loads = loads::pressure_loads(world, scene, groups, &mesh.local);
+            let res = fe.set_loads(loads, &mut mesh.exchange);
+            first_error(world, res.err().map(|e| format!("{file}: {e}")))?;
+        }
         match &mut integrator {
             Integrator::Explicit(fe) => fe.initial_energies(world),
             Integrator::Implicit(imp) => imp.fe.initial_energies(world),
@@ -174,6 +182,16 @@ impl Fe {
             Integrator::Explicit(fe) => fe,
             Integrator::Implicit(imp) => &mut imp.fe,
         }
+    }
+
+    /// After a restart: the time-dependent loads and gravity at the restored time
+    /// (collective).
+    fn refresh_after_restart(&mut self) -> Result<(), String> {
+        if let Integrator::Explicit(fe) = &mut self.integrator {
+            fe.refresh_after_restart(&mut self.mesh.exchange)
+                .map_err(|e| format!("checkpoint: {e}"))?;
+        }
+        Ok(())
     }
 
     /// Sets the clock (with a fixed step the driver keeps t = step dt exactly).
@@ -300,7 +318,8 @@ impl Stage for Fe {
             Integrator::Explicit(fe) => fe.set_restart_state(&mut get),
             Integrator::Implicit(imp) => imp.set_restart_state(&mut get),
         }
-        .map_err(|e| format!("checkpoint: {e}"))
+        .map_err(|e| format!("checkpoint: {e}"))?;
+        self.refresh_after_restart()
     }
 
     fn restore_remapped(
@@ -314,7 +333,8 @@ impl Stage for Fe {
             Integrator::Explicit(fe) => fe.set_restart_state(&mut get),
             Integrator::Implicit(imp) => imp.set_restart_state(&mut get),
         }
-        .map_err(|e| format!("checkpoint: {e}"))
+        .map_err(|e| format!("checkpoint: {e}"))?;
+        self.refresh_after_restart()
     }
 
     fn report(&self, world: &SimpleCommunicator, report: &mut Report, loop_s: f64) {

@@ -2,6 +2,7 @@
 //! velocities, and nodal constraints (with the scene errors docs/scene.md lists for shared nodes).
 use crate::input::scene::{BoundaryKind, Scene};
 use crate::kernels::collective::first_error;
+use fe_petsc::curve::Curve;
 use fe_petsc::explicit::Constraint;
 use fe_petsc::material::{build_material, Material};
 use fe_petsc::mesh::{DistributedMesh, LocalMesh};
@@ -29,6 +30,8 @@ pub struct FeInputs {
     pub velocity: Vec<[f64; 3]>,
     /// Constraints on local nodes.
     pub constraints: Vec<(u32, Constraint)>,
+    /// The curve of each constraint (by index), where its velocity boundary has one.
+    pub velocity_curves: Vec<Option<Curve>>,
     /// The `fixed` and `velocity` groups whose reactions reactions.csv writes.
     pub reaction_groups: Vec<ReactionGroup>,
 }
@@ -149,7 +152,7 @@ pub fn prepare(
         })
         .collect();
 
-    let constraints = constraints(comm, scene, groups, &dm.local)?;
+    let (constraints, velocity_curves) = constraints(comm, scene, groups, &dm.local)?;
     let reaction_groups = reaction_groups(scene, groups, &dm.local);
     Ok(FeInputs {
         elem_material,
@@ -158,6 +161,7 @@ pub fn prepare(
         velocity,
         constraints,
         reaction_groups,
+        velocity_curves,
     })
 }
 
@@ -191,12 +195,16 @@ fn reaction_groups(scene: &Scene, groups: &Groups, m: &LocalMesh) -> Vec<Reactio
     out
 }
 
+/// The constraints on local nodes, and the curve of each (by index) where its velocity
+/// boundary has one.
+type Constraints = (Vec<(u32, Constraint)>, Vec<Option<Curve>>);
+
 fn constraints(
     comm: &SimpleCommunicator,
     scene: &Scene,
     groups: &Groups,
     m: &LocalMesh,
-) -> Result<Vec<(u32, Constraint)>, String> {
+) -> Result<Constraints, String> {
     let file = scene.file.display().to_string();
     let bit_of = |name: &str| -> u32 {
         let tag = groups.surfaces[name];
@@ -219,9 +227,10 @@ fn constraints(
             BoundaryKind::Velocity(v) => {
                 for &n in &nodes {
                     if let Some((w, j)) = vel[n] {
-                        if w != *v && err.is_none() {
+                        let same = w == *v && scene.boundaries[j].curve == b.curve;
+                        if !same && err.is_none() {
                             err = Some(format!(
-                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities",
+                                "{file}: boundary[{i}]: node {} is in velocity groups \"{}\" and \"{}\" with different velocities (or curves)",
                                 m.node_id[n], scene.boundaries[j].group, b.group
                             ));
                         }
@@ -245,6 +254,7 @@ fn constraints(
         }
     }
     let mut out = Vec::new();
+    let mut curves = Vec::new();
     for n in 0..nn {
         if let Some((v, i)) = vel[n] {
             if fixed[n] && err.is_none() {
@@ -264,8 +274,10 @@ fn constraints(
                 }
             }
             out.push((n as u32, Constraint::Velocity(v)));
+            curves.push(scene.boundaries[i].curve.clone());
         } else if fixed[n] {
             out.push((n as u32, Constraint::Fixed));
+            curves.push(None);
         } else if !planes[n].is_empty() {
             // Orthonormalise the plane normals (Gram-Schmidt); parallel planes add nothing.
             let mut basis: Vec<[f64; 3]> = Vec::new();
@@ -283,8 +295,9 @@ fn constraints(
                 }
             }
             out.push((n as u32, Constraint::Planes(basis)));
+            curves.push(None);
         }
     }
     first_error(comm, err)?;
-    Ok(out)
+    Ok((out, curves))
 }

@@ -47,13 +47,23 @@ pub struct Sph {
     pub rcb_bytes: f64,
     /// See `rcb_s`.
     pub rcb_imbalance_sum: f64,
+    /// The scene's gravity and its scale in time (`gravity_curve`).
+    gravity0: [f64; 3],
+    gravity_curve: Option<crate::input::curve::Curve>,
+    /// The time at the start of the present step (the driver's clock), s.
+    time: f64,
 }
 
 impl Sph {
     /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
     /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
     pub fn new(world: &SimpleCommunicator, scene: &Scene, kept_pairs: bool) -> Result<Sph, String> {
-        let (params, map) = params_from_scene(scene)?;
+        let (mut params, map) = params_from_scene(scene)?;
+        // Gravity at t = 0 (`gravity_curve`); `finish` sets it at each step's end.
+        if let Some(c) = &scene.gravity_curve {
+            let s = c.value(0.0);
+            params.gravity = scene.gravity.map(|g| g * s);
+        }
         let seeds = particles_setup::particles(scene, world.rank() as usize, world.size() as usize);
         crate::kernels::collective::first_error(world, seeds.as_ref().err().cloned())?;
         let (seeds, ids) = seeds.expect("checked");
@@ -88,12 +98,21 @@ impl Sph {
             rcb_imbalance_sum: 0.0,
             steps: 0,
             file: scene.file.display().to_string(),
+            gravity0: scene.gravity,
+            gravity_curve: scene.gravity_curve.clone(),
+            time: 0.0,
         })
     }
 
     /// The rest of the step after the drift and the contact correction (collective): the
     /// stage's passes, then the global sums and the gravity work over the step.
     fn finish(&mut self, world: &SimpleCommunicator, dt: f64) -> Result<(), String> {
+        // Gravity at the step's end, where the force pass adds it (`gravity_curve`); its
+        // work is the trapezoid of its power at both ends.
+        if let Some(c) = &self.gravity_curve {
+            let s = c.value(self.time + dt);
+            self.stage.params.gravity = self.gravity0.map(|g| g * s);
+        }
         self.stage.finish(dt)?;
         self.wall_s += self.stage.stats.wall_s;
         self.bytes += self.stage.stats.bytes_sent as f64;
@@ -144,6 +163,10 @@ impl Sph {
 impl Stage for Sph {
     fn name(&self) -> &'static str {
         "sph"
+    }
+
+    fn set_clock(&mut self, t: f64) {
+        self.time = t;
     }
 
     fn drift(&mut self, dt: f64) {

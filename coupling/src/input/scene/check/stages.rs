@@ -374,6 +374,23 @@ pub fn validate_groups(
             });
         }
     }
+    for (i, l) in scene.loads.iter().enumerate() {
+        if !surfaces.contains(&l.group) {
+            let what = if volumes.contains(&l.group) {
+                format!(
+                    "\"{}\" is a physical volume; a [[load]] acts on a physical surface",
+                    l.group
+                )
+            } else {
+                format!("no physical surface \"{}\" in the mesh", l.group)
+            };
+            return Err(SceneError {
+                file,
+                key: format!("load[{i}].group"),
+                message: format!("{what} (physical surfaces: {})", list(surfaces)),
+            });
+        }
+    }
     if let Some(c) = &scene.contact {
         for (i, s) in c.surfaces.iter().enumerate() {
             if s != "exterior" && !surfaces.contains(s) {
