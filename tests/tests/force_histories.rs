@@ -339,3 +339,76 @@ fn particles_on_a_held_plate_reactions_and_contact_forces_at_np_1_and_3() {
     same_text(&outs[0], &outs[1], "contact_forces.csv");
     same_text(&outs[0], &outs[1], "reactions.csv");
 }
+
+#[test]
+fn ramped_pull_reaction_is_hookes_ea_u_over_l_once_settled_at_np_1_and_3() {
+    // Issue 31's ramp bar: a steel bar along x (L = 1 m, 0.05 m square, lateral faces free,
+    // Poisson's ratio 0 so that uniaxial stress is uniaxial strain and the ends' full
+    // constraints add no stiffness) held at x = 0 ("left", fixed) and pulled at x = L
+    // ("right", a velocity boundary) at V = 0.05 m/s scaled by a curve that ramps up over
+    // 2 ms and back to 0 by 4 ms, ten times the bar's fixed-fixed period 2 L / c = 0.396 ms,
+    // then holds: the end has moved u = V * 2 ms = 1e-4 m (the curve's integral, exact). The
+    // reference is Hooke's law for the bar, F = E A u / L = 5.0e4 N (quasi-static), which the
+    // fixed end's reaction must give within 2 % once settled: its mean over the hold, 4.4 to
+    // 6.0 ms (four periods, the residual vibration averaging out); the pulled end's reaction
+    // equal and opposite (the bar at rest: Newton's second law with no momentum change).
+    let (l, a, v, ramp) = (1.0, 0.05f64, 0.05, 2.0e-3);
+    let u = v * ramp;
+    let youngs = 200.0e9;
+    let hooke = youngs * a * a * u / l;
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("forces_ramp_bar_np{np}"));
+        let geo = root().join("meshes").join("bar.geo");
+        let scene = dir.join("scene.toml");
+        std::fs::write(
+            &scene,
+            format!(
+                "title = \"ramped pull\"\n[run]\nend_time = 6.0e-3\nhistory_every = 2.0e-5\n\n\
+                 [[mesh]]\nfile = \"{}\"\nparams = {{ L = {l}, A = {a}, N = 20, M = 1 }}\n\n\
+                 [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\n\
+                 youngs_modulus = {youngs:e}\npoisson_ratio = 0.0\n\n\
+                 [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n\n\
+                 [[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n\n\
+                 [[boundary]]\ngroup = \"right\"\nkind = \"velocity\"\nvelocity = [{v}, 0.0, 0.0]\n\
+                 curve = [[0.0, 0.0], [{ramp:e}, 1.0], [{:e}, 0.0]]\n",
+                geo.display(),
+                2.0 * ramp
+            ),
+        )
+        .unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let path = out.join("reactions.csv");
+        let (t, left, right) = (
+            col(&path, "time"),
+            col(&path, "left.force_x"),
+            col(&path, "right.force_x"),
+        );
+        let mean = |f: &[f64]| -> f64 {
+            let (n, s) = t
+                .iter()
+                .zip(f)
+                .filter(|(t, _)| **t >= 4.4e-3)
+                .fold((0usize, 0.0), |(n, s), (_, x)| (n + 1, s + x));
+            s / n as f64
+        };
+        let (fl, fr) = (mean(&left), mean(&right));
+        // The support pulls the stretched bar back (-x), the pulled end forward (+x).
+        assert!(
+            (-fl / hooke - 1.0).abs() <= 0.02,
+            "np {np}: fixed end's mean reaction {fl:e} N, Hooke's -E A u / L = {:e} N (2 %)",
+            -hooke
+        );
+        assert!(
+            (fr / hooke - 1.0).abs() <= 0.02,
+            "np {np}: pulled end's mean reaction {fr:e} N, Hooke's E A u / L = {hooke:e} N (2 %)"
+        );
+        eprintln!(
+            "np {np}: fixed end {fl:e} N, pulled end {fr:e} N, E A u / L = {hooke:e} N ({:+.3} %)",
+            100.0 * (-fl / hooke - 1.0)
+        );
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "reactions.csv");
+}
