@@ -378,3 +378,20 @@ pub fn csv_columns_differ(a: &Path, b: &Path, name: &str, skip: &[&str]) -> Vec<
     }
     out
 }
+
+/// Runs `scene` at np 2, which must fail with a message that contains `needle` and names the
+/// scene file `scene.toml` (docs/scene.md: the file, the key, what was expected); `name` labels
+/// the case in the assertion.
+pub fn assert_scene_refused(name: &str, scene: &Path, out: &Path, needle: &str) {
+    let o = run(2, scene, out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{name}: must fail");
+    assert!(
+        err.contains(needle),
+        "{name}: stderr should mention {needle:?}:\n{err}"
+    );
+    assert!(
+        err.contains("scene.toml"),
+        "{name}: the message names the file:\n{err}"
+    );
+}

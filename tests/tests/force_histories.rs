@@ -90,6 +90,21 @@ fn fixed_end_reaction_integrates_to_the_momentum_change_at_np_1_and_3() {
     same_text(&outs[0], &outs[1], "reactions.csv");
 }
 
+/// The bar of [`bar`] held at x = L ("right", fixed) under gravity -9.81 m/s^2 along x.
+fn hanging_bar(dir: &Path, run: &str) -> PathBuf {
+    let scene = bar(
+        dir,
+        run,
+        "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
+    );
+    let text = std::fs::read_to_string(&scene).unwrap().replace(
+        "title = \"test bar\"\n",
+        "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
+    );
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
 #[test]
 fn hanging_bar_reaction_carries_its_weight_at_np_1_and_3() {
     // A bar hanging from x = L ("right", fixed) under gravity -9.81 m/s^2 along x, released
@@ -101,16 +116,7 @@ fn hanging_bar_reaction_carries_its_weight_at_np_1_and_3() {
     let weight = RHO * 0.05 * 0.05 * 1.0 * 9.81;
     for np in [1, 3] {
         let dir = workdir(&format!("reaction_weight_np{np}"));
-        let scene = bar(
-            &dir,
-            "end_time = 6.83e-3",
-            "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
-        );
-        let text = std::fs::read_to_string(&scene).unwrap().replace(
-            "title = \"test bar\"\n",
-            "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
-        );
-        std::fs::write(&scene, text).unwrap();
+        let scene = hanging_bar(&dir, "end_time = 6.83e-3");
         let out = dir.join("out");
         run_ok(np, &scene, &out);
         let t = col(&out.join("reactions.csv"), "time");
@@ -262,16 +268,7 @@ fn implicit_hanging_bar_reaction_balances_momentum_and_weight_at_np_1_and_3() {
     let weight = RHO * 0.05 * 0.05 * 1.0 * 9.81;
     for np in [1, 3] {
         let dir = workdir(&format!("reaction_implicit_np{np}"));
-        let scene = bar(
-            &dir,
-            "end_time = 6.84e-3\nmode = \"implicit\"\ndt = 2.0e-5",
-            "[[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
-        );
-        let text = std::fs::read_to_string(&scene).unwrap().replace(
-            "title = \"test bar\"\n",
-            "title = \"test bar\"\ngravity = [-9.81, 0.0, 0.0]\n",
-        );
-        std::fs::write(&scene, text).unwrap();
+        let scene = hanging_bar(&dir, "end_time = 6.84e-3\nmode = \"implicit\"\ndt = 2.0e-5");
         let out = dir.join("out");
         run_ok(np, &scene, &out);
         let t = col(&out.join("reactions.csv"), "time");

@@ -337,17 +337,7 @@ fn bad_walls_are_refused_by_key() {
             explicit
         };
         let scene = bar_scene(&d, 4, run_keys, &wall);
-        let o = run(2, &scene, &d.join("out"));
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{name}: must fail");
-        assert!(
-            err.contains(key),
-            "{name}: stderr should name {key:?}:\n{err}"
-        );
-        assert!(
-            err.contains("scene.toml"),
-            "{name}: the message names the file:\n{err}"
-        );
+        assert_scene_refused(name, &scene, &d.join("out"), key);
     }
 }
 
