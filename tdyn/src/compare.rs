@@ -446,24 +446,7 @@ fn read_series(dir: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>), String>
     Ok((read_column(&path, "time")?, read_column(&path, column)?))
 }
 
-/// One column of a CSV file with a header row (probes.csv, history.csv, a reference curve), by
-/// name; lines starting with `#` are comments (reference files say where they come from).
-pub(crate) fn read_column(path: &Path, column: &str) -> Result<Vec<f64>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let k = header
-        .iter()
-        .position(|h| *h == column)
-        .ok_or_else(|| format!("{}: no column {column}", path.display()))?;
-    lines
-        .map(|l| {
-            let s = l.split(',').nth(k).unwrap_or("");
-            s.parse::<f64>()
-                .map_err(|_| format!("{}: bad number {s:?} in column {column}", path.display()))
-        })
-        .collect()
-}
+pub(crate) use crate::csv::read_column;
 
 /// Period of the dominant oscillation of a sampled signal: a first estimate from the crossings
 /// of its mid-range level (linear interpolation between samples; same-direction crossings when

@@ -76,38 +76,12 @@ struct History {
 
 /// Reads `history.csv`: header row, numbers, `#` comment lines skipped.
 fn read_history(path: &Path) -> Result<History, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
-    let header: Vec<&str> = lines
-        .next()
-        .ok_or_else(|| format!("{}: empty", path.display()))?
-        .split(',')
-        .collect();
-    let rows: Vec<Vec<f64>> = lines
-        .enumerate()
-        .map(|(i, l)| {
-            l.split(',')
-                .map(|v| {
-                    v.trim()
-                        .parse::<f64>()
-                        .map_err(|_| format!("{}: row {}: bad number {v:?}", path.display(), i + 1))
-                })
-                .collect()
-        })
-        .collect::<Result<_, _>>()?;
+    let table = crate::csv::Table::read(path)?;
+    let rows = &table.rows;
     if rows.is_empty() {
         return Err(format!("{}: no rows", path.display()));
     }
-    let column = |name: &str| -> Option<Vec<f64>> {
-        let k = header.iter().position(|h| *h == name)?;
-        Some(
-            rows.iter()
-                .map(|r| r.get(k).copied().unwrap_or(f64::NAN))
-                .collect(),
-        )
-    };
+    let column = |name: &str| table.column(name);
     let need =
         |name: &str| column(name).ok_or_else(|| format!("{}: no column {name}", path.display()));
     let time = need("time")?;
@@ -139,7 +113,8 @@ fn read_history(path: &Path) -> Result<History, String> {
         .collect();
     let internal = term("internal_energy");
     let internal_max = internal.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let blocks: Vec<(String, Vec<f64>)> = header
+    let blocks: Vec<(String, Vec<f64>)> = table
+        .header
         .iter()
         .filter_map(|h| h.strip_prefix(BLOCK_INTERNAL))
         .filter_map(|name| {

@@ -27,38 +27,16 @@ const FRAME: chart::Frame = chart::Frame {
 };
 
 /// A CSV file's header and its rows of numbers (`#` lines skipped).
-struct Table {
-    header: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
+use crate::csv::Table;
 
 fn read_table(path: &Path) -> Result<Table, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.is_empty());
-    let header: Vec<String> = lines
-        .next()
-        .ok_or_else(|| format!("{}: empty", path.display()))?
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
-    let mut rows = Vec::new();
-    for (i, l) in lines.enumerate() {
-        let row = l
-            .split(',')
-            .map(|s| s.trim().parse::<f64>())
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| format!("{}: data row {}: {e}", path.display(), i + 1))?;
-        rows.push(row);
-    }
-    Ok(Table { header, rows })
+    Table::read(path)
 }
 
 /// The column `name` of `t`, or of the columns `name.<kind>_{x,y,z}` the one whose largest
 /// magnitude is largest. `Err` naming the columns there are.
 fn pick(t: &Table, file: &str, name: &str, kind: &str) -> Result<(String, Vec<f64>), String> {
-    let col = |j: usize| -> Vec<f64> { t.rows.iter().map(|r| r[j]).collect() };
+    let col = |j: usize| -> Vec<f64> { t.at(j) };
     if let Some(j) = t.header.iter().position(|h| h == name) {
         return Ok((name.to_string(), col(j)));
     }
@@ -198,6 +176,7 @@ mod tests {
 
     fn table(header: &[&str], rows: Vec<Vec<f64>>) -> Table {
         Table {
+            path: "r.csv".into(),
             header: header.iter().map(|s| s.to_string()).collect(),
             rows,
         }

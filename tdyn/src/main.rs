@@ -9,6 +9,7 @@
 mod chart;
 mod compare;
 mod crosscheck;
+mod csv;
 mod energies;
 mod force_chart;
 mod launch;
