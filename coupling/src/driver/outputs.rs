@@ -247,6 +247,7 @@ impl Outputs {
         let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state.stress(e));
         let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
         let pressure = |e| fe.map_or(0.0, |(_, st, _)| st.pressure(e));
+        let temperature = |e| fe.map_or(f64::NAN, |(_, st, _)| st.temperature(e));
         let nodes = fe.map(|(m, _, _)| NodeFrame {
             ids: &m.node_ids,
             position: Values::Made(&pos),
@@ -262,6 +263,7 @@ impl Outputs {
             stress: Some(Values::Made(&stress)),
             plastic_strain: Some(Values::Made(&eps)),
             pressure: Some(Values::Made(&pressure)),
+            temperature: Some(Values::Made(&temperature)),
             rank: Some(&m.rank_field),
         });
         let rank = self.rank;

@@ -164,5 +164,6 @@ fn value(fe: &ExplicitFe, e: usize, xi: [f64; 3], f: &ProbeField) -> f64 {
         Pressure => -(s[0] + s[1] + s[2]) / 3.0,
         PlasticStrain => fe.plastic_strain(e),
         Density => fe.density(e),
+        Temperature => fe.temperature(e),
     }
 }

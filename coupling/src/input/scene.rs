@@ -374,11 +374,12 @@ pub enum ProbeField {
     Pressure,
     PlasticStrain,
     Density,
+    Temperature,
 }
 
 impl ProbeField {
     /// Every field with its column name.
-    pub const ALL: [(ProbeField, &'static str); 15] = [
+    pub const ALL: [(ProbeField, &'static str); 16] = [
         (ProbeField::DisplacementX, "displacement_x"),
         (ProbeField::DisplacementY, "displacement_y"),
         (ProbeField::DisplacementZ, "displacement_z"),
@@ -394,6 +395,7 @@ impl ProbeField {
         (ProbeField::Pressure, "pressure"),
         (ProbeField::PlasticStrain, "plastic_strain"),
         (ProbeField::Density, "density"),
+        (ProbeField::Temperature, "temperature"),
     ];
     /// The column suffix.
     pub fn name(&self) -> &'static str {
@@ -424,7 +426,7 @@ impl Probe {
 }
 
 /// Output fields (docs/scene.md `[output] fields`).
-pub const OUTPUT_FIELDS: [&str; 7] = [
+pub const OUTPUT_FIELDS: [&str; 8] = [
     "displacement",
     "velocity",
     "stress",
@@ -432,13 +434,14 @@ pub const OUTPUT_FIELDS: [&str; 7] = [
     "pressure",
     "density",
     "rank",
+    "temperature",
 ];
 
 /// `[output]`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputDef {
-    /// Fields to write (default: all).
+    /// Fields to write (default: all; `temperature` where a material has one).
     #[serde(default = "d_fields")]
     pub fields: Vec<String>,
     /// Beyond docs/scene.md: every this many steps (and at step 0), the particles as a LIGGGHTS
@@ -451,8 +454,14 @@ pub struct OutputDef {
     pub checkpoint_every: Option<f64>,
 }
 
-fn d_fields() -> Vec<String> {
-    OUTPUT_FIELDS.iter().map(|s| s.to_string()).collect()
+/// The default `[output] fields`: all but `temperature`, which the scene check adds where a
+/// material has thermal softening.
+pub(crate) fn d_fields() -> Vec<String> {
+    OUTPUT_FIELDS
+        .iter()
+        .filter(|s| **s != "temperature")
+        .map(|s| s.to_string())
+        .collect()
 }
 
 impl Default for OutputDef {

@@ -70,6 +70,8 @@ pub struct ElementFrame<'a> {
     pub plastic_strain: Option<Values<'a, f64>>,
     /// Pressure.
     pub pressure: Option<Values<'a, f64>>,
+    /// Temperature, K (NaN where the material keeps none).
+    pub temperature: Option<Values<'a, f64>>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -343,6 +345,9 @@ impl FieldWriter {
         }
         if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
             cols.push(("pressure", 1, scalar(move |e| s.at(e)), false));
+        }
+        if let (true, Some(s)) = (self.wants("temperature"), ef.temperature) {
+            cols.push(("temperature", 1, scalar(move |e| s.at(e)), false));
         }
         if let (true, Some(s)) = (self.wants("rank"), ef.rank) {
             cols.push(("rank", 1, scalar(move |e| f64::from(s[e])), true));

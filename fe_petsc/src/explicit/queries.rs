@@ -9,6 +9,15 @@ impl ExplicitFe {
         self.materials[self.elem_material[e]].plastic_strain(&self.mat_state[e * s..(e + 1) * s])
     }
 
+    /// Temperature of element `e`, K (Johnson-Cook with thermal softening), or NaN where its
+    /// material keeps none.
+    pub fn temperature(&self, e: usize) -> f64 {
+        let s = self.mat_stride;
+        self.materials[self.elem_material[e]]
+            .temperature(&self.mat_state[e * s..(e + 1) * s])
+            .unwrap_or(f64::NAN)
+    }
+
     /// Current density of element `e`, kg/m^3: its mass over its volume at the current
     /// positions ([`hex::volume`]; the element loop's own volume differs from it at round-off
     /// and is not kept: formed on demand here, for output, not written every step).

@@ -33,7 +33,7 @@ mod johnson_cook;
 pub use elastic::Elastic;
 pub use fluid::Fluid;
 pub use j2_plastic::J2Plastic;
-pub use johnson_cook::JohnsonCook;
+pub use johnson_cook::{JohnsonCook, TAYLOR_QUINNEY, THERMAL_KEYS as JC_THERMAL_KEYS};
 
 /// A solid material: the stress update and the moduli the element needs.
 pub trait Material: Send + Sync + std::fmt::Debug {
@@ -82,6 +82,11 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// Equivalent plastic strain, for output (0 for elastic models).
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
+    }
+    /// Temperature, K, for models that keep one (Johnson-Cook with thermal softening); `None`
+    /// for the others.
+    fn temperature(&self, _state: &[f64]) -> Option<f64> {
+        None
     }
     /// The model's lane form for the batched element kernel ([`crate::batch`]), or `None`
     /// (the default) when the elements of this material take the scalar kernel. A model with a

@@ -33,6 +33,14 @@ const MODEL_KEYS: &[(&str, &[&str])] = &[
     ("fluid", &[]),
 ];
 
+/// Optional model keys: Johnson-Cook's thermal softening (docs/scene.md: `m`, `t_room`,
+/// `t_melt`, `specific_heat` together, `taylor_quinney` optional, default 0.9).
+const OPTIONAL_KEYS: &[(&str, &[&str])] = &[("johnson_cook", &fe_petsc::material::JC_THERMAL_KEYS)];
+
+/// Of the optional keys, those needed together once one is given.
+const TOGETHER_KEYS: &[(&str, &[&str])] =
+    &[("johnson_cook", &["m", "t_room", "t_melt", "specific_heat"])];
+
 /// Names the scene file in every error.
 struct Ctx {
     file: String,
@@ -94,6 +102,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let rigid_walls = check_rigid_walls(&cx, &raw.rigid_wall, &boundaries)?;
     check_probes(&cx, &raw.probe)?;
     check_output(&cx, &raw.output)?;
+    let mut output = raw.output;
+    // The default fields take `temperature` where a material has one.
+    let thermal = materials
+        .iter()
+        .any(|m| m.model == "johnson_cook" && m.params.contains_key("m"));
+    if thermal && output.fields == super::d_fields() {
+        output.fields.push("temperature".into());
+    }
     if let Some(c) = &raw.compare {
         check_compare(&cx, c, &raw.probe)?;
     }
@@ -114,7 +130,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         contact: raw.contact,
         rigid_walls,
         probes: raw.probe,
-        output: raw.output,
+        output,
         compare: raw.compare,
         sweep: raw.sweep,
     })
@@ -421,9 +437,14 @@ fn check_material(
             "name" | "model" | "density" => {}
             "eos" if model == "fluid" => eos = Some(check_eos(cx, i, v)?),
             _ => {
-                if !keys.contains(&k.as_str()) {
+                let optional = OPTIONAL_KEYS
+                    .iter()
+                    .find(|(m, _)| *m == model)
+                    .map_or(&[][..], |o| o.1);
+                if !keys.contains(&k.as_str()) && !optional.contains(&k.as_str()) {
                     let mut all: Vec<&str> = vec!["name", "model", "density"];
                     all.extend(keys.iter());
+                    all.extend(optional.iter());
                     if model == "fluid" {
                         all.push("eos");
                     }
@@ -446,6 +467,23 @@ fn check_material(
                 &key(need),
                 format!("missing (model {model} needs {})", keys.join(", ")),
             ));
+        }
+    }
+    if let Some((_, together)) = TOGETHER_KEYS.iter().find(|(m, _)| *m == model) {
+        let any = OPTIONAL_KEYS
+            .iter()
+            .filter(|(m, _)| *m == model)
+            .any(|(_, o)| o.iter().any(|k| params.contains_key(*k)));
+        if any {
+            if let Some(need) = together.iter().find(|k| !params.contains_key(**k)) {
+                return Err(cx.err(
+                    &key(need),
+                    format!(
+                        "missing: thermal softening needs {} together",
+                        together.join(", ")
+                    ),
+                ));
+            }
         }
     }
     if model == "fluid" && eos.is_none() {

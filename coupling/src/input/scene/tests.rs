@@ -230,3 +230,24 @@ fn rigid_walls_are_normalised_and_their_mistakes_refused_by_key() {
         assert!(!line.contains('\n'), "one line: {line:?}");
     }
 }
+
+/// Johnson-Cook's thermal keys: accepted with the law's keys, the four needed together named
+/// by key when one is missing, and `temperature` among the default output fields then.
+#[test]
+fn johnson_cook_thermal_keys_by_key_and_temperature_by_default() {
+    let jc = base().replace(
+        "model = \"elastic\"\ndensity = 7850.0\n",
+        "model = \"johnson_cook\"\ndensity = 8960.0\na = 90.0e6\nb = 292.0e6\nn = 0.31\n\
+         c = 0.025\neps_dot0 = 1.0\nm = 1.09\nt_room = 294.0\nt_melt = 1356.0\n\
+         specific_heat = 383.0\n",
+    );
+    let s = parse(&jc, Path::new("scene.toml")).unwrap();
+    assert!(s.output.fields.iter().any(|f| f == "temperature"));
+    let iso = parse(&base(), Path::new("scene.toml")).unwrap();
+    assert!(!iso.output.fields.iter().any(|f| f == "temperature"));
+    let e = refused(&jc.replace("t_melt = 1356.0\n", "")).to_string();
+    assert!(
+        e.contains("material[0].t_melt") && e.contains("together"),
+        "{e}"
+    );
+}

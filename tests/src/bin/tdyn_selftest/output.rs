@@ -240,6 +240,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             stress: first.then_some(Values::Held(&stress[..])),
             plastic_strain: Some(Values::Held(&eps)),
             pressure: Some(Values::Held(&pe)),
+            temperature: None,
             rank: Some(&elem_rank),
         };
         let particles = ParticleFrame {
