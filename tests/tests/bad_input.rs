@@ -105,8 +105,8 @@ fn documented_mistakes_give_clear_messages() {
     );
     expect_error(
         "bad_probe_field",
-        |s| s + "[[probe]]\nname = \"p\"\npoint = [0.5, 0.0, 0.0]\nfields = [\"temperature\"]\n",
-        "temperature",
+        |s| s + "[[probe]]\nname = \"p\"\npoint = [0.5, 0.0, 0.0]\nfields = [\"vorticity\"]\n",
+        "vorticity",
     );
     expect_error(
         "implicit_without_dt",

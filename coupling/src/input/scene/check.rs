@@ -110,6 +110,16 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     if thermal && output.fields == super::d_fields() {
         output.fields.push("temperature".into());
     }
+    if !thermal {
+        for (i, p) in raw.probe.iter().enumerate() {
+            if p.fields.contains(&super::ProbeField::Temperature) {
+                return Err(cx.err(
+                    &format!("probe[{i}].fields"),
+                    "temperature needs a johnson_cook material with thermal softening (m, t_room, t_melt, specific_heat)".into(),
+                ));
+            }
+        }
+    }
     if let Some(c) = &raw.compare {
         check_compare(&cx, c, &raw.probe)?;
     }

@@ -245,6 +245,13 @@ fn johnson_cook_thermal_keys_by_key_and_temperature_by_default() {
     assert!(s.output.fields.iter().any(|f| f == "temperature"));
     let iso = parse(&base(), Path::new("scene.toml")).unwrap();
     assert!(!iso.output.fields.iter().any(|f| f == "temperature"));
+    let probe = "\n[[probe]]\nname = \"p\"\npoint = [0.5, 0.0, 0.0]\nfields = [\"temperature\"]\n";
+    assert!(parse(&format!("{jc}{probe}"), Path::new("scene.toml")).is_ok());
+    let e = refused(&format!("{}{probe}", base())).to_string();
+    assert!(
+        e.contains("probe[0].fields") && e.contains("thermal softening"),
+        "{e}"
+    );
     let e = refused(&jc.replace("t_melt = 1356.0\n", "")).to_string();
     assert!(
         e.contains("material[0].t_melt") && e.contains("together"),
