@@ -616,7 +616,12 @@ fn material_mistakes_are_named() {
 /// Johnson & Cook's 1983 OFHC copper (their table 1: A = 90 MPa, B = 292 MPa, n = 0.31,
 /// C = 0.025, m = 1.09, T_melt = 1356 K; specific heat 383 J/(kg K)), E 124 GPa, nu 0.34,
 /// room 294 K, with `extra` keys.
-fn jc_copper(extra: &[(&str, f64)]) -> Box<dyn Material> {
+fn jc_copper(extra: &[(&'static str, f64)]) -> Box<dyn Material> {
+    build_material(&spec("johnson_cook", &jc_copper_keys(extra))).unwrap()
+}
+
+/// [`jc_copper`]'s keys with `extra`.
+fn jc_copper_keys(extra: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
     let mut p = vec![
         ("youngs_modulus", 124e9),
         ("poisson_ratio", 0.34),
@@ -631,7 +636,7 @@ fn jc_copper(extra: &[(&str, f64)]) -> Box<dyn Material> {
         ("specific_heat", 383.0),
     ];
     p.extend_from_slice(extra);
-    build_material(&spec("johnson_cook", &p)).unwrap()
+    p
 }
 
 #[test]
@@ -681,57 +686,28 @@ fn johnson_cook_heats_by_its_share_of_the_plastic_work_and_softens() {
 
 #[test]
 fn johnson_cook_thermal_keys_are_checked() {
-    let missing = build_material(&spec(
+    let without = |k: &str| -> Vec<(&'static str, f64)> {
+        jc_copper_keys(&[])
+            .into_iter()
+            .filter(|(n, _)| *n != k)
+            .collect()
+    };
+    let missing = build_material(&spec("johnson_cook", &without("t_melt")))
+        .unwrap_err()
+        .to_string();
+    assert!(missing.contains("t_melt"), "{missing}");
+    let e = build_material(&spec(
         "johnson_cook",
-        &[
-            ("youngs_modulus", 124e9),
-            ("poisson_ratio", 0.34),
-            ("a", 90e6),
-            ("b", 292e6),
-            ("n", 0.31),
-            ("c", 0.025),
-            ("eps_dot0", 1.0),
-            ("m", 1.09),
-            ("t_room", 294.0),
-            ("specific_heat", 383.0),
-        ],
+        &jc_copper_keys(&[("taylor_quinney", 1.5)]),
     ))
     .unwrap_err()
     .to_string();
-    assert!(missing.contains("t_melt"), "{missing}");
-    let mut p = spec("johnson_cook", &[]);
-    p.params = [
-        ("youngs_modulus", 124e9),
-        ("poisson_ratio", 0.34),
-        ("a", 90e6),
-        ("b", 292e6),
-        ("n", 0.31),
-        ("c", 0.025),
-        ("eps_dot0", 1.0),
-        ("m", 1.09),
-        ("t_room", 294.0),
-        ("t_melt", 1356.0),
-        ("specific_heat", 383.0),
-        ("taylor_quinney", 1.5),
-    ]
-    .iter()
-    .map(|(k, v)| (k.to_string(), *v))
-    .collect();
-    let e = build_material(&p).unwrap_err().to_string();
     assert!(e.contains("taylor_quinney"), "{e}");
     // Without the thermal keys: one state variable, no temperature (the isothermal law).
-    let iso = build_material(&spec(
-        "johnson_cook",
-        &[
-            ("youngs_modulus", 124e9),
-            ("poisson_ratio", 0.34),
-            ("a", 90e6),
-            ("b", 292e6),
-            ("n", 0.31),
-            ("c", 0.025),
-            ("eps_dot0", 1.0),
-        ],
-    ))
-    .unwrap();
+    let iso: Vec<(&'static str, f64)> = jc_copper_keys(&[])
+        .into_iter()
+        .filter(|(n, _)| !["m", "t_room", "t_melt", "specific_heat"].contains(n))
+        .collect();
+    let iso = build_material(&spec("johnson_cook", &iso)).unwrap();
     assert_eq!((iso.n_state(), iso.temperature(&[0.0])), (1, None));
 }

@@ -13,16 +13,12 @@ fn expect_error(name: &str, mutate: impl Fn(String) -> String, needle: &str) {
     );
     let text = mutate(std::fs::read_to_string(&scene).unwrap());
     std::fs::write(&scene, text).unwrap();
-    let o = run(2, &scene, &dir.join("out"));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{name}: must fail");
-    assert!(
-        err.contains(needle),
-        "{name}: stderr should mention {needle:?}:\n{err}"
-    );
-    assert!(
-        err.contains("scene.toml") || name == "missing_file",
-        "{name}: the message names the file:\n{err}"
+    assert_refused(
+        name,
+        &scene,
+        &dir.join("out"),
+        needle,
+        name != "missing_file",
     );
 }
 
