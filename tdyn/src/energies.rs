@@ -392,8 +392,14 @@ const OUTPUTS: [(&str, &str); 6] = [
     ("fields.xmf", "open in ParaView (the fields over time)"),
     ("history.csv", "energies, momentum and contacts, per step"),
     ("probes.csv", "the probes' values, per step"),
-    ("reactions.csv", "the supports' and rigid walls' forces, per step"),
-    ("contact_forces.csv", "the forces between bodies in contact, per step"),
+    (
+        "reactions.csv",
+        "the supports' and rigid walls' forces, per step",
+    ),
+    (
+        "contact_forces.csv",
+        "the forces between bodies in contact, per step",
+    ),
     ("report.json", "timings, balance and bytes per stage"),
 ];
 
