@@ -37,6 +37,7 @@ mod elements;
 mod loads;
 mod queries;
 mod restart;
+pub use contact::booked_kick;
 pub use loads::{face_forces, PressureLoad};
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 
@@ -180,6 +181,10 @@ pub struct ExplicitFe {
     /// Start positions of the step, where a contact stage reads them
     /// ([`ExplicitFe::set_contact_stage`]).
     x_old: Vec<[f64; 3]>,
+    /// Each node's contact corrections: bit 0 set when a push-back or a wall moved it in the
+    /// last step, bit 1 in this one (`kick_drift` shifts bit 1 into bit 0); what
+    /// [`ExplicitFe::apply_contact`] books depends on it.
+    pub(crate) pushed: Vec<u8>,
     /// Whether a contact stage runs between the kick and the element loop (it reads the start
     /// positions and the start-of-step forces there).
     contact: bool,
@@ -356,6 +361,7 @@ impl ExplicitFe {
             reaction_old: vec![[0.0; 3]; nn],
             contact_reaction: vec![[0.0; 3]; setup.constraints.len()],
             x_old: m.coords.clone(),
+            pushed: vec![0; nn],
             contact: true,
             kick_dt: 0.0,
             forces_zeroed: false,
@@ -619,6 +625,9 @@ impl ExplicitFe {
         self.constrained_start.extend(starts);
         let t = self.time;
         self.gravity = self.gravity_at(t);
+        for p in &mut self.pushed {
+            *p >>= 1;
+        }
         let x_old = self.contact.then_some(&mut self.x_old[..]);
         // The constrained owned nodes' forces, read below after the kick may have zeroed them.
         self.constrained_force.clear();

@@ -66,6 +66,10 @@ pub struct Particles {
     /// step (set by the contact push-back, used and cleared after the step's closing kick by
     /// the parallel layer); zero when none. Carried when the particle migrates within a step.
     pub hold: Vec<[f64; 3]>,
+    /// Contact corrections: bit 0 set when the push-back or a wall moved the particle in the
+    /// last step, bit 1 in this one (the step's drift shifts bit 1 into bit 0; what the
+    /// push-back books depends on it: `fe_petsc::explicit::booked_kick`). Carried.
+    pub pushed: Vec<u8>,
     /// The exact sums a pass adds to, one per entry (sized by the passes' resets; not carried).
     pub sums: Vec<PairSums>,
 }
@@ -100,6 +104,10 @@ pub struct ParticleRecord {
     pub fixed: u32,
     /// See [`Particles::hold`].
     pub hold: [f64; 3],
+    /// See [`Particles::pushed`] (u8 widened).
+    pub pushed: u32,
+    /// Padding (zero), so the record has none.
+    pub pad: u32,
 }
 
 /// What a pass added to an entry, as exact sums ([`crate::exact`]); a ghost copy's go to its
@@ -194,6 +202,7 @@ macro_rules! for_each_field {
         $mac!($p.mat);
         $mac!($p.fixed);
         $mac!($p.hold);
+        $mac!($p.pushed);
     }};
 }
 
@@ -288,6 +297,7 @@ impl Particles {
         self.mat.push(r.mat as u16);
         self.fixed.push(r.fixed != 0);
         self.hold.push(r.hold);
+        self.pushed.push(r.pushed as u8);
     }
 
     /// Entry `i` packed (its real position, its shift, every other field).
@@ -313,6 +323,8 @@ impl Particles {
             mat: self.mat[i] as u32,
             fixed: self.fixed[i] as u32,
             hold: self.hold[i],
+            pushed: self.pushed[i] as u32,
+            pad: 0,
         }
     }
 
@@ -414,6 +426,7 @@ impl Particles {
             + b(&self.mat)
             + b(&self.fixed)
             + b(&self.hold)
+            + b(&self.pushed)
             + b(&self.sums)
     }
 

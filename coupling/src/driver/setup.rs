@@ -32,12 +32,11 @@ pub struct Model {
 
 impl Model {
     /// history.csv's `contact_energy`, J: what the push-back has taken (the contact stage's
-    /// sum), the immovable faces' hold on particles (`SphStage::hold_on_faces`) and what the
-    /// rigid walls took.
+    /// sum, the immovable faces' hold on particles included: `SphStage::hold_on_faces`) and
+    /// what the rigid walls took.
     pub fn contact_energy(&self) -> f64 {
-        let held = self.sph.as_ref().map_or(0.0, |s| s.contact_held);
         let walls = self.walls.as_ref().map_or(0.0, |w| w.energy);
-        self.contact.as_ref().map_or(0.0, |c| c.energy + held) + walls
+        self.contact.as_ref().map_or(0.0, |c| c.energy) + walls
     }
 
     /// reactions.csv's entries for the row at `time`: each rigid wall's name and its force on

@@ -31,6 +31,7 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "fe.force"
         | "fe.reaction"
         | "fe.reaction_old"
+        | "fe.pushed"
         | "implicit.force_n"
         | "implicit.reaction_n" => Node,
         "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
@@ -80,6 +81,7 @@ impl ExplicitFe {
             ("fe.force", flat(&self.force)),
             ("fe.reaction", flat(&self.reaction)),
             ("fe.reaction_old", flat(&self.reaction_old)),
+            ("fe.pushed", self.pushed.iter().map(|&p| p as f64).collect()),
             ("fe.hex_state", hex),
             ("fe.mat_state", self.mat_state.clone()),
             ("fe.scalars", scalars),
@@ -120,6 +122,10 @@ impl ExplicitFe {
         self.force = unflat(take("fe.force", n3)?);
         self.reaction = unflat(take("fe.reaction", n3)?);
         self.reaction_old = unflat(take("fe.reaction_old", n3)?);
+        self.pushed = take("fe.pushed", self.x.len())?
+            .iter()
+            .map(|&p| p as u8)
+            .collect();
         self.state.set_flat(&take("fe.hex_state", 18 * ne)?);
         self.mat_state = take("fe.mat_state", self.mat_state.len())?;
         let s = take("fe.scalars", 11)?;

@@ -27,9 +27,6 @@ pub struct Sph {
     pub globals: SphGlobals,
     /// Work of gravity on the particles so far (trapezoid of its power), J.
     pub external_work: f64,
-    /// Kinetic energy the immovable faces' hold has taken from the particles so far, J (>= 0;
-    /// part of `contact_energy`: `SphStage::hold_on_faces`).
-    pub contact_held: f64,
     /// Wall time of the stage (max over ranks per step, summed), s.
     pub wall_s: f64,
     /// Bytes sent by the stage, all ranks, summed over steps.
@@ -89,7 +86,6 @@ impl Sph {
             ids,
             globals: g,
             external_work: 0.0,
-            contact_held: 0.0,
             wall_s: 0.0,
             bytes: 0.0,
             pairs_local: 0.0,
@@ -123,7 +119,6 @@ impl Sph {
         self.rcb_imbalance_sum += r.imbalance;
         let g = globals(world, &self.stage);
         self.external_work += 0.5 * (self.globals.gravity_power + g.gravity_power) * dt;
-        self.contact_held -= g.hold_work;
         self.globals = g;
         self.steps += 1;
         Ok(())
@@ -143,7 +138,7 @@ impl Sph {
     /// Sets the global energies, the gravity work and the step count `save` wrote.
     fn restore_globals(&mut self, r: &StateReader) -> Result<(), String> {
         let g: Vec<f64> = r.get("sph.globals")?;
-        if g.len() != 8 {
+        if g.len() != 7 {
             return Err("checkpoint: sph.globals".into());
         }
         self.globals = SphGlobals {
@@ -151,10 +146,8 @@ impl Sph {
             internal: g[1],
             momentum: [g[2], g[3], g[4]],
             gravity_power: g[5],
-            hold_work: 0.0,
         };
         self.external_work = g[6];
-        self.contact_held = g[7];
         self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
         Ok(())
     }
@@ -219,7 +212,6 @@ impl Stage for Sph {
                 g.momentum[2],
                 g.gravity_power,
                 self.external_work,
-                self.contact_held,
             ],
         );
         w.put("sph.steps", &[self.steps]);

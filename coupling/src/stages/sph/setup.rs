@@ -170,9 +170,6 @@ pub struct SphGlobals {
     pub momentum: [f64; 3],
     /// Power of gravity on the particles, W.
     pub gravity_power: f64,
-    /// The step's change of kinetic energy by the hold on immovable faces, J (<= 0:
-    /// `SphStage::hold_on_faces`).
-    pub hold_work: f64,
 }
 
 impl SphGlobals {
@@ -192,8 +189,7 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
     let (ge, gm) = (st.grids.energy, st.grids.momentum);
     let g = st.params.gravity;
     // [sum m v.v, sum m (e + work), px, py, pz, sum m g.v (moving particles)]
-    let mut f = [[0.0; 3]; 7];
-    f[6] = st.hold_work;
+    let mut f = [[0.0; 3]; 6];
     for i in 0..p.n_owned {
         let (m, v) = (p.m[i], p.v[i]);
         ge.add(&mut f[1], m * (p.e[i] + p.work[i]));
@@ -214,6 +210,5 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
         internal: t[1],
         momentum: [t[2], t[3], t[4]],
         gravity_power: t[5],
-        hold_work: t[6],
     }
 }

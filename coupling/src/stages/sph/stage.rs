@@ -107,9 +107,6 @@ pub struct SphStage {
     /// The grids of the energy and momentum sums ([`fe_petsc::exact`]), from the particles'
     /// mass at the start (`Sph::new`).
     pub grids: SumGrids,
-    /// This step's change of kinetic energy by `hold_on_faces` on this rank's particles (<= 0),
-    /// J, as sum parts on `grids.energy`.
-    pub hold_work: Folds,
     /// Wall time of the last drift, s.
     drift_s: f64,
     /// Pairs each owned particle took part in on this rank in the last evaluation (its RCB
@@ -178,7 +175,6 @@ impl SphStage {
             x_start: Vec::new(),
             contact_rho: Vec::new(),
             grids: SumGrids::for_mass(1.0),
-            hold_work: [0.0; 3],
             drift_s: 0.0,
             pair_count: Vec::new(),
             balanced_once: false,
@@ -329,6 +325,9 @@ impl SphStage {
         self.x_start.clear();
         self.x_start
             .extend_from_slice(&self.parts.x_real[..self.parts.n_owned]);
+        for p in &mut self.parts.pushed {
+            *p >>= 1;
+        }
         first_half(&mut self.parts, dt, &self.params);
         self.drift_s = t0.elapsed().as_secs_f64();
     }

@@ -99,9 +99,13 @@ impl SphStage {
             let kick_n = (0..3)
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
+            // Booked against the start velocity and the share of the start kick
+            // `fe_petsc::explicit::booked_kick` gives.
+            let kick = fe_petsc::explicit::booked_kick(p.pushed[i]);
+            p.pushed[i] |= 2;
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                let w = p.m[i] * dv * (p.v[i][c] + 0.5 * dv - 0.5 * dt * p.f[i][c] / p.m[i]);
+                let w = p.m[i] * dv * (p.v[i][c] + 0.5 * dv - kick * dt * p.f[i][c] / p.m[i]);
                 grid.add(&mut work, w);
                 p.v[i][c] += dv;
                 p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
@@ -122,14 +126,14 @@ impl SphStage {
     /// acts between the kicks, stops only the first half's). Without it a particle at rest
     /// pressed on a fixed face ends each step with the velocity `a dt/2` into the face, its
     /// kinetic energy `m (a dt/2)^2 / 2` made by no motion, and contact books that energy as
-    /// given back at the step the pressing starts. The change of kinetic energy (<= 0) is the
-    /// faces' reaction's work, contact's: `hold_work`, which `contact_energy` takes
-    /// (`Sph::contact_held`). Momentum: the faces' nodes are prescribed (infinite mass), so
-    /// the impulse goes to their constraint, as a push-back on them does.
+    /// given back at the step the pressing starts. Energy: the hold and the push-back together
+    /// do no work on a particle at rest on the faces, and the push-back's booking counts both
+    /// (a held particle starts the next step as one the push-back meets first:
+    /// `fe_petsc::explicit::booked_kick`, `m (-p) . (p/2 - p/2) = 0` for `p = (dt/2) a`), so
+    /// the hold books nothing itself. Momentum: the faces' nodes are prescribed (infinite
+    /// mass), so the impulse goes to their constraint, as a push-back on them does.
     pub(super) fn hold_on_faces(&mut self, dt: f64) {
         let p = &mut self.parts;
-        let grid = self.grids.energy;
-        let mut w = [0.0; 3];
         for i in 0..p.n_owned {
             let n = p.hold[i];
             if n == [0.0; 3] {
@@ -142,13 +146,11 @@ impl SphStage {
             if p.fixed[i] || k >= 0.0 {
                 continue;
             }
+            // Held: its start velocity in the next step carries no kick into the faces.
+            p.pushed[i] &= !2;
             for c in 0..3 {
-                let v0 = p.v[i][c];
-                let v1 = v0 - k * n[c];
-                grid.add(&mut w, 0.5 * p.m[i] * (v1 * v1 - v0 * v0));
-                p.v[i][c] = v1;
+                p.v[i][c] -= k * n[c];
             }
         }
-        self.hold_work = w;
     }
 }
