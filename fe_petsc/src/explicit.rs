@@ -161,7 +161,7 @@ pub struct ExplicitFe {
     /// Summed element forces on each node (incl. hourglass and bulk viscosity), N.
     pub force: Vec<[f64; 3]>,
     /// The nodal sums in canonical element order at any rank count ([`crate::assembly`]).
-    assembly: Assembly,
+    pub(crate) assembly: Assembly,
     /// The old forces' sum f(n) . dx of this step's element work over the owned nodes (twice
     /// their half of the trapezoids), J: counted by the kick and the contact push-back, taken by
     /// `finish_step` (zero between steps).

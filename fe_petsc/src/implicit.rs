@@ -1,6 +1,8 @@
 //! Implicit dynamics: Newmark's average-acceleration (trapezoidal) rule, Newton iterations on the
-//! same hexahedron the explicit mode uses, the tangent assembled in a PETSc matrix and solved by
-//! KSP (conjugate gradients with smoothed aggregation by default).
+//! same hexahedron the explicit mode uses, the tangent solved by conjugate gradients on the
+//! element matrices with the same bits at any rank count ([`exact_cg`], the default), or
+//! assembled in a PETSc matrix and solved by KSP when the user chooses a PETSc solver
+//! (`-ksp_type` / `-pc_type`: CG with smoothed aggregation unless told otherwise).
 //!
 //! **Time integration** (Newmark, beta = 1/4, gamma = 1/2; Hughes, *The Finite Element Method*,
 //! 2000, §9.1): with du = u(n+1) - u(n),
@@ -65,7 +67,10 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod exact_cg;
 mod tangent;
+
+use exact_cg::{CgSystem, ExactCg};
 
 /// Default Newton tolerance on the residual relative to the force scale (`-tdyn_newton_rtol`).
 pub const NEWTON_RTOL: f64 = 1e-8;
@@ -222,6 +227,29 @@ fn gather(xs: &[[f64; 3]], conn: &[u32; 8]) -> [[f64; 3]; 8] {
     std::array::from_fn(|k| xs[conn[k] as usize])
 }
 
+/// The linear solver of the Newton updates.
+enum Linear {
+    /// The default: CG with the same bits at any rank count ([`exact_cg`]).
+    Exact {
+        cg: Box<ExactCg>,
+        delta: Vec<[f64; 3]>,
+        rtol: f64,
+    },
+    /// KSP on an assembled PETSc matrix, when the user chose a solver (`-ksp_type` or
+    /// `-pc_type`): rank-independent to round-off only.
+    Petsc {
+        matrix: BlockMatrix,
+        solver: Solver,
+        rhs: Vector,
+        sol: Vector,
+    },
+}
+
+/// Whether the user chose a PETSc solver for the Newton updates (docs/cli.md).
+pub fn petsc_solver_chosen() -> bool {
+    crate::petsc::Petsc::has_option("-ksp_type") || crate::petsc::Petsc::has_option("-pc_type")
+}
+
 /// The implicit FE stage on one rank. Its nodal and element state lives in an [`ExplicitFe`]
 /// (`fe`: the same arrays, element state and energy bookkeeping that probes and output read);
 /// this type replaces the time step.
@@ -243,10 +271,9 @@ pub struct ImplicitFe {
     curve_of: Vec<u32>,
     mat_stride: usize,
     owned_nodes: Vec<usize>,
-    matrix: BlockMatrix,
-    solver: Solver,
-    rhs: Vector,
-    sol: Vector,
+    linear: Linear,
+    /// `4 m / dt^2` per local node (the tangent's mass term).
+    mass_term: Vec<f64>,
     du: Vec<[f64; 3]>,
     x_trial: Vec<[f64; 3]>,
     v_mean: Vec<[f64; 3]>,
@@ -320,12 +347,27 @@ impl ImplicitFe {
         exchange.sum_shared(&mut ids)?;
         let global_block: Vec<i32> = (0..nn).map(|n| ids[3 * n].round() as i32).collect();
 
-        let mut matrix = BlockMatrix::new(comm, owned_nodes.len(), &global_block, &fe.elems)?;
-        let owned_coords: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x0[n]).collect();
-        matrix.set_rigid_body_modes(&owned_coords)?;
-        let solver = Solver::new(comm, &matrix)?;
-        let rhs = matrix.vector()?;
-        let sol = matrix.vector()?;
+        let linear = if petsc_solver_chosen() {
+            let mut matrix = BlockMatrix::new(comm, owned_nodes.len(), &global_block, &fe.elems)?;
+            let owned_coords: Vec<[f64; 3]> = owned_nodes.iter().map(|&n| fe.x0[n]).collect();
+            matrix.set_rigid_body_modes(&owned_coords)?;
+            let solver = Solver::new(comm, &matrix)?;
+            let rhs = matrix.vector()?;
+            let sol = matrix.vector()?;
+            Linear::Petsc {
+                matrix,
+                solver,
+                rhs,
+                sol,
+            }
+        } else {
+            Linear::Exact {
+                cg: Box::new(ExactCg::new(fe.elems.len(), nn)),
+                delta: vec![[0.0; 3]; nn],
+                rtol: solver::option_real("-ksp_rtol")?.unwrap_or(solver::KSP_RTOL),
+            }
+        };
+        let mass_term = fe.mass.iter().map(|m| 4.0 * m / (dt * dt)).collect();
         let mut imp = ImplicitFe {
             dt,
             options: NewtonOptions::from_options()?,
@@ -336,10 +378,8 @@ impl ImplicitFe {
             curved,
             curve_of,
             mat_stride,
-            matrix,
-            solver,
-            rhs,
-            sol,
+            linear,
+            mass_term,
             du: vec![[0.0; 3]; nn],
             x_trial: fe.x.clone(),
             v_mean: vec![[0.0; 3]; nn],
@@ -477,10 +517,10 @@ impl ImplicitFe {
                 self.tangent_stale = true;
             }
             if self.tangent_stale || self.options.full {
-                self.assemble_tangent()?;
+                self.assemble_tangent(exchange)?;
                 self.tangent_stale = false;
             }
-            self.newton_update(exchange)?;
+            self.newton_update(comm, exchange)?;
             prev = Some(rnorm);
             iterations += 1;
         }
@@ -551,6 +591,7 @@ impl ImplicitFe {
                             f[c] += out.force[k][c];
                         }
                     }
+                    self.fe.assembly.record(e, |k| out.force[k]);
                     grid.add(&mut hg_work, out.hg_work);
                     self.fe.blocks.add(e, &out.force, out.hg_work);
                     self.state_trial.set(e, &st);
@@ -583,12 +624,15 @@ impl ImplicitFe {
                 .map(ImplicitError::Step)
                 .unwrap_or(ImplicitError::OtherRank));
         }
-        exchange.sum_shared(self.force.as_flattened_mut())?;
+        // Each node's force summed in the canonical element order (`crate::assembly`).
+        self.fe.assembly.finish(&mut self.force, exchange)?;
         let t2 = Instant::now();
         self.fe.timers.exchange += (t2 - t1).as_secs_f64();
         let c_mass = 4.0 / (dt * dt);
         let g = self.gravity;
-        let mut sums = [0.0f64; 3];
+        // The norms' squares as exact sums (`exact::totals`): the same bits at any rank count,
+        // so every rank count takes the same Newton iterations.
+        let mut sums: [Vec<f64>; 3] = Default::default();
         for n in 0..self.n_nodes() {
             let m = self.fe.mass[n];
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
@@ -599,14 +643,13 @@ impl ImplicitFe {
             self.residual[n] = pr;
             if self.fe.owned[n] {
                 for c in 0..3 {
-                    sums[0] += pr[c] * pr[c];
-                    sums[1] += f[c] * f[c];
-                    sums[2] += inertia[c] * inertia[c];
+                    sums[0].push(pr[c] * pr[c]);
+                    sums[1].push(f[c] * f[c]);
+                    sums[2].push(inertia[c] * inertia[c]);
                 }
             }
         }
-        let mut global = [0.0f64; 3];
-        comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
+        let global = crate::exact::totals(comm, &sums);
         self.fe.timers.nodal += t2.elapsed().as_secs_f64();
         let rnorm = global[0].sqrt();
         if !rnorm.is_finite() {
@@ -620,17 +663,51 @@ impl ImplicitFe {
     }
 
     /// Solves (4 M / dt^2 + K) delta = -P r and adds P delta to du on every local node.
-    fn newton_update(&mut self, exchange: &mut NodeExchange) -> Result<(), ImplicitError> {
+    fn newton_update(
+        &mut self,
+        comm: &SimpleCommunicator,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), ImplicitError> {
         let t0 = Instant::now();
+        if let Linear::Exact { cg, delta, rtol } = &mut self.linear {
+            let b: Vec<[f64; 3]> = self.residual.iter().map(|r| r.map(|x| -x)).collect();
+            let sys = CgSystem {
+                elems: &self.fe.elems,
+                owned: &self.fe.owned,
+                mass_term: &self.mass_term,
+            };
+            let its = cg.solve(
+                comm,
+                &sys,
+                (&mut self.fe.assembly, exchange),
+                (&b, delta),
+                *rtol,
+            )?;
+            self.stats.ksp_iterations += its as u64;
+            self.stats.solve_s += t0.elapsed().as_secs_f64();
+            for (n, d) in delta.iter().enumerate() {
+                let d = self.dofs[n].free(*d);
+                for c in 0..3 {
+                    self.du[n][c] += d[c];
+                }
+            }
+            return Ok(());
+        }
+        let Linear::Petsc {
+            solver, rhs, sol, ..
+        } = &mut self.linear
+        else {
+            unreachable!("the exact solve returned above")
+        };
         for (k, &n) in self.owned_nodes.iter().enumerate() {
             for c in 0..3 {
                 self.owned_buf[3 * k + c] = -self.residual[n][c];
             }
         }
-        solver::write_vector(&self.rhs, &self.owned_buf)?;
-        let its = self.solver.solve(&self.rhs, &mut self.sol)?;
+        solver::write_vector(rhs, &self.owned_buf)?;
+        let its = solver.solve(rhs, sol)?;
         self.stats.ksp_iterations += its as u64;
-        solver::read_vector(&self.sol, &mut self.owned_buf)?;
+        solver::read_vector(sol, &mut self.owned_buf)?;
         self.stats.solve_s += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         self.local_buf.fill(0.0);

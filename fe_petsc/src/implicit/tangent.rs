@@ -4,10 +4,15 @@ use super::*;
 
 impl ImplicitFe {
     /// Assembles 4 M / dt^2 + K at the current trial state (see the module comment).
-    pub(super) fn assemble_tangent(&mut self) -> Result<(), PetscError> {
+    pub(super) fn assemble_tangent(
+        &mut self,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), PetscError> {
         let t0 = Instant::now();
         let dt = self.dt;
-        self.matrix.zero()?;
+        if let Linear::Petsc { matrix, .. } = &mut self.linear {
+            matrix.zero()?;
+        }
         let stride = self.mat_stride;
         let mut ke = [0.0; 576];
         for (e, conn) in self.fe.elems.iter().enumerate() {
@@ -79,16 +84,33 @@ impl ImplicitFe {
                     }
                 }
             }
-            let rows: [i32; 8] = std::array::from_fn(|k| conn[k] as i32);
-            self.matrix.add_local(&rows, &ke)?;
+            match &mut self.linear {
+                Linear::Exact { cg, .. } => cg.store(e, &ke),
+                Linear::Petsc { matrix, .. } => {
+                    let rows: [i32; 8] = std::array::from_fn(|k| conn[k] as i32);
+                    matrix.add_local(&rows, &ke)?;
+                }
+            }
         }
-        let c_mass = 4.0 / (dt * dt);
-        for &n in &self.owned_nodes {
-            let d = c_mass * self.fe.mass[n];
-            let blk = [d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d];
-            self.matrix.add_local(&[n as i32], &blk)?;
+        match &mut self.linear {
+            Linear::Exact { cg, .. } => {
+                let sys = CgSystem {
+                    elems: &self.fe.elems,
+                    owned: &self.fe.owned,
+                    mass_term: &self.mass_term,
+                };
+                cg.set_diagonal(&sys, &mut self.fe.assembly, exchange)?;
+            }
+            Linear::Petsc { matrix, .. } => {
+                let c_mass = 4.0 / (dt * dt);
+                for &n in &self.owned_nodes {
+                    let d = c_mass * self.fe.mass[n];
+                    let blk = [d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d];
+                    matrix.add_local(&[n as i32], &blk)?;
+                }
+                matrix.assemble()?;
+            }
         }
-        self.matrix.assemble()?;
         self.stats.assemblies += 1;
         self.stats.assembly_s += t0.elapsed().as_secs_f64();
         Ok(())
