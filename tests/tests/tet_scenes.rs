@@ -20,7 +20,8 @@ const MEASURED: [&str; 2] = ["contact_imbalance", "contact_bytes"];
 /// - energy: the balance (kinetic + internal + hourglass + contact against the clamped sides'
 ///   work) within 2 % of the energy scale in every row (the bound);
 /// - one answer: history.csv (every column but the run's own measurements) and probes.csv the
-///   same bytes at np 3 as at np 1.
+///   same bytes at np 3 as at np 1 in every row of the first 10 us (the impact's first half:
+///   the contact's onset and its peak force).
 #[test]
 fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
     let scene = root().join("scenes/ball_plate_tet.toml");
@@ -61,14 +62,38 @@ fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
         err_max < 0.02,
         "energy error {err_max} at most (limit 2 %)"
     );
-    let out = workdir("tet_ball_plate_np3").join("out");
-    run_ok(3, &scene, &out);
+    np3_gives_np1s_rows(&scene, &base, 1.0e-5, "tet_ball_plate_np3");
+}
+
+/// Runs `scene` at np 3 to `end_time` (s; before the np 1 run's end, to keep the test short) in
+/// workdir `tag` and asserts that every row of its history.csv and probes.csv but the last (which
+/// ends the shorter run at `end_time`) has the same bytes as that row of the np 1 run in `base`,
+/// in every column but the run's own measurements (docs/scene.md, "One answer").
+fn np3_gives_np1s_rows(scene: &std::path::Path, base: &std::path::Path, end_time: f64, tag: &str) {
+    let out = workdir(tag).join("out");
+    let t = format!("{end_time:e}");
+    run_ok_args(3, scene, &out, &["--end-time", &t]);
     for file in ["history.csv", "probes.csv"] {
-        let bad = csv_columns_differ(&base, &out, file, &MEASURED);
+        let read = |d: &std::path::Path| std::fs::read_to_string(d.join(file)).unwrap();
+        let (full, short) = (read(base), read(&out));
+        let (lf, ls): (Vec<&str>, Vec<&str>) = (full.lines().collect(), short.lines().collect());
+        assert_eq!(lf[0], ls[0], "{file}: headers differ");
         assert!(
-            bad.is_empty(),
-            "np 3 against np 1: {file} columns differ (column, first row): {bad:?} (same bytes expected)"
+            ls.len() > 10 && ls.len() <= lf.len(),
+            "{file}: {} rows at np 3 to {t} s, {} at np 1",
+            ls.len(),
+            lf.len()
         );
+        let head: Vec<&str> = lf[0].split(',').collect();
+        for (r, (a, b)) in lf.iter().zip(&ls[..ls.len() - 1]).enumerate().skip(1) {
+            for (k, (u, v)) in a.split(',').zip(b.split(',')).enumerate() {
+                assert!(
+                    u == v || MEASURED.contains(&head[k]),
+                    "{file} row {r}, column {}: {u} at np 1, {v} at np 3 (same bytes expected)",
+                    head[k]
+                );
+            }
+        }
     }
 }
 
@@ -185,11 +210,14 @@ const PULL: f64 = 1.0e8;
 /// - quasi-static state: the mean sigma_yy of the elements in the far quarter of the length
 ///   (y > 30 mm, 6 hole radii from its centre) is the applied traction within 2 % (equilibrium of
 ///   the gross section; a dynamic overshoot would show here);
-/// - the stress concentration: sigma_yy on the ligament (elements whose centroid is within 15
-///   degrees of y = 0 and 3 hole-edge elements of the edge), fitted by a quadratic in the
-///   distance from the edge and taken at the edge, over the remote traction: Peterson's fit to
-///   Howland's finite-width solution, Kt = 3.227 (tests/reference/plate_hole.toml), within 8 %;
-/// - one answer: history.csv and probes.csv the same bytes at np 3 as at np 1.
+/// - the stress concentration: sigma_yy on the ligament (elements whose centroid is within 5
+///   degrees of y = 0, where Kirsch's edge stress is within 1 % of its peak, and within 2
+///   hole-edge elements of the edge), fitted by a quadratic in the distance from the edge and
+///   taken at the edge, over the remote traction: Peterson's fit to Howland's finite-width
+///   solution, Kt = 3.227 (tests/reference/plate_hole.toml), within 5 % (measured 3.237 on
+///   gmsh's own split of the same mesh; the largest element's value is 3.18);
+/// - one answer: history.csv and probes.csv the same bytes at np 3 as at np 1 in every row of
+///   the first 30 us.
 #[test]
 fn tet_plate_with_a_hole_concentrates_stress_as_howland() {
     let scene = root().join("scenes/plate_hole.toml");
@@ -197,6 +225,31 @@ fn tet_plate_with_a_hole_concentrates_stress_as_howland() {
     run_ok(1, &scene, &base);
     let st = last_element_state(&base);
     assert!((st.time - 1.0e-4).abs() < 1e-9, "last frame at {}", st.time);
+    let (remote, kt) = remote_and_kt(&st);
+    let kt_ref = kt_gross_howland(0.25);
+    assert!(
+        (remote / PULL - 1.0).abs() < 0.02,
+        "remote sigma_yy {remote} Pa against the applied {PULL} Pa (limit 2 %)"
+    );
+    assert!(
+        (kt / kt_ref - 1.0).abs() < 0.05,
+        "Kt {kt} against Howland's {kt_ref} (limit 5 %)"
+    );
+    np3_gives_np1s_rows(&scene, &base, 3.0e-5, "tet_plate_hole_np3");
+}
+
+/// The checker by hand on any run of the plate-hole scene: `TDYN_OUT=DIR cargo test --release
+/// -p tdyn-tests --test tet_scenes plate_hole_of_a_run -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn plate_hole_of_a_run() {
+    let out = std::path::PathBuf::from(std::env::var("TDYN_OUT").unwrap());
+    remote_and_kt(&last_element_state(&out));
+}
+
+/// The remote stress (Pa) and the stress concentration factor of the plate-hole scene's state
+/// `st` (the test above says how), printed.
+fn remote_and_kt(st: &ElementState) -> (f64, f64) {
     let far: Vec<f64> = (0..st.stress.len())
         .filter(|&e| st.centroid[e][1] > 0.75 * PLATE_HALF_L)
         .map(|e| st.stress[e][1])
@@ -206,7 +259,7 @@ fn tet_plate_with_a_hole_concentrates_stress_as_howland() {
     for (c, sig) in st.centroid.iter().zip(&st.stress) {
         let rho = (c[0] * c[0] + c[1] * c[1]).sqrt();
         let theta = c[1].atan2(c[0]);
-        if theta < 15f64.to_radians() && rho - HOLE_A < 3.0 * HOLE_HH {
+        if theta < 5f64.to_radians() && rho - HOLE_A < 2.0 * HOLE_HH {
             s.push(rho - HOLE_A);
             y.push(sig[1]);
         }
@@ -219,21 +272,5 @@ fn tet_plate_with_a_hole_concentrates_stress_as_howland() {
         far.len(),
         s.len()
     );
-    assert!(
-        (remote / PULL - 1.0).abs() < 0.02,
-        "remote sigma_yy {remote} Pa against the applied {PULL} Pa (limit 2 %)"
-    );
-    assert!(
-        (kt / kt_ref - 1.0).abs() < 0.08,
-        "Kt {kt} against Howland's {kt_ref} (limit 8 %)"
-    );
-    let out = workdir("tet_plate_hole_np3").join("out");
-    run_ok(3, &scene, &out);
-    for file in ["history.csv", "probes.csv"] {
-        let bad = csv_columns_differ(&base, &out, file, &MEASURED);
-        assert!(
-            bad.is_empty(),
-            "np 3 against np 1: {file} columns differ (column, first row): {bad:?} (same bytes expected)"
-        );
-    }
+    (remote, kt)
 }
