@@ -58,10 +58,7 @@ fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
         deepest.0,
         deepest.1
     );
-    assert!(
-        err_max < 0.02,
-        "energy error {err_max} at most (limit 2 %)"
-    );
+    assert!(err_max < 0.02, "energy error {err_max} at most (limit 2 %)");
     np3_gives_np1s_rows(&scene, &base, 1.0e-5, "tet_ball_plate_np3");
 }
 
@@ -162,10 +159,7 @@ fn last_element_state(out: &std::path::Path) -> ElementState {
         .collect();
     ElementState {
         centroid,
-        stress: s
-            .chunks(6)
-            .map(|c| std::array::from_fn(|i| c[i]))
-            .collect(),
+        stress: s.chunks(6).map(|c| std::array::from_fn(|i| c[i])).collect(),
         time: *fr.times.last().unwrap(),
     }
 }

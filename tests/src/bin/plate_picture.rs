@@ -107,7 +107,13 @@ fn main() {
     for k in 0..=(2.0 * SCALE_MAX) as usize {
         let v = 0.5 * k as f64;
         let y = 20.0 + (1.0 - v / SCALE_MAX) * height;
-        writeln!(svg, r#"<text x="{:.1}" y="{:.1}">{v:.1}</text>"#, bx + 26.0, y + 4.0).unwrap();
+        writeln!(
+            svg,
+            r#"<text x="{:.1}" y="{:.1}">{v:.1}</text>"#,
+            bx + 26.0,
+            y + 4.0
+        )
+        .unwrap();
     }
     writeln!(
         svg,
