@@ -13,14 +13,14 @@ const BAR_PX: f64 = 120.0;
 /// The colour scale: sigma_yy / remote from 0 to this.
 const SCALE_MAX: f64 = 3.5;
 
-/// A blue-white-red colour for `v` in [0, 1] (linear between the three).
+/// The colour of a stress ratio `v` (sigma_yy over the remote stress): blue at 0, white at 1
+/// (the remote stress), red at `SCALE_MAX`, linear between.
 fn colour(v: f64) -> String {
-    let v = v.clamp(0.0, 1.0);
-    let (r, g, b) = if v < 0.5 {
-        let t = v / 0.5;
-        (40.0 + 215.0 * t, 80.0 + 175.0 * t, 200.0 + 55.0 * t)
+    let v = v.clamp(0.0, SCALE_MAX);
+    let (r, g, b) = if v < 1.0 {
+        (40.0 + 215.0 * v, 80.0 + 175.0 * v, 200.0 + 55.0 * v)
     } else {
-        let t = (v - 0.5) / 0.5;
+        let t = (v - 1.0) / (SCALE_MAX - 1.0);
         (255.0, 255.0 - 215.0 * t, 255.0 - 225.0 * t)
     };
     format!("rgb({:.0},{:.0},{:.0})", r, g, b)
@@ -74,7 +74,7 @@ fn main() {
     )
     .unwrap();
     for (e, q) in &faces {
-        let fill = colour(stress[6 * e + 1] / pull / SCALE_MAX);
+        let fill = colour(stress[6 * e + 1] / pull);
         for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
             let pts: Vec<String> = q
                 .iter()
@@ -96,11 +96,12 @@ fn main() {
     for k in 0..steps {
         let v = k as f64 / steps as f64;
         let y = 20.0 + (1.0 - v) * height - height / steps as f64;
+        let v = v * SCALE_MAX;
         writeln!(
             svg,
             r#"<rect x="{bx:.1}" y="{y:.2}" width="20" height="{:.2}" fill="{}"/>"#,
             height / steps as f64 + 0.5,
-            colour(v)
+            colour(v + 0.5 * SCALE_MAX / steps as f64)
         )
         .unwrap();
     }
