@@ -96,7 +96,8 @@ fn np3_gives_np1s_rows(scene: &std::path::Path, base: &std::path::Path, end_time
 
 /// Peterson's fit to Howland's finite-width solution, `tests/reference/plate_hole.toml`: the
 /// gross-section stress concentration factor of a central circular hole of diameter / width
-/// `r` in tension.
+/// `r` in tension. (The fit's 3.140 is a fitted coefficient, not pi.)
+#[allow(clippy::approx_constant)]
 fn kt_gross_howland(r: f64) -> f64 {
     let kt_net = 3.000 - 3.140 * r + 3.667 * r * r - 1.527 * r * r * r;
     kt_net / (1.0 - r)
