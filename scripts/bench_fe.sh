@@ -6,10 +6,13 @@
 # count (scenes/bench_block_tet.toml): ns per tetrahedron-cycle and per hexahedron-cycle of its
 # split (4 hexahedra per tetrahedron), the runs interleaved with the hexahedral block's (hex,
 # tet, hex, tet, ...) so that the ratio of each pair holds when the machine's speed drifts.
+# NPS (default "1 2") lists the rank counts. One run on tetrahedra takes minutes: its set-up
+# (the split, PETSc's partition and distribution of 2.5 million cells) about 3 on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEATS=${REPEATS:-3}
 TETS=${TETS:-1}
+NPS=${NPS:-1 2}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 target/release/tdyn mesh meshes/bar.geo -p L=1 -p A=1 -p N=47 -p M=47 >/dev/null
 kinds="hex"
@@ -17,7 +20,7 @@ if [ "$TETS" = 1 ]; then
   target/release/tdyn mesh meshes/block_tet.geo -p L=1 -p A=1 -p H=0.0195 >/dev/null
   kinds="hex tet"
 fi
-for np in 1 2; do
+for np in $NPS; do
   for r in $(seq "$REPEATS"); do
     for kind in $kinds; do
       scene=scenes/bench_block.toml
