@@ -283,3 +283,209 @@ fn counts_are_grouped_by_thousands() {
     assert_eq!(grouped(999), "999");
     assert_eq!(grouped(1_000_000), "1,000,000");
 }
+
+/// A small deterministic generator (LCG, Knuth's constants): no rand crate.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
+    }
+}
+
+/// The nodes of a 3 x 3 x 3 grid on [0, 2]^3, each moved by up to `amp` / 2 of the spacing
+/// per component, and the 1-based id of grid point (i, j, k).
+fn grid(seed: u64, amp: f64) -> (Vec<[f64; 3]>, impl Fn(usize, usize, usize) -> u64) {
+    let mut rng = Lcg(seed);
+    let mut x = Vec::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..3 {
+                x.push([i, j, k].map(|c| c as f64 + amp * rng.next()));
+            }
+        }
+    }
+    (x, |i, j, k| (i + 3 * j + 9 * k + 1) as u64)
+}
+
+/// The 8 cubes of the grid by their corners: `corner(i, j, k)[b]` for `HEX_BITS[b]`.
+fn cubes<F: Fn(usize, usize, usize) -> u64>(id: &F) -> Vec<[u64; 8]> {
+    let mut out = Vec::new();
+    for k in 0..2 {
+        for j in 0..2 {
+            for i in 0..2 {
+                out.push(HEX_BITS.map(|b| id(i + b[0], j + b[1], k + b[2])));
+            }
+        }
+    }
+    out
+}
+
+/// A tetrahedron with its nodes ordered for a positive volume (two swapped if needed).
+fn oriented(x: &[[f64; 3]], mut t: [u64; 4]) -> Vec<u64> {
+    let p = |n: u64| x[n as usize - 1];
+    let v = tet_volume(t.map(p));
+    assert!(v.abs() > 1e-3, "the patch's tetrahedra are not flat: {v:e}");
+    if v < 0.0 {
+        t.swap(2, 3);
+    }
+    t.to_vec()
+}
+
+/// A linear velocity v = A x + c on the split mesh `m`: every sub-hexahedron's stress after
+/// one step from zero is C : (D dt) of the constant D = sym(A) within 1e-10 relative
+/// (fe_petsc/tests/element.rs's patch test; default hourglass control), with no hourglass
+/// work, and the nodes inside the patch are in equilibrium (net force below 1e-10 of the largest nodal force).
+fn patch_test(m: &Msh22) {
+    use fe_petsc::hex::{self, HexControls, HexState};
+    use fe_petsc::material::{build_material, MaterialSpec};
+    let mat = build_material(&MaterialSpec {
+        name: "steel".into(),
+        model: "elastic".into(),
+        density: 7850.0,
+        params: [("youngs_modulus", 200e9), ("poisson_ratio", 0.3)]
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect(),
+        eos: None,
+    })
+    .unwrap();
+    let (lambda, mu) = (200e9 * 0.3 / (1.3 * 0.4), 200e9 / 2.6);
+    let a = [[0.3, -0.7, 0.2], [0.5, 0.1, -0.4], [-0.6, 0.9, 0.25]];
+    let c0 = [0.1, -0.2, 0.3];
+    let d = [
+        a[0][0],
+        a[1][1],
+        a[2][2],
+        0.5 * (a[0][1] + a[1][0]),
+        0.5 * (a[1][2] + a[2][1]),
+        0.5 * (a[2][0] + a[0][2]),
+    ];
+    let tr = d[0] + d[1] + d[2];
+    let dt = 1e-7;
+    let x = coords(m);
+    let vel = |p: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| c0[i] + (0..3).map(|j| a[i][j] * p[j]).sum::<f64>())
+    };
+    // No bulk viscosity: its pressure scales with each element's size (not a constant stress).
+    let ctl = HexControls {
+        bv_linear: 0.0,
+        bv_quadratic: 0.0,
+        ..HexControls::default()
+    };
+    let mut nodal: FxHashMap<u64, [f64; 3]> = FxHashMap::default();
+    let mut faces: FxHashMap<Vec<u64>, usize> = FxHashMap::default();
+    let mut fscale = 0.0f64;
+    for e in m.elements.iter().filter(|e| e.0 == HEX) {
+        // x holds the mid-step geometry; the end of the step is x + dt/2 v.
+        let ve: [[f64; 3]; 8] = std::array::from_fn(|k| vel(x[&e.3[k]]));
+        let xe: [[f64; 3]; 8] =
+            std::array::from_fn(|k| std::array::from_fn(|i| x[&e.3[k]][i] + 0.5 * dt * ve[k][i]));
+        let mut st = HexState::default();
+        let vol = hex::volume(&xe);
+        let out = hex::update(&xe, &ve, dt, 7850.0, vol, &*mat, &ctl, &mut st, &mut []).unwrap();
+        for k in 0..6 {
+            let expect = if k < 3 {
+                lambda * tr * dt + 2.0 * mu * d[k] * dt
+            } else {
+                2.0 * mu * d[k] * dt
+            };
+            assert!(
+                (st.stress[k] - expect).abs() <= 1e-10 * expect.abs(),
+                "patch test: stress[{k}] = {} vs analytic C:(D dt) = {expect} (1e-10 relative)",
+                st.stress[k]
+            );
+        }
+        assert!(
+            out.hg_work.abs() < 1e-12,
+            "no hourglass work under a linear field: {}",
+            out.hg_work
+        );
+        for k in 0..8 {
+            let f = nodal.entry(e.3[k]).or_default();
+            for c in 0..3 {
+                f[c] += out.force[k][c];
+                fscale = fscale.max(out.force[k][c].abs());
+            }
+        }
+        for f in [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [1, 2, 6, 5],
+            [2, 3, 7, 6],
+            [3, 0, 4, 7],
+        ] {
+            let mut key: Vec<u64> = f.iter().map(|&k| e.3[k]).collect();
+            key.sort_unstable();
+            *faces.entry(key).or_default() += 1;
+        }
+    }
+    // Nodes on a face of one element only are on the patch's boundary.
+    let boundary: rustc_hash::FxHashSet<u64> = faces
+        .iter()
+        .filter(|(_, &n)| n == 1)
+        .flat_map(|(k, _)| k.clone())
+        .collect();
+    let mut inside = 0;
+    for (n, f) in &nodal {
+        if !boundary.contains(n) {
+            inside += 1;
+            for c in 0..3 {
+                assert!(
+                    f[c].abs() < 1e-10 * fscale,
+                    "constant stress is in equilibrium: node {n} net force {} vs {fscale:e} (1e-10)",
+                    f[c]
+                );
+            }
+        }
+    }
+    assert!(inside > 0, "the patch has inner nodes");
+}
+
+#[test]
+fn patch_test_on_distorted_tetrahedra_split_into_hexahedra() {
+    // Each cube into the 6 tetrahedra around its diagonal (0,0,0)-(1,1,1) (Kuhn's split: the
+    // same diagonal in every cube conforms), every node moved by up to 5 % of the spacing.
+    let (x, id) = grid(11, 0.1);
+    let mut elements = Vec::new();
+    for c in cubes(&id) {
+        // Paths from bit (0,0,0) to (1,1,1) through one axis, then two.
+        for (p, q) in [(1, 2), (1, 5), (3, 2), (3, 7), (4, 5), (4, 7)] {
+            elements.push((TET, 1, 1, oriented(&x, [c[0], c[p], c[q], c[6]])));
+        }
+    }
+    let (s, summary) = split(&mesh(&x, elements)).unwrap().unwrap();
+    assert_eq!(summary.hexahedra_run, 8 * 6 * 4);
+    check_split(&s, hexes(&s).iter().map(fe_petsc::hex::volume).sum(), true);
+    patch_test(&s);
+}
+
+#[test]
+fn patch_test_on_hexahedra_and_prisms_sharing_faces() {
+    // Cubes with i = 0 are hexahedra, those with i = 1 two prisms each (their bottom quadrangle
+    // cut along the diagonal (0,0)-(1,1), extruded along z): the quadrangles at x = 1 are
+    // shared between a hexahedron and a prism's side, split into 4 on both.
+    let (x, id) = grid(5, 0.1);
+    let mut elements = Vec::new();
+    let mut volume = 0.0;
+    for (n, c) in cubes(&id).into_iter().enumerate() {
+        let p = |k: usize| x[c[k] as usize - 1];
+        if n % 2 == 0 {
+            elements.push((HEX, 1, 1, c.to_vec()));
+            volume += fe_petsc::hex::volume(&std::array::from_fn(p));
+        } else {
+            for w in [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]] {
+                elements.push((PRISM, 1, 1, w.map(|k| c[k]).to_vec()));
+                volume += prism_volume(w.map(p));
+            }
+        }
+    }
+    let (s, summary) = split(&mesh(&x, elements)).unwrap().unwrap();
+    assert_eq!(summary.hexahedra_run, 4 * 8 + 8 * 6);
+    check_split(&s, volume, false);
+    patch_test(&s);
+}
