@@ -1,28 +1,56 @@
 #!/usr/bin/env bash
 # FE benchmark: ns per element-cycle (time-step loop only) and bytes per element for an
 # elastic-plastic block of 103,823 hexahedra at np 1 and np 2, median of REPEATS runs each,
-# with the split between element kernel, ghost exchange and nodal updates (report.json).
+# with the split between element kernel, ghost exchange and nodal updates (report.json). Then
+# (TETS=1, the default) the same block meshed by gmsh's default tetrahedra of about the same node
+# count (scenes/bench_block_tet.toml): ns per tetrahedron-cycle and per hexahedron-cycle of its
+# split (4 hexahedra per tetrahedron), the runs interleaved with the hexahedral block's (hex,
+# tet, hex, tet, ...) so that the ratio of each pair holds when the machine's speed drifts.
+# NPS (default "1 2") lists the rank counts. One run on tetrahedra takes minutes: its set-up
+# (the split, PETSc's partition and distribution of 2.5 million cells) about 3 on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEATS=${REPEATS:-3}
+TETS=${TETS:-1}
+NPS=${NPS:-1 2}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 target/release/tdyn mesh meshes/bar.geo -p L=1 -p A=1 -p N=47 -p M=47 >/dev/null
-for np in 1 2; do
+kinds="hex"
+if [ "$TETS" = 1 ]; then
+  target/release/tdyn mesh meshes/block_tet.geo -p L=1 -p A=1 -p H=0.0195 >/dev/null
+  kinds="hex tet"
+fi
+for np in $NPS; do
   for r in $(seq "$REPEATS"); do
-    mpirun -np "$np" target/release/tdyn run scenes/bench_block.toml --quiet --overwrite --out "out/bench_np${np}_r${r}"
+    for kind in $kinds; do
+      scene=scenes/bench_block.toml
+      [ "$kind" = tet ] && scene=scenes/bench_block_tet.toml
+      mpirun -np "$np" target/release/tdyn run "$scene" --quiet --overwrite --out "out/bench_${kind}_np${np}_r${r}"
+    done
   done
-  python3 - "$np" "$REPEATS" <<'PY'
+  python3 - "$np" "$REPEATS" $kinds <<'PY'
 import json, statistics, sys
-np_, rep = sys.argv[1], int(sys.argv[2])
-rs = [json.load(open(f"out/bench_np{np_}_r{r}/report.json")) for r in range(1, rep + 1)]
-med = lambda k: statistics.median(x[k] for x in rs)
-ns = med("ns_per_element_cycle")
-print(f"np {np_}: {rs[0]['elements']} elements, {rs[0]['steps']} steps: "
-      f"{ns:.1f} ns/element-cycle (median of {rep}; runs: "
-      + ", ".join(f"{x['ns_per_element_cycle']:.1f}" for x in rs) + ")")
-loop = med("loop_s")
-for k in ("fe_element_kernel_s", "fe_ghost_exchange_s", "fe_nodal_s"):
-    print(f"   {k[3:-2]:<16} {med(k):7.3f} s  ({100 * med(k) / loop:4.1f} % of the loop)")
-print(f"   memory: {med('bytes_per_element'):.0f} bytes per element (nodal + element arrays)")
+np_, rep, kinds = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+runs = {k: [json.load(open(f"out/bench_{k}_np{np_}_r{r}/report.json")) for r in range(1, rep + 1)]
+        for k in kinds}
+for kind, rs in runs.items():
+    med = lambda k: statistics.median(x[k] for x in rs)
+    ns = med("ns_per_element_cycle")
+    print(f"{kind} np {np_}: {rs[0]['elements']} elements, {rs[0]['nodes']} nodes, {rs[0]['steps']} steps: "
+          f"{ns:.1f} ns/element-cycle (median of {rep}; runs: "
+          + ", ".join(f"{x['ns_per_element_cycle']:.1f}" for x in rs) + ")")
+    tets = (rs[0].get("mesh_split") or {}).get("tetrahedra", 0)
+    if tets:
+        per = rs[0]["elements"] / tets
+        print(f"   {tets} tetrahedra run as {rs[0]['elements']} hexahedra: "
+              f"{ns * per:.1f} ns per tetrahedron-cycle ({ns:.1f} per hexahedron-cycle of the split)")
+    loop = med("loop_s")
+    for k in ("fe_element_kernel_s", "fe_ghost_exchange_s", "fe_nodal_s"):
+        print(f"   {k[3:-2]:<16} {med(k):7.3f} s  ({100 * med(k) / loop:4.1f} % of the loop)")
+    print(f"   memory: {med('bytes_per_element'):.0f} bytes per element (nodal + element arrays)")
+if "tet" in runs:
+    ratio = [t["ns_per_element_cycle"] / h["ns_per_element_cycle"] for h, t in zip(runs["hex"], runs["tet"])]
+    print(f"np {np_}: split hexahedron-cycle / hexahedron-cycle, pair by pair: median "
+          f"{statistics.median(ratio):.3f} (" + ", ".join(f"{x:.3f}" for x in ratio) + ")")
 PY
 done

@@ -288,7 +288,8 @@ fn read_gmsh(comm: &SimpleCommunicator, path: &Path) -> Result<Dm, MeshError> {
     Ok(dm)
 }
 
-/// Rank 0, on the whole mesh: it is 3D and all hexahedra, its physical surfaces (tags,
+/// Rank 0, on the whole mesh: it is 3D and all hexahedra (tetrahedra and prisms were split
+/// into hexahedra before, `coupling::input::split`), its physical surfaces (tags,
 /// planar normals, vertex masks), the original numbers, and the METIS partition. Any failure
 /// (PETSc's included) is a message for the agreement step.
 fn inspect_on_root(
@@ -387,7 +388,7 @@ fn check_cells(dm: &Dm, path: &Path, c0: i32, c1: i32) -> Result<(), String> {
             _ => "non-hexahedral cell",
         };
         return Err(format!(
-            "mesh {}: element {} is a {} ({} hexahedra, {} other cells): only 8-node hexahedral meshes are supported for now (mesh with Transfinite + Recombine in gmsh)",
+            "mesh {}: element {} is a {} ({} hexahedra, {} other cells): the FE stage reads 8-node hexahedra (the driver splits tetrahedra and prisms into hexahedra before this read: coupling/src/input/split.rs)",
             path.display(), c, kind, nhex, other
         ));
     }

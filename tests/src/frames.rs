@@ -109,7 +109,25 @@ pub const INSIDE_BOUND: f64 = 2.0;
 
 /// How deep point `p` lies inside the (deformed) hexahedron with corners `x`: the smallest
 /// distance behind its six bilinear faces. Negative: `p` is outside at least one face.
+///
+/// A point farther from the corners' mean than every corner is outside: the trilinear element
+/// is a convex combination of its corners (weights >= 0 summing to 1), so it lies in their
+/// convex hull, inside that ball. The screen is exact and keeps the faces' continuation (to
+/// `INSIDE_BOUND`) from judging points beyond it: the bilinear map of a planar face far from
+/// a parallelogram (the kites of a split tetrahedron: a corner, two edge midpoints, a face
+/// centroid) folds over outside its square, where the projection's normal can point either way.
 pub fn depth_inside(p: [f64; 3], x: &[[f64; 3]; 8]) -> f64 {
+    let mean = x.iter().fold([0.0; 3], |m, c| {
+        [m[0] + c[0] / 8.0, m[1] + c[1] / 8.0, m[2] + c[2] / 8.0]
+    });
+    let reach = x
+        .iter()
+        .map(|c| dot(sub(*c, mean), sub(*c, mean)))
+        .fold(0.0, f64::max);
+    let d2 = dot(sub(p, mean), sub(p, mean));
+    if d2 > reach {
+        return -(d2.sqrt() - reach.sqrt());
+    }
     let mut depth = f64::INFINITY;
     for f in &FACES {
         let q = [x[f[0]], x[f[1]], x[f[2]], x[f[3]]];

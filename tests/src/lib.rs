@@ -233,11 +233,19 @@ pub fn reference_value(case: &str, measure: &str) -> f64 {
 /// `tdyn validate --fast --cases CASES --np NP --out target/test-runs/TAG` (not under mpirun:
 /// it launches its runs itself); returns (success, report.md).
 pub fn validate_fast(cases: &str, np: usize, tag: &str) -> (bool, String) {
+    validate(cases, np, tag, true, 600)
+}
+
+/// `tdyn validate [--fast] --cases CASES --np NP --out target/test-runs/TAG`, killed after
+/// `limit_s`; returns (success, report.md).
+pub fn validate(cases: &str, np: usize, tag: &str, fast: bool, limit_s: u32) -> (bool, String) {
     let dir = workdir(tag);
     let o = mpi_env(&mut Command::new("timeout"))
-        .arg("600")
+        .arg(limit_s.to_string())
         .arg(tdyn())
-        .args(["validate", "--fast", "--quiet", "--cases", cases])
+        .arg("validate")
+        .args(fast.then_some("--fast"))
+        .args(["--quiet", "--cases", cases])
         .args(["--np", &np.to_string(), "--dir"])
         .arg(root().join("validation"))
         .arg("--out")

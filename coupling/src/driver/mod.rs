@@ -704,6 +704,7 @@ fn start_info<'a>(
         dt_stable: stable0,
         dt,
         end_time: scene.run.end_time,
+        mesh_split: model.mesh_split.map(|s| s.describe()),
     }
 }
 

@@ -37,6 +37,8 @@ pub struct StartInfo<'a> {
     pub dt: f64,
     /// The end time, s.
     pub end_time: f64,
+    /// The mesh's tetrahedra and prisms run as hexahedra, in words (`SplitSummary::describe`).
+    pub mesh_split: Option<String>,
 }
 
 /// The progress reporter of rank 0 (inactive elsewhere and with `--quiet`).
@@ -60,6 +62,9 @@ impl Progress {
             drawn: false,
         };
         let steps = info.end_time / info.dt;
+        if let (true, Some(split)) = (active, &info.mesh_split) {
+            eprintln!("tdyn: {}: mesh: {split}", info.scene);
+        }
         if active {
             eprintln!(
                 "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s at this step (the step shrinks as elements deform; the progress lines update the count)",

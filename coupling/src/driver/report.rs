@@ -135,6 +135,18 @@ pub fn write(
     );
     ex.insert("mass".into(), f.mass.into());
     ex.insert("energy_scale_floor".into(), f.energy_floor.into());
+    if let Some(s) = &model.mesh_split {
+        ex.insert(
+            "mesh_split".into(),
+            serde_json::json!({
+                "tetrahedra": s.tetrahedra,
+                "prisms": s.prisms,
+                "hexahedra": s.hexahedra,
+                "hexahedra_run": s.hexahedra_run,
+                "text": s.describe(),
+            }),
+        );
+    }
     if let Some(fe) = &model.fe {
         ex.insert("blocks".into(), f.hourglass.report(fe.state()));
         // How many ranks put their elements and nodes in a new order (a poor file order).

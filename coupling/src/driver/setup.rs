@@ -4,6 +4,7 @@
 use super::{Algorithms, RunFailure};
 use crate::driver::probes::Probes;
 use crate::input::scene::{self, Mode, Scene};
+use crate::input::split::{self, SplitSummary};
 use crate::input::{gmsh, msh_check};
 use crate::kernels::collective::first_error;
 use crate::stages::contact::{Contact, SearchChoice};
@@ -28,6 +29,9 @@ pub struct Model {
     pub walls: Option<Walls>,
     /// The probes, located.
     pub probes: Probes,
+    /// The mesh's tetrahedra and prisms and the hexahedra they run as (`split`), when it had
+    /// any (every rank).
+    pub mesh_split: Option<SplitSummary>,
 }
 
 impl Model {
@@ -149,10 +153,12 @@ pub fn build(
     algorithms: &Algorithms,
 ) -> Result<Model, RunFailure> {
     let file = scene.file.display().to_string();
+    let mut mesh_split = None;
     let (mut fe, groups) = if scene.meshes.is_empty() {
         (None, Groups::default())
     } else {
-        let (mesh, groups) = load_mesh(world, scene)?;
+        let (mesh, groups, summary) = load_mesh(world, scene)?;
+        mesh_split = summary;
         let implicit_dt = (scene.run.mode == Mode::Implicit)
             .then_some(scene.run.dt)
             .flatten();
@@ -208,23 +214,29 @@ pub fn build(
         contact,
         walls,
         probes,
+        mesh_split,
     })
 }
 
 /// Meshes the scene's `.geo` files on rank 0 (gmsh, cached; several meshes merged, each moved
 /// by its translation), checks the physical groups the scene names, and distributes the mesh
-/// (collective).
+/// (collective). Returns it with the groups and what the split of tetrahedra and prisms did.
 fn load_mesh(
     world: &SimpleCommunicator,
     scene: &Scene,
-) -> Result<(DistributedMesh, Groups), RunFailure> {
+) -> Result<(DistributedMesh, Groups, Option<SplitSummary>), RunFailure> {
     let file = scene.file.display().to_string();
     let mut mesh_path = PathBuf::new();
     let mut surfaces = fe_petsc::mesh::FileSurfaces::default();
     let mut err = None;
+    let mut split_counts = [0u64; 4];
     if world.rank() == 0 {
         match mesh_on_root(scene).and_then(|p| check_on_root(scene, &p)) {
-            Ok((p, summary)) => {
+            Ok((p, summary, split)) => {
+                if let Some(s) = split {
+                    split_counts =
+                        [s.tetrahedra, s.prisms, s.hexahedra, s.hexahedra_run].map(|n| n as u64);
+                }
                 mesh_path = p;
                 surfaces = fe_petsc::mesh::FileSurfaces {
                     nodes: summary.nodes,
@@ -236,6 +248,17 @@ fn load_mesh(
     }
     // The agreement step before PETSc reads the mesh collectively.
     first_error(world, err)?;
+    world
+        .process_at_rank(0)
+        .broadcast_into(&mut split_counts[..]);
+    let [tetrahedra, prisms, hexahedra, hexahedra_run] = split_counts.map(|n| n as usize);
+    let split = SplitSummary {
+        tetrahedra,
+        prisms,
+        hexahedra,
+        hexahedra_run,
+    };
+    let split = split.changed().then_some(split);
     let mut buf = mesh_path.to_string_lossy().into_owned().into_bytes();
     let mut len = buf.len() as u64;
     world.process_at_rank(0).broadcast_into(&mut len);
@@ -273,20 +296,31 @@ fn load_mesh(
             }
         }
     }
-    Ok((dm, groups))
+    Ok((dm, groups, split))
 }
 
 /// Rank 0 checks the mesh file before PETSc reads it (`msh_check`: a whole file, sound nodes
 /// and elements, no inverted or flat element); a mesh in another format than ASCII msh 2.2 is
-/// checked through its conversion by gmsh, and that conversion is what PETSc reads (the
-/// physical surfaces' faces, from the check, index its nodes in its order). Returns the file
-/// to read and the check's summary.
-fn check_on_root(scene: &Scene, msh: &Path) -> Result<(PathBuf, msh_check::MshSummary), String> {
+/// checked through its conversion by gmsh. Tetrahedra and prisms are then split into
+/// hexahedra (`split`, cached beside the conversions), and the split file is checked again
+/// for its summary. What PETSc reads is the last of these files (the physical surfaces'
+/// faces, from its check, index its nodes in its order). Returns the file to read, the
+/// check's summary and what the split did.
+fn check_on_root(
+    scene: &Scene,
+    msh: &Path,
+) -> Result<(PathBuf, msh_check::MshSummary, Option<SplitSummary>), String> {
     let cache = gmsh::default_cache_dir(&scene.dir);
     let m22 = gmsh::as_msh22(msh, &cache).map_err(|e| format!("mesh: {e}"))?;
     let summary =
         msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
-    Ok((m22, summary))
+    let (run, split) = split::split_file(&m22, &cache).map_err(|e| format!("mesh: {e}"))?;
+    if split.is_none() {
+        return Ok((m22, summary, None));
+    }
+    let summary = msh_check::check_file(&run)
+        .map_err(|e| format!("mesh {} (split into hexahedra): {e}", msh.display()))?;
+    Ok((run, summary, split))
 }
 
 /// The `.msh` of the scene's meshes, meshed and merged on rank 0.

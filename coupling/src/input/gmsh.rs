@@ -385,23 +385,61 @@ pub fn physical_names(msh: &Path) -> Result<Vec<PhysicalName>, MeshError> {
     Ok(out)
 }
 
-/// A msh 2.2 ASCII file in memory: what merging needs.
-struct Msh22 {
-    names: Vec<PhysicalName>,
+/// A msh 2.2 ASCII file in memory: what merging and splitting need (`split.rs`).
+pub(crate) struct Msh22 {
+    pub(crate) names: Vec<PhysicalName>,
     /// (gmsh node id, coordinates)
-    nodes: Vec<(u64, [f64; 3])>,
+    pub(crate) nodes: Vec<(u64, [f64; 3])>,
     /// (type, physical tag, elementary tag, node ids)
-    elements: Vec<(i32, i32, i32, Vec<u64>)>,
+    pub(crate) elements: Vec<(i32, i32, i32, Vec<u64>)>,
 }
 
-fn bad(path: &Path, why: &str) -> MeshError {
+/// The msh 2.2 ASCII text of `m`: elements numbered from 1 in order, each with its physical
+/// and elementary tag; coordinates written in Rust's shortest round-trip form (read back to
+/// the same bits).
+pub(crate) fn msh22_text(m: &Msh22) -> String {
+    let mut text = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
+    text.push_str(&format!("$PhysicalNames\n{}\n", m.names.len()));
+    for g in &m.names {
+        text.push_str(&format!("{} {} \"{}\"\n", g.dim, g.tag, g.name));
+    }
+    text.push_str("$EndPhysicalNames\n");
+    text.push_str(&format!("$Nodes\n{}\n", m.nodes.len()));
+    for (id, x) in &m.nodes {
+        text.push_str(&format!("{id} {:?} {:?} {:?}\n", x[0], x[1], x[2]));
+    }
+    text.push_str("$EndNodes\n");
+    text.push_str(&format!("$Elements\n{}\n", m.elements.len()));
+    for (k, (ty, phys, geom, conn)) in m.elements.iter().enumerate() {
+        text.push_str(&format!("{} {ty} 2 {phys} {geom}", k + 1));
+        for c in conn {
+            text.push_str(&format!(" {c}"));
+        }
+        text.push('\n');
+    }
+    text.push_str("$EndElements\n");
+    text
+}
+
+/// Writes `text` to `out` through a temporary file in the same folder (another rank or run
+/// never sees half a file).
+pub(crate) fn write_atomically(out: &Path, text: &str) -> Result<(), MeshError> {
+    let dir = out.parent().unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| bad(dir, &e.to_string()))?;
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh");
+    let tmp = dir.join(format!("{stem}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, text).map_err(|e| bad(&tmp, &e.to_string()))?;
+    std::fs::rename(&tmp, out).map_err(|e| bad(out, &e.to_string()))
+}
+
+pub(crate) fn bad(path: &Path, why: &str) -> MeshError {
     MeshError::File {
         path: path.to_path_buf(),
         why: why.to_string(),
     }
 }
 
-fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
+pub(crate) fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
     let text = std::fs::read_to_string(path).map_err(|e| bad(path, &e.to_string()))?;
     let names = physical_names(path)?;
     let mut nodes = Vec::new();
@@ -525,7 +563,6 @@ pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf,
     }
     // New physical tags per (dim, name), in order of first appearance.
     let mut groups: Vec<PhysicalName> = Vec::new();
-    let mut text = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
     let mut maps = Vec::new();
     for (m, _) in &meshes {
         let mut map = std::collections::BTreeMap::new();
@@ -546,39 +583,28 @@ pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf,
         }
         maps.push(map);
     }
-    text.push_str(&format!("$PhysicalNames\n{}\n", groups.len()));
-    for g in &groups {
-        text.push_str(&format!("{} {} \"{}\"\n", g.dim, g.tag, g.name));
-    }
-    text.push_str("$EndPhysicalNames\n");
-    let total_nodes: usize = meshes.iter().map(|(m, _)| m.nodes.len()).sum();
-    text.push_str(&format!("$Nodes\n{total_nodes}\n"));
+    let mut merged = Msh22 {
+        names: groups,
+        nodes: Vec::new(),
+        elements: Vec::new(),
+    };
     let mut offsets = Vec::new();
     let mut base = 0u64;
     for (m, t) in &meshes {
         offsets.push(base);
         let mut top = 0;
         for (id, x) in &m.nodes {
-            text.push_str(&format!(
-                "{} {:?} {:?} {:?}\n",
-                id + base,
-                x[0] + t[0],
-                x[1] + t[1],
-                x[2] + t[2]
-            ));
+            merged
+                .nodes
+                .push((id + base, [x[0] + t[0], x[1] + t[1], x[2] + t[2]]));
             top = top.max(*id);
         }
         base += top;
     }
-    text.push_str("$EndNodes\n");
-    let total_elems: usize = meshes.iter().map(|(m, _)| m.elements.len()).sum();
-    text.push_str(&format!("$Elements\n{total_elems}\n"));
-    let mut eid = 0u64;
     let mut geom_base = 0;
     for (k, (m, _)) in meshes.iter().enumerate() {
         let mut geom_top = 0;
         for (ty, phys, geom, conn) in &m.elements {
-            eid += 1;
             let dim = match ty {
                 15 => 0,
                 1 | 8 => 1,
@@ -586,20 +612,13 @@ pub fn merge(parts: &[(PathBuf, [f64; 3])], cache_dir: &Path) -> Result<PathBuf,
                 _ => 3,
             };
             let p = maps[k].get(&(dim, *phys)).copied().unwrap_or(0);
-            text.push_str(&format!("{eid} {ty} 2 {p} {}", geom + geom_base));
-            for c in conn {
-                text.push_str(&format!(" {}", c + offsets[k]));
-            }
-            text.push('\n');
+            let conn = conn.iter().map(|c| c + offsets[k]).collect();
+            merged.elements.push((*ty, p, geom + geom_base, conn));
             geom_top = geom_top.max(*geom);
         }
         geom_base += geom_top;
     }
-    text.push_str("$EndElements\n");
-    std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
-    let tmp = cache_dir.join(format!("merged-{hash}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, text).map_err(|e| bad(&tmp, &e.to_string()))?;
-    std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
+    write_atomically(&out, &msh22_text(&merged))?;
     Ok(out)
 }
 

@@ -5,3 +5,4 @@ pub mod liggghts;
 pub mod msh_check;
 pub mod particles;
 pub mod scene;
+pub mod split;
