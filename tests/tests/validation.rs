@@ -119,6 +119,18 @@ fn foot_pressure_scatter(out: &std::path::Path, z_max: f64) -> f64 {
     (diff2 / pairs as f64).sqrt() / (sum2 / n as f64).sqrt()
 }
 
+/// The foot's pressure scatter of existing runs, by hand: `TDYN_OUT=DIR1,DIR2 cargo test
+/// --release -p tdyn-tests --test validation foot_pressure_scatter_of_runs -- --ignored
+/// --nocapture`.
+#[test]
+#[ignore]
+fn foot_pressure_scatter_of_runs() {
+    for dir in std::env::var("TDYN_OUT").unwrap().split(',') {
+        let s = foot_pressure_scatter(std::path::Path::new(dir), 0.003);
+        println!("{dir}: foot pressure scatter {s:.4}");
+    }
+}
+
 /// Issue 30's "done when": the cantilever meshed with gmsh's default tetrahedra of size
 /// depth/4 (validation/cantilever_tets): first bending period within 5 % of Timoshenko at np 1
 /// and 3. Ignored in `make test`: about 135,000 steps of 14,400 hexahedra, 10-15 min per rank

@@ -314,6 +314,10 @@ fn check_on_root(
     let m22 = gmsh::as_msh22(msh, &cache).map_err(|e| format!("mesh: {e}"))?;
     let summary =
         msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
+    if summary.not_hexahedral == 0 {
+        // Hexahedra only: the file runs as it is (not read again).
+        return Ok((m22, summary, None));
+    }
     let (run, split) = split::split_file(&m22, &cache).map_err(|e| format!("mesh: {e}"))?;
     if split.is_none() {
         return Ok((m22, summary, None));

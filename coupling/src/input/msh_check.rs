@@ -83,6 +83,9 @@ pub struct MshSummary {
     /// tag: each face's corners as indices of the nodes in the file's order (PETSc numbers
     /// its vertices in that order), so the FE stage marks its surfaces from them.
     pub surfaces: Vec<(i32, Vec<Vec<usize>>)>,
+    /// Elements other than linear hexahedra, quadrangles, lines and points (tetrahedra, prisms,
+    /// pyramids, triangles, second-order elements): the mesh goes through `split`.
+    pub not_hexahedral: usize,
 }
 
 /// One element row.
@@ -381,6 +384,9 @@ fn check_elements(
     };
     for e in elements {
         summary.elements[e.dim() as usize] += 1;
+        if !matches!(TYPES[e.kind].0, 1 | 3 | 5 | 15) {
+            summary.not_hexahedral += 1;
+        }
         let mut seen = FxHashSet::default();
         for &v in &e.nodes {
             if !nodes.contains_key(&v) {
