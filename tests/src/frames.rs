@@ -9,6 +9,15 @@ pub struct Frames {
     pub connectivity: Vec<[usize; 8]>,
 }
 
+/// The last frame's group of a run's fields.h5 (`/frames/NNNNNN`, the largest number).
+pub fn last_frame(out: &std::path::Path) -> hdf5::Group {
+    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
+    let mut names = f.group("frames").unwrap().member_names().unwrap();
+    names.sort();
+    f.group(&format!("frames/{}", names.last().unwrap()))
+        .unwrap()
+}
+
 pub fn read_frames(out: &std::path::Path) -> Frames {
     let f = hdf5::File::open(out.join("fields.h5")).unwrap();
     let mut names = f.group("frames").unwrap().member_names().unwrap();

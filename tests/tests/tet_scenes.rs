@@ -132,12 +132,7 @@ struct ElementState {
 
 fn last_element_state(out: &std::path::Path) -> ElementState {
     let fr = read_frames(out);
-    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
-    let mut names = f.group("frames").unwrap().member_names().unwrap();
-    names.sort();
-    let g = f
-        .group(&format!("frames/{}", names.last().unwrap()))
-        .unwrap();
+    let g = last_frame(out);
     let ids: Vec<u64> = g.dataset("elements/id").unwrap().read_raw().unwrap();
     let s: Vec<f64> = g.dataset("elements/stress").unwrap().read_raw().unwrap();
     assert!(

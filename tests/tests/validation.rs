@@ -83,12 +83,8 @@ const CHECKERBOARD_FACTOR: f64 = 2.0;
 /// sharing a face, over the RMS of the pressure there.
 fn foot_pressure_scatter(out: &std::path::Path, z_max: f64) -> f64 {
     let fr = tdyn_tests::frames::read_frames(out);
-    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
-    let mut names = f.group("frames").unwrap().member_names().unwrap();
-    names.sort();
-    let last = names.last().unwrap();
-    let p: Vec<f64> = f
-        .dataset(&format!("frames/{last}/elements/pressure"))
+    let p: Vec<f64> = tdyn_tests::frames::last_frame(out)
+        .dataset("elements/pressure")
         .unwrap()
         .read_raw()
         .unwrap();

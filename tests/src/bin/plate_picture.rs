@@ -5,7 +5,7 @@
 //!
 //! `cargo run --release -p tdyn-tests --bin plate_picture -- OUT_DIR PULL_PA docs/img/plate_hole.svg`
 use std::fmt::Write;
-use tdyn_tests::frames::{read_frames, FACES};
+use tdyn_tests::frames::{last_frame, read_frames, FACES};
 
 /// Picture size (px) and the margin for the colour bar.
 const WIDTH_PX: f64 = 720.0;
@@ -51,12 +51,7 @@ fn main() {
     let out = std::path::Path::new(&args[1]);
     let pull: f64 = args[2].parse().expect("PULL_PA: a number (Pa)");
     let fr = read_frames(out);
-    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
-    let mut names = f.group("frames").unwrap().member_names().unwrap();
-    names.sort();
-    let g = f
-        .group(&format!("frames/{}", names.last().unwrap()))
-        .unwrap();
+    let g = last_frame(out);
     let stress: Vec<f64> = g.dataset("elements/stress").unwrap().read_raw().unwrap();
     let x0 = &fr.positions[0];
     let faces = top_faces(x0, &fr.connectivity);
