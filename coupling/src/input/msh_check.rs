@@ -11,7 +11,7 @@
 //! - every node row is `id x y z` with finite coordinates, each id defined once;
 //! - every element row has the node count of its gmsh type, each node defined in `$Nodes` and
 //!   listed once;
-//! - every hexahedron and tetrahedron has a positive volume (not inverted, not flat: more than
+//! - every hexahedron, tetrahedron and prism has a positive volume (not inverted, not flat: more than
 //!   [`FLAT_VOLUME`] times the cube of its longest edge), named with its centroid;
 //! - in a 3D mesh every surface element is a face, every line element an edge and every point
 //!   element a node of some volume element.
@@ -416,24 +416,38 @@ fn check_elements(
     Ok(summary)
 }
 
-/// A hexahedron's or tetrahedron's volume is positive and not flat.
+/// The signed volume of the tetrahedron `(p[a], p[b], p[c], p[d])`, m^3 (positive in gmsh's
+/// order).
+fn tet_volume(p: &[[f64; 3]], [a, b, c, d]: [usize; 4]) -> f64 {
+    let e = |k: usize| std::array::from_fn::<f64, 3, _>(|i| p[k][i] - p[a][i]);
+    let (u, v, w) = (e(b), e(c), e(d));
+    (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+        + u[2] * (v[0] * w[1] - v[1] * w[0]))
+        / 6.0
+}
+
+/// A hexahedron's, tetrahedron's or prism's volume is positive and not flat. A prism (gmsh's
+/// node order: the triangle 0 1 2 below 3 4 5) is measured as the three tetrahedra 0123, 1234
+/// and 2345, exact where its quadrangles are planar, and inverted or flat where they are.
 fn check_volume(nodes: &FxHashMap<i64, ([f64; 3], usize)>, e: &Element) -> Result<(), String> {
     let x = |k: usize| nodes[&e.nodes[k]].0;
-    let corners = match e.faces().len() {
-        6 => 8,
-        4 => 4,
+    let corners = match (e.faces().len(), e.nodes.len()) {
+        (6, _) => 8,
+        (4, _) => 4,
+        (5, 6) => 6,
         _ => return Ok(()),
     };
     let pts: Vec<[f64; 3]> = (0..corners).map(x).collect();
-    let volume = if corners == 8 {
-        let hex: [[f64; 3]; 8] = std::array::from_fn(|k| pts[k]);
-        fe_petsc::hex::volume(&hex)
-    } else {
-        let d = |k: usize| std::array::from_fn::<f64, 3, _>(|c| pts[k][c] - pts[0][c]);
-        let (a, b, c) = (d(1), d(2), d(3));
-        (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-            + a[2] * (b[0] * c[1] - b[1] * c[0]))
-            / 6.0
+    let volume = match corners {
+        8 => {
+            let hex: [[f64; 3]; 8] = std::array::from_fn(|k| pts[k]);
+            fe_petsc::hex::volume(&hex)
+        }
+        6 => [[0, 1, 2, 3], [1, 2, 3, 4], [2, 3, 4, 5]]
+            .into_iter()
+            .map(|t| tet_volume(&pts, t))
+            .sum(),
+        _ => tet_volume(&pts, [0, 1, 2, 3]),
     };
     let mut longest: f64 = 0.0;
     for i in 0..corners {
@@ -546,6 +560,28 @@ $Elements\n3\n1 3 2 2 1 1 4 8 5\n2 5 2 1 1 1 2 3 4 5 6 7 8\n3 5 2 1 1 2 9 10 3 6
     fn with(from: &str, to: &str) -> String {
         assert!(TWO_HEXES.contains(from), "{from}");
         TWO_HEXES.replacen(from, to, 1)
+    }
+
+    /// One prism (gmsh's reference: the triangle (0,0,0) (1,0,0) (0,1,0) below the same at z = 2),
+    /// volume 1 m^3.
+    const PRISM: &str = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n\
+$Nodes\n6\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 2\n5 1 0 2\n6 0 1 2\n$EndNodes\n\
+$Elements\n1\n1 6 2 1 1 1 2 3 4 5 6\n$EndElements\n";
+
+    #[test]
+    fn a_prism_upside_down_or_flat_is_named() {
+        assert_eq!(check(PRISM).unwrap().elements, [0, 0, 0, 1]);
+        // Its two triangles swapped: volume -1 m^3 (the reference's, negated).
+        let e =
+            check(&PRISM.replace("1 6 2 1 1 1 2 3 4 5 6", "1 6 2 1 1 4 5 6 1 2 3")).unwrap_err();
+        assert!(
+            e.contains("element 1 (prism) is inverted: volume -1.000e0 m^3"),
+            "{e}"
+        );
+        // The top triangle on the bottom one's plane: zero volume.
+        let e = check(&PRISM.replace("\n4 0 0 2\n5 1 0 2\n6 0 1 2", "\n4 0 0 0\n5 1 0 0\n6 0 1 0"))
+            .unwrap_err();
+        assert!(e.contains("has zero volume"), "{e}");
     }
 
     #[test]
