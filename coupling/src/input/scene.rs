@@ -298,6 +298,10 @@ pub struct Block {
     #[serde(default)]
     #[serde(deserialize_with = "vec3::exact")]
     pub velocity: [f64; 3],
+    /// SCENE.md's `failed` (what a failed element becomes): read so that a scene using it is
+    /// refused by name (element failure is not built yet: docs/status.md).
+    #[serde(default)]
+    pub failed: Option<toml::Value>,
 }
 
 /// Boundary condition kinds.
@@ -575,6 +579,10 @@ pub struct SphDef {
     pub artificial_viscosity: Option<ArtificialViscosity>,
     #[serde(default)]
     pub tensile_correction: Option<TensileCorrection>,
+    /// SCENE.md's `artificial_stress` (solid particles): read so that a scene using it is
+    /// refused by name (solid particles are not built yet: docs/status.md).
+    #[serde(default)]
+    pub artificial_stress: Option<toml::Value>,
     #[serde(default)]
     pub periodic: Option<Periodic>,
     #[serde(default = "d_profile")]
