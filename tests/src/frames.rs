@@ -303,6 +303,20 @@ pub fn bodies(conn: &[[usize; 8]]) -> Vec<Body> {
 /// The deepest penetration of any skin node of one body into another body of the mesh, in
 /// configuration `pos` (see [`deepest_penetration`]): (depth, node), over every ordered pair of
 /// distinct bodies.
+/// The deepest node of any body inside another over all frames: (depth m, the frame's time s,
+/// the node), from [`deepest_between_bodies`] frame by frame (the first frame of the largest
+/// depth; depth 0 and node `usize::MAX` when none is inside).
+pub fn deepest_over_frames(fr: &Frames, bodies: &[Body]) -> (f64, f64, usize) {
+    let mut deepest = (0.0f64, 0.0f64, usize::MAX);
+    for (k, pos) in fr.positions.iter().enumerate() {
+        let (d, n) = deepest_between_bodies(pos, &fr.connectivity, bodies);
+        if d > deepest.0 {
+            deepest = (d, fr.times[k], n);
+        }
+    }
+    deepest
+}
+
 pub fn deepest_between_bodies(
     pos: &[[f64; 3]],
     conn: &[[usize; 8]],

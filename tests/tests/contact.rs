@@ -597,13 +597,7 @@ fn flat_block_on_a_plate_never_lets_a_node_through_whatever_the_alignment() {
             let bodies = bodies(&fr.connectivity);
             assert_eq!(bodies.len(), 2, "{name}: two bodies");
             assert!(max_frame_motion(&fr) < 0.5 * PLATE_THICKNESS);
-            let mut deepest = (0.0f64, 0.0f64, usize::MAX);
-            for (k, pos) in fr.positions.iter().enumerate() {
-                let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
-                if d > deepest.0 {
-                    deepest = (d, fr.times[k], n);
-                }
-            }
+            let deepest = deepest_over_frames(&fr, &bodies);
             eprintln!(
                 "{name} np {np}: deepest node inside the other body {:.3e} m (t = {:.3e}, node {})",
                 deepest.0, deepest.1, deepest.2
@@ -821,13 +815,7 @@ fn ball_on_a_clamped_plate_stays_out_of_it_with_or_without_a_node_under_its_pole
             let bodies = bodies(&fr.connectivity);
             assert_eq!(bodies.len(), 2);
             assert!(max_frame_motion(&fr) < 0.5 * 0.004);
-            let mut deepest = (0.0f64, 0.0f64, usize::MAX);
-            for (k, pos) in fr.positions.iter().enumerate() {
-                let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
-                if d > deepest.0 {
-                    deepest = (d, fr.times[k], n);
-                }
-            }
+            let deepest = deepest_over_frames(&fr, &bodies);
             eprintln!(
                 "ball, plate {np_plate}^2, np {np}: deepest node inside the other body {:.3e} m (t = {:.3e}), energy error {err_max:.2e} at most, {err_end:.2e} at the end",
                 deepest.0, deepest.1

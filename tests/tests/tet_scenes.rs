@@ -40,13 +40,7 @@ fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
     assert_eq!(bodies.len(), 2, "a ball and a plate");
     let motion = max_frame_motion(&fr);
     assert!(motion < 0.5 * BALL_PLATE_HP, "frames {motion} m apart");
-    let mut deepest = (0.0f64, 0.0f64, usize::MAX);
-    for (k, pos) in fr.positions.iter().enumerate() {
-        let (d, n) = deepest_between_bodies(pos, &fr.connectivity, &bodies);
-        if d > deepest.0 {
-            deepest = (d, fr.times[k], n);
-        }
-    }
+    let deepest = deepest_over_frames(&fr, &bodies);
     eprintln!(
         "tet ball on tet plate: deepest node {:.3e} m inside the other body (t = {:.3e}), energy error {err_max:.2e} at most",
         deepest.0, deepest.1
