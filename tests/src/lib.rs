@@ -409,3 +409,64 @@ pub fn assert_refused(name: &str, scene: &Path, out: &Path, needle: &str, names_
         "{name}: the message names the file:\n{err}"
     );
 }
+
+/// A run's bits in one number: FNV-1a (64 bits) over history.csv without the run's own
+/// measurements (`contact_imbalance`, `contact_bytes`), then probes.csv, reactions.csv and
+/// contact_forces.csv (those the run wrote), then every frame's
+/// datasets in fields.h5 (each group's values in id order, the rank column left out). Two runs
+/// with the same digest wrote the same results; the one-answer guarantee (docs/scene.md) says
+/// every CPU writes the same digest for a scene. `run_digest DIR` prints it.
+pub fn run_digest(out: &Path) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let keep: Vec<bool> = head
+        .iter()
+        .map(|c| !["contact_imbalance", "contact_bytes"].contains(c))
+        .collect();
+    for line in std::iter::once(head.join(",").as_str()).chain(lines) {
+        for (cell, _) in line.split(',').zip(&keep).filter(|(_, &k)| k) {
+            eat(cell.as_bytes());
+            eat(b",");
+        }
+        eat(b"\n");
+    }
+    for file in ["probes.csv", "reactions.csv", "contact_forces.csv"] {
+        eat(&std::fs::read(out.join(file)).unwrap_or_default());
+    }
+    let file = hdf5::File::open(out.join("fields.h5")).unwrap();
+    let mut frames = file.group("frames").unwrap().member_names().unwrap();
+    frames.sort();
+    for fr in &frames {
+        let g = file.group(&format!("frames/{fr}")).unwrap();
+        let mut groups = g.member_names().unwrap();
+        groups.sort();
+        for grp in groups {
+            let Ok(gg) = g.group(&grp) else { continue };
+            let Ok(ids) = gg.dataset("id") else { continue };
+            let ids: Vec<u64> = ids.read_raw().unwrap();
+            let mut order: Vec<usize> = (0..ids.len()).collect();
+            order.sort_by_key(|&i| ids[i]);
+            let mut names = gg.member_names().unwrap();
+            names.sort();
+            for ds in names.iter().filter(|d| *d != "id" && *d != "rank") {
+                let v: Vec<f64> = gg.dataset(ds).unwrap().read_raw().unwrap();
+                let w = v.len() / ids.len().max(1);
+                eat(format!("{fr}/{grp}/{ds}").as_bytes());
+                for &i in &order {
+                    for c in 0..w {
+                        eat(&v[i * w + c].to_bits().to_le_bytes());
+                    }
+                }
+            }
+        }
+    }
+    format!("{h:016x}")
+}
