@@ -37,6 +37,17 @@ fn taylor_copper_bar_at_n6_within_the_literature() {
     passes_at_np1_and_np3("taylor_copper");
 }
 
+/// Johnson-Cook with thermal softening and adiabatic heating against two published codes: the
+/// steel Taylor bar of the DynELA manual (validation/taylor_jc_steel: DynELA and
+/// Abaqus/Explicit) at N = 6, at np 1 and 3: final length within 1 %, impact-face diameter
+/// within 3 %, the centre element's temperature rise within 5 % and its plastic strain within
+/// 8 % (measured 0.08 %, 0.7 %, 1.2 %, 1.4 %). The isothermal law misses the foot by 7.6 %
+/// and the plastic strain by 23 %, so the thermal term is what passes.
+#[test]
+fn johnson_cook_thermal_taylor_bar_matches_dynela_and_abaqus() {
+    passes_at_np1_and_np3("taylor_jc_steel");
+}
+
 /// Issue 30's "done when" on tetrahedra, as the hexahedral case above: the copper Taylor bar
 /// on gmsh's default tetrahedra of size R/6 (validation/taylor_copper_tets, each tetrahedron
 /// run as 4 hexahedra): length within 2 % and foot radius within 4 % of the literature at np 1
