@@ -8,7 +8,10 @@
 //! contact node's body to the node's owner; the master bodies of a one-pass search (`[contact]
 //! passes = 1`: the bodies with an element in a `master` volume) go to every rank. Each step the
 //! FE rank then hands the contact stage its owned contact nodes and its faces with their nodes'
-//! records (flagged `contact::FLAG_MASTER` on a master body).
+//! records (flagged `contact::FLAG_MASTER` on a master body), and at a rebuild each face goes
+//! to the contact owner of its first node ([`faces_to_owners`]).
+use crate::kernels::comm::CommPlan;
+use crate::kernels::rcb::CutTree;
 use bytemuck::{Pod, Zeroable};
 use contact::{FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
@@ -17,6 +20,7 @@ use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::collections::HashMap;
+use std::rc::Rc;
 
 /// A face with the records of its four nodes: what the FE owners send the contact stage.
 #[repr(C)]
@@ -358,4 +362,20 @@ impl FeContact {
         }
         out
     }
+}
+
+/// Step 3 of a rebuild: each face with its nodes to the contact owner of its first node in the
+/// new cuts `tree` (collective). Returns the faces this rank now holds and the bytes it sent.
+pub(crate) fn faces_to_owners(
+    comm: &Rc<SimpleCommunicator>,
+    tree: &CutTree,
+    faces: &[FullFace],
+) -> (Vec<FullFace>, u64) {
+    let dest: Vec<i32> = faces
+        .iter()
+        .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
+        .collect();
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let my_faces = plan.exchange(faces);
+    (my_faces, plan.bytes_sent)
 }

@@ -89,30 +89,28 @@ impl ContactStage {
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
         let tt = Instant::now();
-        let (mut force, back_bytes) =
-            mesh_forces_home(st, &owned_force[..n_owned], &fe_inputs, nodes.len());
+        let (mut force, back_bytes) = mesh_forces_home(
+            (&mut st.plan, &st.owned_home, &st.source_of_home),
+            &owned_force[..n_owned],
+            &fe_inputs,
+            nodes.len(),
+        );
         bytes += back_bytes;
         t_bytes += back_bytes;
         let mut held = vec![false; nodes.len()];
         if let Some(mut plan) = pplan {
-            let before = plan.bytes_sent;
-            // Each particle's force and whether immovable faces alone hold it (1 or 0).
             let flags = match &st.pbox {
                 Some((_, pb, _)) => held_particles(pb, &pcontacts, pgot.len()),
                 None => vec![false; pgot.len()],
             };
-            let out: Vec<[f64; 4]> = owned_force[n_owned..]
-                .iter()
-                .zip(&flags)
-                .map(|(f, &h)| [f[0], f[1], f[2], f64::from(u8::from(h))])
-                .collect();
-            let back = plan.reverse(&out);
-            for (item, f) in pitems.iter().zip(&back) {
-                force[item.home_idx as usize] = [f[0], f[1], f[2]];
-                held[item.home_idx as usize] = f[3] != 0.0;
-            }
-            bytes += plan.bytes_sent - before;
-            t_bytes += plan.bytes_sent - before;
+            let sent = particle_forces_home(
+                &mut plan,
+                &pitems,
+                (&owned_force[n_owned..], &flags),
+                (&mut force, &mut held),
+            );
+            bytes += sent;
+            t_bytes += sent;
         }
         t_s += tt.elapsed().as_secs_f64();
         let work_items = st.work_items + pgot.len() as f64;
@@ -284,20 +282,4 @@ fn send_mesh_records(st: &mut Sticky, nodes: &[NodeRecord]) -> (Vec<u32>, u64) {
         n.set_motion(slot as usize, r);
     }
     (fe_inputs, sent)
-}
-
-/// Step 3 of a rebuild: each face with its nodes to the contact owner of its first node in the
-/// new cuts `tree` (collective). Returns the faces this rank now holds and the bytes it sent.
-fn faces_to_owners(
-    comm: &Rc<SimpleCommunicator>,
-    tree: &CutTree,
-    faces: &[FullFace],
-) -> (Vec<FullFace>, u64) {
-    let dest: Vec<i32> = faces
-        .iter()
-        .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
-        .collect();
-    let mut plan = CommPlan::new_shared(comm, &dest);
-    let my_faces = plan.exchange(faces);
-    (my_faces, plan.bytes_sent)
 }
