@@ -9,11 +9,13 @@
 //! passes = 1`: the bodies with an element in a `master` volume) go to every rank. Each step the
 //! FE rank then hands the contact stage its owned contact nodes and its faces with their nodes'
 //! records (flagged `contact::FLAG_MASTER` on a master body), and at a rebuild each face goes
-//! to the contact owner of its first node ([`faces_to_owners`]).
+//! to the contact owner of its first node (`faces_to_owners`); on a kept decomposition the
+//! nodes' records go straight to the boxes holding them (`send_mesh_records`).
+use super::is_particle;
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::CutTree;
 use bytemuck::{Pod, Zeroable};
-use contact::{FaceRecord, NodeRecord};
+use contact::{ContactNodes, FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
 use fe_petsc::mesh::LocalMesh;
 use mpi::datatype::PartitionMut;
@@ -435,4 +437,34 @@ pub(crate) fn faces_to_owners(
     let mut plan = CommPlan::new_shared(comm, &dest);
     let my_faces = plan.exchange(faces);
     (my_faces, plan.bytes_sent)
+}
+
+/// Step 1 (and 3, 5-6) on a kept contact decomposition: the mesh nodes' records (`nodes`, the
+/// records lent this step; particles skipped) straight to the boxes holding them along the
+/// kept plan (`send_idx[k]`: the mesh input sent as the plan's item k; `recv_slot`: the box
+/// slot of each record received, in arrival order), written in place into the kept box's
+/// nodes `into` (collective). `send_buf` keeps the records in plan order (its memory reused).
+/// Returns the input index of each mesh input and the bytes sent.
+pub(crate) fn send_mesh_records(
+    (plan, send_idx, recv_slot): (&mut CommPlan, &[u32], &[u32]),
+    send_buf: &mut Vec<NodeRecord>,
+    nodes: &[NodeRecord],
+    into: &mut ContactNodes,
+) -> (Vec<u32>, u64) {
+    let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
+        .filter(|&i| !is_particle(&nodes[i as usize]))
+        .collect();
+    send_buf.clear();
+    send_buf.extend(
+        send_idx
+            .iter()
+            .map(|&k| nodes[fe_inputs[k as usize] as usize]),
+    );
+    let before = plan.bytes_sent;
+    let got = plan.exchange(send_buf);
+    let sent = plan.bytes_sent - before;
+    for (r, &slot) in got.iter().zip(recv_slot) {
+        into.set_motion(slot as usize, r);
+    }
+    (fe_inputs, sent)
 }

@@ -69,8 +69,8 @@ use crate::transfer::bodies_contact::{home_items, to_owners};
 use crate::transfer::contact_bodies::send_home;
 use crate::transfer::contact_fe::mesh_forces_home;
 use crate::transfer::contact_sph::particle_forces_home;
-use crate::transfer::fe_contact::faces_to_owners;
 pub use crate::transfer::fe_contact::FullFace;
+use crate::transfer::fe_contact::{faces_to_owners, send_mesh_records};
 use crate::transfer::sph_contact::particles_to_boxes;
 use crate::transfer::{is_particle, CNode};
 

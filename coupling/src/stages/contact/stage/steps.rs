@@ -23,7 +23,12 @@ impl ContactStage {
         // 1 (and 3, 5-6). The mesh nodes' records straight to the boxes holding them, written
         // in place.
         let tt = Instant::now();
-        let (fe_inputs, sent) = send_mesh_records(st, nodes);
+        let (fe_inputs, sent) = send_mesh_records(
+            (&mut st.plan, &st.send_idx, &st.recv_slot),
+            &mut st.send_buf,
+            nodes,
+            &mut st.b.nodes,
+        );
         bytes += sent;
         t_bytes += sent;
         // Particles (never face corners) to the box their predicted position falls in: the
@@ -256,29 +261,6 @@ impl ContactStage {
             t_s,
         })
     }
-}
-
-/// Step 1 (and 3, 5-6) on a kept decomposition: the mesh nodes' records straight to the boxes
-/// holding them along the kept plan, written in place (collective). Returns the input index
-/// of each mesh input and the bytes sent.
-fn send_mesh_records(st: &mut Sticky, nodes: &[NodeRecord]) -> (Vec<u32>, u64) {
-    let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
-        .filter(|&i| !is_particle(&nodes[i as usize]))
-        .collect();
-    st.send_buf.clear();
-    st.send_buf.extend(
-        st.send_idx
-            .iter()
-            .map(|&k| nodes[fe_inputs[k as usize] as usize]),
-    );
-    let before = st.plan.bytes_sent;
-    let got = st.plan.exchange(&st.send_buf);
-    let sent = st.plan.bytes_sent - before;
-    let n = &mut st.b.nodes;
-    for (r, &slot) in got.iter().zip(&st.recv_slot) {
-        n.set_motion(slot as usize, r);
-    }
-    (fe_inputs, sent)
 }
 
 /// Step 7 on a kept decomposition: the search of the kept box over its candidate lists (rebuilt
