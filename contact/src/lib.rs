@@ -22,6 +22,8 @@
 //!   node's contacts chosen deterministically (the deepest, and those on faces at an angle).
 //! - [`push_back()`]: kinematic contact (Taylor and Flanagan), momentum-conserving to round-off.
 //! - [`surfaces()`]: boundary faces and bodies of a hexahedral mesh.
+//! - [`energy`]: the push-back's energy bookkeeping (what a correction books, what the guard
+//!   weighs), the same for mesh nodes and particles.
 //! - [`wall`]: a rigid wall (an infinite plane, moving or not), its push-back in closed form.
 //!
 //! Units are SI. Determinism: results depend only on geometry and global ids, never on the order
@@ -29,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod data;
+pub mod energy;
 pub mod geometry;
 mod grid;
 pub mod pair;

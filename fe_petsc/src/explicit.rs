@@ -37,7 +37,7 @@ mod elements;
 mod loads;
 mod queries;
 mod restart;
-pub use contact::booked_kick;
+pub use contact::ContactCorrection;
 pub use loads::{face_forces, PressureLoad};
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 

@@ -68,7 +68,7 @@ pub struct Particles {
     pub hold: Vec<[f64; 3]>,
     /// Contact corrections: bit 0 set when the push-back or a wall moved the particle in the
     /// last step, bit 1 in this one (the step's drift shifts bit 1 into bit 0; what the
-    /// push-back books depends on it: `fe_petsc::explicit::booked_kick`). Carried.
+    /// push-back books depends on it: `contact::energy::booked_kick`). Carried.
     pub pushed: Vec<u8>,
     /// The exact sums a pass adds to, one per entry (sized by the passes' resets; not carried).
     pub sums: Vec<PairSums>,

@@ -66,7 +66,7 @@ fn underwater_explosion_peak_pressure_against_cole_energy_and_rank_counts() {
         // docs/scene.md's bound on contact_energy, 1e-3 of the energy scale between rows
         // (E0 = 1.12e5 J), holds here too: the products pressed on the cavity's faces from
         // rest, whose onset contact booked as given back (143 J, 1.28e-3, before
-        // `fe_petsc::explicit::booked_kick`). Measured: largest fall 1.2e-5 (np 1).
+        // `contact::energy::booked_kick`). Measured: largest fall 1.2e-5 (np 1).
         run_ok_with_contact_fall(
             np,
             &root().join("scenes/underwater_explosion.toml"),

@@ -186,20 +186,24 @@ pub fn build(
     )?;
     let block_names: Vec<String> = scene.blocks.iter().map(|b| b.group.clone()).collect();
     let particle_names: Vec<String> = scene.particles.iter().map(|p| p.name.clone()).collect();
-    let contact = match (&scene.contact, &fe) {
-        (Some(def), Some(fe)) => Some(Contact::new(
-            world,
-            &file,
-            (def, &block_names, &particle_names),
-            &groups,
-            fe,
-            sph.is_some(),
-            SearchChoice {
-                static_decomposition: algorithms.contact_static,
-                kept: algorithms.contact_kept,
-                skins: algorithms.contact_skins,
-            },
-        )?),
+    let contact = match (&scene.contact, &mut fe) {
+        (Some(def), Some(fe)) => {
+            // The FE stage lends the contact stage the nodes and faces of the named surfaces.
+            let mesh_ids = fe.mesh.local.global_nodes;
+            let surfaces = fe.set_contact_surfaces(world, def, &block_names, &groups);
+            Some(Contact::new(
+                world,
+                &file,
+                (def, &block_names, &particle_names),
+                (surfaces, mesh_ids),
+                sph.is_some(),
+                SearchChoice {
+                    static_decomposition: algorithms.contact_static,
+                    kept: algorithms.contact_kept,
+                    skins: algorithms.contact_skins,
+                },
+            )?)
+        }
         _ => None,
     };
     let walls = Walls::new(&scene.rigid_walls);

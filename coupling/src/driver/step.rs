@@ -8,6 +8,7 @@
 //! the corrected positions, each ending with its closing kick (step 6). An implicit FE stage
 //! takes its whole Newton step in `forces`.
 use super::setup::Model;
+use crate::stages::contact::body::ContactBody;
 use crate::stages::StageError;
 use mpi::topology::SimpleCommunicator;
 
@@ -25,7 +26,8 @@ pub fn step(
     }
     // 4-5. Contact detection on the contact decomposition; push-back on nodes and particles.
     if let (Some(contact), Some(fe)) = (&mut model.contact, &mut model.fe) {
-        contact.step(world, fe, model.sph.as_mut(), dt)?;
+        let particles = model.sph.as_mut().map(|s| s as &mut dyn ContactBody);
+        contact.step(world, (fe, particles), (t, dt))?;
     }
     // The rigid walls put back what the drift or the push-back left behind them.
     if let Some(walls) = &mut model.walls {

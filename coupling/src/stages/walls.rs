@@ -11,9 +11,10 @@
 //! move to the contact decomposition and back, and a `[contact]` table the scene may not have.
 //!
 //! The correction goes through the stages' own push-back interfaces
-//! (`ExplicitFe::apply_contact`, `SphStage::apply_contact`), which apply a node's constraints
+//! (`stages::fe::apply_contact`, `SphStage::apply_contact`), which apply a node's constraints
 //! and return the step's change of kinetic energy beyond what the element, pair and gravity
-//! work count, `dK = sum m dv . (v(n+1/2) + dv/2 - a(n) dt/2)`. The wall's reaction, the force
+//! work count, `dK = sum m dv . (v(n+1/2) + dv/2 - a(n) dt/2)`, booked as the contact stage
+//! books its corrections (`contact::energy`). The wall's reaction, the force
 //! it applies to the bodies, is the impulse it gives, `J = sum m dv` over owned nodes and
 //! particles on the momentum grids (exact: the same bits at any rank count); reactions.csv
 //! shows its mean over each row's interval (`Walls::forces`).
@@ -150,7 +151,7 @@ impl Walls {
                 .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
                 .map(|n| (n, state.v[n]))
                 .collect();
-            let w = state.apply_contact(&f, dt);
+            let w = super::fe::apply_contact(state, &f, dt);
             exact_sum::merge(&mut folds[0], &w);
             for (n, v0) in touched {
                 for c in 0..3 {

@@ -8,15 +8,21 @@
 //! contact node's body to the node's owner; the master bodies of a one-pass search (`[contact]
 //! passes = 1`: the bodies with an element in a `master` volume) go to every rank. Each step the
 //! FE rank then hands the contact stage its owned contact nodes and its faces with their nodes'
-//! records (flagged `contact::FLAG_MASTER` on a master body).
+//! records (flagged `contact::FLAG_MASTER` on a master body), and at a rebuild each face goes
+//! to the contact owner of its first node (`faces_to_owners`); on a kept decomposition the
+//! nodes' records go straight to the boxes holding them (`send_mesh_records`).
+use super::is_particle;
+use crate::kernels::comm::CommPlan;
+use crate::kernels::rcb::CutTree;
 use bytemuck::{Pod, Zeroable};
-use contact::{FaceRecord, NodeRecord};
+use contact::{ContactNodes, FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
 use fe_petsc::mesh::LocalMesh;
 use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::collections::HashMap;
+use std::rc::Rc;
 
 /// A face with the records of its four nodes: what the FE owners send the contact stage.
 #[repr(C)]
@@ -104,6 +110,155 @@ fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> 
     }
 }
 
+/// What [`FeContact::build`] gathers from each rank: its elements (element gid, 8 node gids),
+/// its owned nodes (gid, surface bits), and each element's flag of a master volume and block
+/// (the index in `block_tags`; `block_tags.len()` for none).
+fn local_inputs(mesh: &LocalMesh, master_volumes: &[i32], block_tags: &[i32]) -> [Vec<u64>; 4] {
+    let elems: Vec<u64> = mesh
+        .elems
+        .iter()
+        .zip(&mesh.elem_id)
+        .flat_map(|(c, &id)| std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize])))
+        .collect();
+    let nodes: Vec<u64> = (0..mesh.node_id.len())
+        .filter(|&n| mesh.owned[n])
+        .flat_map(|n| [mesh.node_id[n], mesh.node_surfaces[n] as u64])
+        .collect();
+    let in_master: Vec<u64> = mesh
+        .elem_block
+        .iter()
+        .map(|t| master_volumes.contains(t) as u64)
+        .collect();
+    let nb = block_tags.len();
+    let in_block: Vec<u64> = mesh
+        .elem_block
+        .iter()
+        .map(|t| block_tags.iter().position(|b| b == t).unwrap_or(nb) as u64)
+        .collect();
+    [elems, nodes, in_master, in_block]
+}
+
+/// What rank 0 finds of the whole mesh's contact surfaces ([`root_surfaces`]).
+#[derive(Default)]
+struct RootSurfaces {
+    /// For each rank: its faces (gid, element gid, side, 4 node gids, body), a `u64::MAX`
+    /// marker, then its contact nodes (gid, body).
+    per_rank: Vec<Vec<u64>>,
+    /// Bodies in the mesh.
+    n_bodies: u32,
+    /// Each body's master flag (0 or 1).
+    master_body: Vec<u64>,
+    /// Faces kept.
+    global_faces: u64,
+    /// Each body's block (the first in scene order among its elements').
+    body_block: Vec<u64>,
+    /// Each block's flag of a contact face (0 or 1).
+    block_in_contact: Vec<u64>,
+}
+
+/// On rank 0: the boundary faces and bodies of the whole mesh (elements `all_e` gathered from
+/// `p` ranks in `counts_e`, owned nodes `all_n` in `counts_n`, each element's master flag and
+/// block), the faces kept (all four nodes on a surface of `surface_bits`; every boundary face
+/// for `None`), numbered by (element gid, side), and what each rank gets.
+fn root_surfaces(
+    p: usize,
+    (all_e, counts_e): (&[u64], &[i32]),
+    (all_n, counts_n): (&[u64], &[i32]),
+    (all_master, all_block): (&[u64], &[u64]),
+    (surface_bits, nb): (Option<u32>, usize),
+) -> RootSurfaces {
+    // Element k of the gathered list came from rank elem_rank[k].
+    let mut elem_rank = Vec::new();
+    for (r, &c) in counts_e.iter().enumerate() {
+        elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
+    }
+    // In element gid order, so that bodies (numbered by their first element) do not
+    // depend on the rank count.
+    let mut order: Vec<usize> = (0..elem_rank.len()).collect();
+    order.sort_unstable_by_key(|&k| all_e[9 * k]);
+    let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
+    let hexes: Vec<[u64; 8]> = order
+        .iter()
+        .map(|&k| std::array::from_fn(|j| all_e[9 * k + 1 + j]))
+        .collect();
+    let elem_gid: Vec<u64> = order.iter().map(|&k| all_e[9 * k]).collect();
+    let mut bits: HashMap<u64, u32> = HashMap::new();
+    let mut node_rank: HashMap<u64, usize> = HashMap::new();
+    let mut off = 0;
+    for (r, &c) in counts_n.iter().enumerate() {
+        for pair in all_n[off..off + c as usize].chunks(2) {
+            bits.insert(pair[0], pair[1] as u32);
+            node_rank.insert(pair[0], r);
+        }
+        off += c as usize;
+    }
+    let surf = contact::surfaces(&hexes, |_| true);
+    let n_bodies = surf.n_bodies;
+    let mut master_body = vec![0u64; n_bodies as usize];
+    let mut body_block = vec![nb as u64; n_bodies as usize];
+    for (e, &k) in order.iter().enumerate() {
+        let body = surf.element_body[e] as usize;
+        master_body[body] |= all_master[k];
+        body_block[body] = body_block[body].min(all_block[k]);
+    }
+    // Keep a face when all four nodes share a named surface bit.
+    let mut kept = Vec::new();
+    for f in &surf.faces {
+        let keep = match surface_bits {
+            None => true,
+            Some(b) => {
+                let common = f
+                    .nodes
+                    .iter()
+                    .fold(u32::MAX, |a, n| a & bits.get(n).copied().unwrap_or(0));
+                common & b != 0
+            }
+        };
+        if keep {
+            kept.push(*f);
+        }
+    }
+    // Deterministic face gids: by (element gid, side), independent of the rank count.
+    kept.sort_by_key(|f| (elem_gid[f.element], f.side));
+    let mut block_in_contact = vec![0u64; nb];
+    for f in &kept {
+        let b = all_block[order[f.element]] as usize;
+        if b < nb {
+            block_in_contact[b] = 1;
+        }
+    }
+    // Per rank: faces (gid, elem gid, side, 4 node gids, body) then contact nodes of
+    // that rank (gid, body), after a marker.
+    let mut per_rank = vec![Vec::new(); p];
+    let mut node_body: HashMap<u64, u32> = HashMap::new();
+    for (k, f) in kept.iter().enumerate() {
+        let r = elem_rank[f.element];
+        per_rank[r].extend([k as u64, elem_gid[f.element], f.side as u64]);
+        per_rank[r].extend(f.nodes);
+        per_rank[r].push(f.body as u64);
+        for n in f.nodes {
+            node_body.insert(n, f.body);
+        }
+    }
+    let mut cn: Vec<(u64, u32)> = node_body.into_iter().collect();
+    cn.sort_unstable();
+    for r in per_rank.iter_mut() {
+        r.push(u64::MAX);
+    }
+    for (gid, body) in cn {
+        let r = node_rank[&gid];
+        per_rank[r].extend([gid, body as u64]);
+    }
+    RootSurfaces {
+        per_rank,
+        n_bodies,
+        master_body,
+        global_faces: kept.len() as u64,
+        body_block,
+        block_in_contact,
+    }
+}
+
 impl FeContact {
     /// Finds the contact faces and nodes (collective). `surface_bits`: the bits (in
     /// `mesh.node_surfaces`) of the named surfaces; `None` for `"exterior"`. `master_volumes`:
@@ -118,135 +273,51 @@ impl FeContact {
         master_volumes: &[i32],
         block_tags: &[i32],
     ) -> FeContact {
-        let me = comm.rank();
-        // Elements: (elem gid, 8 node gids); owned nodes: (gid, surface bits).
-        let elems: Vec<u64> = mesh
-            .elems
-            .iter()
-            .zip(&mesh.elem_id)
-            .flat_map(|(c, &id)| {
-                std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize]))
-            })
-            .collect();
-        let nodes: Vec<u64> = (0..mesh.node_id.len())
-            .filter(|&n| mesh.owned[n])
-            .flat_map(|n| [mesh.node_id[n], mesh.node_surfaces[n] as u64])
-            .collect();
-        let in_master: Vec<u64> = mesh
-            .elem_block
-            .iter()
-            .map(|t| master_volumes.contains(t) as u64)
-            .collect();
         let nb = block_tags.len();
-        let in_block: Vec<u64> = mesh
-            .elem_block
-            .iter()
-            .map(|t| block_tags.iter().position(|b| b == t).unwrap_or(nb) as u64)
-            .collect();
+        let [elems, nodes, in_master, in_block] = local_inputs(mesh, master_volumes, block_tags);
         let (all_block, _, _) = gatherv_u64(comm, &in_block);
         let (all_e, counts_e, _) = gatherv_u64(comm, &elems);
         let (all_master, _, _) = gatherv_u64(comm, &in_master);
         let (all_n, counts_n, _) = gatherv_u64(comm, &nodes);
-        let mut per_rank: Vec<Vec<u64>> = Vec::new();
-        let mut n_bodies = 0u32;
-        let mut master_body: Vec<u64> = Vec::new();
-        let mut global_faces = 0u64;
-        let mut body_block: Vec<u64> = Vec::new();
-        let mut block_in_contact = vec![0u64; nb];
-        if me == 0 {
-            let p = comm.size() as usize;
-            // Element k of the gathered list came from rank elem_rank[k].
-            let mut elem_rank = Vec::new();
-            for (r, &c) in counts_e.iter().enumerate() {
-                elem_rank.extend(std::iter::repeat_n(r, c as usize / 9));
-            }
-            // In element gid order, so that bodies (numbered by their first element) do not
-            // depend on the rank count.
-            let mut order: Vec<usize> = (0..elem_rank.len()).collect();
-            order.sort_unstable_by_key(|&k| all_e[9 * k]);
-            let elem_rank: Vec<usize> = order.iter().map(|&k| elem_rank[k]).collect();
-            let hexes: Vec<[u64; 8]> = order
-                .iter()
-                .map(|&k| std::array::from_fn(|j| all_e[9 * k + 1 + j]))
-                .collect();
-            let elem_gid: Vec<u64> = order.iter().map(|&k| all_e[9 * k]).collect();
-            let mut bits: HashMap<u64, u32> = HashMap::new();
-            let mut node_rank: HashMap<u64, usize> = HashMap::new();
-            let mut off = 0;
-            for (r, &c) in counts_n.iter().enumerate() {
-                for pair in all_n[off..off + c as usize].chunks(2) {
-                    bits.insert(pair[0], pair[1] as u32);
-                    node_rank.insert(pair[0], r);
-                }
-                off += c as usize;
-            }
-            let surf = contact::surfaces(&hexes, |_| true);
-            n_bodies = surf.n_bodies;
-            master_body = vec![0u64; n_bodies as usize];
-            body_block = vec![nb as u64; n_bodies as usize];
-            for (e, &k) in order.iter().enumerate() {
-                let body = surf.element_body[e] as usize;
-                master_body[body] |= all_master[k];
-                body_block[body] = body_block[body].min(all_block[k]);
-            }
-            // Keep a face when all four nodes share a named surface bit.
-            let mut kept = Vec::new();
-            for f in &surf.faces {
-                let keep = match surface_bits {
-                    None => true,
-                    Some(b) => {
-                        let common = f
-                            .nodes
-                            .iter()
-                            .fold(u32::MAX, |a, n| a & bits.get(n).copied().unwrap_or(0));
-                        common & b != 0
-                    }
-                };
-                if keep {
-                    kept.push(*f);
-                }
-            }
-            // Deterministic face gids: by (element gid, side), independent of the rank count.
-            kept.sort_by_key(|f| (elem_gid[f.element], f.side));
-            global_faces = kept.len() as u64;
-            for f in &kept {
-                let b = all_block[order[f.element]] as usize;
-                if b < nb {
-                    block_in_contact[b] = 1;
-                }
-            }
-            // Per rank: faces (gid, elem gid, side, 4 node gids, body) then contact nodes of
-            // that rank (gid, body), after a marker.
-            per_rank = vec![Vec::new(); p];
-            let mut node_body: HashMap<u64, u32> = HashMap::new();
-            for (k, f) in kept.iter().enumerate() {
-                let r = elem_rank[f.element];
-                per_rank[r].extend([k as u64, elem_gid[f.element], f.side as u64]);
-                per_rank[r].extend(f.nodes);
-                per_rank[r].push(f.body as u64);
-                for n in f.nodes {
-                    node_body.insert(n, f.body);
-                }
-            }
-            let mut cn: Vec<(u64, u32)> = node_body.into_iter().collect();
-            cn.sort_unstable();
-            for r in per_rank.iter_mut() {
-                r.push(u64::MAX);
-            }
-            for (gid, body) in cn {
-                let r = node_rank[&gid];
-                per_rank[r].extend([gid, body as u64]);
-            }
+        let mut root = RootSurfaces {
+            block_in_contact: vec![0u64; nb],
+            ..RootSurfaces::default()
+        };
+        if comm.rank() == 0 {
+            root = root_surfaces(
+                comm.size() as usize,
+                (&all_e, &counts_e),
+                (&all_n, &counts_n),
+                (&all_master, &all_block),
+                (surface_bits, nb),
+            );
         }
-        let mine = scatterv_u64(comm, per_rank);
-        let mut gf = [global_faces, n_bodies as u64];
+        let mine = scatterv_u64(comm, std::mem::take(&mut root.per_rank));
+        let mut gf = [root.global_faces, root.n_bodies as u64];
         comm.process_at_rank(0).broadcast_into(&mut gf[..]);
-        master_body.resize(gf[1] as usize, 0);
-        comm.process_at_rank(0).broadcast_into(&mut master_body[..]);
-        body_block.resize(gf[1] as usize, 0);
-        comm.process_at_rank(0).broadcast_into(&mut body_block[..]);
+        root.master_body.resize(gf[1] as usize, 0);
         comm.process_at_rank(0)
-            .broadcast_into(&mut block_in_contact[..]);
+            .broadcast_into(&mut root.master_body[..]);
+        root.body_block.resize(gf[1] as usize, 0);
+        comm.process_at_rank(0)
+            .broadcast_into(&mut root.body_block[..]);
+        comm.process_at_rank(0)
+            .broadcast_into(&mut root.block_in_contact[..]);
+        let out = FeContact {
+            global_faces: gf[0],
+            n_bodies: gf[1] as u32,
+            master_body: root.master_body.iter().map(|&m| m != 0).collect(),
+            body_block: root.body_block.iter().map(|&b| b as u32).collect(),
+            block_in_contact: root.block_in_contact.iter().map(|&b| b != 0).collect(),
+            ..Default::default()
+        };
+        out.with_mine(mesh, &mine)
+    }
+
+    /// This rank's faces and contact nodes from what rank 0 sent it (`mine`: faces as (gid,
+    /// element gid, side, 4 node gids, body), a `u64::MAX` marker, then contact nodes as (gid,
+    /// body)), in local indices of `mesh`.
+    fn with_mine(mut self, mesh: &LocalMesh, mine: &[u64]) -> FeContact {
         let local: HashMap<u64, u32> = mesh
             .node_id
             .iter()
@@ -257,22 +328,14 @@ impl FeContact {
             .iter()
             .position(|&v| v == u64::MAX)
             .unwrap_or(mine.len());
-        let mut out = FeContact {
-            global_faces: gf[0],
-            n_bodies: gf[1] as u32,
-            master_body: master_body.iter().map(|&m| m != 0).collect(),
-            body_block: body_block.iter().map(|&b| b as u32).collect(),
-            block_in_contact: block_in_contact.iter().map(|&b| b != 0).collect(),
-            ..Default::default()
-        };
         for c in mine[..split].chunks(8) {
             let node_gids = [c[3], c[4], c[5], c[6]];
             let loc = node_gids.map(|g| local[&g]);
             let body = c[7] as u32;
             for &l in &loc {
-                out.body_of.insert(l, body);
+                self.body_of.insert(l, body);
             }
-            out.faces.push((
+            self.faces.push((
                 FaceRecord {
                     gid: c[0],
                     nodes: node_gids,
@@ -284,10 +347,10 @@ impl FeContact {
         }
         for c in mine[split.saturating_add(1).min(mine.len())..].chunks(2) {
             let l = local[&c[0]];
-            out.nodes.push((l, c[1] as u32));
-            out.body_of.insert(l, c[1] as u32);
+            self.nodes.push((l, c[1] as u32));
+            self.body_of.insert(l, c[1] as u32);
         }
-        out
+        self
     }
 
     /// Node `n`'s record (gid 0) as a node of `body`.
@@ -358,4 +421,50 @@ impl FeContact {
         }
         out
     }
+}
+
+/// Step 3 of a rebuild: each face with its nodes to the contact owner of its first node in the
+/// new cuts `tree` (collective). Returns the faces this rank now holds and the bytes it sent.
+pub(crate) fn faces_to_owners(
+    comm: &Rc<SimpleCommunicator>,
+    tree: &CutTree,
+    faces: &[FullFace],
+) -> (Vec<FullFace>, u64) {
+    let dest: Vec<i32> = faces
+        .iter()
+        .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
+        .collect();
+    let mut plan = CommPlan::new_shared(comm, &dest);
+    let my_faces = plan.exchange(faces);
+    (my_faces, plan.bytes_sent)
+}
+
+/// Step 1 (and 3, 5-6) on a kept contact decomposition: the mesh nodes' records (`nodes`, the
+/// records lent this step; particles skipped) straight to the boxes holding them along the
+/// kept plan (`send_idx[k]`: the mesh input sent as the plan's item k; `recv_slot`: the box
+/// slot of each record received, in arrival order), written in place into the kept box's
+/// nodes `into` (collective). `send_buf` keeps the records in plan order (its memory reused).
+/// Returns the input index of each mesh input and the bytes sent.
+pub(crate) fn send_mesh_records(
+    (plan, send_idx, recv_slot): (&mut CommPlan, &[u32], &[u32]),
+    send_buf: &mut Vec<NodeRecord>,
+    nodes: &[NodeRecord],
+    into: &mut ContactNodes,
+) -> (Vec<u32>, u64) {
+    let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
+        .filter(|&i| !is_particle(&nodes[i as usize]))
+        .collect();
+    send_buf.clear();
+    send_buf.extend(
+        send_idx
+            .iter()
+            .map(|&k| nodes[fe_inputs[k as usize] as usize]),
+    );
+    let before = plan.bytes_sent;
+    let got = plan.exchange(send_buf);
+    let sent = plan.bytes_sent - before;
+    for (r, &slot) in got.iter().zip(recv_slot) {
+        into.set_motion(slot as usize, r);
+    }
+    (fe_inputs, sent)
 }

@@ -2,13 +2,16 @@
 //! particles as contact nodes on their own RCB decomposition (`stage`), the search and the
 //! push-back, and the corrections sent back to the FE and SPH owners. `baseline` searches on
 //! the static FE decomposition instead (the paper's comparison, for benchmarks only).
-use super::fe::{setup::Groups, Fe};
-use super::sph::Sph;
+//!
+//! The stage is a coupler: it sees the bodies only through [`body::ContactBody`] (the FE and
+//! SPH stages implement it), and the energy bookkeeping of its corrections is the `contact`
+//! crate's (`contact::energy`).
 use crate::input::scene::ContactDef;
 use crate::kernels::collective;
 use crate::output::{Report, StageStats};
 use crate::transfer::fe_contact::FeContact;
 use baseline::BaselineStage;
+use body::ContactBody;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::{Communicator, CommunicatorCollectives};
@@ -16,6 +19,7 @@ use stage::{ContactOutcome, ContactStage};
 use std::time::Instant;
 
 pub mod baseline;
+pub mod body;
 mod cells;
 pub mod pairs;
 pub mod stage;
@@ -178,17 +182,14 @@ pub const ENERGY_INJECTION_BUDGET: f64 = 1e-6;
 /// untouched; the same on every rank). Collective.
 fn energy_guard(
     world: &SimpleCommunicator,
-    fe: &fe_petsc::explicit::ExplicitFe,
-    sph: Option<&Sph>,
+    (mesh, particles): (&dyn ContactBody, Option<&dyn ContactBody>),
     (fe_force, sph_force): (&mut [[f64; 3]], &mut [[f64; 3]]),
     (dt, budget): (f64, f64),
 ) -> f64 {
-    // FE's and the particles' terms on their own grids, each exact (the same bits at any rank
-    // count), added once reduced.
-    let mut t = fe.contact_energy_terms(fe_force, dt).to_vec();
-    t.extend(sph.map_or([[0.0; 3]; 2], |s| {
-        s.stage.contact_energy_terms(sph_force, dt)
-    }));
+    // The mesh's and the particles' terms on their own grids, each exact (the same bits at
+    // any rank count), added once reduced.
+    let mut t = mesh.energy_terms(fe_force, dt).to_vec();
+    t.extend(particles.map_or([[0.0; 3]; 2], |s| s.energy_terms(sph_force, dt)));
     let flat = fe_petsc::exact::flatten(&t);
     let mut g = vec![0.0f64; flat.len()];
     world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
@@ -207,12 +208,24 @@ fn energy_guard(
     alpha
 }
 
+/// The report's figures of the contact surfaces the FE stage lends (`FeContact`).
+#[derive(Debug, Clone, Copy)]
+struct SurfaceFigures {
+    /// This rank's owned contact nodes.
+    nodes: usize,
+    /// Faces over all ranks.
+    global_faces: u64,
+    /// Bodies in the mesh, and the masters of a one-pass search among them.
+    n_bodies: u32,
+    /// See `n_bodies`.
+    masters: usize,
+}
+
 /// The contact stage of a run with `[contact]`.
 pub struct Contact {
-    /// The FE side's surfaces (which nodes and faces take part).
-    pub fe_side: FeContact,
+    /// What the report tells of the FE stage's contact surfaces.
+    surfaces: SurfaceFigures,
     search: Search,
-    node_gid: Vec<u64>,
     /// SPH particles are contact nodes too (`contact.particles`), with ids from this offset
     /// (the mesh's node count, so no particle id meets a node id).
     particles: bool,
@@ -231,48 +244,28 @@ pub struct Contact {
 }
 
 impl Contact {
-    /// The stage for the scene's `[contact]` table over the FE stage's surfaces (collective).
+    /// The stage for the scene's `[contact]` table over the FE stage's contact surfaces
+    /// (`surfaces`; collective). `mesh_ids`: the mesh's node count (the particles' ids start
+    /// there).
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
         (def, blocks, particle_sets): (&ContactDef, &[String], &[String]),
-        groups: &Groups,
-        fe: &Fe,
+        (surfaces, mesh_ids): (&FeContact, u64),
         with_particles: bool,
         choice: SearchChoice,
     ) -> Result<Contact, String> {
-        let local = &fe.mesh.local;
-        // The named physical surfaces as node bits ("exterior": every boundary face).
-        let bits = if def.surfaces.iter().any(|s| s == "exterior") {
-            None
-        } else {
-            let mut b = 0u32;
-            for name in &def.surfaces {
-                let tag = groups.surfaces.get(name).copied();
-                if let Some(k) = local.surface_tags.iter().position(|&t| Some(t) == tag) {
-                    b |= 1 << k;
-                }
-            }
-            Some(b)
-        };
-        // The master bodies of a one-pass search: those with an element in a `master` volume.
-        let master: Vec<i32> = def
-            .master
-            .iter()
-            .filter_map(|m| groups.volumes.get(m).copied())
-            .collect();
-        let block_tags: Vec<i32> = blocks
-            .iter()
-            .map(|b| groups.volumes.get(b).copied().unwrap_or(i32::MIN))
-            .collect();
-        let fe_side = FeContact::build(world, local, bits, &master, &block_tags);
         // contact_forces.csv: every pair of blocks with contact faces, in scene order, then
         // each block with the particle sets, where particles take part.
         let particles = def.particles && with_particles && !choice.static_decomposition;
         let sets = if particles { particle_sets } else { &[] };
-        let pair_forces =
-            pairs::PairForces::new(blocks, &fe_side.block_in_contact, &fe_side.body_block, sets);
-        if fe_side.global_faces == 0 {
+        let pair_forces = pairs::PairForces::new(
+            blocks,
+            &surfaces.block_in_contact,
+            &surfaces.body_block,
+            sets,
+        );
+        if surfaces.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
                 def.surfaces
@@ -289,11 +282,15 @@ impl Contact {
             Search::Dynamic(dynamic)
         };
         Ok(Contact {
-            fe_side,
+            surfaces: SurfaceFigures {
+                nodes: surfaces.nodes.len(),
+                global_faces: surfaces.global_faces,
+                n_bodies: surfaces.n_bodies,
+                masters: surfaces.master_body.iter().filter(|&&m| m).count(),
+            },
             search,
-            node_gid: local.node_id.clone(),
             particles,
-            particle_gid_offset: local.global_nodes,
+            particle_gid_offset: mesh_ids,
             passes: def.passes,
             energy: 0.0,
             energy_scale: 0.0,
@@ -306,87 +303,54 @@ impl Contact {
     }
 
     /// Steps 4-5 of Fig. 3 after the drift: detection on the contact decomposition, push-back
-    /// forces back on the FE nodes (all copies) and particles, positions and half-step
-    /// velocities corrected (collective).
+    /// forces back on the bodies, the mesh's (`mesh`: its nodes, all copies, and faces) and
+    /// the particles' (where they take part), positions and half-step velocities corrected
+    /// (collective). `t`: the time at the step's start.
     pub fn step(
         &mut self,
         world: &SimpleCommunicator,
-        fe: &mut Fe,
-        sph: Option<&mut Sph>,
-        dt: f64,
+        (mesh, particles): (&mut dyn ContactBody, Option<&mut dyn ContactBody>),
+        (t, dt): (f64, f64),
     ) -> Result<(), String> {
         let t0 = Instant::now();
-        let mut nodes = self.fe_side.node_records(fe.state(), &self.node_gid);
+        let mut nodes = mesh.contact_nodes(0, dt);
         let n_fe = nodes.len();
-        let sph = sph.filter(|_| self.particles);
-        if let Some(s) = &sph {
-            nodes.extend(s.stage.contact_records(self.particle_gid_offset, dt));
+        let mut particles = particles.filter(|_| self.particles);
+        if let Some(s) = &particles {
+            nodes.extend(s.contact_nodes(self.particle_gid_offset, dt));
         }
-        let (out, mut f) = match &mut self.search {
+        let out = match &mut self.search {
             Search::Dynamic(stage) => {
-                let (fe_side, gids) = (&self.fe_side, &self.node_gid);
-                let fe_ref = fe.state();
-                let out = stage.step(&nodes, || fe_side.face_records(fe_ref, gids), dt)?;
-                let f = self
-                    .fe_side
-                    .forces_on_nodes(fe_ref.n_nodes(), &out.force[..n_fe]);
-                (out, f)
+                let lender = &*mesh;
+                stage.step(&nodes, || lender.contact_faces(), dt)?
             }
             Search::Baseline(stage) => {
                 // the benchmark baseline searches mesh nodes only (`particles` is off)
-                let faces = self.fe_side.face_records(fe.state(), &self.node_gid);
-                let out = stage.step(&nodes[..n_fe], &faces, dt)?;
-                let f = self
-                    .fe_side
-                    .forces_on_nodes(fe.state().n_nodes(), &out.force);
-                (out, f)
+                let faces = mesh.contact_faces();
+                stage.step(&nodes[..n_fe], &faces, dt)?
             }
         };
-        let Fe {
-            integrator, mesh, ..
-        } = fe;
-        let state = match integrator {
-            super::fe::Integrator::Explicit(e) => e,
-            super::fe::Integrator::Implicit(i) => &mut i.fe,
+        let mut f = mesh.take_forces(&out.force[..n_fe])?;
+        let mut sph_force = match particles.as_deref_mut() {
+            Some(s) => s.take_forces(&out.force[n_fe..])?,
+            None => out.force[n_fe..].to_vec(),
         };
-        state
-            .sum_contact_forces(&mut f, &mut mesh.exchange)
-            .map_err(|e| e.to_string())?;
-        let mut sph_force = out.force[n_fe..].to_vec();
         let budget = ENERGY_INJECTION_BUDGET * self.energy_scale;
         let alpha = energy_guard(
             world,
-            state,
-            sph.as_deref(),
+            (&*mesh, particles.as_deref().map(|s| s as &dyn ContactBody)),
             (&mut f, &mut sph_force),
             (dt, budget),
         );
-        // contact_forces.csv's: the forces as applied on the owned contact nodes and particles.
-        let (pf, offset) = (&mut self.pair_forces, self.particle_gid_offset);
-        let vertex = |gid: u64| {
-            let entry = sph.as_ref().and_then(|s| s.ids.entry(gid - offset));
-            pf.particle_vertex(entry)
-        };
-        let fe_nodes = self.fe_side.nodes.iter().map(|&(n, b)| (b, f[n as usize]));
-        let held_by: Vec<(usize, u32)> = out
-            .particle_faces
-            .iter()
-            .map(|&(g, b)| (vertex(g), b))
-            .collect();
-        let on_particles: Vec<(usize, [f64; 3])> = nodes[n_fe..]
-            .iter()
-            .zip(&sph_force)
-            .map(|(r, &fc)| (vertex(r.gid), fc))
-            .collect();
-        pf.record(
-            fe_nodes,
-            on_particles.into_iter(),
-            &out.body_pairs,
-            held_by.into_iter(),
+        self.record_pair_forces(
+            (&*mesh, particles.as_deref().map(|s| s as &dyn ContactBody)),
+            (&nodes, n_fe),
+            (&f, &sph_force),
+            &out,
         );
-        let mut w = vec![state.apply_contact(&f, dt)];
+        let mut w = vec![mesh.apply_impulses(&f, &out.held[..n_fe], dt)];
         let held = &out.held[n_fe..];
-        w.push(sph.map_or([0.0; 3], |s| s.stage.apply_contact(&sph_force, held, dt)));
+        w.push(particles.map_or([0.0; 3], |s| s.apply_impulses(&sph_force, held, dt)));
         let flat = fe_petsc::exact::flatten(&w);
         let mut g = vec![0.0f64; flat.len()];
         world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
@@ -396,7 +360,7 @@ impl Contact {
             if self.stats.energy_limited_steps == 0 && world.rank() == 0 {
                 eprintln!(
                     "tdyn: warning: the contact push-back at t = {:.4e} s would have added kinetic energy to the half-step motion; its forces were scaled by {alpha:.3} (report.json contact_energy_limited_steps counts such steps; logged once)",
-                    state.time + dt
+                    t + dt
                 );
             }
             self.stats.energy_limited_steps += 1;
@@ -404,6 +368,46 @@ impl Contact {
         self.stats.add(&out);
         self.stats.wall_s += t0.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// contact_forces.csv's: the forces as applied (`f` on the mesh's array, `sph_force` on
+    /// the particles') on the owned contact nodes and particles (`nodes`: the step's records,
+    /// the mesh's `n_fe` first), and the pairs of bodies this rank's contacts touched.
+    fn record_pair_forces(
+        &mut self,
+        (mesh, particles): (&dyn ContactBody, Option<&dyn ContactBody>),
+        (nodes, n_fe): (&[contact::NodeRecord], usize),
+        (f, sph_force): (&[[f64; 3]], &[[f64; 3]]),
+        out: &ContactOutcome,
+    ) {
+        let (pf, offset) = (&mut self.pair_forces, self.particle_gid_offset);
+        let vertex = |gid: u64| {
+            let entry = particles.and_then(|s| s.particle_entry(gid - offset));
+            pf.particle_vertex(entry)
+        };
+        let on_mesh = mesh.forces_on_records(f);
+        let fe_nodes = nodes[..n_fe]
+            .iter()
+            .zip(on_mesh)
+            .map(|(r, fc)| (r.body, fc));
+        let held_by: Vec<(usize, u32)> = out
+            .particle_faces
+            .iter()
+            .map(|&(g, b)| (vertex(g), b))
+            .collect();
+        let on_records =
+            particles.map_or_else(|| sph_force.to_vec(), |s| s.forces_on_records(sph_force));
+        let on_particles: Vec<(usize, [f64; 3])> = nodes[n_fe..]
+            .iter()
+            .zip(on_records)
+            .map(|(r, fc)| (vertex(r.gid), fc))
+            .collect();
+        pf.record(
+            fe_nodes,
+            on_particles.into_iter(),
+            &out.body_pairs,
+            held_by.into_iter(),
+        );
     }
 
     /// Writes this rank's restart state: the contact energy and the last step's figures. The
@@ -472,7 +476,7 @@ impl Contact {
             });
             report.stages_run.push("transfer".into());
         }
-        let contact_nodes = collective::sum(world, self.fe_side.nodes.len() as f64) as u64;
+        let contact_nodes = collective::sum(world, self.surfaces.nodes as f64) as u64;
         let ex = &mut report.extra;
         ex.insert(
             "contact_share_of_step".into(),
@@ -512,11 +516,10 @@ impl Contact {
             }
             .into(),
         );
-        ex.insert("contact_faces".into(), self.fe_side.global_faces.into());
-        ex.insert("contact_bodies".into(), self.fe_side.n_bodies.into());
+        ex.insert("contact_faces".into(), self.surfaces.global_faces.into());
+        ex.insert("contact_bodies".into(), self.surfaces.n_bodies.into());
         ex.insert("contact_passes".into(), self.passes.into());
-        let masters = self.fe_side.master_body.iter().filter(|&&m| m).count();
-        ex.insert("contact_master_bodies".into(), masters.into());
+        ex.insert("contact_master_bodies".into(), self.surfaces.masters.into());
     }
 }
 

@@ -38,7 +38,7 @@
 //! nodes, which share the impulse (`contact::push_back`); in cells, the two rows share nodes, so
 //! they are in one cell or in cells of different colours, and are solved in turn either way.
 use crate::kernels::comm::CommPlan;
-use crate::kernels::rcb::{CutTree, Rcb, RcbItem, RcbStats};
+use crate::kernels::rcb::{CutTree, Rcb, RcbStats};
 use bytemuck::{Pod, Zeroable};
 use contact::{
     face_records_search_aabb, search_candidates, within_skin, Candidates, Contact, ContactBox,
@@ -65,45 +65,24 @@ use std::time::Instant;
 /// 0.02 between bodies too, `underwater_explosion`'s plug moved 1.4 % differently at np 1 and 3).
 pub const MESH_PARAM_TOL: f64 = 2e-2;
 
-/// A contact node travelling through the stage: its record and where its owner keeps it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct CNode {
-    rec: NodeRecord,
-    home: u64,
-    home_idx: u64,
-    /// Position among the home's mesh (non-particle) nodes; `u64::MAX` for a particle.
-    fe_idx: u64,
-}
-
-impl RcbItem for CNode {
-    fn position(&self) -> [f64; 3] {
-        self.rec.x1
-    }
-    fn id(&self) -> u64 {
-        self.rec.gid
-    }
-}
-
+use crate::transfer::bodies_contact::{home_items, to_owners};
+use crate::transfer::contact_bodies::send_home;
+use crate::transfer::contact_fe::mesh_forces_home;
+use crate::transfer::contact_sph::particle_forces_home;
 pub use crate::transfer::fe_contact::FullFace;
+use crate::transfer::fe_contact::{faces_to_owners, send_mesh_records};
+use crate::transfer::sph_contact::particles_to_boxes;
+use crate::transfer::{is_particle, CNode};
 
+mod ghosts;
 mod particles;
 mod solve;
 mod steps;
 mod sticky;
-mod transfers;
+use ghosts::*;
 use particles::*;
 pub(crate) use solve::*;
 use sticky::*;
-use transfers::*;
-
-/// A force for one node, keyed by an index or a gid.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct Back {
-    key: u64,
-    f: [f64; 3],
-}
 
 /// What one contact step found and cost.
 #[derive(Clone, Debug, Default)]

@@ -16,9 +16,12 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod contact_body;
 mod loads;
 mod remap;
 pub mod setup;
+
+pub use contact_body::apply_contact;
 
 /// The integrator of the scene's mode. Both keep their state in an [`ExplicitFe`], which
 /// contact, probes and output read.
@@ -42,6 +45,9 @@ pub struct Fe {
     wall_s: f64,
     /// The `fixed` and `velocity` groups of reactions.csv, in scene order.
     pub reaction_groups: Vec<setup::ReactionGroup>,
+    /// The contact surfaces a `[contact]` table names (`Fe::set_contact_surfaces`): the
+    /// nodes and faces the FE stage lends the contact stage.
+    contact_surfaces: Option<crate::transfer::fe_contact::FeContact>,
 }
 
 impl Fe {
@@ -106,6 +112,7 @@ impl Fe {
             file,
             wall_s: 0.0,
             reaction_groups,
+            contact_surfaces: None,
         })
     }
 

@@ -2,6 +2,7 @@
 //! (`stage`: rebalance, ghosts, the pairwise passes under the centre-of-interaction rule), built
 //! from the scene (`setup`), with its global energies and momentum, the work of gravity on the
 //! particles, and what it cost. A particle-only run is the same driver with no FE stage.
+mod contact_body;
 pub mod setup;
 pub mod stage;
 

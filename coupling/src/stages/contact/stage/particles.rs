@@ -51,10 +51,6 @@ pub(super) fn refresh_particle_box(
     1
 }
 
-pub(super) fn is_particle(r: &NodeRecord) -> bool {
-    r.flags & contact::FLAG_PARTICLE != 0
-}
-
 /// The box in which a kept decomposition searches the particles it holds this step: the
 /// particles owned, then every node of the kept box `b` as a copy, and `b`'s faces. `None`
 /// without particles.

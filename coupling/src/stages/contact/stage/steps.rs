@@ -23,7 +23,12 @@ impl ContactStage {
         // 1 (and 3, 5-6). The mesh nodes' records straight to the boxes holding them, written
         // in place.
         let tt = Instant::now();
-        let (fe_inputs, sent) = send_mesh_records(st, nodes);
+        let (fe_inputs, sent) = send_mesh_records(
+            (&mut st.plan, &st.send_idx, &st.recv_slot),
+            &mut st.send_buf,
+            nodes,
+            &mut st.b.nodes,
+        );
         bytes += sent;
         t_bytes += sent;
         // Particles (never face corners) to the box their predicted position falls in: the
@@ -38,47 +43,17 @@ impl ContactStage {
         };
         t_s += tt.elapsed().as_secs_f64();
         // 7. The search over the candidate lists, rebuilt here when the skin no longer covers.
-        if !st.cands.still_valid(&st.b, &self.params) {
-            let (_, cand_skin) = skins(motion, st.face_size, self.skins);
-            st.cands = Candidates::build(&st.b, &self.params, cand_skin);
-            self.rebuilds.candidates += 1;
-        }
-        let contacts = search_candidates(&st.b, &self.params, &st.cands);
-        let n_owned = st.b.nodes.n_owned;
-        let mut owned_gids: Vec<u64> = st.b.nodes.gid[..n_owned].to_vec();
-        let (_, cand_skin) = skins(motion, st.face_size, self.skins);
-        self.rebuilds.candidates += refresh_particle_box(st, &pgot, &self.params, cand_skin);
-        let pcontacts = match &st.pbox {
-            Some((_, pb, pc)) => {
-                owned_gids.extend(pgot.iter().map(|c| c.rec.gid));
-                search_candidates(pb, &self.params, pc)
-            }
-            None => Vec::new(),
-        };
-        let mut parts = vec![Part {
-            b: &mut st.b,
-            cands: &st.cands,
-            contacts,
-        }];
-        if let Some((_, pb, pc)) = &mut st.pbox {
-            parts.push(Part {
-                b: pb,
-                cands: pc,
-                contacts: pcontacts,
-            });
-        }
-        let settled = solve_rechecked(
+        let (kept, particles, owned_gids, rebuilt) =
+            search_kept(st, &pgot, &self.params, (motion, self.skins));
+        self.rebuilds.candidates += rebuilt;
+        let (settled, contacts, pcontacts) = solve_kept(
             comm,
-            Some(tree),
-            &mut parts,
-            &owned_gids,
+            tree,
+            st,
+            (kept, particles, &owned_gids),
             dt,
             (self.friction, &self.params),
         )?;
-        let mut parts = parts.into_iter();
-        let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
-        let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
-        drop(parts);
         let pairs = body_pairs(&st.b, &contacts);
         let held_by = match &st.pbox {
             Some((_, pb, _)) => particle_faces(pb, &pcontacts),
@@ -89,31 +64,13 @@ impl ContactStage {
         // 8. Forces back to the homes: the mesh nodes' nonzero ones along the plan's own pairs
         // of ranks, the particles' back along their plan.
         let tt = Instant::now();
-        let (mut force, back_bytes) =
-            mesh_forces_home(st, &owned_force[..n_owned], &fe_inputs, nodes.len());
+        let (force, held, back_bytes) = kept_forces_home(
+            st,
+            (&owned_force, &fe_inputs, nodes.len()),
+            pplan.map(|plan| (plan, &pitems[..], &pcontacts[..], pgot.len())),
+        );
         bytes += back_bytes;
         t_bytes += back_bytes;
-        let mut held = vec![false; nodes.len()];
-        if let Some(mut plan) = pplan {
-            let before = plan.bytes_sent;
-            // Each particle's force and whether immovable faces alone hold it (1 or 0).
-            let flags = match &st.pbox {
-                Some((_, pb, _)) => held_particles(pb, &pcontacts, pgot.len()),
-                None => vec![false; pgot.len()],
-            };
-            let out: Vec<[f64; 4]> = owned_force[n_owned..]
-                .iter()
-                .zip(&flags)
-                .map(|(f, &h)| [f[0], f[1], f[2], f64::from(u8::from(h))])
-                .collect();
-            let back = plan.reverse(&out);
-            for (item, f) in pitems.iter().zip(&back) {
-                force[item.home_idx as usize] = [f[0], f[1], f[2]];
-                held[item.home_idx as usize] = f[3] != 0.0;
-            }
-            bytes += plan.bytes_sent - before;
-            t_bytes += plan.bytes_sent - before;
-        }
         t_s += tt.elapsed().as_secs_f64();
         let work_items = st.work_items + pgot.len() as f64;
         let mut all_contacts = contacts;
@@ -146,29 +103,17 @@ impl ContactStage {
     ) -> Result<ContactOutcome, String> {
         // Set up a kept decomposition for the next steps?
         let keep_next = self.sticky_enabled && self.step_count >= self.retry_at;
-        let me = self.comm.rank();
-        let mut bytes = 0u64;
-        let items = home_items(nodes, me);
-        // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
-        // owners to contact owners and back): their bytes and time.
-        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
-        // 1. To last step's contact owners.
-        let tt = Instant::now();
-        let (items, sent) = to_owners(&self.comm, self.tree.as_ref(), items);
-        bytes += sent;
-        t_bytes += sent;
-        t_s += tt.elapsed().as_secs_f64();
-        // 2. RCB over nodes and particles, from the previous cuts.
-        let (mine, rcb_stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
-        bytes += rcb_stats.bytes_sent;
-        let tree = self.rcb.tree().clone();
+        // 1-3. The nodes to their contact owners, the RCB, the faces to theirs.
+        let Arrived {
+            mine,
+            rcb: rcb_stats,
+            tree,
+            faces: my_faces,
+            mut bytes,
+            mut t_bytes,
+            mut t_s,
+        } = self.gather_at_owners(nodes, &faces)?;
         let comm = &self.comm;
-        // 3. Faces with their nodes to the contact owner of their first node.
-        let tt = Instant::now();
-        let (my_faces, sent) = faces_to_owners(comm, &tree, &faces);
-        bytes += sent;
-        t_bytes += sent;
-        t_s += tt.elapsed().as_secs_f64();
         // 5-6. Ghost each face to every box its search box overlaps, grown by the zone of
         // influence: the largest node motion of the step and the largest particle radius (the
         // face's search box), and the skin the kept decomposition needs (at least the motion).
@@ -226,21 +171,15 @@ impl ContactStage {
         // The plan for the steps that keep this decomposition.
         self.sticky = None;
         if keep_next {
-            let (st, setup_bytes) = build_sticky(
-                comm,
-                &tree,
-                nodes,
-                &mine,
-                &index,
-                SetupBox {
-                    b: &b,
-                    params: &self.params,
-                    skin,
-                    cand_skin,
-                    face_size,
-                    max_radius: radius,
-                },
-            )?;
+            let sb = SetupBox {
+                b: &b,
+                params: &self.params,
+                skin,
+                cand_skin,
+                face_size,
+                max_radius: radius,
+            };
+            let (st, setup_bytes) = build_sticky(comm, &tree, nodes, &mine, &index, sb)?;
             bytes += setup_bytes;
             self.sticky = st.map(Box::new);
         }
@@ -263,41 +202,166 @@ impl ContactStage {
     }
 }
 
-/// Step 1 (and 3, 5-6) on a kept decomposition: the mesh nodes' records straight to the boxes
-/// holding them along the kept plan, written in place (collective). Returns the input index
-/// of each mesh input and the bytes sent.
-fn send_mesh_records(st: &mut Sticky, nodes: &[NodeRecord]) -> (Vec<u32>, u64) {
-    let fe_inputs: Vec<u32> = (0..nodes.len() as u32)
-        .filter(|&i| !is_particle(&nodes[i as usize]))
-        .collect();
-    st.send_buf.clear();
-    st.send_buf.extend(
-        st.send_idx
-            .iter()
-            .map(|&k| nodes[fe_inputs[k as usize] as usize]),
-    );
-    let before = st.plan.bytes_sent;
-    let got = st.plan.exchange(&st.send_buf);
-    let sent = st.plan.bytes_sent - before;
-    let n = &mut st.b.nodes;
-    for (r, &slot) in got.iter().zip(&st.recv_slot) {
-        n.set_motion(slot as usize, r);
-    }
-    (fe_inputs, sent)
+/// Steps 1-3 of a rebuild ([`ContactStage::gather_at_owners`]): what arrived on this rank.
+struct Arrived {
+    /// The contact nodes this rank owns after the RCB.
+    mine: Vec<CNode>,
+    /// The RCB's statistics.
+    rcb: RcbStats,
+    /// The new cuts.
+    tree: CutTree,
+    /// The faces whose first node this rank owns, with their nodes' records.
+    faces: Vec<FullFace>,
+    /// Bytes sent (the RCB's included), and those of the transfers between decompositions.
+    bytes: u64,
+    /// See `bytes`.
+    t_bytes: u64,
+    /// The transfers' time, s.
+    t_s: f64,
 }
 
-/// Step 3 of a rebuild: each face with its nodes to the contact owner of its first node in the
-/// new cuts `tree` (collective). Returns the faces this rank now holds and the bytes it sent.
-fn faces_to_owners(
+impl ContactStage {
+    /// Steps 1-3 of a rebuild (collective): every node lent here (`nodes`) to its contact
+    /// owner of the last step, the RCB rebalance from the previous cuts, and each face
+    /// (`faces`) with its nodes to the contact owner of its first node.
+    fn gather_at_owners(
+        &mut self,
+        nodes: &[NodeRecord],
+        faces: &[FullFace],
+    ) -> Result<Arrived, String> {
+        let me = self.comm.rank();
+        let mut bytes = 0u64;
+        let items = home_items(nodes, me);
+        // The transfers between decompositions (steps 1, 3 and the last half of 8: FE and SPH
+        // owners to contact owners and back): their bytes and time.
+        let (mut t_bytes, mut t_s) = (0u64, 0.0f64);
+        // 1. To last step's contact owners.
+        let tt = Instant::now();
+        let (items, sent) = to_owners(&self.comm, self.tree.as_ref(), items);
+        bytes += sent;
+        t_bytes += sent;
+        t_s += tt.elapsed().as_secs_f64();
+        // 2. RCB over nodes and particles, from the previous cuts.
+        let (mine, rcb) = self.rcb.balance(items).map_err(|e| e.to_string())?;
+        bytes += rcb.bytes_sent;
+        let tree = self.rcb.tree().clone();
+        // 3. Faces with their nodes to the contact owner of their first node.
+        let tt = Instant::now();
+        let (my_faces, sent) = faces_to_owners(&self.comm, &tree, faces);
+        bytes += sent;
+        t_bytes += sent;
+        t_s += tt.elapsed().as_secs_f64();
+        Ok(Arrived {
+            mine,
+            rcb,
+            tree,
+            faces: my_faces,
+            bytes,
+            t_bytes,
+            t_s,
+        })
+    }
+}
+
+/// Step 7 on a kept decomposition: the search of the kept box over its candidate lists (rebuilt
+/// when their skin no longer covers the step's `motion`, with the stage's `skins`), and of the
+/// particles `pgot` this rank received in their own box. Returns the mesh box's contacts, the
+/// particles', the owned nodes' gids (the mesh box's, then the particles') and the candidate
+/// lists rebuilt.
+fn search_kept(
+    st: &mut Sticky,
+    pgot: &[CNode],
+    params: &SearchParams,
+    (motion, skin_steps): (f64, (f64, f64)),
+) -> (Vec<Contact>, Vec<Contact>, Vec<u64>, u64) {
+    let mut rebuilt = 0;
+    if !st.cands.still_valid(&st.b, params) {
+        let (_, cand_skin) = skins(motion, st.face_size, skin_steps);
+        st.cands = Candidates::build(&st.b, params, cand_skin);
+        rebuilt += 1;
+    }
+    let contacts = search_candidates(&st.b, params, &st.cands);
+    let n_owned = st.b.nodes.n_owned;
+    let mut owned_gids: Vec<u64> = st.b.nodes.gid[..n_owned].to_vec();
+    let (_, cand_skin) = skins(motion, st.face_size, skin_steps);
+    rebuilt += refresh_particle_box(st, pgot, params, cand_skin);
+    let pcontacts = match &st.pbox {
+        Some((_, pb, pc)) => {
+            owned_gids.extend(pgot.iter().map(|c| c.rec.gid));
+            search_candidates(pb, params, pc)
+        }
+        None => Vec::new(),
+    };
+    (contacts, pcontacts, owned_gids, rebuilt)
+}
+
+/// Step 7b on a kept decomposition: the push-back over the kept box's contacts and the
+/// particle box's (`owned_gids`: the owned nodes of both, [`solve_rechecked`]; collective).
+/// Returns what it settled and both boxes' contacts, the rechecks' included.
+fn solve_kept(
     comm: &Rc<SimpleCommunicator>,
     tree: &CutTree,
-    faces: &[FullFace],
-) -> (Vec<FullFace>, u64) {
-    let dest: Vec<i32> = faces
-        .iter()
-        .map(|f| tree.owner_of_item(&f.nodes[0].x1, f.nodes[0].gid))
-        .collect();
-    let mut plan = CommPlan::new_shared(comm, &dest);
-    let my_faces = plan.exchange(faces);
-    (my_faces, plan.bytes_sent)
+    st: &mut Sticky,
+    (contacts, pcontacts, owned_gids): (Vec<Contact>, Vec<Contact>, &[u64]),
+    dt: f64,
+    (friction, params): (f64, &SearchParams),
+) -> Result<(Settled, Vec<Contact>, Vec<Contact>), String> {
+    let mut parts = vec![Part {
+        b: &mut st.b,
+        cands: &st.cands,
+        contacts,
+    }];
+    if let Some((_, pb, pc)) = &mut st.pbox {
+        parts.push(Part {
+            b: pb,
+            cands: pc,
+            contacts: pcontacts,
+        });
+    }
+    let settled = solve_rechecked(
+        comm,
+        Some(tree),
+        &mut parts,
+        owned_gids,
+        dt,
+        (friction, params),
+    )?;
+    let mut parts = parts.into_iter();
+    let contacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+    let pcontacts = parts.next().map(|p| p.contacts).unwrap_or_default();
+    Ok((settled, contacts, pcontacts))
+}
+
+/// Step 8 on a kept decomposition (collective): the forces of the kept box's owned mesh nodes
+/// (`owned_force`'s first `n_owned`; `fe_inputs` and `n_inputs` as for [`mesh_forces_home`])
+/// back to their FE homes, then, where particles came (`particles`: their plan, the records
+/// this rank sent, the particle box's contacts and the particles received), the particles'
+/// forces and whether immovable faces alone hold them back along their plan. Returns the force
+/// on each input node, the held flags and the bytes sent.
+fn kept_forces_home(
+    st: &mut Sticky,
+    (owned_force, fe_inputs, n_inputs): (&[[f64; 3]], &[u32], usize),
+    particles: Option<(CommPlan, &[CNode], &[Contact], usize)>,
+) -> (Vec<[f64; 3]>, Vec<bool>, u64) {
+    let n_owned = st.b.nodes.n_owned;
+    let (mut force, mut bytes) = mesh_forces_home(
+        (&mut st.plan, &st.owned_home, &st.source_of_home),
+        &owned_force[..n_owned],
+        fe_inputs,
+        n_inputs,
+    );
+    let mut held = vec![false; n_inputs];
+    if let Some((mut plan, pitems, pcontacts, n_got)) = particles {
+        let flags = match &st.pbox {
+            Some((_, pb, _)) => held_particles(pb, pcontacts, n_got),
+            None => vec![false; n_got],
+        };
+        bytes += particle_forces_home(
+            &mut plan,
+            pitems,
+            (&owned_force[n_owned..], &flags),
+            (&mut force, &mut held),
+        );
+    }
+    (force, held, bytes)
 }

@@ -57,7 +57,8 @@ impl SphStage {
 
     /// The terms `[A, B]` of the change of the half-step kinetic energy that `force` scaled by
     /// `alpha` makes, `dK(alpha) = alpha A + alpha^2 B`, over owned moving particles (J):
-    /// `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`.
+    /// `A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 / 2`, `dv = F dt / m`
+    /// ([`::contact::energy::half_step_terms`]).
     pub fn contact_energy_terms(&self, force: &[[f64; 3]], dt: f64) -> [Folds; 2] {
         let p = &self.parts;
         let e = &self.grids.energy;
@@ -68,8 +69,9 @@ impl SphStage {
             }
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                e.add(&mut t[0], p.m[i] * dv * p.v[i][c]);
-                e.add(&mut t[1], 0.5 * p.m[i] * dv * dv);
+                let [a, b] = ::contact::energy::half_step_terms(p.m[i], dv, p.v[i][c]);
+                e.add(&mut t[0], a);
+                e.add(&mut t[1], b);
             }
         }
         t
@@ -78,8 +80,9 @@ impl SphStage {
     /// Applies the contact stage's push-back forces (aligned with `contact_records`) over the
     /// step: dv = f dt / m on the half-step (and predicted) velocity, dx = dv dt. Returns the
     /// change of kinetic energy beyond what the pair and gravity work count (velocity Verlet
-    /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m),
-    /// summed over this rank's particles.
+    /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m, the
+    /// contact stage's bookkeeping [`::contact::energy::booked_work`]), summed over this rank's
+    /// particles.
     /// `held`: the particles immovable faces alone hold in this step (see `hold_on_faces`).
     pub fn apply_contact(&mut self, force: &[[f64; 3]], held: &[bool], dt: f64) -> Folds {
         let p = &mut self.parts;
@@ -100,12 +103,13 @@ impl SphStage {
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
             // Booked against the start velocity and the share of the start kick
-            // `fe_petsc::explicit::booked_kick` gives.
-            let kick = fe_petsc::explicit::booked_kick(p.pushed[i]);
+            // `contact::energy::booked_kick` gives.
+            let kick = ::contact::energy::booked_kick(p.pushed[i]);
             p.pushed[i] |= 2;
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
-                let w = p.m[i] * dv * (p.v[i][c] + 0.5 * dv - kick * dt * p.f[i][c] / p.m[i]);
+                let start_kick = kick * dt * p.f[i][c] / p.m[i];
+                let w = ::contact::energy::booked_work(p.m[i], dv, p.v[i][c], start_kick);
                 grid.add(&mut work, w);
                 p.v[i][c] += dv;
                 p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
@@ -129,7 +133,7 @@ impl SphStage {
     /// given back at the step the pressing starts. Energy: the hold and the push-back together
     /// do no work on a particle at rest on the faces, and the push-back's booking counts both
     /// (a held particle starts the next step as one the push-back meets first:
-    /// `fe_petsc::explicit::booked_kick`, `m (-p) . (p/2 - p/2) = 0` for `p = (dt/2) a`), so
+    /// `contact::energy::booked_kick`, `m (-p) . (p/2 - p/2) = 0` for `p = (dt/2) a`), so
     /// the hold books nothing itself. Momentum: the faces' nodes are prescribed (infinite
     /// mass), so the impulse goes to their constraint, as a push-back on them does.
     pub(super) fn hold_on_faces(&mut self, dt: f64) {
