@@ -16,6 +16,12 @@
 //! Energy bookkeeping uses the work of the nodal forces over each step's displacement,
 //! W += (f(n) + f(n+1))/2 . (x(n+1) - x(n)), which velocity Verlet balances against the kinetic
 //! energy to O(dt^2) without drift.
+//!
+//! This file holds the types; the stage's methods are in `explicit/`, one concern a file:
+//! `setup` (construction, lumped masses), `integrator` (kick and drift, the closing kick),
+//! `elements` (the element loop and its kernel dispatch), `constraints` (boundary conditions,
+//! gravity, reactions), `loads` (pressure loads), `contact` (the push-back's impulses),
+//! `energies` (the reduced sums), `restart` and `queries` (what output reads).
 use crate::assembly::Assembly;
 use crate::batch::{self, Batch, LaneMaterial, Width};
 use crate::blocks::BlockWork;
