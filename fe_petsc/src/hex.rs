@@ -498,6 +498,106 @@ pub fn stable_dt(
     critical_dt(w, xi)
 }
 
+/// The mean gradient b = B / V (`bv` is B = V b, `iv` = 1/V) and the sum of its squares.
+#[inline(always)]
+fn mean_gradient(bv: &[[f64; 3]; 8], iv: f64) -> ([[f64; 3]; 8], f64) {
+    let mut b = [[0.0; 3]; 8];
+    let mut bb = 0.0;
+    for i in 0..8 {
+        for j in 0..3 {
+            b[i][j] = bv[i][j] * iv;
+            bb += b[i][j] * b[i][j];
+        }
+    }
+    (b, bb)
+}
+
+/// The velocity gradient L = (sum_I v_I (x) V bh_I) / V(n+1/2) (`bvh` the mid-step V bh,
+/// `ivh` = 1/V(n+1/2)): the division by the volume once per entry.
+#[inline(always)]
+fn velocity_gradient(v: &[[f64; 3]; 8], bvh: &[[f64; 3]; 8], ivh: f64) -> [[f64; 3]; 3] {
+    let mut l = [[0.0; 3]; 3];
+    for i in 0..8 {
+        for a in 0..3 {
+            for j in 0..3 {
+                l[a][j] += v[i][a] * bvh[i][j];
+            }
+        }
+    }
+    for row in l.iter_mut() {
+        for lj in row.iter_mut() {
+            *lj *= ivh;
+        }
+    }
+    l
+}
+
+/// The stress `s` (Voigt xx,yy,zz,xy,yz,zx) rotated by the step's Hughes-Winget increment of
+/// the spin W = skew(L): R s R^T.
+#[inline(always)]
+fn rotated_stress(l: &[[f64; 3]; 3], dt: f64, s: &[f64; 6]) -> [f64; 6] {
+    // Spin W = skew(L): w[0] = W_yz... store as the full antisymmetric matrix.
+    let w01 = 0.5 * (l[0][1] - l[1][0]);
+    let w12 = 0.5 * (l[1][2] - l[2][1]);
+    let w20 = 0.5 * (l[2][0] - l[0][2]);
+    // Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective.
+    let h = 0.5 * dt;
+    let a = [
+        [1.0, -h * w01, h * w20],
+        [h * w01, 1.0, -h * w12],
+        [-h * w20, h * w12, 1.0],
+    ];
+    let p = [
+        [1.0, h * w01, -h * w20],
+        [-h * w01, 1.0, h * w12],
+        [h * w20, -h * w12, 1.0],
+    ];
+    let ai = inverse3(&a).unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    let r: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| ai[i][k] * p[k][j]).sum()));
+    // sigma <- R sigma R^T
+    let sm = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
+    let mut rs = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            rs[i][j] = (0..3).map(|k| r[i][k] * sm[k][j]).sum();
+        }
+    }
+    let rot = |i: usize, j: usize| -> f64 { (0..3).map(|k| rs[i][k] * r[j][k]).sum() };
+    [
+        rot(0, 0),
+        rot(1, 1),
+        rot(2, 2),
+        rot(0, 1),
+        rot(1, 2),
+        rot(2, 0),
+    ]
+}
+
+/// The nodal forces -V sigma b of the stress plus the bulk viscosity `q` on its normal
+/// components (`bv` = V b).
+#[inline(always)]
+fn stress_forces(bv: &[[f64; 3]; 8], stress: &[f64; 6], q: f64) -> [[f64; 3]; 8] {
+    let st_tot = [
+        stress[0] + q,
+        stress[1] + q,
+        stress[2] + q,
+        stress[3],
+        stress[4],
+        stress[5],
+    ];
+    let mut force = [[0.0; 3]; 8];
+    for i in 0..8 {
+        let bi = &bv[i]; // V * b
+        force[i] = [
+            -(st_tot[0] * bi[0] + st_tot[3] * bi[1] + st_tot[5] * bi[2]),
+            -(st_tot[3] * bi[0] + st_tot[1] * bi[1] + st_tot[4] * bi[2]),
+            -(st_tot[5] * bi[0] + st_tot[4] * bi[1] + st_tot[2] * bi[2]),
+        ];
+    }
+    force
+}
+
 /// One explicit update of one element.
 ///
 /// `x`: nodal coordinates at t(n+1); `v`: nodal velocities at t(n+1/2); `dt`: the step just taken;
@@ -536,28 +636,8 @@ pub fn update(
     let inv = 1.0 / (vol * volh);
     let (iv, ivh) = (volh * inv, vol * inv);
     // Mean gradient b = B / V at t(n+1) (forces, hourglass, stable step).
-    let mut b = [[0.0; 3]; 8];
-    let mut bb = 0.0;
-    for i in 0..8 {
-        for j in 0..3 {
-            b[i][j] = bv[i][j] * iv;
-            bb += b[i][j] * b[i][j];
-        }
-    }
-    // L = (sum_I v_I (x) V bh_I) / V(n+1/2): the division by the volume once per entry.
-    let mut l = [[0.0; 3]; 3];
-    for i in 0..8 {
-        for a in 0..3 {
-            for j in 0..3 {
-                l[a][j] += v[i][a] * bvh[i][j];
-            }
-        }
-    }
-    for row in l.iter_mut() {
-        for lj in row.iter_mut() {
-            *lj *= ivh;
-        }
-    }
+    let (b, bb) = mean_gradient(&bv, iv);
+    let l = velocity_gradient(v, &bvh, ivh);
     let d = [
         l[0][0],
         l[1][1],
@@ -566,43 +646,7 @@ pub fn update(
         0.5 * (l[1][2] + l[2][1]),
         0.5 * (l[2][0] + l[0][2]),
     ];
-    // Spin W = skew(L): w[0] = W_yz... store as the full antisymmetric matrix.
-    let w01 = 0.5 * (l[0][1] - l[1][0]);
-    let w12 = 0.5 * (l[1][2] - l[2][1]);
-    let w20 = 0.5 * (l[2][0] - l[0][2]);
-    // Hughes-Winget: R = (I - dt/2 W)^-1 (I + dt/2 W), incrementally objective.
-    let h = 0.5 * dt;
-    let a = [
-        [1.0, -h * w01, h * w20],
-        [h * w01, 1.0, -h * w12],
-        [-h * w20, h * w12, 1.0],
-    ];
-    let p = [
-        [1.0, h * w01, -h * w20],
-        [-h * w01, 1.0, h * w12],
-        [h * w20, -h * w12, 1.0],
-    ];
-    let ai = inverse3(&a).unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
-    let r: [[f64; 3]; 3] =
-        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| ai[i][k] * p[k][j]).sum()));
-    // sigma <- R sigma R^T
-    let s = &st.stress;
-    let sm = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
-    let mut rs = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            rs[i][j] = (0..3).map(|k| r[i][k] * sm[k][j]).sum();
-        }
-    }
-    let rot = |i: usize, j: usize| -> f64 { (0..3).map(|k| rs[i][k] * r[j][k]).sum() };
-    let mut stress = [
-        rot(0, 0),
-        rot(1, 1),
-        rot(2, 2),
-        rot(0, 1),
-        rot(1, 2),
-        rot(2, 0),
-    ];
+    let mut stress = rotated_stress(&l, dt, &st.stress);
     let deps: [f64; 6] = std::array::from_fn(|k| d[k] * dt);
     // rho = m / V with the exact volume (a fluid's EOS reads it).
     let rho = rho0 * vol0 * iv;
@@ -623,23 +667,7 @@ pub fn update(
         mat.add_heat(mat_state, q * ev * dt / rho, rho);
     }
 
-    let st_tot = [
-        stress[0] + q,
-        stress[1] + q,
-        stress[2] + q,
-        stress[3],
-        stress[4],
-        stress[5],
-    ];
-    let mut force = [[0.0; 3]; 8];
-    for i in 0..8 {
-        let bi = &bv[i]; // V * b
-        force[i] = [
-            -(st_tot[0] * bi[0] + st_tot[3] * bi[1] + st_tot[5] * bi[2]),
-            -(st_tot[3] * bi[0] + st_tot[1] * bi[1] + st_tot[4] * bi[2]),
-            -(st_tot[5] * bi[0] + st_tot[4] * bi[1] + st_tot[2] * bi[2]),
-        ];
-    }
+    let mut force = stress_forces(&bv, &stress, q);
 
     // Hourglass control with the material's current tangent (see `crate::hourglass`).
     let mu = mat.shear_modulus();

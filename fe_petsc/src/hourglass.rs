@@ -410,16 +410,19 @@ pub struct HourglassStep<'a> {
 /// The hourglass vectors gamma_a (FB) of an element: gamma_aI = Gamma_aI - (Gamma_a . x) . b_I.
 #[inline]
 pub fn vectors(x: &[[f64; 3]; 8], b: &[[f64; 3]; 8]) -> [[f64; 8]; 4] {
-    std::array::from_fn(|al| {
-        let g = &GAMMA[al];
+    let mut out = [[0.0; 8]; 4];
+    for (g, o) in GAMMA.iter().zip(out.iter_mut()) {
         let mut gx = [0.0; 3];
         for k in 0..8 {
             for c in 0..3 {
                 gx[c] += g[k] * x[k][c];
             }
         }
-        std::array::from_fn(|k| g[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2]))
-    })
+        for k in 0..8 {
+            o[k] = g[k] - (gx[0] * b[k][0] + gx[1] * b[k][1] + gx[2] * b[k][2]);
+        }
+    }
+    out
 }
 
 impl Hourglass {
@@ -447,16 +450,18 @@ impl Hourglass {
         let kind = self.for_material(mat.mu);
         let gam = vectors(s.x, s.b);
         let frame = Frame::new(s.x);
-        // Hourglass rates in the element frame.
-        let qd: [[f64; 3]; 4] = std::array::from_fn(|al| {
+        // Hourglass rates in the element frame (a plain loop rather than `array::from_fn`,
+        // whose closure LLVM left out of line in some builds: ~12 % more instructions here).
+        let mut qd = [[0.0; 3]; 4];
+        for (al, qa) in qd.iter_mut().enumerate() {
             let mut q = [0.0; 3];
             for k in 0..8 {
                 for c in 0..3 {
                     q[c] += s.v[k][c] * gam[al][k];
                 }
             }
-            frame.to_local(&q)
-        });
+            *qa = frame.to_local(&q);
+        }
         if let Hourglass::Physical { scale } = kind {
             return physical_step(s, mat, scale, &frame, &gam, &qd, hg, force);
         }

@@ -68,9 +68,11 @@ use mpi::traits::*;
 use std::time::Instant;
 
 mod exact_cg;
+mod restart;
 mod tangent;
 
 use exact_cg::{CgSystem, ExactCg};
+pub use tangent::material_tangent;
 
 /// Default Newton tolerance on the residual relative to the force scale (`-tdyn_newton_rtol`).
 pub const NEWTON_RTOL: f64 = 1e-8;
@@ -80,10 +82,6 @@ pub const NEWTON_MAX_IT: u32 = 30;
 pub const REFRESH_RATIO: f64 = 0.1;
 /// Below this fraction of the run's largest force scale a residual counts as zero.
 const FORCE_FLOOR: f64 = 1e-3;
-/// Forward-difference step of the material tangent, relative to the strain increment...
-const FD_REL: f64 = 1e-6;
-/// ... and the smallest strain increment it is taken relative to.
-const FD_STRAIN_FLOOR: f64 = 1e-6;
 /// Most history variables a material may have (the tangent's scratch space).
 const MAX_MAT_STATE: usize = 8;
 
@@ -433,44 +431,6 @@ impl ImplicitFe {
         self.fe.x.len()
     }
 
-    /// The restart state beyond the explicit arrays (`ExplicitFe::restart_state`): the
-    /// accepted state's forces and reactions (the energy sums use them) and the force scale of
-    /// the convergence test. The tangent is not kept: a restarted run assembles a fresh one,
-    /// so it agrees with the run without a stop to the Newton tolerance, not bit for bit.
-    pub fn restart_state(&self) -> Vec<(&'static str, Vec<f64>)> {
-        let mut v = self.fe.restart_state();
-        v.push(("implicit.force_n", self.force_n.as_flattened().to_vec()));
-        v.push((
-            "implicit.reaction_n",
-            self.reaction_n.as_flattened().to_vec(),
-        ));
-        v.push(("implicit.force_scale_max", vec![self.force_scale_max]));
-        v
-    }
-
-    /// Sets the state [`ImplicitFe::restart_state`] gave.
-    pub fn set_restart_state(
-        &mut self,
-        get: &mut dyn FnMut(&str) -> Option<Vec<f64>>,
-    ) -> Result<(), String> {
-        self.fe.set_restart_state(get)?;
-        let n3 = 3 * self.force_n.len();
-        let mut take = |name: &str, len: usize| -> Result<Vec<f64>, String> {
-            let v = get(name).ok_or_else(|| format!("{name}: missing"))?;
-            if v.len() != len {
-                return Err(format!("{name}: {} values, {len} expected", v.len()));
-            }
-            Ok(v)
-        };
-        let f = take("implicit.force_n", n3)?;
-        self.force_n.as_flattened_mut().copy_from_slice(&f);
-        let r = take("implicit.reaction_n", n3)?;
-        self.reaction_n.as_flattened_mut().copy_from_slice(&r);
-        self.force_scale_max = take("implicit.force_scale_max", 1)?[0];
-        self.tangent_stale = true;
-        Ok(())
-    }
-
     /// One Newmark step of `self.dt`: predictor, Newton iterations, update of positions,
     /// velocities, accelerations, element state and energies (collective; every rank returns an
     /// error together, the failing ones their own and the others [`ImplicitError::OtherRank`]).
@@ -789,52 +749,4 @@ impl ImplicitFe {
         self.fe.timers.nodal += t0.elapsed().as_secs_f64();
         sums
     }
-}
-
-#[inline]
-fn mat3_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
-}
-
-/// The algorithmic tangent d(stress)/d(strain) of `mat`'s stress update at (stress, state,
-/// deps), Voigt xx,yy,zz,xy,yz,zx against engineering shear strains, symmetrised: forward
-/// differences of `update_stress` (6 extra calls), at the reference density (a fluid, whose
-/// stress is a function of the density alone, has no such tangent: fluids are explicit only).
-pub fn material_tangent(
-    mat: &dyn Material,
-    stress: &[f64; 6],
-    state: &[f64],
-    deps: &[f64; 6],
-    dt: f64,
-) -> [[f64; 6]; 6] {
-    let n = state.len();
-    let mut buf = [0.0; MAX_MAT_STATE];
-    let mut eval = |d: &[f64; 6]| -> [f64; 6] {
-        let mut s = *stress;
-        buf[..n].copy_from_slice(state);
-        mat.update_stress(&mut s, &mut buf[..n], d, dt, mat.density());
-        s
-    };
-    let s0 = eval(deps);
-    let scale = deps.iter().fold(FD_STRAIN_FLOOR, |m, d| m.max(d.abs()));
-    let h = FD_REL * scale;
-    let mut c = [[0.0; 6]; 6];
-    for l in 0..6 {
-        let mut d = *deps;
-        d[l] += h;
-        let s1 = eval(&d);
-        // Tensor shear strain h is engineering strain 2h.
-        let to_eng = if l >= 3 { 0.5 } else { 1.0 };
-        for k in 0..6 {
-            c[k][l] = (s1[k] - s0[k]) / h * to_eng;
-        }
-    }
-    for k in 0..6 {
-        for l in (k + 1)..6 {
-            let m = 0.5 * (c[k][l] + c[l][k]);
-            c[k][l] = m;
-            c[l][k] = m;
-        }
-    }
-    c
 }

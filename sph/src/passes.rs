@@ -473,7 +473,6 @@ fn pair_loop_for<
     } else {
         Kernel::Wendland
     };
-    let liggghts = LIGGGHTS;
     let cond = conductivity(params);
     let PassBuffers {
         slots,
@@ -489,7 +488,7 @@ fn pair_loop_for<
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = kernel_at(&k, f64::NAN, params);
     let mut work = PairWork::default();
-    let mut pair = |i: usize, j: usize| {
+    let pair = |i: usize, j: usize| {
         let (a, b) = (&slots[i], &slots[j]);
         let d = sub(a.x, b.x);
         let r2 = dot(d, d);
@@ -516,36 +515,9 @@ fn pair_loop_for<
             note(&mut md, ti);
             note(&mut md, tj);
         }
-        let visc = match params.viscosity {
-            Some(av) => {
-                // mu = 0 (so Pi = 0) when receding: min(vr, 0) rather than a jump
-                let mu = h * neg_part(vr) / (r2 + av.eta_factor * h * h);
-                let c_mean = 0.5 * (a.c + b.c);
-                let rho_mean = 0.5 * (a.rho + b.rho);
-                (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
-            }
-            None => 0.0,
-        };
+        let visc = pair_viscosity(params, a, b, h, vr, r2);
         let (pa, pb) = (a.p_rho2, b.p_rho2);
-        let tensile = match params.tensile {
-            Some(tc) if kern.1 > 0.0 => {
-                let fab = w_norm * kind.shape(s) * kern.1;
-                // epsilon |x| in tension (x < 0), else 0: epsilon max(-x, 0)
-                let tension = |x: f64| tc.epsilon * pos_part(-x);
-                let r_ab = if liggghts {
-                    // 0.01 (pa + pb) when both pressures are positive (the tension terms
-                    // are then zero), else the tension terms
-                    let both = (a.p > 0.0) & (b.p > 0.0);
-                    let positive = POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb);
-                    select_or_zero(both, positive) + (tension(pa) + tension(pb))
-                } else {
-                    let one = |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * pos_part(x);
-                    one(pa) + one(pb)
-                };
-                r_ab * fab.powi(TENSILE_EXPONENT)
-            }
-            _ => 0.0,
-        };
+        let tensile = pair_tensile::<LIGGGHTS>(params, kind, s, w_norm, kern.1, a, b);
         let press = pa + pb + tensile;
         let gr = dw * inv_r; // grad_a W_ab = gr r_ab
         let mm = a.m * b.m;
@@ -573,6 +545,21 @@ fn pair_loop_for<
         add4(&mut sums[i].fold, [-fd[0], -fd[1], -fd[2], de_i], &shifts);
         add4(&mut sums[j].fold, [fd[0], fd[1], fd[2], de_j], &shifts);
     };
+    let n_pairs = each_pair::<KEPT>(pairs, slots, count, pair);
+    *m = [mf, md, me];
+    (work, n_pairs)
+}
+
+/// Runs `pair` on each pair of `pairs` and counts each slot's pairs; with `KEPT` (candidates
+/// kept between steps) only on those whose particles overlap, a chunk at a time: the overlap
+/// test first, then the pairs that passed. Returns how many passed (0 without `KEPT`).
+#[inline(always)]
+fn each_pair<const KEPT: bool>(
+    pairs: &[(u32, u32)],
+    slots: &[Slot],
+    count: &mut [u32],
+    mut pair: impl FnMut(usize, usize),
+) -> usize {
     let mut n_pairs = 0usize;
     if KEPT {
         let mut close = [(0u32, 0u32); CANDIDATE_CHUNK];
@@ -601,8 +588,58 @@ fn pair_loop_for<
             pair(i, j);
         }
     }
-    *m = [mf, md, me];
-    (work, n_pairs)
+    n_pairs
+}
+
+/// The artificial viscosity Pi_ab of a pair (zero without one), with h the pair's mean
+/// smoothing length, vr = (v_a - v_b) . (x_a - x_b) and r2 = |x_a - x_b|^2.
+#[inline(always)]
+fn pair_viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
+    match params.viscosity {
+        Some(av) => {
+            // mu = 0 (so Pi = 0) when receding: min(vr, 0) rather than a jump
+            let mu = h * neg_part(vr) / (r2 + av.eta_factor * h * h);
+            let c_mean = 0.5 * (a.c + b.c);
+            let rho_mean = 0.5 * (a.rho + b.rho);
+            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+        }
+        None => 0.0,
+    }
+}
+
+/// The tensile-instability correction R_ab f_ab^n of a pair (zero without one), f_ab =
+/// W(r) / W(delta_p) (`w_norm` times the shape at `s` = r / h, times `inv_w_delta` = 1 /
+/// W(delta_p)); the LIGGGHTS form with `LIGGGHTS`.
+#[inline(always)]
+fn pair_tensile<const LIGGGHTS: bool>(
+    params: &Params,
+    kind: Kernel,
+    s: f64,
+    w_norm: f64,
+    inv_w_delta: f64,
+    a: &Slot,
+    b: &Slot,
+) -> f64 {
+    let (pa, pb) = (a.p_rho2, b.p_rho2);
+    match params.tensile {
+        Some(tc) if inv_w_delta > 0.0 => {
+            let fab = w_norm * kind.shape(s) * inv_w_delta;
+            // epsilon |x| in tension (x < 0), else 0: epsilon max(-x, 0)
+            let tension = |x: f64| tc.epsilon * pos_part(-x);
+            let r_ab = if LIGGGHTS {
+                // 0.01 (pa + pb) when both pressures are positive (the tension terms
+                // are then zero), else the tension terms
+                let both = (a.p > 0.0) & (b.p > 0.0);
+                let positive = POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb);
+                select_or_zero(both, positive) + (tension(pa) + tension(pb))
+            } else {
+                let one = |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * pos_part(x);
+                one(pa) + one(pb)
+            };
+            r_ab * fab.powi(TENSILE_EXPONENT)
+        }
+        _ => 0.0,
+    }
 }
 
 /// x where x > 0, else +0 (also for NaN): a clamp of a pair's formula, one `maxsd` rather than

@@ -78,32 +78,7 @@ pub fn write(
         f.steps,
         f.wall_s,
     );
-    let mut skipped = serde_json::Map::new();
-    for stage in model.stages() {
-        report.stages_run.push(stage.name().into());
-        stage.report(world, &mut report, f.loop_s);
-    }
-    if model.fe.is_none() {
-        skipped.insert("fe".into(), "no [[mesh]]".into());
-    }
-    if model.sph.is_none() {
-        skipped.insert("sph".into(), "no [[particles]]".into());
-    }
-    match &model.contact {
-        Some(c) => {
-            report.stages_run.push("contact".into());
-            c.report(world, &mut report, f.loop_s);
-        }
-        None => {
-            skipped.insert("contact".into(), "no [contact]".into());
-        }
-    }
-    if let Some(w) = &model.walls {
-        // The walls' corrections: not a decomposition, a pass over the nodes and particles.
-        report.stages_run.push("rigid_walls".into());
-        let s = crate::kernels::collective::max(world, w.wall_s);
-        report.extra.insert("rigid_walls_s".into(), s.into());
-    }
+    let skipped = stage_figures(world, &mut report, model, f.loop_s);
     report.output = Some(StageStats::reduce(
         world,
         f.output_s,
@@ -113,22 +88,7 @@ pub fn write(
     report.energy_error_max = f.energy_error_max;
     let ex = &mut report.extra;
     ex.insert("stages_skipped".into(), serde_json::Value::Object(skipped));
-    match f.failure {
-        None => {
-            ex.insert("status".into(), "finished".into());
-        }
-        Some((kind, message)) => {
-            let status = match kind {
-                super::FailureKind::Stopped => "stopped",
-                _ => "failed",
-            };
-            ex.insert("status".into(), status.into());
-            ex.insert(
-                "failure".into(),
-                serde_json::json!({ "kind": format!("{kind:?}").to_lowercase(), "message": message }),
-            );
-        }
-    }
+    insert_status(ex, f.failure);
     ex.insert(
         "energy_error_max_checked".into(),
         f.energy_error_max_checked.into(),
@@ -169,32 +129,100 @@ pub fn write(
     ex.insert("dt_stable_initial".into(), f.dt_stable_initial.into());
     ex.insert("dt_min".into(), f.dt_min.into());
     ex.insert("setup_s".into(), collective::max(world, f.setup_s).into());
-    // The processes' peak memory (the largest resident set each reached, summed over ranks;
-    // the set-up's mesh structures included), over the elements and over the particles: the
-    // whole process's figure, so with both a mesh and particles each ratio counts both.
-    let rss = collective::sum(world, peak_rss());
-    ex.insert("peak_rss_bytes".into(), rss.into());
-    ex.insert(
-        "peak_rss_bytes_max_rank".into(),
-        collective::max(world, peak_rss()).into(),
-    );
-    if report.elements > 0 {
-        ex.insert(
-            "peak_rss_bytes_per_element".into(),
-            (rss / report.elements as f64).into(),
-        );
-    }
-    if report.particles > 0 {
-        ex.insert(
-            "peak_rss_bytes_per_particle".into(),
-            (rss / report.particles as f64).into(),
-        );
-    }
-    ex.insert("loop_s".into(), f.loop_s.into());
+    insert_memory(world, &mut report);
+    report.extra.insert("loop_s".into(), f.loop_s.into());
     if world.rank() == 0 {
         report
             .write(&out_dir.join("report.json"))
             .map_err(|e| format!("report.json: {e}"))?;
     }
     Ok(())
+}
+
+/// Each stage's figures into `report` (the stages that ran, in order, the rigid walls' time),
+/// and why each stage that did not run was skipped (collective).
+fn stage_figures(
+    world: &SimpleCommunicator,
+    report: &mut Report,
+    model: &Model,
+    loop_s: f64,
+) -> serde_json::Map<String, serde_json::Value> {
+    let mut skipped = serde_json::Map::new();
+    for stage in model.stages() {
+        report.stages_run.push(stage.name().into());
+        stage.report(world, report, loop_s);
+    }
+    if model.fe.is_none() {
+        skipped.insert("fe".into(), "no [[mesh]]".into());
+    }
+    if model.sph.is_none() {
+        skipped.insert("sph".into(), "no [[particles]]".into());
+    }
+    match &model.contact {
+        Some(c) => {
+            report.stages_run.push("contact".into());
+            c.report(world, report, loop_s);
+        }
+        None => {
+            skipped.insert("contact".into(), "no [contact]".into());
+        }
+    }
+    if let Some(w) = &model.walls {
+        // The walls' corrections: not a decomposition, a pass over the nodes and particles.
+        report.stages_run.push("rigid_walls".into());
+        let s = crate::kernels::collective::max(world, w.wall_s);
+        report.extra.insert("rigid_walls_s".into(), s.into());
+    }
+    skipped
+}
+
+/// How the run ended: "finished", "stopped" or "failed", with the failure's kind and message.
+fn insert_status(
+    ex: &mut serde_json::Map<String, serde_json::Value>,
+    failure: Option<(super::FailureKind, &str)>,
+) {
+    match failure {
+        None => {
+            ex.insert("status".into(), "finished".into());
+        }
+        Some((kind, message)) => {
+            let status = match kind {
+                super::FailureKind::Stopped => "stopped",
+                _ => "failed",
+            };
+            ex.insert("status".into(), status.into());
+            ex.insert(
+                "failure".into(),
+                serde_json::json!({ "kind": format!("{kind:?}").to_lowercase(), "message": message }),
+            );
+        }
+    }
+}
+
+/// The processes' peak memory, summed over ranks and on the largest rank, and per element and
+/// per particle (collective).
+fn insert_memory(world: &SimpleCommunicator, report: &mut Report) {
+    // The processes' peak memory (the largest resident set each reached, summed over ranks;
+    // the set-up's mesh structures included), over the elements and over the particles: the
+    // whole process's figure, so with both a mesh and particles each ratio counts both.
+    let rss = collective::sum(world, peak_rss());
+    let (elements, particles) = (report.elements, report.particles);
+    let ex = &mut report.extra;
+    ex.insert("peak_rss_bytes".into(), rss.into());
+    ex.insert(
+        "peak_rss_bytes_max_rank".into(),
+        collective::max(world, peak_rss()).into(),
+    );
+    if elements > 0 {
+        ex.insert(
+            "peak_rss_bytes_per_element".into(),
+            (rss / elements as f64).into(),
+        );
+    }
+    if particles > 0 {
+        ex.insert(
+            "peak_rss_bytes_per_particle".into(),
+            (rss / particles as f64).into(),
+        );
+    }
 }

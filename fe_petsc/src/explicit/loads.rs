@@ -26,8 +26,10 @@
 //! gid), the faces of a node that several ranks hold summed by its owner through an
 //! [`Assembly`] of the faces (the element forces' scheme), then added to the node's summed
 //! element force.
+use super::{ExplicitFe, StepError};
 use crate::assembly::Assembly;
 use crate::curve::Curve;
+use crate::exact::StepFolds;
 use crate::mesh::NodeExchange;
 use crate::petsc::PetscError;
 
@@ -163,6 +165,87 @@ impl Loads {
     pub fn keep(&mut self) {
         for (o, &n) in self.old.iter_mut().zip(&self.nodes) {
             *o = self.now[n as usize];
+        }
+    }
+}
+
+impl ExplicitFe {
+    /// The pressure loads of this rank (collective: every rank calls it, with the same
+    /// number of loads; none: nothing to do): their forces at the present positions and
+    /// time are added to the nodal forces the next kick reads.
+    pub fn set_loads(
+        &mut self,
+        sets: Vec<PressureLoad>,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), StepError> {
+        if sets.is_empty() {
+            return Ok(());
+        }
+        let mut l = Loads::new(sets, self.x.len(), exchange)?;
+        l.evaluate(&self.x, self.time, exchange)?;
+        for &n in &l.nodes {
+            let n = n as usize;
+            for c in 0..3 {
+                self.force[n][c] += l.now[n][c];
+            }
+        }
+        self.loads = Some(l);
+        Ok(())
+    }
+
+    /// After a restart: the loads at the restored positions and time, as the step that
+    /// wrote the checkpoint left them (its forces, restored, already hold them); gravity at
+    /// the restored time (collective).
+    pub fn refresh_after_restart(&mut self, exchange: &mut NodeExchange) -> Result<(), StepError> {
+        self.gravity = self.gravity_at(self.time);
+        if let Some(l) = &mut self.loads {
+            l.evaluate(&self.x, self.time, exchange)?;
+        }
+        Ok(())
+    }
+
+    /// The loads at the step's end (time `t`, the present positions) added to the summed
+    /// element forces; the last step's kept for the work (collective).
+    pub(super) fn add_loads(
+        &mut self,
+        t: f64,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), PetscError> {
+        let Some(l) = &mut self.loads else {
+            return Ok(());
+        };
+        l.keep();
+        l.evaluate(&self.x, t, exchange)?;
+        for &n in &l.nodes {
+            let n = n as usize;
+            for c in 0..3 {
+                self.force[n][c] += l.now[n][c];
+            }
+        }
+        Ok(())
+    }
+
+    /// The loads' work over the step on the owned loaded nodes, with the displacement dt v
+    /// (`v` the half-step velocities): the trapezoid (L(n) + L(n+1))/2 . dx into the external
+    /// work, and the same forces' f . dx taken out of the element work's sum (the nodal
+    /// forces the kick and the closing pass summed include the loads).
+    pub(super) fn load_work(&self, dt: f64, sums: &mut StepFolds) {
+        let Some(l) = &self.loads else {
+            return;
+        };
+        let e = &self.grids.energy;
+        for (old, &n) in l.old.iter().zip(&l.nodes) {
+            let n = n as usize;
+            if !self.owned[n] {
+                continue;
+            }
+            let now = l.now[n];
+            for c in 0..3 {
+                let dx = dt * self.v[n][c];
+                let both = old[c] + now[c];
+                e.add(&mut sums[2], (0.5 * both) * dx);
+                e.add(&mut sums[1], -(both * dx));
+            }
         }
     }
 }

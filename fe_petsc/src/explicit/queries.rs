@@ -3,6 +3,11 @@
 use super::*;
 
 impl ExplicitFe {
+    /// Number of local nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.x.len()
+    }
+
     /// Equivalent plastic strain of element `e`.
     pub fn plastic_strain(&self, e: usize) -> f64 {
         let s = self.mat_stride;

@@ -2,6 +2,11 @@
 //! hourglass control.
 use super::*;
 
+/// Forward-difference step of the material tangent, relative to the strain increment...
+const FD_REL: f64 = 1e-6;
+/// ... and the smallest strain increment it is taken relative to.
+const FD_STRAIN_FLOOR: f64 = 1e-6;
+
 impl ImplicitFe {
     /// Assembles 4 M / dt^2 + K at the current trial state (see the module comment).
     pub(super) fn assemble_tangent(
@@ -149,4 +154,52 @@ impl ImplicitFe {
         };
         self.controls.hourglass.tangent(&step, &hm, self.dt)
     }
+}
+
+#[inline]
+fn mat3_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// The algorithmic tangent d(stress)/d(strain) of `mat`'s stress update at (stress, state,
+/// deps), Voigt xx,yy,zz,xy,yz,zx against engineering shear strains, symmetrised: forward
+/// differences of `update_stress` (6 extra calls), at the reference density (a fluid, whose
+/// stress is a function of the density alone, has no such tangent: fluids are explicit only).
+pub fn material_tangent(
+    mat: &dyn Material,
+    stress: &[f64; 6],
+    state: &[f64],
+    deps: &[f64; 6],
+    dt: f64,
+) -> [[f64; 6]; 6] {
+    let n = state.len();
+    let mut buf = [0.0; MAX_MAT_STATE];
+    let mut eval = |d: &[f64; 6]| -> [f64; 6] {
+        let mut s = *stress;
+        buf[..n].copy_from_slice(state);
+        mat.update_stress(&mut s, &mut buf[..n], d, dt, mat.density());
+        s
+    };
+    let s0 = eval(deps);
+    let scale = deps.iter().fold(FD_STRAIN_FLOOR, |m, d| m.max(d.abs()));
+    let h = FD_REL * scale;
+    let mut c = [[0.0; 6]; 6];
+    for l in 0..6 {
+        let mut d = *deps;
+        d[l] += h;
+        let s1 = eval(&d);
+        // Tensor shear strain h is engineering strain 2h.
+        let to_eng = if l >= 3 { 0.5 } else { 1.0 };
+        for k in 0..6 {
+            c[k][l] = (s1[k] - s0[k]) / h * to_eng;
+        }
+    }
+    for k in 0..6 {
+        for l in (k + 1)..6 {
+            let m = 0.5 * (c[k][l] + c[l][k]);
+            c[k][l] = m;
+            c[l][k] = m;
+        }
+    }
+    c
 }

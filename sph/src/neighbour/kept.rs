@@ -302,67 +302,13 @@ pub(super) fn one_box_candidates(
     let n = x.len();
     let grid = Grid::new(x, h);
     let ncell = grid.n_cells();
-    // key 2 c for a primary entry of cell c, 2 c + 1 for another: primary slots first in
-    // each cell, each group in entry order (a stable counting sort)
-    let keys: Vec<u32> = x
-        .iter()
-        .enumerate()
-        .map(|(i, x)| {
-            let late = !primary.is_empty() && !primary[i];
-            (2 * grid.cell_of(x) + late as usize) as u32
-        })
-        .collect();
-    let mut start = vec![0u32; 2 * ncell + 1];
-    for &k in &keys {
-        start[k as usize + 1] += 1;
-    }
-    for k in 0..2 * ncell {
-        start[k + 1] += start[k];
-    }
-    let mut fill = start.clone();
-    let mut order = vec![0u32; n];
-    let mut slots = vec![[0.0f64; 4]; n];
-    let mut cell_hmax = vec![0.0f64; ncell];
-    for (i, &k) in keys.iter().enumerate() {
-        let s = fill[k as usize] as usize;
-        fill[k as usize] += 1;
-        order[s] = i as u32;
-        slots[s] = [x[i][0], x[i][1], x[i][2], h[i]];
-        let c = k as usize / 2;
-        cell_hmax[c] = cell_hmax[c].max(h[i]);
-    }
-    // cell c: slots start[2c]..start[2c + 2], the primary ones start[2c]..start[2c + 1];
-    // bounds[2c]: the box of its primary slots' positions (lower corner, upper corner),
-    // bounds[2c + 1]: of all its slots' (empty: lower +inf, upper -inf)
-    let mut bounds = vec![
-        [
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY
-        ];
-        2 * ncell
-    ];
-    for c in 0..ncell {
-        let (s0, p1, s1) = (
-            start[2 * c] as usize,
-            start[2 * c + 1] as usize,
-            start[2 * c + 2] as usize,
-        );
-        let mut b = bounds[2 * c];
-        for (s, a) in (s0..s1).zip(&slots[s0..s1]) {
-            for k in 0..3 {
-                b[k] = b[k].min(a[k]);
-                b[k + 3] = b[k + 3].max(a[k]);
-            }
-            if s + 1 == p1 {
-                bounds[2 * c] = b;
-            }
-        }
-        bounds[2 * c + 1] = b;
-    }
+    let CellSort {
+        start,
+        order,
+        slots,
+        cell_hmax,
+    } = sort_by_cell(x, h, primary, &grid);
+    let bounds = cell_bounds(&start, &slots, ncell);
     let most = (0..ncell)
         .map(|c| start[2 * c + 2] - start[2 * c])
         .max()
@@ -456,6 +402,97 @@ pub(super) fn one_box_candidates(
         }
     }
     out
+}
+
+/// The entries of one box sorted by cell ([`one_box_candidates`]).
+struct CellSort {
+    /// Cell c's slots: start[2c]..start[2c + 2], its primary ones start[2c]..start[2c + 1].
+    start: Vec<u32>,
+    /// The entry in each slot.
+    order: Vec<u32>,
+    /// Each slot's position and smoothing length.
+    slots: Vec<[f64; 4]>,
+    /// Each cell's largest smoothing length.
+    cell_hmax: Vec<f64>,
+}
+
+/// Sorts the entries by cell of `grid`, the primary ones first in each cell, each group in
+/// entry order (a stable counting sort).
+fn sort_by_cell(x: &[[f64; 3]], h: &[f64], primary: &[bool], grid: &Grid) -> CellSort {
+    let n = x.len();
+    let ncell = grid.n_cells();
+    // key 2 c for a primary entry of cell c, 2 c + 1 for another: primary slots first in
+    // each cell, each group in entry order (a stable counting sort)
+    let keys: Vec<u32> = x
+        .iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let late = !primary.is_empty() && !primary[i];
+            (2 * grid.cell_of(x) + late as usize) as u32
+        })
+        .collect();
+    let mut start = vec![0u32; 2 * ncell + 1];
+    for &k in &keys {
+        start[k as usize + 1] += 1;
+    }
+    for k in 0..2 * ncell {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut order = vec![0u32; n];
+    let mut slots = vec![[0.0f64; 4]; n];
+    let mut cell_hmax = vec![0.0f64; ncell];
+    for (i, &k) in keys.iter().enumerate() {
+        let s = fill[k as usize] as usize;
+        fill[k as usize] += 1;
+        order[s] = i as u32;
+        slots[s] = [x[i][0], x[i][1], x[i][2], h[i]];
+        let c = k as usize / 2;
+        cell_hmax[c] = cell_hmax[c].max(h[i]);
+    }
+    CellSort {
+        start,
+        order,
+        slots,
+        cell_hmax,
+    }
+}
+
+/// Each cell's boxes of its slots' positions ([`sort_by_cell`]'s `start` and `slots`).
+fn cell_bounds(start: &[u32], slots: &[[f64; 4]], ncell: usize) -> Vec<[f64; 6]> {
+    // cell c: slots start[2c]..start[2c + 2], the primary ones start[2c]..start[2c + 1];
+    // bounds[2c]: the box of its primary slots' positions (lower corner, upper corner),
+    // bounds[2c + 1]: of all its slots' (empty: lower +inf, upper -inf)
+    let mut bounds = vec![
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY
+        ];
+        2 * ncell
+    ];
+    for c in 0..ncell {
+        let (s0, p1, s1) = (
+            start[2 * c] as usize,
+            start[2 * c + 1] as usize,
+            start[2 * c + 2] as usize,
+        );
+        let mut b = bounds[2 * c];
+        for (s, a) in (s0..s1).zip(&slots[s0..s1]) {
+            for k in 0..3 {
+                b[k] = b[k].min(a[k]);
+                b[k + 3] = b[k + 3].max(a[k]);
+            }
+            if s + 1 == p1 {
+                bounds[2 * c] = b;
+            }
+        }
+        bounds[2 * c + 1] = b;
+    }
+    bounds
 }
 
 /// Pair candidates kept over several steps by one box of a decomposition (a Verlet list for

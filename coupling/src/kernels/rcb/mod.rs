@@ -345,6 +345,23 @@ fn split_level<T: RcbItem>(
     hi: i32,
     prev: Option<Cut>,
 ) -> (Cut, u64) {
+    let (dim, guess, target) = cut_axis(g, items, lo, mid, hi, prev);
+    let (low, iterations) = median_search(g, items, dim, guess, target);
+    let (value, tie_id) = cut_plane(g, items, dim, &low, guess);
+    (Cut { dim, value, tie_id }, iterations)
+}
+
+/// The axis of the group's cut (its items' longest extent, or the previous cut's while no
+/// other is twice as long), the previous cut's (value, id) on that axis as the first pivot,
+/// and the weight the lower `mid - lo` ranks get (collective over `g`).
+fn cut_axis<T: RcbItem>(
+    g: &SimpleCommunicator,
+    items: &[T],
+    lo: i32,
+    mid: i32,
+    hi: i32,
+    prev: Option<Cut>,
+) -> (usize, Option<(f64, u64)>, f64) {
     // Totals and bounding box of the group's items.
     let mut w_loc = 0.0;
     let mut bb = [f64::INFINITY; 6]; // min xyz, -max xyz
@@ -381,7 +398,18 @@ fn split_level<T: RcbItem>(
     };
     let guess = prev.filter(|p| p.dim == dim).map(|p| (p.value, p.tie_id));
     let target = w_total * (mid - lo) as f64 / (hi - lo) as f64;
+    (dim, guess, target)
+}
 
+/// The median search along `dim`: which items go to the lower ranks (their weight reaching
+/// `target`, the ties split by id), and the iterations taken (collective over `g`).
+fn median_search<T: RcbItem>(
+    g: &SimpleCommunicator,
+    items: &[T],
+    dim: usize,
+    guess: Option<(f64, u64)>,
+    target: f64,
+) -> (Vec<bool>, u64) {
     // Median search over the undecided items. -0.0 becomes 0.0 so that the sort order
     // (total_cmp) and `<` agree.
     let mut active: Vec<Key> = items
@@ -458,7 +486,18 @@ fn split_level<T: RcbItem>(
             break;
         }
     }
+    (low, iterations)
+}
 
+/// The cut's plane between the items `low` gives the lower ranks and the others along `dim`:
+/// its value and, where both sides share the coordinate, the tie id (collective over `g`).
+fn cut_plane<T: RcbItem>(
+    g: &SimpleCommunicator,
+    items: &[T],
+    dim: usize,
+    low: &[bool],
+    guess: Option<(f64, u64)>,
+) -> (f64, u64) {
     // The plane: midway between the last low and the first high coordinate, or a tie cut.
     let mut ext_loc = [f64::NEG_INFINITY; 2]; // max low c, -min high c
     for (i, it) in items.iter().enumerate() {
@@ -498,7 +537,7 @@ fn split_level<T: RcbItem>(
         (true, false) => max_low.next_up(),
         (false, false) => guess.map(|p| p.0).unwrap_or(0.0),
     };
-    (Cut { dim, value, tie_id }, iterations)
+    (value, tie_id)
 }
 
 /// Each rank proposes the item at quantile `f` of its undecided items; the pivot is the
