@@ -23,11 +23,13 @@ bench: setup
 	./scripts/bench_fe.sh
 	./scripts/bench_sph.sh
 
-# The lint gate (CI runs it after setup, before the tests).
+# The lint gate (CI runs it after setup, before the tests): formatting, clippy, and the API
+# documentation built without a warning (no broken or private links).
 lint:
 	@cargo fmt --version >/dev/null 2>&1 && cargo clippy --version >/dev/null 2>&1 || rustup component add rustfmt clippy
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --quiet
 
 # The validation suite (docs/validation.md): every case of validation/ at its validation
 # resolution; out/validation/report.md. FAST=1 runs the coarse meshes the tests use.

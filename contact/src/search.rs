@@ -388,7 +388,7 @@ pub fn search_candidates(
     out
 }
 
-/// Depths within this fraction of the face's diameter are a tie ([`blend_tied_normals`]).
+/// Depths within this fraction of the face's diameter are a tie (`blend_tied_normals`).
 pub const TIE_BAND: f64 = 1e-6;
 
 /// Makes a node's contact continuous where its face wins a tie by round-off: a hit dropped as

@@ -1,6 +1,6 @@
 //! Implicit dynamics: Newmark's average-acceleration (trapezoidal) rule, Newton iterations on the
 //! same hexahedron the explicit mode uses, the tangent solved by conjugate gradients on the
-//! element matrices with the same bits at any rank count ([`exact_cg`], the default), or
+//! element matrices with the same bits at any rank count (`exact_cg`, the default), or
 //! assembled in a PETSc matrix and solved by KSP when the user chooses a PETSc solver
 //! (`-ksp_type` / `-pc_type`: CG with smoothed aggregation unless told otherwise).
 //!

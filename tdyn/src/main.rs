@@ -5,6 +5,9 @@
 // Index loops over points and components read like the formulas; `!(x > 0.0)` deliberately also
 // rejects NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+// The option structs' doc comments are the command line's `--help` text (clap), written for a
+// terminal: `<scene name>` and `[sweep]` there are words for the user, not HTML or links.
+#![allow(rustdoc::invalid_html_tags, rustdoc::broken_intra_doc_links)]
 
 mod chart;
 mod compare;

@@ -67,7 +67,7 @@ impl ForceHistory {
 /// component c of force k), exact, so the same bits at any rank count, and the maximum over
 /// ranks of each of `flags`; two reductions in all (collective; every rank passes as many
 /// sums and flags). Each sum is binned on the grid covering its largest term (reduced) times
-/// [`MAX_TERMS`] (`fe_petsc::exact`: three folds, the lowest quantum 2^-104 of the grid's top,
+/// `MAX_TERMS` (`fe_petsc::exact`: three folds, the lowest quantum 2^-104 of the grid's top,
 /// so 2^-76 of the largest term): a bound on the terms of a sum that every rank count shares,
 /// where `fe_petsc::exact::totals` reduces the count itself in a third reduction.
 pub fn exact_forces(

@@ -151,11 +151,11 @@ impl ContactStats {
 }
 
 /// Relative size below which a positive work of the push-back is round-off: `W <= tol (|A| +
-/// B)` ([`energy_guard`]).
+/// B)` (`energy_guard`).
 pub const ENERGY_TOL: f64 = 1e-9;
 
 /// The push-back's energy injection a step may keep, as a fraction of the run's energy scale
-/// ([`energy_guard`]).
+/// (`energy_guard`).
 pub const ENERGY_INJECTION_BUDGET: f64 = 1e-6;
 
 /// Contact never gives energy back (docs/scene.md; `contact::pushback`, "Only the step's own
@@ -235,7 +235,7 @@ pub struct Contact {
     /// Energy taken by the push-back (minus the work of the contact forces), J.
     pub energy: f64,
     /// The run's energy scale after the last step (the energy error's denominator), J: the
-    /// driver sets it ([`energy_guard`]).
+    /// driver sets it (`energy_guard`).
     pub energy_scale: f64,
     /// What it found and cost.
     pub stats: ContactStats,

@@ -97,10 +97,10 @@ pub struct ContactOutcome {
     /// The contacts found on this rank: (node gid, face gid, depth).
     pub found: Vec<(u64, u64, f64)>,
     /// The pairs of different bodies (node's, face's) this rank's contacts touch, each once
-    /// ([`body_pairs`]).
+    /// (`body_pairs`).
     pub body_pairs: Vec<(u32, u32)>,
     /// The particles (gid) this rank's contacts hold against faces, with the face's body
-    /// ([`particle_faces`]).
+    /// (`particle_faces`).
     pub particle_faces: Vec<(u64, u32)>,
     /// Work of the push-back forces, over all ranks, J.
     pub work: f64,
