@@ -184,11 +184,13 @@ fn water_falling_on_a_rigid_floor_stays_above_it() {
 }
 
 /// The bar of the wave tests (steel, lateral symmetry planes: uniaxial strain) at rest, with a
-/// rigid wall at x = 0 moving at 1 m/s into it; `contact`: with a `[contact]` table too.
-fn pushed_bar(dir: &Path, contact: bool) -> PathBuf {
-    let mut extra = String::from(
+/// rigid wall at x = 0 moving at 1 m/s into it (its velocity scaled by the load curve `curve`,
+/// a TOML array, when given); `contact`: with a `[contact]` table too.
+fn pushed_bar(dir: &Path, contact: bool, curve: Option<&str>) -> PathBuf {
+    let curve = curve.map_or(String::new(), |c| format!("curve = {c}\n"));
+    let mut extra = format!(
         "[[rigid_wall]]\nname = \"piston\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n\
-         velocity = [1.0, 0.0, 0.0]\n\n\
+         velocity = [1.0, 0.0, 0.0]\n{curve}\n\
          [[probe]]\nname = \"mid\"\npoint = [0.5, 0.0, 0.0]\nfields = [\"stress_xx\", \"velocity_x\"]\n\n\
          [[probe]]\nname = \"face\"\npoint = [0.0, 0.0, 0.0]\nfields = [\"displacement_x\"]\n",
     );
@@ -212,7 +214,7 @@ fn a_moving_wall_drives_a_bar_at_rho_c_v() {
     let mut first: Option<PathBuf> = None;
     for np in [1, 3] {
         let out = dir.join(format!("np{np}"));
-        let scene = pushed_bar(&mkdir(&dir, &format!("scene_np{np}")), false);
+        let scene = pushed_bar(&mkdir(&dir, &format!("scene_np{np}")), false, None);
         run_ok(np, &scene, &out);
         let (h, rows) = read_csv(&out.join("probes.csv"));
         let t = column(&h, &rows, "time");
@@ -284,11 +286,65 @@ fn a_moving_wall_drives_a_bar_at_rho_c_v() {
     // With a [contact] table (the bar's face a contact surface, nothing to touch): the walls
     // act after the push-back, and the answer is the same bits as without it.
     let with = dir.join("with_contact");
-    let scene = pushed_bar(&mkdir(&dir, "scene_contact"), true);
+    let scene = pushed_bar(&mkdir(&dir, "scene_contact"), true, None);
     run_ok(3, &scene, &with);
     for file in ["reactions.csv", "probes.csv"] {
         let d = csv_columns_differ(first.as_ref().unwrap(), &with, file, &[]);
         assert!(d.is_empty(), "with [contact]: {file} columns differ: {d:?}");
+    }
+}
+
+/// The integral of the ramp `[[0, 0], [T, 1]]` (held at 1 after T) from 0 to `t`, s: `t^2 /
+/// (2 T)` on the ramp, `T / 2 + (t - T)` after it.
+fn ramp_integral(t: f64, ramp: f64) -> f64 {
+    if t <= ramp {
+        t * t / (2.0 * ramp)
+    } else {
+        0.5 * ramp + (t - ramp)
+    }
+}
+
+#[test]
+fn a_wall_moved_by_a_load_curve_follows_its_integral() {
+    // The pushed bar's wall (1 m/s) with `curve = [[0, 0], [T, 1]]`, T = 100 us: the wall
+    // accelerates from rest and then moves at 1 m/s. The bar's face, pushed by it, stays on
+    // it: its displacement is V times the curve's integral (by hand, `ramp_integral`) at
+    // every row, to 1e-9 m as the constant wall's; the wall is the only thing acting on the
+    // bar, so its impulse (reactions.csv) is the bar's momentum change to 1e-3. At np 1 and 3,
+    // the same bits.
+    let (v, ramp) = (1.0, 1.0e-4);
+    let dir = workdir("rigid_wall_curve");
+    let mut first: Option<PathBuf> = None;
+    for np in [1, 3] {
+        let out = dir.join(format!("np{np}"));
+        let scene = pushed_bar(
+            &mkdir(&dir, &format!("scene_np{np}")),
+            false,
+            Some("[[0.0, 0.0], [1.0e-4, 1.0]]"),
+        );
+        run_ok(np, &scene, &out);
+        let (h, rows) = read_csv(&out.join("probes.csv"));
+        let t = column(&h, &rows, "time");
+        let face = column(&h, &rows, "face.displacement_x");
+        for (tt, u) in t.iter().zip(&face) {
+            let want = v * ramp_integral(*tt, ramp);
+            assert!(
+                (u - want).abs() < 1e-9,
+                "np {np}: the face at t = {tt:e} s is at {u:e} m, the wall at {want:e} m"
+            );
+        }
+        let (hh, rh) = read_csv(&out.join("history.csv"));
+        let px = column(&hh, &rh, "momentum_x");
+        let dp = px.last().unwrap() - px[0];
+        let j = impulse(&out, "piston.force_x");
+        assert!(
+            dp > 0.0 && (j - dp).abs() < 1e-3 * dp,
+            "np {np}: wall impulse {j:e} N s vs the bar's momentum change {dp:e} kg m/s (1e-3)"
+        );
+        match &first {
+            None => first = Some(out),
+            Some(a) => same_bits(a, &out, "ramped wall, np 3 against np 1"),
+        }
     }
 }
 
@@ -322,6 +378,16 @@ fn bad_walls_are_refused_by_key() {
             "short_point",
             good.replace("point = [0.0, 0.0, 0.0]", "point = [0.0, 0.0]"),
             "rigid_wall[0].point",
+        ),
+        (
+            "curve_without_velocity",
+            format!("{good}curve = [[0.0, 0.0], [1.0e-4, 1.0]]\n"),
+            "rigid_wall[0].curve",
+        ),
+        (
+            "curve_backwards",
+            format!("{good}velocity = [1.0, 0.0, 0.0]\ncurve = [[1.0e-4, 0.0], [0.0, 1.0]]\n"),
+            "rigid_wall[0].curve[1]",
         ),
         (
             "implicit",

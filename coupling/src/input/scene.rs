@@ -647,6 +647,11 @@ pub struct RigidWallDef {
     /// The wall's velocity (a translation), m/s; default at rest.
     #[serde(default, deserialize_with = "vec3::option")]
     pub velocity: Option<[f64; 3]>,
+    /// A load curve `[[t, s], ...]` scaling `velocity` in time (docs/scene.md `curve`): the
+    /// wall moves at `s(t) velocity`, its plane through `point + velocity * (the integral of s
+    /// from 0 to t)`. Checked by [`crate::input::curve::check`]; none: `s = 1`.
+    #[serde(default)]
+    pub curve: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Debug, Deserialize)]

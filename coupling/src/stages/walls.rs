@@ -24,8 +24,17 @@
 //! inelastic correction removed, `<= 0`). That work is the prescribed motion's, like a velocity
 //! boundary's, and goes to `external_work`; what the correction dissipated, `W . J - dK`, goes
 //! to `contact_energy` (`>= 0`: energy the walls took). A wall at rest does no work.
+//!
+//! A wall with a load curve `s(t)` (`curve`) moves at `s(t) W`: over the step `[t, t + dt]` its
+//! plane is the one through `p + W I(t + dt)` at the step's end, `I(t) = integral of s from 0 to
+//! t` ([`Curve::integral`], exact for the piecewise-linear curve), and it moves at the step's
+//! mean velocity `W (I(t + dt) - I(t)) / dt` ([`Curve::mean`]): the velocity that carries it
+//! from the last step's plane to this one, so a node held on it follows `p + W I(t)` to
+//! round-off, and `W . J` takes that mean velocity. Without a curve the wall is the constant
+//! `p + W t` of [`contact::Wall`].
 use super::fe::Fe;
 use super::sph::Sph;
+use crate::input::curve::Curve;
 use crate::input::scene::RigidWallDef;
 use crate::output::state::{StateReader, StateWriter};
 use contact::Wall;
@@ -38,6 +47,8 @@ use std::time::Instant;
 /// The rigid walls of a run.
 pub struct Walls {
     walls: Vec<Wall>,
+    /// Each wall's load curve scaling its velocity (`None`: constant).
+    curves: Vec<Option<Curve>>,
     /// The walls' names, in scene order (reactions.csv's columns).
     pub names: Vec<String>,
     /// Energy the walls took from the bodies so far, J: their work less the change of kinetic
@@ -87,6 +98,14 @@ impl Walls {
                     friction: d.friction,
                 })
                 .collect(),
+            curves: defs
+                .iter()
+                .map(|d| {
+                    d.curve
+                        .as_ref()
+                        .map(|raw| Curve::new(raw.iter().map(|p| (p[0], p[1])).collect()))
+                })
+                .collect(),
             names: defs.iter().map(|d| d.name.clone()).collect(),
             energy: 0.0,
             work: 0.0,
@@ -109,21 +128,22 @@ impl Walls {
     ) {
         let t0 = Instant::now();
         let nw = self.walls.len();
+        let walls = self.walls_of_step(t1, dt);
         // [FE work, particles' work, then per wall FE impulse x, y, z and particles' x, y, z]:
         // each on its own stage's grid, added once reduced.
         let mut folds: Vec<Folds> = vec![[0.0; 3]; 2 + 6 * nw];
         if let Some(fe) = fe {
-            self.fe_step(fe, (t1, dt), &mut folds);
+            fe_step(&walls, fe, dt, &mut folds);
         }
         if let Some(sph) = sph {
-            self.sph_step(sph, (t1, dt), &mut folds);
+            sph_step(&walls, sph, dt, &mut folds);
         }
         let flat = exact_sum::flatten(&folds);
         let mut g = vec![0.0f64; flat.len()];
         world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
         let g = exact_sum::values(&g);
         let mut work = 0.0;
-        for (k, (imp, wall)) in self.impulse.iter_mut().zip(&self.walls).enumerate() {
+        for (k, (imp, (wall, _))) in self.impulse.iter_mut().zip(&walls).enumerate() {
             let s = &g[2 + 6 * k..8 + 6 * k];
             for c in 0..3 {
                 let j = s[c] + s[3 + c];
@@ -136,60 +156,27 @@ impl Walls {
         self.wall_s += t0.elapsed().as_secs_f64();
     }
 
-    /// The FE nodes' corrections: work into `folds[0]`, wall k's impulse into
-    /// `folds[2 + 6k..5 + 6k]`: `m (v' - v)` over the owned nodes it touched, the velocity
-    /// change `apply_contact` made (its constraints applied: a fixed node takes none).
-    fn fe_step(&self, fe: &mut Fe, (t1, dt): (f64, f64), folds: &mut [Folds]) {
-        let state = fe.state_mut();
-        let grid = state.grids.momentum;
-        for (k, wall) in self.walls.iter().enumerate() {
-            let nodes = (0..state.n_nodes()).map(|n| (n, state.x[n], state.v[n], state.mass[n]));
-            let Some(f) = forces_of(wall, (t1, dt), nodes, state.n_nodes()) else {
-                continue;
-            };
-            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
-                .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
-                .map(|n| (n, state.v[n]))
-                .collect();
-            let w = super::fe::apply_contact(state, &f, dt);
-            exact_sum::merge(&mut folds[0], &w);
-            for (n, v0) in touched {
-                for c in 0..3 {
-                    grid.add(
-                        &mut folds[2 + 6 * k + c],
-                        state.mass[n] * (state.v[n][c] - v0[c]),
-                    );
+    /// The walls as they stand over the step to `t1` (scene order), each with the time at
+    /// which [`Wall::correction`] is to place it: a wall without a curve as given, at `t1`; one
+    /// with a curve moved to its plane at `t1` and its mean velocity over the step (module
+    /// doc), at time 0.
+    fn walls_of_step(&self, t1: f64, dt: f64) -> Vec<(Wall, f64)> {
+        self.walls
+            .iter()
+            .zip(&self.curves)
+            .map(|(w, curve)| match curve {
+                None => (*w, t1),
+                Some(c) => {
+                    let (moved, mean) = (c.integral(0.0, t1), c.mean(t1 - dt, dt));
+                    let wall = Wall {
+                        point: std::array::from_fn(|k| w.point[k] + w.velocity[k] * moved),
+                        velocity: w.velocity.map(|v| v * mean),
+                        ..*w
+                    };
+                    (wall, 0.0)
                 }
-            }
-        }
-    }
-
-    /// The owned moving particles' corrections: work into `folds[1]`, wall k's impulse into
-    /// `folds[5 + 6k..8 + 6k]`, `m (v' - v)`.
-    fn sph_step(&self, sph: &mut Sph, (t1, dt): (f64, f64), folds: &mut [Folds]) {
-        let stage = &mut sph.stage;
-        let grid = stage.grids.momentum;
-        for (k, wall) in self.walls.iter().enumerate() {
-            let p = &stage.parts;
-            let nodes = (0..p.n_owned)
-                .filter(|&i| !p.fixed[i])
-                .map(|i| (i, p.x_real[i], p.v[i], p.m[i]));
-            let Some(f) = forces_of(wall, (t1, dt), nodes, p.n_owned) else {
-                continue;
-            };
-            let touched: Vec<(usize, [f64; 3])> = (0..f.len())
-                .filter(|&i| f[i] != [0.0; 3])
-                .map(|i| (i, p.v[i]))
-                .collect();
-            let w = stage.apply_contact(&f, &[], dt);
-            exact_sum::merge(&mut folds[1], &w);
-            let p = &stage.parts;
-            for (i, v0) in touched {
-                for c in 0..3 {
-                    grid.add(&mut folds[5 + 6 * k + c], p.m[i] * (p.v[i][c] - v0[c]));
-                }
-            }
-        }
+            })
+            .collect()
     }
 
     /// Each wall's force on the bodies for the history row at `time`, N: the impulse it gave
@@ -239,5 +226,62 @@ impl Walls {
             *i = [s[3 + 3 * k], s[4 + 3 * k], s[5 + 3 * k]];
         }
         Ok(())
+    }
+}
+
+/// The FE nodes' corrections by `walls` (each with its time, [`Walls::walls_of_step`]): work
+/// into `folds[0]`, wall k's impulse into `folds[2 + 6k..5 + 6k]`: `m (v' - v)` over the owned
+/// nodes it touched, the velocity change `apply_contact` made (its constraints applied: a
+/// fixed node takes none).
+fn fe_step(walls: &[(Wall, f64)], fe: &mut Fe, dt: f64, folds: &mut [Folds]) {
+    let state = fe.state_mut();
+    let grid = state.grids.momentum;
+    for (k, &(wall, t)) in walls.iter().enumerate() {
+        let nodes = (0..state.n_nodes()).map(|n| (n, state.x[n], state.v[n], state.mass[n]));
+        let Some(f) = forces_of(&wall, (t, dt), nodes, state.n_nodes()) else {
+            continue;
+        };
+        let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+            .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
+            .map(|n| (n, state.v[n]))
+            .collect();
+        let w = super::fe::apply_contact(state, &f, dt);
+        exact_sum::merge(&mut folds[0], &w);
+        for (n, v0) in touched {
+            for c in 0..3 {
+                grid.add(
+                    &mut folds[2 + 6 * k + c],
+                    state.mass[n] * (state.v[n][c] - v0[c]),
+                );
+            }
+        }
+    }
+}
+
+/// The owned moving particles' corrections by `walls` (each with its time): work into
+/// `folds[1]`, wall k's impulse into `folds[5 + 6k..8 + 6k]`, `m (v' - v)`.
+fn sph_step(walls: &[(Wall, f64)], sph: &mut Sph, dt: f64, folds: &mut [Folds]) {
+    let stage = &mut sph.stage;
+    let grid = stage.grids.momentum;
+    for (k, &(wall, t)) in walls.iter().enumerate() {
+        let p = &stage.parts;
+        let nodes = (0..p.n_owned)
+            .filter(|&i| !p.fixed[i])
+            .map(|i| (i, p.x_real[i], p.v[i], p.m[i]));
+        let Some(f) = forces_of(&wall, (t, dt), nodes, p.n_owned) else {
+            continue;
+        };
+        let touched: Vec<(usize, [f64; 3])> = (0..f.len())
+            .filter(|&i| f[i] != [0.0; 3])
+            .map(|i| (i, p.v[i]))
+            .collect();
+        let w = stage.apply_contact(&f, &[], dt);
+        exact_sum::merge(&mut folds[1], &w);
+        let p = &stage.parts;
+        for (i, v0) in touched {
+            for c in 0..3 {
+                grid.add(&mut folds[5 + 6 * k + c], p.m[i] * (p.v[i][c] - v0[c]));
+            }
+        }
     }
 }

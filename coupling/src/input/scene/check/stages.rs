@@ -242,6 +242,15 @@ pub(super) fn check_rigid_walls(
                 format!("expected Coulomb's coefficient >= 0, got {}", w.friction),
             ));
         }
+        if let Some(raw) = &w.curve {
+            if w.velocity.is_none() {
+                return Err(cx.err(
+                    &key("curve"),
+                    "a curve scales the wall's velocity: give `velocity` (m/s) too".into(),
+                ));
+            }
+            crate::input::curve::check(&cx.file, &key("curve"), raw)?;
+        }
         out.push(RigidWallDef {
             normal: n.map(|c| c / len),
             ..w.clone()
