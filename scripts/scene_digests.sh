@@ -27,7 +27,7 @@ if [ -z "${SCENES:-}" ]; then
 fi
 for s in $SCENES; do
   end=$(grep -m1 -E '^end_time *=' "scenes/$s.toml" | sed -E 's/^end_time *= *([^ #]+).*/\1/')
-  short=$(python3 -c "print(repr(float('$end') * $FRACTION))")
+  short=$(awk -v e="$end" -v f="$FRACTION" 'BEGIN { printf "%.17g", e * f }')
   out="$WORK/np${NP}_${KERNEL}/$s"
   mkdir -p "$(dirname "$out")"
   if mpirun -np "$NP" target/release/tdyn run "scenes/$s.toml" --kernel "$KERNEL" \
