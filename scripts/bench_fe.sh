@@ -39,6 +39,7 @@ for kind, rs in runs.items():
     print(f"{kind} np {np_}: {rs[0]['elements']} elements, {rs[0]['nodes']} nodes, {rs[0]['steps']} steps: "
           f"{ns:.1f} ns/element-cycle (median of {rep}; runs: "
           + ", ".join(f"{x['ns_per_element_cycle']:.1f}" for x in rs) + ")")
+    print(f"   CPU {rs[0].get('cpu', 'unknown')}, element kernel {rs[0].get('fe_kernel', 'unknown')}")
     tets = (rs[0].get("mesh_split") or {}).get("tetrahedra", 0)
     if tets:
         per = rs[0]["elements"] / tets

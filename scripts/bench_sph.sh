@@ -31,6 +31,7 @@ done
 python3 - "$REPEATS" <<'PY'
 import json, re, statistics, sys
 rep = int(sys.argv[1])
+print("CPU " + json.load(open("out/bench_sph/alone_np2/report.json")).get("cpu", "unknown"))
 for np_ in (1, 2):
     ours, lig = [], []
     for r in range(1, rep + 1):

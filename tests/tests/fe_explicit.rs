@@ -547,8 +547,31 @@ fn every_element_kernel_gives_the_same_bits() {
         );
         assert!(String::from_utf8_lossy(&o.stderr).contains("AVX-512F"));
     }
+    // report.json names the kernel that ran (what `make bench` prints beside its figures):
+    // the one asked for, `auto` the widest this CPU offers.
+    let ran = |out: &std::path::Path| -> String {
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        r["fe_kernel"].as_str().unwrap_or("none").to_string()
+    };
+    assert_eq!(
+        ran(&reference),
+        "scalar",
+        "report.json fe_kernel of --kernel scalar"
+    );
     for k in kernels {
         let out = run_with(k);
+        let want = match k {
+            "auto" if avx512 => "lanes8",
+            "auto" => "lanes4",
+            other => other,
+        };
+        assert!(
+            ran(&out).starts_with(want),
+            "--kernel {k}: report.json says fe_kernel {:?}, expected {want}",
+            ran(&out)
+        );
         if let Err(e) = fields_differ(&reference, &out) {
             panic!("--kernel {k} against scalar: fields.h5 {e} (same bits expected)");
         }

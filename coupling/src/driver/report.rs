@@ -54,6 +54,32 @@ pub fn peak_rss() -> f64 {
         .map_or(f64::NAN, |kb| kb * 1024.0)
 }
 
+/// The CPU this process runs on, as the benchmarks name it: the `model name` of
+/// /proc/cpuinfo and the widest SIMD set the element kernel can use on it (`AVX-512F`, `AVX2`,
+/// or `SSE2`); "unknown" where /proc is not there.
+pub fn cpu_model() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    #[cfg(target_arch = "x86_64")]
+    let set = if std::arch::is_x86_feature_detected!("avx512f") {
+        "AVX-512F"
+    } else if std::arch::is_x86_feature_detected!("avx2") {
+        "AVX2"
+    } else {
+        "SSE2"
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let set = "no x86 SIMD";
+    format!("{model} ({set})")
+}
+
 /// Resets the peak resident set to the current one (Linux: "5" to /proc/self/clear_refs), so
 /// that a later [`peak_rss`] measures what came after; nothing where that is refused.
 pub fn reset_peak_rss() {
@@ -208,6 +234,8 @@ fn insert_memory(world: &SimpleCommunicator, report: &mut Report) {
     let rss = collective::sum(world, peak_rss());
     let (elements, particles) = (report.elements, report.particles);
     let ex = &mut report.extra;
+    // Rank 0's CPU: the machine a figure of this report was measured on.
+    ex.insert("cpu".into(), cpu_model().into());
     ex.insert("peak_rss_bytes".into(), rss.into());
     ex.insert(
         "peak_rss_bytes_max_rank".into(),

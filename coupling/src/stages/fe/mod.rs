@@ -376,6 +376,9 @@ impl Stage for Fe {
             collective::max(world, t.exchange).into(),
         );
         ex.insert("fe_nodal_s".into(), collective::max(world, t.nodal).into());
+        if let Integrator::Explicit(e) = &self.integrator {
+            ex.insert("fe_kernel".into(), kernel_name(e).into());
+        }
         if let Integrator::Implicit(imp) = &self.integrator {
             implicit_report(world, imp, report, steps);
         }
@@ -412,4 +415,20 @@ fn implicit_report(world: &SimpleCommunicator, imp: &ImplicitFe, report: &mut Re
         collective::max(world, s.solve_s).into(),
     );
     ex.insert("newton_rtol".into(), imp.options.rtol.into());
+}
+
+/// The element kernel an explicit run took (report.json `fe_kernel`), with the instructions it
+/// was built for: `scalar`, `lanes4 (AVX2)` (`lanes4 (SSE2)` on a CPU without AVX2) or `lanes8
+/// (AVX-512F)`; every rank runs the same one (`Fe::choose_kernel`).
+fn kernel_name(fe: &ExplicitFe) -> &'static str {
+    use fe_petsc::batch::Width;
+    use fe_petsc::explicit::ElementKernel;
+    match (fe.kernel, fe.width) {
+        (ElementKernel::Scalar, _) => "scalar",
+        #[cfg(target_arch = "x86_64")]
+        (_, Width::W8) => "lanes8 (AVX-512F)",
+        #[cfg(target_arch = "x86_64")]
+        (_, Width::W4) if std::arch::is_x86_feature_detected!("avx2") => "lanes4 (AVX2)",
+        (_, Width::W4) => "lanes4 (SSE2)",
+    }
 }
