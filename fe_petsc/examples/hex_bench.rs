@@ -5,7 +5,7 @@
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexState};
 use fe_petsc::locality;
-use fe_petsc::material::{build_material, MaterialSpec};
+use fe_petsc::material::{build_material, Material, MaterialSpec, MAX_STATE};
 use fe_petsc::mesh::LocalMesh;
 use fe_petsc::states::HexStates;
 use std::time::Instant;
@@ -128,15 +128,15 @@ fn main() {
     if kernels != "scalar" {
         // The same elements in groups (loaded from the element arrays each time, as the
         // explicit loop does): every width this CPU runs.
-        let lm = LaneMaterial::new(&*mat, &ctl).unwrap();
+        let lm = LaneMaterial::new(&*mat, &ctl);
         for w in batch::available() {
             let ns = match w {
                 Width::W4 => batched::<batch::w4::LaneGroup>(
-                    &xs, &vs, &conn, vol0, &lm, &ctl, reps, &mut acc,
+                    &xs, &vs, &conn, vol0, &lm, &*mat, &ctl, reps, &mut acc,
                 ),
                 #[cfg(target_arch = "x86_64")]
                 Width::W8 => batched::<batch::w8::LaneGroup>(
-                    &xs, &vs, &conn, vol0, &lm, &ctl, reps, &mut acc,
+                    &xs, &vs, &conn, vol0, &lm, &*mat, &ctl, reps, &mut acc,
                 ),
             };
             println!("batch::{w:?} update {ns:.1} ns/element (checksum {acc:e})");
@@ -154,6 +154,7 @@ fn batched<B: Batch>(
     conn: &[[u32; 8]],
     vol0: f64,
     lm: &LaneMaterial,
+    model: &dyn Material,
     ctl: &HexControls,
     reps: usize,
     acc: &mut f64,
@@ -193,12 +194,12 @@ fn batched<B: Batch>(
     // arrays alone).
     let states = vec![fe_petsc::hex::HexState::default(); B::LANES];
     group.load(xs, vs, &conn[..B::LANES], &vol[..B::LANES], &states, |_| {
-        0.0
+        [0.0; MAX_STATE]
     });
     let t = Instant::now();
     for _ in 0..reps {
         for _ in (0..n).step_by(B::LANES) {
-            group.update(1e-7, lm, ctl).unwrap();
+            group.update(1e-7, lm, model, ctl).unwrap();
             *acc += group.force(0, 0)[0];
         }
     }

@@ -247,8 +247,8 @@ pub struct ExplicitFe {
     pub kernel: ElementKernel,
     /// The batched kernel's group size: the widest this CPU runs ([`batch::widest`]).
     pub width: Width,
-    /// The lane form of each material, where it has one under the controls.
-    lane_materials: Vec<Option<LaneMaterial>>,
+    /// The lane form of each material under the controls.
+    lane_materials: Vec<LaneMaterial>,
     /// Whether each node has a constraint (its reactions are the only ones not zero).
     constrained: Vec<bool>,
 }
@@ -256,13 +256,13 @@ pub struct ExplicitFe {
 /// The element kernel of the explicit element loop.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum ElementKernel {
-    /// One element at a time: the batched kernel's source ([`Batch::update`]) on a group of
-    /// one element (its other lanes padding, their results dropped), so the same operations in
+    /// One element at a time: the element kernel ([`Batch::update`]) on a group of one
+    /// element (its other lanes padding, their results dropped), so the same operations in
     /// the same order as in a group of four or eight, and the same bits (about four times the
-    /// four-lane kernel's time per element); [`hex::update`] for a material without a lane form.
+    /// four-lane kernel's time per element).
     Scalar,
-    /// [`Batch::update`] on groups of consecutive elements of one material with a lane form
-    /// (four or eight: [`ExplicitFe::width`]); the scalar kernel for the others.
+    /// [`Batch::update`] on groups of consecutive elements of one material (four or eight:
+    /// [`ExplicitFe::width`]).
     #[default]
     Batched,
 }

@@ -1,11 +1,13 @@
-//! The batched element kernel (`batch::Batch::update`, four or eight elements in lanes: every
-//! width this CPU runs) against the scalar kernel (`hex::update`), which is the reference: a randomly distorted block driven through
-//! steps of a velocity field with random nodal parts (hourglass modes), elastic and J2 plastic
-//! (yielding), the default physical hourglass control. No MPI, no PETSc.
+//! The element kernel (`batch::Batch::update`, four or eight elements in lanes: every width
+//! this CPU runs) against the node-by-node kernel (`hex::update`), which is the reference: a
+//! randomly distorted block driven through steps of a velocity field with random nodal parts
+//! (hourglass modes), for every material model (elastic and J2 in lanes; Johnson-Cook with
+//! thermal softening and a fluid's equation of state called lane by lane) and every hourglass
+//! control. No MPI, no PETSc.
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
 use fe_petsc::hourglass::Hourglass;
-use fe_petsc::material::{build_material, Material, MaterialSpec};
+use fe_petsc::material::{build_material, EosSpec, Material, MaterialSpec, MAX_STATE};
 use fe_petsc::states::HexStates;
 
 /// Relative agreement required. Every width runs the same IEEE operations in the same order
@@ -38,6 +40,50 @@ fn material(model: &str, extra: &[(&str, f64)]) -> Box<dyn Material> {
         eos: None,
     })
     .unwrap()
+}
+
+/// Johnson-Cook with thermal softening and adiabatic heating (the 42CrMo4 steel of
+/// scenes/taylor_jc_steel.toml): two history values, the plastic strain and the temperature.
+fn johnson_cook() -> Box<dyn Material> {
+    material(
+        "johnson_cook",
+        &[
+            ("a", 806e6),
+            ("b", 614e6),
+            ("n", 0.168),
+            ("c", 0.0089),
+            ("eps_dot0", 1.0),
+            ("m", 1.1),
+            ("t_room", 293.15),
+            ("t_melt", 1813.15),
+            ("specific_heat", 460.0),
+        ],
+    )
+}
+
+/// An ideal gas at 1 bar (gamma 1.4, rho 1.2 kg/m^3): three history values, the specific
+/// energy (heated by the bulk viscosity here), volume and pressure.
+fn gas() -> Box<dyn Material> {
+    build_material(&MaterialSpec {
+        name: "air".into(),
+        model: "fluid".into(),
+        density: 1.2,
+        params: Default::default(),
+        eos: Some(EosSpec {
+            kind: "ideal_gas".into(),
+            params: [("gamma".to_string(), 1.4), ("e0".to_string(), 1e5 / 0.48)]
+                .into_iter()
+                .collect(),
+        }),
+    })
+    .unwrap()
+}
+
+/// History values `ms[e * ns..]` of element `e` as the kernel loads them.
+fn history_of(ms: &[f64], ns: usize, e: usize) -> [f64; MAX_STATE] {
+    let mut h = [0.0; MAX_STATE];
+    h[..ns].copy_from_slice(&ms[e * ns..(e + 1) * ns]);
+    h
 }
 
 /// An n x n x m block of hexahedra of side `h` with every node moved by up to 20 % of `h`;
@@ -147,14 +193,19 @@ fn compare_kernels<B: Batch>(
             ]
         })
         .collect();
-    let lm = LaneMaterial::new(mat, &ctl).expect("the material has a lane form");
+    let lm = LaneMaterial::new(mat, &ctl);
     let ns = mat.n_state().max(1);
+    // A pointwise model's history is loaded lane by lane only (no whole-group path).
+    let whole_path = !lm.pointwise();
     let vol0: Vec<f64> = elems
         .iter()
         .map(|c| hex::volume(&c.map(|n| x[n as usize])))
         .collect();
     let mut st_s = vec![HexState::default(); elems.len()];
     let mut ms_s = vec![0.0; elems.len() * ns];
+    for e in 0..elems.len() {
+        mat.init_state(&mut ms_s[e * ns..(e + 1) * ns]);
+    }
     let mut st_b = st_s.clone();
     // One buffer for every group, as the explicit loop uses it.
     let mut group = B::default();
@@ -169,7 +220,8 @@ fn compare_kernels<B: Batch>(
     let dt = 2e-7;
     let (mut flowed, mut mixed) = (0, 0);
     let mut d_out: [Diff; 5] = Default::default();
-    let [mut d_stress, mut d_hg, mut d_ep]: [Diff; 3] = Default::default();
+    let [mut d_stress, mut d_hg]: [Diff; 2] = Default::default();
+    let mut d_hist: Vec<Diff> = (0..mat.n_state()).map(|_| Diff::default()).collect();
     for _ in 0..steps {
         for (p, w) in x.iter_mut().zip(&v) {
             for c in 0..3 {
@@ -201,38 +253,54 @@ fn compare_kernels<B: Batch>(
                 &elems[e.clone()],
                 &vol0[e.clone()],
                 &st_b[e.clone()],
-                |l| ms_b[(g + l) * ns],
+                |l| history_of(&ms_b, ns, g + l),
             );
-            group.update(dt, &lm, &ctl).expect("no inverted element");
-            let mut io = batch::GroupLanes {
-                xs: &x,
-                vs: &v,
-                conn: &elems[e.clone()],
-                vol0: &vol0[e.clone()],
-                state: st_l.lanes_mut(g),
-                history: (mat.n_state() > 0).then(|| &mut ms_l[e.clone()]),
-                force: Some(&mut f_whole),
-            };
-            group_l
-                .update_lanes(&mut io, dt, &lm, &ctl)
+            group
+                .update(dt, &lm, mat, &ctl)
                 .expect("no inverted element");
+            if whole_path {
+                let mut io = batch::GroupLanes {
+                    xs: &x,
+                    vs: &v,
+                    conn: &elems[e.clone()],
+                    vol0: &vol0[e.clone()],
+                    state: st_l.lanes_mut(g),
+                    history: (mat.n_state() > 0).then(|| &mut ms_l[e.clone()]),
+                    force: Some(&mut f_whole),
+                };
+                group_l
+                    .update_lanes(&mut io, dt, &lm, &ctl)
+                    .expect("no inverted element");
+            }
             let flows = (0..lanes)
-                .filter(|&l| group.lane_state(l).1 > ms_b[(g + l) * ns])
+                .filter(|&l| group.lane_state(l).1[0] > ms_b[(g + l) * ns])
                 .count();
             flowed += flows;
             mixed += usize::from(flows > 0 && flows < lanes);
             for l in 0..lanes {
                 let e = g + l;
                 let (s, hist) = group.lane_state(l);
-                (st_b[e], ms_b[e * ns]) = (s, hist);
+                st_b[e] = s;
+                ms_b[e * ns..(e + 1) * ns].copy_from_slice(&hist[..ns]);
                 let (r, b) = (outputs(&ref_out[e]), outputs(&group.lane_output(l)));
                 for (d, (r, b)) in d_out.iter_mut().zip(r.iter().zip(&b)) {
                     d.add(r, b);
                 }
                 d_stress.add(&st_s[e].stress, &s.stress);
                 d_hg.add(st_s[e].hg.as_flattened(), s.hg.as_flattened());
-                d_ep.add(&ms_s[e * ns..e * ns + 1], &[hist]);
-                let by_lane = format!("{:?} {:?} {:?}", s, hist, group.lane_output(l));
+                for (k, d) in d_hist.iter_mut().enumerate() {
+                    d.add(&ms_s[e * ns + k..e * ns + k + 1], &hist[k..k + 1]);
+                }
+                for k in 0..8 {
+                    let node = &mut f_lanes[elems[e][k] as usize];
+                    for (p, q) in node.iter_mut().zip(group.lane_output(l).force[k]) {
+                        *p += q;
+                    }
+                }
+                if !whole_path {
+                    continue;
+                }
+                let by_lane = format!("{:?} {:?} {:?}", s, hist[0], group.lane_output(l));
                 let whole = format!(
                     "{:?} {:?} {:?}",
                     st_l.get(e),
@@ -245,27 +313,25 @@ fn compare_kernels<B: Batch>(
                 );
                 for k in 0..8 {
                     assert_eq!(group_l.force(l, k), group.lane_output(l).force[k]);
-                    let node = &mut f_lanes[elems[e][k] as usize];
-                    for (p, q) in node.iter_mut().zip(group.lane_output(l).force[k]) {
-                        *p += q;
-                    }
                 }
             }
         }
     }
     // The whole-group path adds its forces to the nodes in the kernel: the same sums, in the
     // same order, as adding each lane's output element by element.
-    assert_eq!(
-        f_whole, f_lanes,
-        "{case}: the nodal forces added in the kernel differ from the lanes' outputs summed"
-    );
+    if whole_path {
+        assert_eq!(
+            f_whole, f_lanes,
+            "{case}: the nodal forces added in the kernel differ from the lanes' outputs summed"
+        );
+    }
     for (d, what) in d_out.iter().zip(OUTPUTS) {
         d.check(what, case);
     }
     d_stress.check("stresses", case);
     d_hg.check("hourglass stress amplitudes", case);
-    if mat.n_state() > 0 {
-        d_ep.check("plastic strains", case);
+    for (k, d) in d_hist.iter().enumerate() {
+        d.check(&format!("history values {k}"), case);
     }
     (flowed, mixed)
 }
@@ -343,7 +409,57 @@ fn batched_kernel_equals_the_scalar_kernel_fb_stiffness_hourglass() {
 }
 
 #[test]
-fn a_group_with_an_inverted_element_is_left_to_the_scalar_kernel() {
+fn element_kernel_equals_the_node_by_node_kernel_johnson_cook_thermal() {
+    // Johnson-Cook's stress update, yield stress and temperature called lane by lane, the rest
+    // of the element in lanes, under the physical hourglass control (bounded by the current
+    // yield stress, which here depends on each lane's history) and the FB stiffness form.
+    let mat = johnson_cook();
+    for ctl in [
+        HexControls::default(),
+        HexControls {
+            hourglass: Hourglass::Stiffness { coefficient: 0.05 },
+            ..HexControls::default()
+        },
+    ] {
+        for w in widths() {
+            let case = format!("johnson_cook, {:?}", ctl.hourglass);
+            let (flowed, mixed) = compare_width(w, &*mat, &ctl, &case, 12);
+            assert!(
+                flowed > 100,
+                "{case}, {w:?}: only {flowed} element-steps flowed"
+            );
+            assert!(
+                mixed > 0,
+                "{case}, {w:?}: no group mixed flowing and elastic lanes"
+            );
+        }
+    }
+}
+
+#[test]
+fn element_kernel_equals_the_node_by_node_kernel_fluid_and_fb_viscous() {
+    // An ideal gas (no shear modulus: the physical control turns into the FB viscous form),
+    // its EOS, wave modulus and bulk-viscosity heating called lane by lane; and J2 under the
+    // FB viscous form asked for by name.
+    let gas = gas();
+    for w in widths() {
+        compare_width(w, &*gas, &HexControls::default(), "ideal gas", 12);
+    }
+    let j2 = material(
+        "j2_plastic",
+        &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
+    );
+    let ctl = HexControls {
+        hourglass: Hourglass::Viscous { coefficient: 0.1 },
+        ..HexControls::default()
+    };
+    for w in widths() {
+        compare_width(w, &*j2, &ctl, "j2_plastic, FB viscous", 12);
+    }
+}
+
+#[test]
+fn a_group_with_an_inverted_element_is_refused_naming_it() {
     for w in widths() {
         match w {
             Width::W4 => inverted_group_is_refused::<batch::w4::LaneGroup>(),
@@ -353,15 +469,15 @@ fn a_group_with_an_inverted_element_is_left_to_the_scalar_kernel() {
     }
 }
 
-/// A group whose third element is inside out is refused with nothing changed, and the scalar
-/// kernel names that element.
+/// A group whose third element is inside out is refused with nothing changed, naming that
+/// lane and its volume (the node-by-node kernel's, to round-off).
 fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
     let mat = material(
         "j2_plastic",
         &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
     );
     let ctl = HexControls::default();
-    let lm = LaneMaterial::new(&*mat, &ctl).unwrap();
+    let lm = LaneMaterial::new(&*mat, &ctl);
     let cube: [[f64; 3]; 8] = hex::NODE_XI.map(|p| p.map(|c| 0.005 * (c + 1.0)));
     let mut inverted = cube;
     inverted.swap(0, 4);
@@ -386,13 +502,33 @@ fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
         &conn,
         &vec![1.25e-7; n],
         &vec![state; n],
-        |_| 0.0,
+        |_| [0.0; MAX_STATE],
     );
     let before = format!("{group:?}");
-    let r = group.update(1e-7, &lm, &ctl);
+    let r = group.update(1e-7, &lm, &*mat, &ctl);
+    // The node-by-node kernel's volume of the inverted element (the same to round-off).
+    let mut s = HexState::default();
+    let Err(hex::ElementError::Inverted { volume }) = hex::update(
+        &inverted,
+        &[[1.0, 0.0, 0.0]; 8],
+        1e-7,
+        7850.0,
+        1.25e-7,
+        &*mat,
+        &ctl,
+        &mut s,
+        &mut [0.0],
+    ) else {
+        panic!("the node-by-node kernel must refuse the inverted element")
+    };
+    let Err(bad) = r else {
+        panic!("{n} lanes: lane 2 is inverted: the group must be refused")
+    };
+    assert_eq!(bad.lane, 2, "{n} lanes: the refusal names lane 2");
     assert!(
-        r.is_err(),
-        "{n} lanes: lane 2 is inverted: the group must be refused"
+        (bad.volume - volume).abs() <= 1e-12 * volume.abs(),
+        "{n} lanes: the refusal's volume {} is not the inverted element's {volume} (1e-12)",
+        bad.volume
     );
     assert_eq!(
         before,
@@ -430,20 +566,6 @@ fn inverted_group_is_refused<B: Batch + std::fmt::Debug>() {
         vec![0.5; n],
         "{n} lanes: a refused group's history changed"
     );
-    // The scalar kernel, which then runs the group's elements, names the inverted one.
-    let mut s = HexState::default();
-    let r = hex::update(
-        &inverted,
-        &[[1.0, 0.0, 0.0]; 8],
-        1e-7,
-        7850.0,
-        1.25e-7,
-        &*mat,
-        &ctl,
-        &mut s,
-        &mut [0.0],
-    );
-    assert!(matches!(r, Err(hex::ElementError::Inverted { .. })));
 }
 
 #[test]
@@ -468,7 +590,7 @@ fn lanes_are_independent<B: Batch>() {
         &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
     );
     let ctl = HexControls::default();
-    let lm = LaneMaterial::new(&*mat, &ctl).unwrap();
+    let lm = LaneMaterial::new(&*mat, &ctl);
     let lanes = B::LANES;
     let mut rng = Lcg(0x1a4e5);
     let (x, elems) = distorted_block(4, 3, 0.01, &mut rng);
@@ -499,8 +621,11 @@ fn lanes_are_independent<B: Batch>() {
         let vol: Vec<f64> = (0..lanes).map(|l| vol0[pick(l)]).collect();
         let st: Vec<HexState> = (0..lanes).map(|l| state[pick(l)]).collect();
         let mut g = B::default();
-        g.load(&x, &v, &conn, &vol, &st, |l| 1e-3 * pick(l) as f64);
-        g.update(2e-7, &lm, &ctl).expect("no inverted element");
+        g.load(&x, &v, &conn, &vol, &st, |l| {
+            [1e-3 * pick(l) as f64, 0.0, 0.0, 0.0]
+        });
+        g.update(2e-7, &lm, &*mat, &ctl)
+            .expect("no inverted element");
         (0..n)
             .map(|l| format!("{:?} {:?}", g.lane_state(l), g.lane_output(l)))
             .collect::<Vec<_>>()
@@ -535,7 +660,7 @@ fn an_element_gives_the_same_bits_in_every_lane() {
 fn lane_position_free<B: Batch>() {
     let mat = material("elastic", &[]);
     let ctl = HexControls::default();
-    let lm = LaneMaterial::new(&*mat, &ctl).unwrap();
+    let lm = LaneMaterial::new(&*mat, &ctl);
     let lanes = B::LANES;
     let mut rng = Lcg(0x7a9e);
     let (x, elems) = distorted_block(4, 3, 0.01, &mut rng);
@@ -557,8 +682,9 @@ fn lane_position_free<B: Batch>() {
         let vol: Vec<f64> = (0..lanes).map(|l| vol0[pick(l)]).collect();
         let st = vec![HexState::default(); lanes];
         let mut g = B::default();
-        g.load(&x, &v, &conn, &vol, &st, |_| 0.0);
-        g.update(2e-7, &lm, &ctl).expect("no inverted element");
+        g.load(&x, &v, &conn, &vol, &st, |_| [0.0; MAX_STATE]);
+        g.update(2e-7, &lm, &*mat, &ctl)
+            .expect("no inverted element");
         // Results by element, not by lane.
         let mut r = vec![String::new(); lanes];
         for l in 0..lanes {

@@ -11,17 +11,19 @@
 //! element at about 1.5 flops per cycle (DESIGN.md section 7); independent elements in lanes
 //! fill the vector units and hide the latencies.
 //!
-//! Scope: the materials with a lane form ([`crate::material::LaneLaw`]: elastic, J2 plastic)
-//! under the physical hourglass control or the FB/PRONTO stiffness form. A group with an element whose volume (end of step or
-//! mid-step) is not positive and finite returns an error before it changes any state, so that the
-//! caller runs its elements through the scalar kernel, which reports the error as it
-//! always has.
+//! Scope: every material and hourglass control. The elastic and J2 laws run in lanes
+//! ([`crate::material::LaneLaw`]); the other models' stress updates, wave moduli, heating and
+//! yield stresses are their own scalar functions called lane by lane (`pointwise.rs`), the rest
+//! of the element in lanes. A group with an element whose volume (end of step or mid-step) is
+//! not positive and finite returns an error naming the lane before it changes any state.
 use super::hourglass::{self as hourglass_lanes, LaneHourglass};
 use super::law;
 use super::modes;
+use super::pointwise::{self, LaneHistory, Pointwise};
 use super::{F, LANES, M};
 use crate::batch::{GroupInverted, LaneHourglassKind, LaneMaterial};
 use crate::hex::{HexControls, HexOutput, HexState, NODES, SQRT_3};
+use crate::material::{Material, MAX_STATE};
 
 type V3 = [F; 3];
 
@@ -148,7 +150,7 @@ struct Kinematics {
 }
 
 /// The gradients at the end and the middle of the step, the velocity gradient at mid-step and
-/// its split, as [`crate::hex::update`] defines them, computed in mode space; `None` when a
+/// its split, as [`crate::hex::update`] defines them, computed in mode space; `Err` when a
 /// lane's volume (end or middle) is not positive and finite.
 ///
 /// The mid-step coordinates are x(n+1/2) = x(n+1) - dt/2 v(n+1/2); the transform is linear, so
@@ -159,7 +161,7 @@ struct Kinematics {
 /// 20 (sum b^2) + 60 (the rotation) = about 380 operations, after the 2 x 69 of the modes of
 /// x and v (`xm`, `um`, formed by the caller); nothing read or written outside the lanes.
 #[inline(always)]
-fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
+fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Result<Kinematics, GroupInverted> {
     let (xk, xk7) = *xm;
     let (u, u7) = *um;
     // The mid-step modes X - dt/2 U (8 times a - dt/16 U).
@@ -173,7 +175,7 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
     let (g64, vol) = modes::volume_gradient(&xk);
     let (gh64, volh) = modes::volume_gradient(&xh);
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
-        return None;
+        return Err(first_inverted(vol, volh));
     }
     // 1/V and 1/V(n+1/2) from one reciprocal.
     let inv = (vol * volh).recip();
@@ -212,7 +214,7 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
     let w12 = 0.5 * (l[1][2] - l[2][1]);
     let w20 = 0.5 * (l[2][0] - l[0][2]);
     let r = hughes_winget(w01, w12, w20, dt);
-    Some(Kinematics {
+    Ok(Kinematics {
         xk,
         xk7,
         u,
@@ -224,6 +226,22 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Option<Kinematics> {
         d,
         r,
     })
+}
+
+/// The first lane whose end-of-step volume `vol` or mid-step volume `volh` is not positive and
+/// finite, with that volume (the end-of-step one first, as [`crate::hex::update`] checks them).
+#[cold]
+#[inline(never)]
+fn first_inverted(vol: F, volh: F) -> GroupInverted {
+    let bad = |v: f64| !(v > 0.0 && v.is_finite());
+    (0..LANES)
+        .find_map(|lane| {
+            [vol.0[lane], volh.0[lane]]
+                .into_iter()
+                .find(|&v| bad(v))
+                .map(|volume| GroupInverted { lane, volume })
+        })
+        .expect("a lane with a bad volume")
 }
 
 /// a0 b0 + a1 b1 + a2 b2 summed left to right, each product added by `F::mul_add` (two
@@ -333,6 +351,9 @@ pub struct LaneGroup {
     pub(crate) state: LaneState,
     /// What the last update produced.
     pub(crate) out: LaneOutput,
+    /// Each lane's history values (all of a pointwise model's; a lane law's one is copied here
+    /// from `state` after each update).
+    pub(crate) history: LaneHistory,
 }
 
 /// One explicit update over the step `dt` of the group's elements of the material `m`: in
@@ -344,6 +365,7 @@ pub(super) fn update_inline(
     g: &mut LaneGroup,
     dt: f64,
     m: &LaneMaterial,
+    model: &dyn Material,
     ctl: &HexControls,
 ) -> Result<(), GroupInverted> {
     let LaneGroup {
@@ -352,13 +374,20 @@ pub(super) fn update_inline(
         vol0,
         state,
         out,
+        history,
     } = g;
     let (xm, um) = (modes::modes(x), modes::modes(v));
-    update_core(&xm, &um, *vol0, state, out, dt, m, ctl)
+    let pw = m.law.is_pointwise().then_some(Pointwise {
+        model,
+        n_state: m.n_state(),
+        history,
+    });
+    update_core(&xm, &um, *vol0, state, out, dt, m, ctl, pw)
 }
 
 /// The update of [`update_inline`] on the modes of the nodal coordinates `xm` and velocities
-/// `um` ([`modes::modes`]), reference volumes `vol0` and the state `st`, its output in `out`.
+/// `um` ([`modes::modes`]), reference volumes `vol0` and the state `st`, its output in `out`;
+/// `pw` the model and its lanes' history for a pointwise law (`None` for a lane law).
 ///
 /// Cost per element: about 520 operations of kinematics in mode space (the modes and
 /// `kinematics`), 200 for
@@ -377,8 +406,9 @@ fn update_core(
     dt: f64,
     m: &LaneMaterial,
     ctl: &HexControls,
+    mut pw: Option<Pointwise<'_>>,
 ) -> Result<(), GroupInverted> {
-    let k = kinematics(xm, um, dt).ok_or(GroupInverted)?;
+    let k = kinematics(xm, um, dt)?;
     // The hourglass rates first (the velocities' modes are dead after them: fewer live
     // vectors through the stress update): the hourglass modes of the coordinates (over 8)
     // and velocities, and
@@ -411,14 +441,28 @@ fn update_core(
     // rho = m / V with the exact volume.
     let rho = m.rho0 * vol0 * k.iv;
     let rotated = stress;
-    law::update_stress(&m.law, &mut stress, &mut st.history, &deps);
+    match pw.as_mut() {
+        Some(p) => p.update_stress(&mut stress, &deps, dt, rho),
+        None => law::update_stress(&m.law, &mut stress, &mut st.history, &deps),
+    }
     st.stress = stress;
 
-    // Bulk viscosity on the normal stresses for the force only; a material with a lane form has
-    // the constant wave modulus lambda + 2 mu and keeps no heat.
-    let c = (m.dilatational * rho.recip()).sqrt();
+    // Bulk viscosity on the normal stresses for the force only, with c from the material's
+    // current wave modulus: the constant lambda + 2 mu of a lane law, the model's own otherwise.
+    let c = match &pw {
+        Some(p) => p.sound_speed(rho),
+        None => (m.dilatational * rho.recip()).sqrt(),
+    };
     let ev = k.d[0] + k.d[1] + k.d[2];
     let (q, dt_stable) = bulk_viscosity_and_dt(ctl, k.bb, rho, c, ev);
+    // Its work heats the material (a fluid's EOS keeps it; a lane law keeps no heat).
+    if let Some(p) = pw.as_mut() {
+        p.add_heat(q, ev, dt, rho);
+    }
+    let yield_stress = match &pw {
+        Some(p) => p.yield_stress(),
+        None => law::yield_stress(&m.law, st.history),
+    };
 
     let mut dsig = [F::ZERO; 6];
     for i in 0..6 {
@@ -434,7 +478,7 @@ fn update_core(
                 nu: m.nu,
                 scale,
                 tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
-                yield_stress: law::yield_stress(&m.law, st.history),
+                yield_stress,
                 stress,
             };
             hourglass_lanes::physical(&hg, &mut st.hg)
@@ -442,7 +486,11 @@ fn update_core(
         LaneHourglassKind::Stiffness { coefficient } => {
             // The scalar kernel's rate, kappa 2 mu V sum(b^2) / 8, in its order of operations.
             let rate = coefficient * 2.0 * m.mu * k.vol * k.bb * 0.125;
-            hourglass_lanes::stiffness(&geo, rate, dt, &mut st.hg)
+            hourglass_lanes::fb(&geo, rate, F::ZERO, dt, &mut st.hg)
+        }
+        LaneHourglassKind::Viscous { coefficient } => {
+            let visc = pointwise::viscous_coefficient(coefficient, rho, c, k.vol);
+            hourglass_lanes::fb(&geo, F::ZERO, visc, dt, &mut st.hg)
         }
     };
     out.force = nodal_forces(&k, &stress, q, &tg);
@@ -550,7 +598,11 @@ pub(super) fn update_lanes_inline(
         Some(h) => F::load(h),
         None => F::ZERO,
     };
-    update_core(&xm, &um, vol0, &mut st, &mut g.out, dt, m, ctl)?;
+    assert!(
+        !m.law.is_pointwise(),
+        "a pointwise law's history is loaded lane by lane (Batch::load)"
+    );
+    update_core(&xm, &um, vol0, &mut st, &mut g.out, dt, m, ctl, None)?;
     let dst = &mut *io.state;
     for k in 0..6 {
         st.stress[k].store(&mut dst[k * BLOCK..]);
@@ -608,14 +660,16 @@ impl crate::batch::Batch for LaneGroup {
         conn: &[[u32; NODES]],
         vol0: &[f64],
         state: &[HexState],
-        history: impl Fn(usize) -> f64,
+        history: impl Fn(usize) -> [f64; MAX_STATE],
     ) {
         let lanes: [&[u32; NODES]; LANES] = std::array::from_fn(|l| &conn[l]);
         gather(xs, lanes, &mut self.x);
         gather(vs, lanes, &mut self.v);
         self.vol0 = F(std::array::from_fn(|l| vol0[l]));
         for (l, s) in state[..LANES].iter().enumerate() {
-            self.state.set_lane(l, s, history(l));
+            let h = history(l);
+            self.state.set_lane(l, s, h[0]);
+            self.history[l] = h;
         }
     }
 
@@ -624,14 +678,21 @@ impl crate::batch::Batch for LaneGroup {
         &mut self,
         dt: f64,
         m: &LaneMaterial,
+        model: &dyn Material,
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
-        super::entry(self, dt, m, ctl)
+        super::entry(self, dt, m, model, ctl)?;
+        if !m.law.is_pointwise() {
+            for l in 0..LANES {
+                self.history[l][0] = self.state.history.0[l];
+            }
+        }
+        Ok(())
     }
 
     #[inline]
-    fn lane_state(&self, l: usize) -> (HexState, f64) {
-        self.state.lane(l)
+    fn lane_state(&self, l: usize) -> (HexState, [f64; MAX_STATE]) {
+        (self.state.lane(l).0, self.history[l])
     }
 
     #[inline]

@@ -313,16 +313,18 @@ fn centre_stress(st: &[F; 6], e: &M3) -> M3 {
     ]
 }
 
-/// The FB/PRONTO stiffness form's step on a group of elements ([`crate::hourglass`]'s
-/// `Hourglass::apply` for `Stiffness`): the generalised forces `hg` (element frame, N) grow by
-/// dt `rate` qd. Returns the work of the step (trapezoid), J, and the generalised forces in
-/// global axes, whose nodal forces are -H_a gamma_aI (the caller adds them in mode space).
-/// `rate`: kappa 2 mu V sum(b^2) / 8 of each lane, N/m.
+/// The FB forms' step on a group of elements ([`crate::hourglass`]'s `Hourglass::apply` for
+/// `Stiffness` and `Viscous`): the generalised forces `hg` (element frame, N) grow by dt `rate`
+/// qd, and the viscous part `visc` qd is added to them for the force. Returns the work of the
+/// step (the trapezoid on the stiffness part), J, and the generalised forces in global axes,
+/// whose nodal forces are -H_a gamma_aI (the caller adds them in mode space). `rate`: kappa
+/// 2 mu V sum(b^2) / 8 of each lane, N/m (zero for the viscous form); `visc`: kappa rho c
+/// V^(2/3) / 4, kg/s (zero for the stiffness form).
 ///
-/// Cost per element: 50 (frame) + 4 x 15 (to local) + 12 x 8 (update and work) + 4 x 15
-/// (to global) = about 270 operations; 12 state doubles read and written.
+/// Cost per element: 50 (frame) + 4 x 15 (to local) + 12 x 9 (update and work) + 4 x 15
+/// (to global) = about 280 operations; 12 state doubles read and written.
 #[inline(always)]
-pub fn stiffness(geo: &ModeGeometry, rate: F, dt: f64, hg: &mut [V3; 4]) -> (F, [V3; 4]) {
+pub fn fb(geo: &ModeGeometry, rate: F, visc: F, dt: f64, hg: &mut [V3; 4]) -> (F, [V3; 4]) {
     let frame = Frame::new(&geo.jac);
     let dt_rate = dt * rate;
     let mut work = F::ZERO;
@@ -331,11 +333,11 @@ pub fn stiffness(geo: &ModeGeometry, rate: F, dt: f64, hg: &mut [V3; 4]) -> (F, 
         let qd = frame.to_local(&geo.q[al]);
         let mut h = [F::ZERO; 3];
         for i in 0..3 {
-            // As the scalar kernel: new = old + dt rate qd, and its viscous part qv = 0 x qd
-            // added, so that a -0.0 comes out as it does there.
+            // As the scalar kernel: new = old + dt rate qd, qv = visc qd (a zero coefficient
+            // still multiplied, so that a -0.0 comes out as it does there).
             let old = hg[al][i];
             let new = dt_rate.mul_add(qd[i], old);
-            let qv = F::ZERO * qd[i];
+            let qv = visc * qd[i];
             work = (dt * (0.5 * (old + new) + qv)).mul_add(qd[i], work);
             hg[al][i] = new;
             h[i] = new + qv;

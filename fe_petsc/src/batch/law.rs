@@ -26,6 +26,7 @@ pub(super) fn update_stress(law: &LaneLaw, stress: &mut [F; 6], history: &mut F,
             }
             *history = F::select(flow, *history + dgamma, *history);
         }
+        LaneLaw::Pointwise { .. } => unreachable!("a pointwise law runs lane by lane"),
     }
 }
 
@@ -36,6 +37,7 @@ pub(super) fn yield_stress(law: &LaneLaw, history: F) -> Option<F> {
     match law {
         LaneLaw::Elastic(_) => None,
         LaneLaw::J2Plastic(m) => Some(m.yield_stress + m.hardening * history),
+        LaneLaw::Pointwise { .. } => unreachable!("a pointwise law runs lane by lane"),
     }
 }
 

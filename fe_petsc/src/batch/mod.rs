@@ -30,7 +30,7 @@
 #![allow(clippy::duplicate_mod)]
 use crate::hex::{HexControls, HexOutput, HexState, NODES};
 use crate::hourglass::{self, Hourglass};
-use crate::material::{LaneLaw, Material};
+use crate::material::{LaneLaw, Material, MAX_STATE};
 
 /// A group of elements in lanes, as the explicit element loop uses it: load the group's
 /// elements, update them, read each lane's state and output back.
@@ -39,7 +39,8 @@ pub trait Batch: Default {
     const LANES: usize;
 
     /// Loads the first `LANES` elements of `conn` (their nodal coordinates from `xs`, velocities
-    /// from `vs`, reference volumes, states and history values `history(l)`) into the lanes.
+    /// from `vs`, reference volumes, states and history values `history(l)`, the model's
+    /// `n_state` first, the rest unused) into the lanes.
     fn load(
         &mut self,
         xs: &[[f64; 3]],
@@ -47,17 +48,23 @@ pub trait Batch: Default {
         conn: &[[u32; NODES]],
         vol0: &[f64],
         state: &[HexState],
-        history: impl Fn(usize) -> f64,
+        history: impl Fn(usize) -> [f64; MAX_STATE],
     );
 
-    /// One explicit update over the step `dt` of the loaded elements of the material `m`: in
-    /// each lane what [`crate::hex::update`] computes for its element. `Err`, with the state
-    /// untouched, when a lane's volume (end of step or mid-step) is not positive and finite.
-    fn update(&mut self, dt: f64, m: &LaneMaterial, ctl: &HexControls)
-        -> Result<(), GroupInverted>;
+    /// One explicit update over the step `dt` of the loaded elements of the material `model`
+    /// (`m` its lane form, [`LaneMaterial::new`]): in each lane what [`crate::hex::update`]
+    /// computes for its element. `Err`, with the state untouched, when a lane's volume (end of
+    /// step or mid-step) is not positive and finite.
+    fn update(
+        &mut self,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted>;
 
-    /// Lane `l`'s element state and history value after the update.
-    fn lane_state(&self, l: usize) -> (HexState, f64);
+    /// Lane `l`'s element state and history values after the update.
+    fn lane_state(&self, l: usize) -> (HexState, [f64; MAX_STATE]);
 
     /// Lane `l`'s output of the update.
     fn lane_output(&self, l: usize) -> HexOutput;
@@ -66,7 +73,9 @@ pub trait Batch: Default {
     /// `e0..e0 + LANES` of a [`crate::states::HexStates`], `e0` a multiple of `LANES`): what
     /// [`Batch::load`], [`Batch::update`] and storing each [`Batch::lane_state`] do, with the
     /// state moved as whole vectors. `Err`, with `io.state` and `io.history` untouched, as
-    /// [`Batch::update`]. The outputs are read as after [`Batch::update`].
+    /// [`Batch::update`]. The outputs are read as after [`Batch::update`]. For a material with
+    /// its own lane law (not [`LaneLaw::Pointwise`]: a pointwise model's history values are
+    /// not consecutive lanes; [`Batch::load`] and [`Batch::update`] take those).
     fn update_lanes(
         &mut self,
         io: &mut GroupLanes<'_>,
@@ -143,7 +152,7 @@ pub struct LaneMaterial {
     pub(crate) hourglass: LaneHourglassKind,
 }
 
-/// The hourglass controls the batched kernel runs (the others take the scalar kernel).
+/// The hourglass control of a material in the batched kernel ([`Hourglass::for_material`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum LaneHourglassKind {
     /// The physical kind, its stiffness multiplied by `scale`.
@@ -156,40 +165,60 @@ pub(crate) enum LaneHourglassKind {
         /// kappa.
         coefficient: f64,
     },
+    /// The FB viscous form with coefficient kappa (and fluids under the physical kind).
+    Viscous {
+        /// kappa.
+        coefficient: f64,
+    },
 }
 
 impl LaneMaterial {
-    /// The lane form of `mat` under the controls `ctl`; `None` when `mat` has none or the
-    /// hourglass control is the FB viscous form (it takes the scalar kernel: its coefficient
-    /// needs a cube root per element).
-    pub fn new(mat: &dyn Material, ctl: &HexControls) -> Option<LaneMaterial> {
-        let law = mat.lane_law()?;
+    /// The lane form of `mat` under the controls `ctl`: the model's own lane law, or
+    /// [`LaneLaw::Pointwise`] for a model without one.
+    pub fn new(mat: &dyn Material, ctl: &HexControls) -> LaneMaterial {
+        let n_state = mat.n_state();
+        assert!(
+            n_state <= MAX_STATE,
+            "a material keeps at most {MAX_STATE} history values per element, not {n_state}"
+        );
+        let law = mat.lane_law().unwrap_or(LaneLaw::Pointwise { n_state });
         let mu = mat.shear_modulus();
         let hourglass = match ctl.hourglass.for_material(mu) {
             Hourglass::Physical { scale } => LaneHourglassKind::Physical { scale },
             Hourglass::Stiffness { coefficient } => LaneHourglassKind::Stiffness { coefficient },
-            Hourglass::Viscous { .. } => return None,
+            Hourglass::Viscous { coefficient } => LaneHourglassKind::Viscous { coefficient },
         };
-        Some(LaneMaterial {
+        LaneMaterial {
             law,
             rho0: mat.density(),
             dilatational: mat.dilatational_modulus(),
             mu,
             nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
             hourglass,
-        })
+        }
     }
 
-    /// History variables per element of the material (0 or 1).
+    /// History variables per element of the material.
     pub fn n_state(&self) -> usize {
         self.law.n_state()
+    }
+
+    /// Whether the kernel calls the model's scalar functions lane by lane
+    /// ([`LaneLaw::Pointwise`]).
+    pub fn pointwise(&self) -> bool {
+        self.law.is_pointwise()
     }
 }
 
 /// A group with an element whose volume (end of step or mid-step) is not positive and finite:
-/// its elements are for the scalar kernel, which names the element.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct GroupInverted;
+/// the first such lane and that volume (the end-of-step one when it is the bad one), m^3.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupInverted {
+    /// The lane of the first inverted element.
+    pub lane: usize,
+    /// Its volume, m^3.
+    pub volume: f64,
+}
 
 mod lanes4;
 #[cfg(target_arch = "x86_64")]
@@ -221,6 +250,7 @@ pub mod w4 {
     pub use super::lanes4::{F4 as F, LANES, M4 as M};
     use super::{GroupInverted, LaneMaterial};
     use crate::hex::HexControls;
+    use crate::material::Material;
 
     #[path = "hex.rs"]
     pub mod hex;
@@ -230,6 +260,8 @@ pub mod w4 {
     mod law;
     #[path = "modes.rs"]
     mod modes;
+    #[path = "pointwise.rs"]
+    mod pointwise;
     pub use hex::LaneGroup;
 
     /// [`super::Batch::update`] for four lanes: the AVX2 build when the CPU has AVX2, the
@@ -239,14 +271,15 @@ pub mod w4 {
         g: &mut LaneGroup,
         dt: f64,
         m: &LaneMaterial,
+        model: &dyn Material,
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { update_avx2(g, dt, m, ctl) };
+            return unsafe { update_avx2(g, dt, m, model, ctl) };
         }
-        hex::update_inline(g, dt, m, ctl)
+        hex::update_inline(g, dt, m, model, ctl)
     }
 
     /// [`super::Batch::update_lanes`] for four lanes, built as [`entry`].
@@ -288,9 +321,10 @@ pub mod w4 {
         g: &mut LaneGroup,
         dt: f64,
         m: &LaneMaterial,
+        model: &dyn Material,
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
-        hex::update_inline(g, dt, m, ctl)
+        hex::update_inline(g, dt, m, model, ctl)
     }
 }
 
@@ -303,6 +337,7 @@ pub mod w8 {
     pub(crate) use super::lanes8::{F8 as F, M8 as M};
     use super::{GroupInverted, LaneMaterial};
     use crate::hex::HexControls;
+    use crate::material::Material;
 
     #[path = "hex.rs"]
     pub mod hex;
@@ -312,6 +347,8 @@ pub mod w8 {
     mod law;
     #[path = "modes.rs"]
     mod modes;
+    #[path = "pointwise.rs"]
+    mod pointwise;
     pub use hex::LaneGroup;
 
     /// [`super::Batch::update`] for eight lanes. Panics on a CPU without AVX-512F: the element
@@ -321,6 +358,7 @@ pub mod w8 {
         g: &mut LaneGroup,
         dt: f64,
         m: &LaneMaterial,
+        model: &dyn Material,
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         assert!(
@@ -328,7 +366,7 @@ pub mod w8 {
             "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
         );
         // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe { update_avx512(g, dt, m, ctl) }
+        unsafe { update_avx512(g, dt, m, model, ctl) }
     }
 
     /// [`super::Batch::update_lanes`] for eight lanes, built as [`entry`].
@@ -368,9 +406,10 @@ pub mod w8 {
         g: &mut LaneGroup,
         dt: f64,
         m: &LaneMaterial,
+        model: &dyn Material,
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         super::aligned_frame();
-        hex::update_inline(g, dt, m, ctl)
+        hex::update_inline(g, dt, m, model, ctl)
     }
 }

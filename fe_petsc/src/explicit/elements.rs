@@ -1,17 +1,19 @@
-//! The element loop and its kernel dispatch: groups of one material through the lane kernels
-//! ([`Batch`]), the rest element by element ([`hex::update`]), the forces added to the nodes
-//! in canonical element order.
+//! The element loop and its kernel dispatch: groups of consecutive elements of one material
+//! through the element kernel ([`Batch`]), the forces added to the nodes in canonical element
+//! order.
 use super::*;
+use crate::batch::GroupInverted;
+use crate::material::MAX_STATE;
 
 impl ExplicitFe {
     /// Element loop at the new positions with the half-step velocities, then the ghost
     /// exchange. Returns the local hourglass work of this step; sets `dt_stable_local`.
     ///
     /// With [`ElementKernel::Batched`] (the default), groups of consecutive elements of one
-    /// material with a lane form ([`LaneMaterial`]) are updated together by [`Batch::update`]
-    /// (four or eight at once: [`ExplicitFe::width`]); the other elements, and a group with an
-    /// inverted element, go through [`hex::update`] one by one. Either way each element's forces are added to the nodes in element order (the
-    /// canonical order, [`crate::assembly`]), so the two kernels' sums are the same.
+    /// material are updated together by the element kernel ([`Batch`], four or eight at once:
+    /// [`ExplicitFe::width`]); with [`ElementKernel::Scalar`] one at a time. Either way each
+    /// element's forces are added to the nodes in element order (the canonical order,
+    /// [`crate::assembly`]), so the sums are the same.
     pub fn element_forces(
         &mut self,
         dt: f64,
@@ -57,111 +59,87 @@ impl ExplicitFe {
         }
     }
 
-    /// Every element's update, in element order. Each run of consecutive elements of one
-    /// material with a lane form goes through the batched kernel in groups of `B::LANES`, the
-    /// run's last group padded (see [`Self::group_update`]); other elements, and a group with
-    /// an inverted element, through the scalar kernel.
+    /// Every element's update, in element order: each run of consecutive elements of one
+    /// material through the element kernel in groups of `B::LANES`, the run's last group padded
+    /// (see [`Self::group_update`]); one element per group with [`ElementKernel::Scalar`].
     ///
-    /// So every element of a lane material is updated by the same kernel source however the
-    /// elements are dealt to ranks and whatever the width: every width runs the same IEEE
-    /// operations in the same order (no fused multiply-adds), so an element's result does not
-    /// depend on its group, its lane or its rank's share (docs/scene.md, "One answer").
+    /// So every element is updated by the same kernel source however the elements are dealt
+    /// to ranks and whatever the width: every width runs the same IEEE operations in the same
+    /// order (no fused multiply-adds), so an element's result does not depend on its group, its
+    /// lane or its rank's share (docs/scene.md, "One answer").
+    ///
+    /// A group with an inverted element is left as it was and the first such element recorded
+    /// in `sums` (the step fails; the ghost exchange after the loop is collective, and a rank
+    /// that left before it would hang the others in it).
     fn element_loop<B: Batch>(&mut self, dt: f64, sums: &mut LoopSums) {
+        // The models are read while the elements' arrays are written.
+        let materials = std::mem::take(&mut self.materials);
         let mut group = Box::<B>::default();
         let mut e = 0;
         while e < self.elems.len() {
             let n = self.lane_run(e, B::LANES);
-            if n == 0 {
-                self.element_update(e, dt, sums);
-                e += 1;
-                continue;
-            }
-            let m = self.lane_materials[self.elem_material[e]].expect("a lane run");
-            if !self.group_update(e, n, &m, dt, &mut *group, sums) {
-                // An inverted element in the group: the scalar kernel names it.
-                for k in e..e + n {
-                    self.element_update(k, dt, sums);
-                }
+            let mi = self.elem_material[e];
+            let m = self.lane_materials[mi];
+            let model = &*materials[mi];
+            if let Err(bad) = self.group_update(e, n, &m, model, dt, &mut *group, sums) {
+                self.record_inverted(e + bad.lane, bad.volume, dt, sums);
             }
             e += n;
         }
+        self.materials = materials;
     }
 
-    /// How many of the elements `e..` go into one batched group: those that exist, lie before
-    /// the next multiple of `lanes` and share `e`'s material, when that material has a lane
-    /// form (one with [`ElementKernel::Scalar`]); 0 otherwise. (Groups end at multiples of
-    /// `lanes` so that a whole group finds its state as whole vectors in [`HexStates`].)
+    /// How many of the elements `e..` go into one group: those that exist, lie before the next
+    /// multiple of `lanes` and share `e`'s material (one with [`ElementKernel::Scalar`]).
+    /// (Groups end at multiples of `lanes` so that a whole group finds its state as whole
+    /// vectors in [`HexStates`].)
     fn lane_run(&self, e: usize, lanes: usize) -> usize {
-        let mi = self.elem_material[e];
-        if self.lane_materials[mi].is_none() {
-            return 0;
-        }
         if self.kernel == ElementKernel::Scalar {
             return 1;
         }
+        let mi = self.elem_material[e];
         let end = ((e / lanes + 1) * lanes).min(self.elems.len());
         (e..end)
             .take_while(|&k| self.elem_material[k] == mi)
             .count()
     }
 
-    /// Updates element `e` with the scalar kernel and adds its output (an inverted element is
-    /// recorded in `sums`, the first one kept: the ghost exchange after the loop is
-    /// collective, and a rank that left before it would hang the others in it).
-    fn element_update(&mut self, e: usize, dt: f64, sums: &mut LoopSums) {
-        let conn = &self.elems[e];
-        let xe = gather(&self.x, conn);
-        let ve = gather(&self.v, conn);
-        let mat = &*self.materials[self.elem_material[e]];
-        let stride = self.mat_stride;
-        let ms = &mut self.mat_state[e * stride..(e + 1) * stride];
-        let mut st = self.state.get(e);
-        match hex::update(
-            &xe,
-            &ve,
-            dt,
-            mat.density(),
-            self.vol0[e],
-            mat,
-            &self.controls,
-            &mut st,
-            ms,
-        ) {
-            Ok(out) => {
-                self.state.set(e, &st);
-                self.add_output(e, &out, sums)
-            }
-            Err(hex::ElementError::Inverted { volume }) => {
-                sums.inverted.get_or_insert(StepError::Inverted {
-                    elem: self.elem_id[e],
-                    volume,
-                    at: centroid(&xe),
-                    time: self.time + dt,
-                    step: self.step + 1,
-                });
-            }
-        }
+    /// Records element `e`, inverted with `volume` over the step `dt`, in `sums` (the first
+    /// one kept).
+    #[cold]
+    fn record_inverted(&self, e: usize, volume: f64, dt: f64, sums: &mut LoopSums) {
+        let xe = gather(&self.x, &self.elems[e]);
+        sums.inverted.get_or_insert(StepError::Inverted {
+            elem: self.elem_id[e],
+            volume,
+            at: centroid(&xe),
+            time: self.time + dt,
+            step: self.step + 1,
+        });
     }
 
-    /// Updates elements `e0..e0 + n` (material `m`, `n` at most `B::LANES`, the group not
-    /// crossing a multiple of `B::LANES`) with the batched kernel in the buffer `g` and adds
-    /// their outputs in element order; `false`, with nothing changed, when one of them is
-    /// inverted. A whole group moves its state as whole vectors ([`Batch::update_lanes`]); a
-    /// group of fewer than `B::LANES` elements fills its other lanes with copies of element
-    /// `e0`, whose results are dropped (lanes are independent: each computes its own element
-    /// only).
+    /// Updates elements `e0..e0 + n` (the material `model`, its lane form `m`; `n` at most
+    /// `B::LANES`, the group not crossing a multiple of `B::LANES`) with the element kernel in
+    /// the buffer `g` and adds their outputs in element order; `Err`, with nothing changed,
+    /// when one of them is inverted. A whole group of a lane law moves its state as whole
+    /// vectors ([`Batch::update_lanes`]); a group of fewer than `B::LANES` elements fills its
+    /// other lanes with copies of element `e0`, whose results are dropped (lanes are
+    /// independent: each computes its own element only).
+    #[allow(clippy::too_many_arguments)]
     fn group_update<B: Batch>(
         &mut self,
         e0: usize,
         n: usize,
         m: &LaneMaterial,
+        model: &dyn Material,
         dt: f64,
         g: &mut B,
         sums: &mut LoopSums,
-    ) -> bool {
+    ) -> Result<(), GroupInverted> {
         let stride = self.mat_stride;
         let history = m.n_state() > 0;
-        let ok = if n == B::LANES && (stride == 1 || !history) {
+        let whole = n == B::LANES && !m.law.is_pointwise() && (stride == 1 || !history);
+        if whole {
             let lanes = e0..e0 + n;
             let mut io = batch::GroupLanes {
                 xs: &self.x,
@@ -173,50 +151,47 @@ impl ExplicitFe {
                 force: Some(&mut self.force),
             };
             // The forces added to the nodes in the kernel.
-            g.update_lanes(&mut io, dt, m, &self.controls)
-                .is_ok()
-                .then_some(true)
+            g.update_lanes(&mut io, dt, m, &self.controls)?;
         } else {
-            self.group_update_by_lane(e0, n, m, dt, g).then_some(false)
-        };
-        let Some(added) = ok else {
-            return false;
-        };
-        self.add_group_output(e0, n, g, !added, sums);
-        true
+            self.group_update_by_lane(e0, n, m, model, dt, g)?;
+        }
+        self.add_group_output(e0, n, g, !whole, sums);
+        Ok(())
     }
 
-    /// [`ExplicitFe::group_update`]'s path for a part group or materials with several
-    /// history values per element: the lanes loaded and stored one element at a time.
+    /// [`ExplicitFe::group_update`]'s path for a part group, a pointwise law or materials with
+    /// several history values per element: the lanes loaded and stored one element at a time.
     fn group_update_by_lane<B: Batch>(
         &mut self,
         e0: usize,
         n: usize,
         m: &LaneMaterial,
+        model: &dyn Material,
         dt: f64,
         g: &mut B,
-    ) -> bool {
+    ) -> Result<(), GroupInverted> {
         let stride = self.mat_stride;
-        let history = m.n_state() > 0;
+        let n_state = m.n_state();
         let elem = |l: usize| e0 + if l < n { l } else { 0 };
         let ms = &self.mat_state;
-        let hist = |l: usize| if history { ms[elem(l) * stride] } else { 0.0 };
+        let hist = |l: usize| {
+            let mut h = [0.0; MAX_STATE];
+            let at = elem(l) * stride;
+            h[..n_state].copy_from_slice(&ms[at..at + n_state]);
+            h
+        };
         let conn: Vec<[u32; 8]> = (0..B::LANES).map(|l| self.elems[elem(l)]).collect();
         let vol0: Vec<f64> = (0..B::LANES).map(|l| self.vol0[elem(l)]).collect();
         let state: Vec<HexState> = (0..B::LANES).map(|l| self.state.get(elem(l))).collect();
         g.load(&self.x, &self.v, &conn, &vol0, &state, hist);
-        if g.update(dt, m, &self.controls).is_err() {
-            return false;
-        }
+        g.update(dt, m, model, &self.controls)?;
         for l in 0..n {
             let e = e0 + l;
             let (s, h) = g.lane_state(l);
             self.state.set(e, &s);
-            if history {
-                self.mat_state[e * stride] = h;
-            }
+            self.mat_state[e * stride..e * stride + n_state].copy_from_slice(&h[..n_state]);
         }
-        true
+        Ok(())
     }
 
     /// Adds the outputs of a group's first `n` lanes (elements `e0..e0 + n`), as
@@ -259,21 +234,5 @@ impl ExplicitFe {
             sums.grid.add(&mut sums.hg_work, hg_work[l]);
             sums.dt_min = sums.dt_min.min(dt_stable[l]);
         }
-    }
-
-    /// Adds element `e`'s output: its forces to its nodes and its block, its hourglass work and
-    /// stable step to `sums`.
-    #[inline]
-    fn add_output(&mut self, e: usize, out: &hex::HexOutput, sums: &mut LoopSums) {
-        for (k, &n) in self.elems[e].iter().enumerate() {
-            let f = &mut self.force[n as usize];
-            f[0] += out.force[k][0];
-            f[1] += out.force[k][1];
-            f[2] += out.force[k][2];
-        }
-        self.assembly.record(e, |k| out.force[k]);
-        sums.grid.add(&mut sums.hg_work, out.hg_work);
-        self.blocks.add(e, &out.force, out.hg_work);
-        sums.dt_min = sums.dt_min.min(out.dt_stable);
     }
 }

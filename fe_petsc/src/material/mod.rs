@@ -88,32 +88,52 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     fn temperature(&self, _state: &[f64]) -> Option<f64> {
         None
     }
-    /// The model's lane form for the batched element kernel ([`crate::batch`]), or `None`
-    /// (the default) when the elements of this material take the scalar kernel. A model with a
-    /// lane form keeps the default `wave_modulus` and `add_heat`, has at most one history
-    /// variable, and its lane update computes in each lane what `update_stress` computes.
+    /// The model's own lane form of its stress update for the element kernel
+    /// ([`crate::batch`]), or `None` (the default): the kernel then calls this model's
+    /// `update_stress`, `wave_modulus`, `add_heat` and `yield_stress` lane by lane
+    /// ([`LaneLaw::Pointwise`]). A model with a lane form keeps the default `wave_modulus` and
+    /// `add_heat`, has at most one history variable, and its lane update computes in each lane
+    /// what `update_stress` computes.
     fn lane_law(&self) -> Option<LaneLaw> {
         None
     }
 }
 
-/// The stress updates the batched element kernel runs in lanes: one element per lane, the same
-/// operations in every lane, branches as masked lane operations.
+/// The most history variables a model keeps per element (the fluid keeps three: its specific
+/// internal energy, volume and pressure), the size of the element kernel's per-lane buffer.
+pub const MAX_STATE: usize = 4;
+
+/// How the element kernel ([`crate::batch`]) runs a model's stress update on a group of
+/// elements, one element per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LaneLaw {
-    /// Linear elastic ([`Elastic`]).
+    /// Linear elastic ([`Elastic`]) in lanes.
     Elastic(Elastic),
-    /// J2 plasticity with linear hardening ([`J2Plastic`]); history: the plastic strain.
+    /// J2 plasticity with linear hardening ([`J2Plastic`]) in lanes; history: the plastic
+    /// strain.
     J2Plastic(J2Plastic),
+    /// Any other model (Johnson-Cook with its powers and logarithms, a fluid's equation of
+    /// state): the kernel calls the model's own scalar functions lane by lane, the rest of the
+    /// element (geometry, bulk viscosity, hourglass control, forces) in lanes.
+    Pointwise {
+        /// The model's history variables per element (at most [`MAX_STATE`]).
+        n_state: usize,
+    },
 }
 
 impl LaneLaw {
-    /// History variables per element (0 or 1).
+    /// History variables per element.
     pub fn n_state(&self) -> usize {
         match self {
             LaneLaw::Elastic(_) => 0,
             LaneLaw::J2Plastic(_) => 1,
+            LaneLaw::Pointwise { n_state } => *n_state,
         }
+    }
+
+    /// Whether the kernel calls the model's scalar functions lane by lane.
+    pub fn is_pointwise(&self) -> bool {
+        matches!(self, LaneLaw::Pointwise { .. })
     }
 }
 
