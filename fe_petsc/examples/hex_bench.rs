@@ -131,6 +131,9 @@ fn main() {
         let lm = LaneMaterial::new(&*mat, &ctl);
         for w in batch::available() {
             let ns = match w {
+                Width::W1 => batched::<batch::w1::LaneGroup>(
+                    &xs, &vs, &conn, vol0, &lm, &*mat, &ctl, reps, &mut acc,
+                ),
                 Width::W4 => batched::<batch::w4::LaneGroup>(
                     &xs, &vs, &conn, vol0, &lm, &*mat, &ctl, reps, &mut acc,
                 ),

@@ -243,28 +243,13 @@ pub struct ExplicitFe {
     pub step: u64,
     /// Seconds spent in the element loop, and in the ghost exchange, on this rank.
     pub timers: FeTimers,
-    /// Which element kernel the element loop runs (default: batched).
-    pub kernel: ElementKernel,
-    /// The batched kernel's group size: the widest this CPU runs ([`batch::widest`]).
+    /// The element kernel's group size (default: the widest this CPU runs,
+    /// [`batch::widest`]; [`Width::W1`] runs one element at a time).
     pub width: Width,
     /// The lane form of each material under the controls.
     lane_materials: Vec<LaneMaterial>,
     /// Whether each node has a constraint (its reactions are the only ones not zero).
     constrained: Vec<bool>,
-}
-
-/// The element kernel of the explicit element loop.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum ElementKernel {
-    /// One element at a time: the element kernel ([`Batch::update`]) on a group of one
-    /// element (its other lanes padding, their results dropped), so the same operations in
-    /// the same order as in a group of four or eight, and the same bits (about four times the
-    /// four-lane kernel's time per element).
-    Scalar,
-    /// [`Batch::update`] on groups of consecutive elements of one material (four or eight:
-    /// [`ExplicitFe::width`]).
-    #[default]
-    Batched,
 }
 
 /// What the element loop sums over elements.

@@ -67,6 +67,7 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod elements;
 mod exact_cg;
 mod restart;
 mod tangent;
@@ -521,54 +522,14 @@ impl ImplicitFe {
         for f in self.force.iter_mut() {
             *f = [0.0; 3];
         }
-        let stride = self.mat_stride;
-        let mut hg_work = [0.0; 3];
-        let grid = self.fe.grids.energy;
-        let mut failure: Option<StepError> = None;
         self.fe.blocks.begin();
-        for (e, conn) in self.fe.elems.iter().enumerate() {
-            let xe = gather(&self.x_trial, conn);
-            let ve = gather(&self.v_mean, conn);
-            let mat = &*self.fe.materials[self.fe.elem_material[e]];
-            let mut st = self.fe.state.get(e);
-            let ms = &mut self.mat_trial[e * stride..(e + 1) * stride];
-            ms.copy_from_slice(&self.fe.mat_state[e * stride..(e + 1) * stride]);
-            match hex::update(
-                &xe,
-                &ve,
-                dt,
-                mat.density(),
-                self.fe.vol0[e],
-                mat,
-                &self.controls,
-                &mut st,
-                ms,
-            ) {
-                Ok(out) => {
-                    for (k, &n) in conn.iter().enumerate() {
-                        let f = &mut self.force[n as usize];
-                        for c in 0..3 {
-                            f[c] += out.force[k][c];
-                        }
-                    }
-                    self.fe.assembly.record(e, |k| out.force[k]);
-                    grid.add(&mut hg_work, out.hg_work);
-                    self.fe.blocks.add(e, &out.force, out.hg_work);
-                    self.state_trial.set(e, &st);
-                }
-                Err(hex::ElementError::Inverted { volume }) => {
-                    failure = Some(StepError::Inverted {
-                        elem: self.fe.elem_id[e],
-                        volume,
-                        at: centroid(&xe),
-                        time: self.fe.time + dt,
-                        step: self.fe.step + 1,
-                    });
-                    break;
-                }
+        let failure = match self.trial_element_forces(dt) {
+            Ok(hg_work) => {
+                self.hg_work_trial = hg_work;
+                None
             }
-        }
-        self.hg_work_trial = hg_work;
+            Err(e) => Some(e),
+        };
         self.stats.residuals += 1;
         let t1 = Instant::now();
         self.fe.timers.elements += (t1 - t0).as_secs_f64();

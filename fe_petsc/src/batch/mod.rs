@@ -1,30 +1,33 @@
-//! The batched element kernel: the hexahedron of [`crate::hex`] on a group of consecutive
-//! elements of one material at once, one element per f64 lane, the same operations in every
-//! lane and the scalar kernel's branches as masked lane operations. Each lane computes what
-//! [`crate::hex::update`] computes for its element, the geometry in mode space (`modes.rs`: the
-//! volume, its gradient and the nodal forces through the Walsh-Hadamard transform of the nodal
-//! values) and the rest in the scalar kernel's order. Every width runs the same IEEE operations
-//! in the same order (no fused multiply-adds: `F::mul_add` rounds twice; IEEE division and
-//! square root), so one, four and eight lanes (`--kernel scalar|lanes4|lanes8`) give the same
-//! bits. The node-by-node [`crate::hex::update`] forms the geometry otherwise and agrees to
-//! round-off; it stays the reference the tests hold every width to (`tests/lanes.rs`, 1e-12
-//! relative).
+//! The element kernel: the hexahedron of [`crate::hex`] on a group of consecutive elements of
+//! one material at once, one element per f64 lane, the same operations in every lane and the
+//! branches as masked lane operations. Each lane computes what [`crate::hex::update`] computes
+//! for its element, the geometry in mode space (`modes.rs`: the volume, its gradient and the
+//! nodal forces through the Walsh-Hadamard transform of the nodal values) and the rest in the
+//! node-by-node kernel's order. Every material runs here: elastic and J2 in lanes (`law.rs`),
+//! the other models' own scalar functions called lane by lane (`pointwise.rs`). Every width
+//! runs the same IEEE operations in the same order (no fused multiply-adds: `F::mul_add`
+//! rounds twice; IEEE division and square root), so one, four and eight lanes (`--kernel
+//! scalar|lanes4|lanes8`) give the same bits. The node-by-node [`crate::hex::update`] forms
+//! the geometry otherwise and agrees to round-off; it is the reference the tests hold every
+//! width to (`tests/lanes.rs`, 1e-12 relative), and no run calls it.
 //!
-//! The kernel is written once (`hex.rs`, `hourglass.rs`, `law.rs` in this folder, on a lane
-//! type `F`, its mask `M` and the group size `LANES` taken from the parent module) and compiled
-//! twice:
-//! - [`w4`]: four lanes on fixed-size arrays the compiler vectorises (`lanes4.rs`), built for
-//!   AVX2 when the CPU has it (chosen at run time) and for the baseline x86-64 (SSE2) otherwise;
+//! The kernel is written once (`hex.rs`, `hourglass.rs`, `law.rs`, `modes.rs`, `pointwise.rs`
+//! in this folder, on a lane type `F`, its mask `M` and the group size `LANES` taken from the
+//! parent module) and compiled once per width:
+//! - [`w1`]: one lane (`fixed.rs`), one element at a time;
+//! - [`w4`]: four lanes on fixed-size arrays the compiler vectorises (`fixed.rs`, the same text
+//!   as one lane), built for AVX2 when the CPU has it (chosen at run time) and for the
+//!   baseline x86-64 (SSE2) otherwise;
 //! - [`w8`] (x86-64): eight lanes in one AVX-512 register (`lanes8.rs`, intrinsics), used when
 //!   the CPU has AVX-512F. Eight lanes halve the instructions per element, the 32 vector
 //!   registers of AVX-512 spill less than AVX2's 16.
 //!
 //! In the kernel, no `std::array::from_fn` or other library generic taking a closure: those
 //! are not inlined into the target-feature builds, and each lane operation inside them becomes
-//! a call (the eight-lane update then takes 360 ns per element instead of 200).
+//! a call.
 //!
-//! [`widest`] picks the width for this CPU; [`Batch`] is what the element loop and the tests
-//! see of either.
+//! [`widest`] picks the width for this CPU; [`Batch`] is what the element loops and the tests
+//! see of any.
 // The kernel's files are compiled once per width on purpose (each width its own lane type):
 // clippy's duplicate-module lint is for files loaded twice by mistake.
 #![allow(clippy::duplicate_mod)]
@@ -112,9 +115,11 @@ pub struct GroupLanes<'a> {
     pub force: Option<&'a mut [[f64; 3]]>,
 }
 
-/// The group sizes of the batched kernel.
+/// The group sizes of the element kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Width {
+    /// One element at a time ([`w1`]).
+    W1,
     /// Four lanes ([`w4`]).
     W4,
     /// Eight lanes in AVX-512 registers ([`w8`]).
@@ -131,9 +136,10 @@ pub fn widest() -> Width {
     Width::W4
 }
 
-/// The widths this CPU can run, narrowest first (the tests compare each with the scalar kernel).
+/// The widths this CPU can run, narrowest first (the tests compare each with the node-by-node
+/// kernel).
 pub fn available() -> Vec<Width> {
-    let mut w = vec![Width::W4];
+    let mut w = vec![Width::W1, Width::W4];
     if widest() != Width::W4 {
         w.push(widest());
     }
@@ -220,9 +226,11 @@ pub struct GroupInverted {
     pub volume: f64,
 }
 
-mod lanes4;
+pub mod arrays;
+mod fixed;
 #[cfg(target_arch = "x86_64")]
 mod lanes8;
+use fixed::{lanes1, lanes4};
 
 /// Makes the calling kernel entry keep its stack frame aligned to 64 bytes, so that its spills
 /// of 512-bit registers (several hundred per group) never straddle two cache lines.
@@ -244,7 +252,53 @@ fn aligned_frame() {
     std::hint::black_box(&mut line);
 }
 
-/// The kernel on four lanes of fixed-size arrays (`lanes4.rs`).
+/// The kernel on one lane (`fixed.rs`): one element at a time, for the baseline x86-64 (no
+/// vector instructions to gain from).
+#[path = "."]
+pub mod w1 {
+    pub use super::lanes1::{F1 as F, LANES, M1 as M};
+    use super::{GroupInverted, LaneMaterial};
+    use crate::hex::HexControls;
+    use crate::material::Material;
+
+    #[path = "hex.rs"]
+    pub mod hex;
+    #[path = "hourglass.rs"]
+    mod hourglass;
+    #[path = "law.rs"]
+    mod law;
+    #[path = "modes.rs"]
+    mod modes;
+    #[path = "pointwise.rs"]
+    mod pointwise;
+    pub use hex::LaneGroup;
+
+    /// [`super::Batch::update`] for one lane.
+    #[inline]
+    fn entry(
+        g: &mut LaneGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// [`super::Batch::update_lanes`] for one lane.
+    #[inline]
+    fn entry_lanes(
+        g: &mut LaneGroup,
+        io: &mut super::GroupLanes<'_>,
+        dt: f64,
+        m: &LaneMaterial,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        hex::update_lanes_inline(g, io, dt, m, ctl)
+    }
+}
+
+/// The kernel on four lanes of fixed-size arrays (`fixed.rs`).
 #[path = "."]
 pub mod w4 {
     pub use super::lanes4::{F4 as F, LANES, M4 as M};

@@ -3,17 +3,15 @@
 //! order.
 use super::*;
 use crate::batch::GroupInverted;
-use crate::material::MAX_STATE;
 
 impl ExplicitFe {
     /// Element loop at the new positions with the half-step velocities, then the ghost
     /// exchange. Returns the local hourglass work of this step; sets `dt_stable_local`.
     ///
-    /// With [`ElementKernel::Batched`] (the default), groups of consecutive elements of one
-    /// material are updated together by the element kernel ([`Batch`], four or eight at once:
-    /// [`ExplicitFe::width`]); with [`ElementKernel::Scalar`] one at a time. Either way each
-    /// element's forces are added to the nodes in element order (the canonical order,
-    /// [`crate::assembly`]), so the sums are the same.
+    /// Groups of consecutive elements of one material are updated together by the element
+    /// kernel ([`Batch`], one, four or eight at once: [`ExplicitFe::width`]). Each element's
+    /// forces are added to the nodes in element order (the canonical order,
+    /// [`crate::assembly`]), so every width's sums are the same.
     pub fn element_forces(
         &mut self,
         dt: f64,
@@ -35,6 +33,7 @@ impl ExplicitFe {
         };
         self.blocks.begin();
         match self.width {
+            Width::W1 => self.element_loop::<batch::w1::LaneGroup>(dt, &mut sums),
             Width::W4 => self.element_loop::<batch::w4::LaneGroup>(dt, &mut sums),
             #[cfg(target_arch = "x86_64")]
             Width::W8 => self.element_loop::<batch::w8::LaneGroup>(dt, &mut sums),
@@ -61,7 +60,7 @@ impl ExplicitFe {
 
     /// Every element's update, in element order: each run of consecutive elements of one
     /// material through the element kernel in groups of `B::LANES`, the run's last group padded
-    /// (see [`Self::group_update`]); one element per group with [`ElementKernel::Scalar`].
+    /// (see [`Self::group_update`]).
     ///
     /// So every element is updated by the same kernel source however the elements are dealt
     /// to ranks and whatever the width: every width runs the same IEEE operations in the same
@@ -90,13 +89,10 @@ impl ExplicitFe {
     }
 
     /// How many of the elements `e..` go into one group: those that exist, lie before the next
-    /// multiple of `lanes` and share `e`'s material (one with [`ElementKernel::Scalar`]).
+    /// multiple of `lanes` and share `e`'s material.
     /// (Groups end at multiples of `lanes` so that a whole group finds its state as whole
     /// vectors in [`HexStates`].)
-    fn lane_run(&self, e: usize, lanes: usize) -> usize {
-        if self.kernel == ElementKernel::Scalar {
-            return 1;
-        }
+    pub(crate) fn lane_run(&self, e: usize, lanes: usize) -> usize {
         let mi = self.elem_material[e];
         let end = ((e / lanes + 1) * lanes).min(self.elems.len());
         (e..end)
@@ -170,27 +166,20 @@ impl ExplicitFe {
         dt: f64,
         g: &mut B,
     ) -> Result<(), GroupInverted> {
-        let stride = self.mat_stride;
         let n_state = m.n_state();
-        let elem = |l: usize| e0 + if l < n { l } else { 0 };
-        let ms = &self.mat_state;
-        let hist = |l: usize| {
-            let mut h = [0.0; MAX_STATE];
-            let at = elem(l) * stride;
-            h[..n_state].copy_from_slice(&ms[at..at + n_state]);
-            h
+        let arrays = batch::arrays::ElementArrays {
+            xs: &self.x,
+            vs: &self.v,
+            elems: &self.elems,
+            vol0: &self.vol0,
+            state: &self.state,
+            history: &self.mat_state,
+            stride: self.mat_stride,
         };
-        let conn: Vec<[u32; 8]> = (0..B::LANES).map(|l| self.elems[elem(l)]).collect();
-        let vol0: Vec<f64> = (0..B::LANES).map(|l| self.vol0[elem(l)]).collect();
-        let state: Vec<HexState> = (0..B::LANES).map(|l| self.state.get(elem(l))).collect();
-        g.load(&self.x, &self.v, &conn, &vol0, &state, hist);
+        batch::arrays::load(g, &arrays, e0, n, n_state);
         g.update(dt, m, model, &self.controls)?;
-        for l in 0..n {
-            let e = e0 + l;
-            let (s, h) = g.lane_state(l);
-            self.state.set(e, &s);
-            self.mat_state[e * stride..e * stride + n_state].copy_from_slice(&h[..n_state]);
-        }
+        let (state, history) = (&mut self.state, &mut self.mat_state);
+        batch::arrays::store(g, e0, n, n_state, state, history, self.mat_stride);
         Ok(())
     }
 

@@ -65,7 +65,6 @@ impl ExplicitFe {
             time: 0.0,
             step: 0,
             timers: FeTimers::default(),
-            kernel: ElementKernel::default(),
             lane_materials: Vec::new(),
             width: batch::widest(),
             constrained: vec![false; nn],

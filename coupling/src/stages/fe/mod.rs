@@ -148,8 +148,8 @@ impl Fe {
     ) -> Result<(), String> {
         use crate::driver::KernelChoice;
         use fe_petsc::batch::{widest, Width};
-        use fe_petsc::explicit::ElementKernel;
         let mine: i32 = match widest() {
+            Width::W1 => 1,
             Width::W4 => 4,
             #[cfg(target_arch = "x86_64")]
             Width::W8 => 8,
@@ -164,14 +164,11 @@ impl Fe {
             );
         }
         let wide = if all >= 8 { widest() } else { Width::W4 };
-        let (kernel, width) = match choice {
-            KernelChoice::Auto | KernelChoice::Lanes8 => (ElementKernel::Batched, wide),
-            KernelChoice::Lanes4 => (ElementKernel::Batched, Width::W4),
-            KernelChoice::Scalar => (ElementKernel::Scalar, Width::W4),
+        self.state_mut().width = match choice {
+            KernelChoice::Auto | KernelChoice::Lanes8 => wide,
+            KernelChoice::Lanes4 => Width::W4,
+            KernelChoice::Scalar => Width::W1,
         };
-        let fe = self.state_mut();
-        fe.kernel = kernel;
-        fe.width = width;
         Ok(())
     }
 
@@ -422,13 +419,12 @@ fn implicit_report(world: &SimpleCommunicator, imp: &ImplicitFe, report: &mut Re
 /// (AVX-512F)`; every rank runs the same one (`Fe::choose_kernel`).
 fn kernel_name(fe: &ExplicitFe) -> &'static str {
     use fe_petsc::batch::Width;
-    use fe_petsc::explicit::ElementKernel;
-    match (fe.kernel, fe.width) {
-        (ElementKernel::Scalar, _) => "scalar",
+    match fe.width {
+        Width::W1 => "scalar",
         #[cfg(target_arch = "x86_64")]
-        (_, Width::W8) => "lanes8 (AVX-512F)",
+        Width::W8 => "lanes8 (AVX-512F)",
         #[cfg(target_arch = "x86_64")]
-        (_, Width::W4) if std::arch::is_x86_feature_detected!("avx2") => "lanes4 (AVX2)",
-        (_, Width::W4) => "lanes4 (SSE2)",
+        Width::W4 if std::arch::is_x86_feature_detected!("avx2") => "lanes4 (AVX2)",
+        Width::W4 => "lanes4 (SSE2)",
     }
 }
