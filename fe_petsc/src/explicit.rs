@@ -48,7 +48,7 @@ mod queries;
 mod restart;
 pub use contact::ContactCorrection;
 mod setup;
-pub use loads::{face_forces, PressureLoad};
+pub use loads::{face_forces, Loads, PressureLoad};
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 
 /// A nodal constraint from a boundary condition.

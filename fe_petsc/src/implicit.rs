@@ -14,12 +14,17 @@
 //! ```
 //!
 //! unconditionally stable and without numerical damping for a linear system, whose energy it
-//! conserves; its period elongation is (omega dt)^2 / 12 to leading order.
+//! conserves; its period elongation is (omega dt)^2 / 12 to leading order. Gravity g and the
+//! pressure loads L (`[[load]]`, on the faces at the trial positions) are taken at t(n+1) with
+//! their curves' values then: M a(n+1) = f(u(n+1)) + L(u(n+1), t(n+1)) + M g(t(n+1)) + R, and
+//! their work over the step is the trapezoid of their values at t(n) and t(n+1). The tangent
+//! leaves out the follower pressure's own stiffness (of relative size p / modulus; Newton then
+//! converges linearly at that rate).
 //!
-//! **Element.** The nodal forces f(u(n+1)) come from [`hex::update`] itself (mean-gradient
-//! hexahedron, hourglass control, Hughes-Winget incremental rotation), given
-//! the trial positions x(n) + du and the step's mean velocity du/dt, starting from the element
-//! state at t(n): the two modes differ only in time integration. Bulk viscosity is off (docs/scene.md:
+//! **Element.** The nodal forces f(u(n+1)) come from the explicit loop's element kernel
+//! ([`crate::batch`]: mean-gradient hexahedron, hourglass control, Hughes-Winget incremental
+//! rotation), given the trial positions x(n) + du and the step's mean velocity du/dt, starting
+//! from the element state at t(n): the two modes differ only in time integration. Bulk viscosity is off (docs/scene.md:
 //! explicit only).
 //!
 //! **Tangent** (per element, 24 x 24): K = V S^T C S + K_hg, with K_hg the hourglass control's
@@ -262,7 +267,9 @@ pub struct ImplicitFe {
     /// Counters and timers.
     pub stats: ImplicitStats,
     controls: HexControls,
+    /// Gravity at the step's end (its curve's value there) and at its start, m/s^2.
     gravity: [f64; 3],
+    gravity_n: [f64; 3],
     dofs: Vec<NodeDof>,
     /// The velocity constraints with a curve: (local node, velocity, curve); and each node's
     /// index among them (`u32::MAX`: none).
@@ -306,7 +313,6 @@ impl ImplicitFe {
             bv_quadratic: 0.0,
             ..setup.controls
         };
-        let gravity = setup.gravity;
         let nn = setup.mesh.coords.len();
         let mut dofs = vec![NodeDof::Free; nn];
         for (n, c) in &setup.constraints {
@@ -372,7 +378,8 @@ impl ImplicitFe {
             options: NewtonOptions::from_options()?,
             stats: ImplicitStats::default(),
             controls,
-            gravity,
+            gravity: fe.gravity_at(0.0),
+            gravity_n: fe.gravity_at(0.0),
             dofs,
             curved,
             curve_of,
@@ -402,6 +409,32 @@ impl ImplicitFe {
             imp.reaction_n[n] = imp.constraint_force(n, imp.fe.a[n], [0.0; 3]);
         }
         Ok(imp)
+    }
+
+    /// The pressure loads of this rank (collective), as [`ExplicitFe::set_loads`]: their
+    /// forces at t = 0 on the initial positions join the forces and accelerations of t = 0,
+    /// M a(0) = L(0) + M g(0) + R(0) (the stress is zero).
+    pub fn set_loads(
+        &mut self,
+        sets: Vec<crate::explicit::PressureLoad>,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), StepError> {
+        self.fe.set_loads(sets, exchange)?;
+        let Some(l) = self.fe.loads() else {
+            return Ok(());
+        };
+        l.add_to(&mut self.force_n);
+        for n in l.nodes.clone() {
+            let n = n as usize;
+            if matches!(self.dofs[n], NodeDof::Prescribed(_)) {
+                continue;
+            }
+            let (m, f, a) = (self.fe.mass[n], self.force_n[n], self.fe.a[n]);
+            let a0: [f64; 3] = std::array::from_fn(|c| a[c] + f[c] / m);
+            self.fe.a[n] = self.dofs[n].free(a0);
+            self.reaction_n[n] = self.constraint_force(n, self.fe.a[n], f);
+        }
+        Ok(())
     }
 
     /// The force a node's constraint applies: (I - P)(m (a - g) - f).
@@ -448,6 +481,12 @@ impl ImplicitFe {
         for (n, v, c) in &self.curved {
             let s = c.mean(t, dt);
             self.dofs[*n] = NodeDof::Prescribed(v.map(|x| x * s));
+        }
+        // Gravity at the step's end; the loads at its start kept for their work.
+        self.gravity_n = self.gravity;
+        self.gravity = self.fe.gravity_at(t + dt);
+        if let Some(l) = self.fe.loads_mut() {
+            l.keep();
         }
         // Predictor: a(n+1) = a(n).
         for n in 0..self.n_nodes() {
@@ -545,8 +584,14 @@ impl ImplicitFe {
                 .map(ImplicitError::Step)
                 .unwrap_or(ImplicitError::OtherRank));
         }
-        // Each node's force summed in the canonical element order (`crate::assembly`).
+        // Each node's force summed in the canonical element order (`crate::assembly`), then
+        // the pressure loads on the faces at the trial positions (`explicit::loads`).
         self.fe.assembly.finish(&mut self.force, exchange)?;
+        let t_end = self.fe.time + dt;
+        if let Some(l) = self.fe.loads_mut() {
+            l.evaluate(&self.x_trial, t_end, exchange)?;
+            l.add_to(&mut self.force);
+        }
         let t2 = Instant::now();
         self.fe.timers.exchange += (t2 - t1).as_secs_f64();
         let c_mass = 4.0 / (dt * dt);
@@ -661,7 +706,8 @@ impl ImplicitFe {
         let dt = self.dt;
         let t1 = self.fe.time + dt;
         let c_mass = 4.0 / (dt * dt);
-        let g = self.gravity;
+        // Gravity's mean over the step (the same bits as g itself when it is constant).
+        let g: [f64; 3] = std::array::from_fn(|c| 0.5 * (self.gravity_n[c] + self.gravity[c]));
         let mut sums = [[0.0; 3]; 6];
         let (ge, gp) = (self.fe.grids.energy, self.fe.grids.momentum);
         for n in 0..self.n_nodes() {
@@ -700,6 +746,9 @@ impl ImplicitFe {
             }
         }
         let du = &self.du;
+        if let Some(l) = self.fe.loads() {
+            l.book_work(&self.fe.owned, &ge, |n, c| du[n][c], &mut sums);
+        }
         self.fe.blocks.accept(|n| du[n]);
         let sums = self.fe.step_sums(&sums, &self.hg_work_trial);
         std::mem::swap(&mut self.force_n, &mut self.force);

@@ -111,18 +111,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
             "{file}: contact: the contact stage runs in explicit mode only; use mode = \"explicit\" or remove the [contact] table"
         ));
     }
-    // The mode may come from the command line (`--mode`): the scene's own check
-    // (`scene::check`) saw the file's.
-    if implicit && scene.gravity_curve.is_some() {
-        return Err(format!(
-            "{file}: gravity_curve: gravity_curve is explicit only: mode = \"implicit\" keeps gravity constant (use mode = \"explicit\")"
-        ));
-    }
-    if implicit && !scene.loads.is_empty() {
-        return Err(format!(
-            "{file}: load[0]: [[load]] is explicit only: mode = \"implicit\" takes no pressure loads (use mode = \"explicit\")"
-        ));
-    }
     if !scene.loads.is_empty() && scene.meshes.is_empty() {
         return Err(format!(
             "{file}: load[0]: a pressure load acts on mesh faces: a scene of particles only cannot have a [[load]] table"
@@ -195,7 +183,7 @@ pub fn build(
                 world,
                 &file,
                 (def, &block_names, &particle_names),
-                (surfaces, mesh_ids),
+                (&surfaces.lent(), mesh_ids),
                 sph.is_some(),
                 SearchChoice {
                     static_decomposition: algorithms.contact_static,

@@ -14,6 +14,7 @@
 use super::is_particle;
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::CutTree;
+use crate::stages::contact::{LentSurfaces, SurfaceFigures};
 use bytemuck::{Pod, Zeroable};
 use contact::{ContactNodes, FaceRecord, NodeRecord};
 use fe_petsc::explicit::ExplicitFe;
@@ -54,6 +55,22 @@ pub struct FeContact {
     pub body_block: Vec<u32>,
     /// Whether each block has a contact face (its pairs are columns of contact_forces.csv).
     pub block_in_contact: Vec<bool>,
+}
+
+impl FeContact {
+    /// What the contact stage is told of these surfaces when it starts.
+    pub fn lent(&self) -> LentSurfaces {
+        LentSurfaces {
+            figures: SurfaceFigures {
+                nodes: self.nodes.len(),
+                global_faces: self.global_faces,
+                n_bodies: self.n_bodies,
+                masters: self.master_body.iter().filter(|&&m| m).count(),
+            },
+            body_block: self.body_block.clone(),
+            block_in_contact: self.block_in_contact.clone(),
+        }
+    }
 }
 
 fn gatherv_u64(comm: &SimpleCommunicator, mine: &[u64]) -> (Vec<u64>, Vec<i32>, Vec<i32>) {

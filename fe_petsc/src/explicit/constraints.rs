@@ -4,7 +4,7 @@ use super::*;
 
 impl ExplicitFe {
     /// Gravity at time `t`: the scene's times its curve's value, m/s^2.
-    pub(super) fn gravity_at(&self, t: f64) -> [f64; 3] {
+    pub(crate) fn gravity_at(&self, t: f64) -> [f64; 3] {
         match &self.gravity_curve {
             Some(c) => {
                 let s = c.value(t);

@@ -29,7 +29,7 @@
 use super::{ExplicitFe, StepError};
 use crate::assembly::Assembly;
 use crate::curve::Curve;
-use crate::exact::StepFolds;
+use crate::exact::{Grid, StepFolds};
 use crate::mesh::NodeExchange;
 use crate::petsc::PetscError;
 
@@ -47,7 +47,7 @@ pub struct PressureLoad {
 
 /// The loads of one rank: the faces in key order, their ordered nodal sum and the loaded
 /// nodes' forces now and a step ago.
-pub(super) struct Loads {
+pub struct Loads {
     /// Pressure and curve of each load.
     sets: Vec<(f64, Option<Curve>)>,
     /// The faces in key order (load, face gid): their load and corners.
@@ -167,9 +167,55 @@ impl Loads {
             *o = self.now[n as usize];
         }
     }
+
+    /// Adds the loads `now` (the last [`Loads::evaluate`]) to the nodal forces `force`.
+    pub fn add_to(&self, force: &mut [[f64; 3]]) {
+        for &n in &self.nodes {
+            let n = n as usize;
+            for c in 0..3 {
+                force[n][c] += self.now[n][c];
+            }
+        }
+    }
+
+    /// The loads' work over a step on the owned loaded nodes, each node's displacement
+    /// `dx(n, c)`: the trapezoid (L(n) + L(n+1))/2 . dx into the external work (`sums[2]`),
+    /// and the same forces' (L(n) + L(n+1)) . dx taken out of the element work's raw sum
+    /// (`sums[1]`, halved later), which summed the nodal forces with the loads in them.
+    pub(crate) fn book_work(
+        &self,
+        owned: &[bool],
+        grid: &Grid,
+        dx: impl Fn(usize, usize) -> f64,
+        sums: &mut StepFolds,
+    ) {
+        for (old, &n) in self.old.iter().zip(&self.nodes) {
+            let n = n as usize;
+            if !owned[n] {
+                continue;
+            }
+            let now = self.now[n];
+            for c in 0..3 {
+                let d = dx(n, c);
+                let both = old[c] + now[c];
+                grid.add(&mut sums[2], (0.5 * both) * d);
+                grid.add(&mut sums[1], -(both * d));
+            }
+        }
+    }
 }
 
 impl ExplicitFe {
+    /// The pressure loads, where the scene has some ([`ExplicitFe::set_loads`]).
+    pub fn loads(&self) -> Option<&Loads> {
+        self.loads.as_ref()
+    }
+
+    /// [`ExplicitFe::loads`], to evaluate them elsewhere (implicit mode's trial positions).
+    pub fn loads_mut(&mut self) -> Option<&mut Loads> {
+        self.loads.as_mut()
+    }
+
     /// The pressure loads of this rank (collective: every rank calls it, with the same
     /// number of loads; none: nothing to do): their forces at the present positions and
     /// time are added to the nodal forces the next kick reads.
@@ -230,22 +276,9 @@ impl ExplicitFe {
     /// work, and the same forces' f . dx taken out of the element work's sum (the nodal
     /// forces the kick and the closing pass summed include the loads).
     pub(super) fn load_work(&self, dt: f64, sums: &mut StepFolds) {
-        let Some(l) = &self.loads else {
-            return;
-        };
-        let e = &self.grids.energy;
-        for (old, &n) in l.old.iter().zip(&l.nodes) {
-            let n = n as usize;
-            if !self.owned[n] {
-                continue;
-            }
-            let now = l.now[n];
-            for c in 0..3 {
-                let dx = dt * self.v[n][c];
-                let both = old[c] + now[c];
-                e.add(&mut sums[2], (0.5 * both) * dx);
-                e.add(&mut sums[1], -(both * dx));
-            }
+        if let Some(l) = &self.loads {
+            let v = &self.v;
+            l.book_work(&self.owned, &self.grids.energy, |n, c| dt * v[n][c], sums);
         }
     }
 }

@@ -91,7 +91,6 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         .transpose()?;
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
     let loads = check_loads(&cx, &raw.load)?;
-    check_implicit_curves(&cx, &raw.run, &gravity_curve, &loads)?;
     check_particles(&cx, &raw.particles, &materials)?;
     if let Some(s) = &raw.sph {
         check_sph(&cx, s)?;
@@ -719,26 +718,4 @@ fn check_loads(cx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>, SceneError> {
         });
     }
     Ok(loads)
-}
-
-/// The implicit integrator keeps gravity constant and has no pressure loads: a
-/// `gravity_curve` or a `[[load]]` with `mode = "implicit"` is refused (a velocity curve
-/// works in both modes).
-fn check_implicit_curves(
-    cx: &Ctx,
-    run: &Run,
-    gravity_curve: &Option<crate::input::curve::Curve>,
-    loads: &[Load],
-) -> Result<(), SceneError> {
-    if run.mode != Mode::Implicit {
-        return Ok(());
-    }
-    let why = "is explicit only: mode = \"implicit\" keeps gravity constant and takes no pressure loads (use mode = \"explicit\")";
-    if gravity_curve.is_some() {
-        return Err(cx.err("gravity_curve", format!("gravity_curve {why}")));
-    }
-    if !loads.is_empty() {
-        return Err(cx.err("load[0]", format!("[[load]] {why}")));
-    }
-    Ok(())
 }

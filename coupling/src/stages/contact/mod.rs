@@ -9,7 +9,6 @@
 use crate::input::scene::ContactDef;
 use crate::kernels::collective;
 use crate::output::{Report, StageStats};
-use crate::transfer::fe_contact::FeContact;
 use baseline::BaselineStage;
 use body::ContactBody;
 use mpi::collective::SystemOperation;
@@ -208,17 +207,29 @@ fn energy_guard(
     alpha
 }
 
-/// The report's figures of the contact surfaces the FE stage lends (`FeContact`).
-#[derive(Debug, Clone, Copy)]
-struct SurfaceFigures {
+/// What the contact stage is told of the surfaces a body lends it when it starts (the FE
+/// stage's: `transfer::fe_contact`), for contact_forces.csv's columns and the report.
+#[derive(Debug, Clone, Default)]
+pub struct LentSurfaces {
+    /// The report's figures.
+    pub figures: SurfaceFigures,
+    /// Each body's block (index in the scene's `[[block]]` order).
+    pub body_block: Vec<u32>,
+    /// Whether each block has a contact face.
+    pub block_in_contact: Vec<bool>,
+}
+
+/// The report's figures of the contact surfaces lent to the stage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SurfaceFigures {
     /// This rank's owned contact nodes.
-    nodes: usize,
+    pub nodes: usize,
     /// Faces over all ranks.
-    global_faces: u64,
+    pub global_faces: u64,
     /// Bodies in the mesh, and the masters of a one-pass search among them.
-    n_bodies: u32,
+    pub n_bodies: u32,
     /// See `n_bodies`.
-    masters: usize,
+    pub masters: usize,
 }
 
 /// The contact stage of a run with `[contact]`.
@@ -244,14 +255,14 @@ pub struct Contact {
 }
 
 impl Contact {
-    /// The stage for the scene's `[contact]` table over the FE stage's contact surfaces
+    /// The stage for the scene's `[contact]` table over the contact surfaces the bodies lend
     /// (`surfaces`; collective). `mesh_ids`: the mesh's node count (the particles' ids start
     /// there).
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
         (def, blocks, particle_sets): (&ContactDef, &[String], &[String]),
-        (surfaces, mesh_ids): (&FeContact, u64),
+        (surfaces, mesh_ids): (&LentSurfaces, u64),
         with_particles: bool,
         choice: SearchChoice,
     ) -> Result<Contact, String> {
@@ -265,7 +276,7 @@ impl Contact {
             &surfaces.body_block,
             sets,
         );
-        if surfaces.global_faces == 0 {
+        if surfaces.figures.global_faces == 0 {
             return Err(format!(
                 "{file}: contact.surfaces: no boundary face lies on {:?}",
                 def.surfaces
@@ -282,12 +293,7 @@ impl Contact {
             Search::Dynamic(dynamic)
         };
         Ok(Contact {
-            surfaces: SurfaceFigures {
-                nodes: surfaces.nodes.len(),
-                global_faces: surfaces.global_faces,
-                n_bodies: surfaces.n_bodies,
-                masters: surfaces.master_body.iter().filter(|&&m| m).count(),
-            },
+            surfaces: surfaces.figures,
             search,
             particles,
             particle_gid_offset: mesh_ids,

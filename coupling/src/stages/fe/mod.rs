@@ -97,11 +97,12 @@ impl Fe {
                 Integrator::Implicit(Box::new(res.map_err(|e| e.to_string())?))
             }
         };
-        if let Integrator::Explicit(fe) = &mut integrator {
-            let loads = loads::pressure_loads(world, scene, groups, &mesh.local);
-            let res = fe.set_loads(loads, &mut mesh.exchange);
-            first_error(world, res.err().map(|e| format!("{file}: {e}")))?;
-        }
+        let loads = loads::pressure_loads(world, scene, groups, &mesh.local);
+        let res = match &mut integrator {
+            Integrator::Explicit(fe) => fe.set_loads(loads, &mut mesh.exchange),
+            Integrator::Implicit(imp) => imp.set_loads(loads, &mut mesh.exchange),
+        };
+        first_error(world, res.err().map(|e| format!("{file}: {e}")))?;
         match &mut integrator {
             Integrator::Explicit(fe) => fe.initial_energies(world),
             Integrator::Implicit(imp) => imp.fe.initial_energies(world),
