@@ -4,10 +4,12 @@
 # its table (one row per run: the swept parameters, elements, particles, steps, loop time, model
 # memory, the largest energy error, and each measure's value and error) between the lines
 # `<!-- table: SCENE -->` and `<!-- end table -->` of docs/accuracy.md, the text around them
-# untouched. Prints each table as it goes.
+# untouched; then runs `tdyn validate` on the CASES (default taylor_copper) and writes each
+# case's rows of its report between `<!-- table: validate CASE -->` and `<!-- end table -->`.
+# Prints each table as it goes.
 #
 #   scripts/accuracy_tables.sh                        # every scene with a [sweep] table
-#   SCENES="bar_wave taylor_impact" scripts/accuracy_tables.sh
+#   SCENES="bar_wave taylor_impact" CASES=none scripts/accuracy_tables.sh
 #
 # Needs the release build (`cargo build --release --workspace --bins`). About 5 minutes on 2
 # cores; the loop times are this machine's (say which in the text).
@@ -20,6 +22,24 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 if [ -z "${SCENES:-}" ]; then
   SCENES=$(grep -l '^\[sweep\]' scenes/*.toml | xargs -n1 basename | sed 's/\.toml$//')
 fi
+CASES=${CASES:-taylor_copper}
+[ "$SCENES" = none ] && SCENES=""
+[ "$CASES" = none ] && CASES=""
+mkdir -p "$WORK"
+
+# Replaces the lines between `<!-- table: $1 -->` and `<!-- end table -->` of the manual with
+# the file $2 (or says that the manual has no such block).
+put() {
+  if grep -q "^<!-- table: $1 -->\$" "$DOC"; then
+    awk -v s="$1" -v f="$2" '
+      $0 == "<!-- table: " s " -->" { print; while ((getline l < f) > 0) print l; skip = 1; next }
+      skip && $0 == "<!-- end table -->" { skip = 0 }
+      !skip { print }' "$DOC" >"$WORK/doc.md"
+    cp "$WORK/doc.md" "$DOC"
+  else
+    echo "($DOC has no '<!-- table: $1 -->' line: table printed only)"
+  fi
+}
 
 # The markdown table of a sweep's accuracy_cost.csv (docs/accuracy.md's "tdyn sweep" section
 # names the columns). The CSV's quoted fields hold no commas except the message, which is last.
@@ -63,13 +83,16 @@ for s in $SCENES; do
   table "$out/accuracy_cost.csv" >"$WORK/$s.md"
   echo "== $s"
   cat "$WORK/$s.md"
-  if grep -q "^<!-- table: $s -->\$" "$DOC"; then
-    awk -v s="$s" -v f="$WORK/$s.md" '
-      $0 == "<!-- table: " s " -->" { print; while ((getline l < f) > 0) print l; skip = 1; next }
-      skip && $0 == "<!-- end table -->" { skip = 0 }
-      !skip { print }' "$DOC" >"$WORK/doc.md"
-    cp "$WORK/doc.md" "$DOC"
-  else
-    echo "($DOC has no '<!-- table: $s -->' line: table printed only)"
-  fi
+  put "$s" "$WORK/$s.md"
+done
+
+for c in $CASES; do
+  target/release/tdyn validate --cases "$c" --np "$NP" --out "$WORK/validate_$c" --quiet \
+    >"$WORK.validate_$c.log" 2>&1 || true
+  { grep -m1 '^| case ' "$WORK/validate_$c/report.md"
+    grep -m1 '^| --- ' "$WORK/validate_$c/report.md"
+    grep "^| $c |" "$WORK/validate_$c/report.md"; } >"$WORK/validate_$c.md"
+  echo "== validate $c"
+  cat "$WORK/validate_$c.md"
+  put "validate $c" "$WORK/validate_$c.md"
 done
