@@ -20,6 +20,23 @@ fn max_energy_error(dir: &Path) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The plate's mean centre deflection (downwards positive) over the hold, from 2 ms after the
+/// ramp's end (0.036 s) to the end (the reference's window), m: probes.csv of `out`.
+fn held_deflection(out: &Path) -> f64 {
+    let (h, rows) = read_csv(&out.join("probes.csv"));
+    let (time, w) = (
+        column(&h, &rows, "time"),
+        column(&h, &rows, "centre.displacement_z"),
+    );
+    let hold: Vec<f64> = time
+        .iter()
+        .zip(&w)
+        .filter(|(t, _)| (0.038..=0.048).contains(*t))
+        .map(|(_, w)| -w)
+        .collect();
+    hold.iter().sum::<f64>() / hold.len() as f64
+}
+
 /// The clamped plate (scenes/kirchhoff_plate.toml, N = 10, M = 3) under a pressure ramped over
 /// about eight periods and held: the mean of the centre's deflection over the hold against
 /// Kirchhoff's w = alpha q a^4 / D (validation/kirchhoff_plate/reference.toml: alpha = 0.00126,
@@ -42,19 +59,7 @@ fn clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
     for np in [1, 3] {
         let out = workdir(&format!("loads_plate_np{np}")).join("out");
         run_ok(np, &scene, &out);
-        let (h, rows) = read_csv(&out.join("probes.csv"));
-        let (time, w) = (
-            column(&h, &rows, "time"),
-            column(&h, &rows, "centre.displacement_z"),
-        );
-        // The hold: from 2 ms after the ramp's end (0.036 s) to the end (the reference's window).
-        let hold: Vec<f64> = time
-            .iter()
-            .zip(&w)
-            .filter(|(t, _)| (0.038..=0.048).contains(*t))
-            .map(|(_, w)| -w)
-            .collect();
-        let mean = hold.iter().sum::<f64>() / hold.len() as f64;
+        let mean = held_deflection(&out);
         let err = mean / want - 1.0;
         assert!(
             err.abs() < 0.03,
@@ -109,18 +114,7 @@ fn implicit_clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
     for np in [1, 3] {
         let out = dir.join(format!("np{np}"));
         run_ok(np, &scene, &out);
-        let (h, rows) = read_csv(&out.join("probes.csv"));
-        let (time, w) = (
-            column(&h, &rows, "time"),
-            column(&h, &rows, "centre.displacement_z"),
-        );
-        let hold: Vec<f64> = time
-            .iter()
-            .zip(&w)
-            .filter(|(t, _)| (0.038..=0.048).contains(*t))
-            .map(|(_, w)| -w)
-            .collect();
-        let mean = hold.iter().sum::<f64>() / hold.len() as f64;
+        let mean = held_deflection(&out);
         let err = mean / want - 1.0;
         assert!(
             err.abs() < 0.03,

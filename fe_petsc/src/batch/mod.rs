@@ -252,6 +252,24 @@ fn aligned_frame() {
     std::hint::black_box(&mut line);
 }
 
+/// The kernel's files, declared in each width's module (which names the lane types `F`, `M`
+/// and `LANES` they are compiled on).
+macro_rules! kernel_files {
+    () => {
+        #[path = "hex.rs"]
+        pub mod hex;
+        #[path = "hourglass.rs"]
+        mod hourglass;
+        #[path = "law.rs"]
+        mod law;
+        #[path = "modes.rs"]
+        mod modes;
+        #[path = "pointwise.rs"]
+        mod pointwise;
+        pub use hex::LaneGroup;
+    };
+}
+
 /// The kernel on one lane (`fixed.rs`): one element at a time, for the baseline x86-64 (no
 /// vector instructions to gain from).
 #[path = "."]
@@ -261,17 +279,7 @@ pub mod w1 {
     use crate::hex::HexControls;
     use crate::material::Material;
 
-    #[path = "hex.rs"]
-    pub mod hex;
-    #[path = "hourglass.rs"]
-    mod hourglass;
-    #[path = "law.rs"]
-    mod law;
-    #[path = "modes.rs"]
-    mod modes;
-    #[path = "pointwise.rs"]
-    mod pointwise;
-    pub use hex::LaneGroup;
+    kernel_files!();
 
     /// [`super::Batch::update`] for one lane.
     #[inline]
@@ -306,17 +314,7 @@ pub mod w4 {
     use crate::hex::HexControls;
     use crate::material::Material;
 
-    #[path = "hex.rs"]
-    pub mod hex;
-    #[path = "hourglass.rs"]
-    mod hourglass;
-    #[path = "law.rs"]
-    mod law;
-    #[path = "modes.rs"]
-    mod modes;
-    #[path = "pointwise.rs"]
-    mod pointwise;
-    pub use hex::LaneGroup;
+    kernel_files!();
 
     /// [`super::Batch::update`] for four lanes: the AVX2 build when the CPU has AVX2, the
     /// baseline build otherwise.
@@ -393,17 +391,7 @@ pub mod w8 {
     use crate::hex::HexControls;
     use crate::material::Material;
 
-    #[path = "hex.rs"]
-    pub mod hex;
-    #[path = "hourglass.rs"]
-    mod hourglass;
-    #[path = "law.rs"]
-    mod law;
-    #[path = "modes.rs"]
-    mod modes;
-    #[path = "pointwise.rs"]
-    mod pointwise;
-    pub use hex::LaneGroup;
+    kernel_files!();
 
     /// [`super::Batch::update`] for eight lanes. Panics on a CPU without AVX-512F: the element
     /// loop takes this width only where [`super::widest`] found it.
