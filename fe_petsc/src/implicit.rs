@@ -437,6 +437,15 @@ impl ImplicitFe {
         Ok(())
     }
 
+    /// After a restart: the pressure loads at the restored positions and time and gravity at
+    /// that time, as the step that wrote the checkpoint left them (collective).
+    pub fn refresh_after_restart(&mut self, exchange: &mut NodeExchange) -> Result<(), StepError> {
+        self.fe.refresh_after_restart(exchange)?;
+        self.gravity = self.fe.gravity_at(self.fe.time);
+        self.gravity_n = self.gravity;
+        Ok(())
+    }
+
     /// The force a node's constraint applies: (I - P)(m (a - g) - f).
     #[inline]
     fn constraint_force(&self, n: usize, a: [f64; 3], f: [f64; 3]) -> [f64; 3] {

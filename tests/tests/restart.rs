@@ -624,3 +624,49 @@ fn pressure_load_run_stopped_mid_ramp_and_restarted_ends_bit_identical_at_np_2()
     std::fs::write(&scene, text).unwrap();
     stop_and_restart_in(&dir, &scene, 2, 40, &[]);
 }
+
+#[test]
+fn implicit_run_with_a_pressure_load_stopped_and_restarted_continues() {
+    // The clamped plate under its ramped pressure in implicit mode (dt = 1 ms, 48 steps): the
+    // restarted run takes the load on the faces at the restored positions and time, and its
+    // work continues in external_work. A restarted implicit run assembles a fresh tangent, so
+    // its Newton iterates differ from the run without a stop at the Newton tolerance (see
+    // `implicit_run_checkpointed_on_3_ranks_continues_on_2`): limit 1e-6 of each column's
+    // largest value for the energies, the work and the probe.
+    let dir = workdir("restart_implicit_load");
+    let text = std::fs::read_to_string(root().join("scenes/kirchhoff_plate.toml"))
+        .unwrap()
+        .replace(
+            "end_time = 0.048\n",
+            "end_time = 0.048\nmode = \"implicit\"\ndt = 1.0e-3\n",
+        )
+        .replace(
+            "\"../meshes/",
+            &format!("\"{}/", root().join("meshes").display()),
+        );
+    assert!(
+        text.contains("mode = \"implicit\""),
+        "the plate scene's [run]"
+    );
+    let scene = dir.join("plate_implicit.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (a, b) = (dir.join("A"), dir.join("B"));
+    run_ok(1, &scene, &a);
+    stop_after_rows(1, &scene, &b, 20, &[]);
+    restart_ok(1, &scene, &b, &[]);
+    let compared = ["kinetic_energy", "internal_energy", "external_work", "time"];
+    for f in ["history.csv", "probes.csv"] {
+        let scale = |name: &str, largest: f64| {
+            (f == "probes.csv" || compared.contains(&name)).then_some(largest)
+        };
+        let diffs = column_differences(&a.join(f), &b.join(f), &scale)
+            .unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(diffs.len() >= 2, "{f}: columns compared: {diffs:?}");
+        for (name, d) in diffs {
+            assert!(
+                d <= 1e-6,
+                "implicit plate stopped and continued: {f} column {name} differs from the run without a stop by {d:e} of its largest value (limit 1e-6: 100 x the Newton tolerance)"
+            );
+        }
+    }
+}

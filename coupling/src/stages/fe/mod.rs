@@ -192,11 +192,12 @@ impl Fe {
     /// After a restart: the time-dependent loads and gravity at the restored time
     /// (collective).
     fn refresh_after_restart(&mut self) -> Result<(), String> {
-        if let Integrator::Explicit(fe) = &mut self.integrator {
-            fe.refresh_after_restart(&mut self.mesh.exchange)
-                .map_err(|e| format!("checkpoint: {e}"))?;
+        let ex = &mut self.mesh.exchange;
+        match &mut self.integrator {
+            Integrator::Explicit(fe) => fe.refresh_after_restart(ex),
+            Integrator::Implicit(imp) => imp.refresh_after_restart(ex),
         }
-        Ok(())
+        .map_err(|e| format!("checkpoint: {e}"))
     }
 
     /// Sets the clock (with a fixed step the driver keeps t = step dt exactly).
