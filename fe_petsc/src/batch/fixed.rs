@@ -237,8 +237,7 @@ macro_rules! fixed_lanes {
                 $M(self.0.map(f64::is_finite))
             }
 
-            /// `self * b + c`, rounded twice as the scalar kernel's `a * b + c` (the eight-lane build
-            /// fuses it: see `lanes8`).
+            /// `self * b + c`, rounded twice as `a * b + c` is (and as the eight lanes' is).
             #[inline(always)]
             pub fn mul_add(self, b: $F, c: $F) -> $F {
                 self * b + c
