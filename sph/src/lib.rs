@@ -47,6 +47,8 @@ pub mod particles;
 pub mod passes;
 pub mod periodic;
 pub mod serial;
+pub mod solid;
+pub mod strength;
 
 pub use diagnostics::{energies, gravity_power, interpolate, Energies};
 pub use eos::Eos;
@@ -64,3 +66,5 @@ pub use passes::{
 };
 pub use periodic::{periodic_images, Periodic};
 pub use serial::SerialSim;
+pub use solid::{ArtificialStress, SolidSim, Solids};
+pub use strength::StressModel;
