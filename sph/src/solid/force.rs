@@ -82,24 +82,28 @@ fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64
 }
 
 /// Force pass with the stress tensor, over every pair (solids and fluids: a fluid's stress is
-/// -p I). With T_ab = sigma_a/rho_a^2 + sigma_b/rho_b^2 + (R_a + R_b) f_ab^n - Pi_ab I
-/// (m^5/(kg s^2)) and g = grad_a W_ab = (dW/dr / r)(x_a - x_b), 1/m^4:
+/// -p I and its B = I). With g = grad_a W_ab = (dW/dr / r)(x_a - x_b), 1/m^4, B_a the
+/// kernel-gradient correction (`Solids::correction`, Randles & Libersky 1996) and
 ///
 /// ```text
-/// f_a  += m_a m_b T_ab g,   f_b -= the same                   N    (Libersky & Petschek 1991;
-///                                                                   Gray et al. 2001, eq. 10)
+/// T_ab g = (sigma_a/rho_a^2 B_a + sigma_b/rho_b^2 B_b) g + (R_a + R_b) f_ab^n g - Pi_ab g
+/// f_a  += m_a m_b T_ab g,   f_b -= the same                   N    (Gray et al. 2001, eq. 10,
+///                                                                   with Bonet & Lok, CMAME 180
+///                                                                   (1999) 97, eq. 50's B g)
 /// de_a += -1/2 m_b v^_ab . (T_ab g),  de_b += -1/2 m_a (same)  W/kg
 /// ```
 ///
-/// For a fluid pair T = -(p_a/rho_a^2 + p_b/rho_b^2 + Pi) I and these are the fluid pass's
-/// Monaghan (1992) eqs. 3.3-3.4. Equal and opposite forces conserve momentum; the two halves of
-/// -m_a m_b v^_ab . (T g) given to a and b are what the forces take from the kinetic energy
-/// (d/dt sum 1/2 m v^2 = sum_pairs m_a m_b v^_ab . T g at v = v^), so kinetic + sum m e is
-/// conserved as in the fluid pass. The momentum form uses the uncorrected kernel gradient
-/// (the correction would break the antisymmetry that conserves momentum). Sets `f` and `de`
-/// of EVERY entry (plain sums in pair order, see the module doc; the caller adds ghosts' to
-/// owners). Returns the work rate: `pressure` from the stress and artificial stress,
-/// `viscosity` from Pi.
+/// (T in m^5/(kg s^2)). The pair term is the same tensor applied to g for a and to -g for b,
+/// so the forces are equal and opposite (momentum conserved) whatever B. B makes a linear
+/// stress field's divergence exact at the free surface too; without it (B = I, Gray et al.'s
+/// form) a surface particle's truncated kernel carries only part of its stress, and a bent
+/// plate is as stiff as one (n_y - 1) particle spacings thick rather than n_y. For a fluid pair
+/// T g = -(p_a/rho_a^2 + p_b/rho_b^2 + Pi) g: the fluid pass's Monaghan (1992) eqs. 3.3-3.4.
+/// The two halves of -m_a m_b v^_ab . (T g) given to a and b are what the forces take from the
+/// kinetic energy (d/dt sum 1/2 m v^2 = sum_pairs m_a m_b v^_ab . T g at v = v^), so kinetic +
+/// sum m e is conserved as in the fluid pass. Sets `f` and `de` of EVERY entry (plain sums in
+/// pair order, see the module doc; the caller adds ghosts' to owners). Returns the work rate:
+/// `pressure` from the stress and artificial stress, `viscosity` from Pi.
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
@@ -109,11 +113,13 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
+    // sigma_a / rho_a^2 B_a (B = I for fluids)
     let sr: Vec<Mat3> = (0..n)
         .map(|i| {
             let t = stress_of(p, s, i);
             let r2 = 1.0 / (p.rho[i] * p.rho[i]);
-            std::array::from_fn(|a| std::array::from_fn(|b| t[a][b] * r2))
+            let sb = mul(&t, &s.correction[i]);
+            std::array::from_fn(|a| std::array::from_fn(|b| sb[a][b] * r2))
         })
         .collect();
     let rt: Vec<Mat3> = match art {
@@ -151,6 +157,7 @@ pub fn stress_force_pass(
             }
             None => 0.0,
         };
+        // T g without the viscous part
         let mut tg = [0.0; 3];
         for a in 0..3 {
             for b in 0..3 {

@@ -59,6 +59,10 @@ pub struct Solids {
     pub shape_sum: Vec<Mat3>,
     /// The corrected velocity gradient L = dv/dx (`L[k][l]` = dv_k/dx_l), 1/s (owned).
     pub grad_v: Vec<Mat3>,
+    /// The kernel-gradient correction B = shape_sum^-T (the identity for fluids and where
+    /// `shape_sum` is singular), set on owners by `settle_gradients`, sent to ghosts: the force
+    /// pass uses B grad W (Bonet & Lok 1999).
+    pub correction: Vec<Mat3>,
 }
 
 impl Solids {
@@ -103,11 +107,13 @@ impl Solids {
         self.grad_sum.resize(n, [[0.0; 3]; 3]);
         self.shape_sum.resize(n, [[0.0; 3]; 3]);
         self.grad_v.resize(n, [[0.0; 3]; 3]);
+        self.correction.resize(n, tensor::IDENTITY);
     }
 
     /// Copies owner `o`'s stress and history to entry `g` (a ghost copy of it).
     pub fn copy_to_ghost(&mut self, g: usize, o: usize) {
         self.stress[g] = self.stress[o];
+        self.correction[g] = self.correction[o];
         let k = self.stride;
         self.state.copy_within(o * k..(o + 1) * k, g * k);
     }
@@ -188,16 +194,25 @@ pub fn velocity_gradient_pass(
 ///
 /// For a linear field v = G x, v_b - v_a = G (x_b - x_a), so grad_sum_a = G shape_sum_a and
 /// L_a = G exactly, at the free surface too (where the uncorrected sum is short of neighbours).
-/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum.
+/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum. Also sets
+/// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
+/// B grad_a W is the corrected kernel gradient.
 pub fn settle_gradients(p: &Particles, s: &mut Solids) {
+    s.resize(p.len());
     for i in 0..p.n_owned {
         if !s.is_solid(p.mat[i]) {
             continue;
         }
-        s.grad_v[i] = match inverse(&s.shape_sum[i], CORRECTION_SINGULAR) {
-            Some(inv) => mul(&s.grad_sum[i], &inv),
-            None => s.grad_sum[i],
-        };
+        match inverse(&s.shape_sum[i], CORRECTION_SINGULAR) {
+            Some(inv) => {
+                s.grad_v[i] = mul(&s.grad_sum[i], &inv);
+                s.correction[i] = tensor::transpose(&inv);
+            }
+            None => {
+                s.grad_v[i] = s.grad_sum[i];
+                s.correction[i] = tensor::IDENTITY;
+            }
+        }
     }
 }
 

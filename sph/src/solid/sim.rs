@@ -67,7 +67,7 @@ impl SolidSim {
         work
     }
 
-    /// Images, pairs, density pass, (with `dt`) the velocity gradient and stress update, then
+    /// Images, pairs, density pass, the velocity gradient, (with `dt`) the stress update, then
     /// the stress force pass and gravity.
     fn evaluate(&mut self, dt: Option<f64>) -> PairWork {
         let sim = &mut self.sim;
@@ -87,18 +87,16 @@ impl SolidSim {
         p.settle_density(false);
         update_eos(p, params);
         let s = &mut self.solids;
+        // the gradient pass also gives the correction B of the force pass (set-up included)
+        velocity_gradient_pass(&pairs, p, s, &params.smoothing_kernel());
+        for (g, &o) in owners.iter().enumerate() {
+            s.fold_ghost(p.n_owned + g, o);
+        }
+        settle_gradients(p, s);
         match dt {
-            Some(dt) => {
-                velocity_gradient_pass(&pairs, p, s, &params.smoothing_kernel());
-                for (g, &o) in owners.iter().enumerate() {
-                    s.fold_ghost(p.n_owned + g, o);
-                }
-                settle_gradients(p, s);
-                update_stress(p, s, dt);
-            }
+            Some(dt) => update_stress(p, s, dt),
             None => solid_pressure(p, s),
         }
-        s.resize(p.len());
         for (g, &o) in owners.iter().enumerate() {
             let st = p.eos_state(o);
             p.set_eos_state(p.n_owned + g, &st);
