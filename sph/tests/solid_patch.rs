@@ -105,8 +105,8 @@ fn linear_velocity_gives_exact_gradient_and_stress_rate() {
         let expect: [f64; 6] = std::array::from_fn(|c| sigma0[c] + dt * jau[c] + inc[c]);
         let scale = 2.0 * elastic().mu * 1.0 * dt; // the size of the increment, Pa
         for i in 0..p.n_owned {
-            for c in 0..6 {
-                let e = (s.stress[i][c] - expect[c]).abs();
+            for (c, (got, want)) in s.stress[i].iter().zip(&expect).enumerate() {
+                let e = (got - want).abs();
                 // the increment exact to 1e-10 of its size (plus the prestress's round-off)
                 assert!(
                     e < 1e-10 * scale + 1e-15 * 2.0e4,
@@ -147,8 +147,8 @@ fn stress_force_pass_conserves_momentum_and_energy() {
     let work = stress_force_pass(&pr, &mut p, &s, &params, Some(&art));
     let (mut fsum, mut fabs, mut ke_rate, mut ie_rate, mut scale) = ([0.0; 3], 0.0, 0.0, 0.0, 0.0);
     for i in 0..p.n_owned {
-        for c in 0..3 {
-            fsum[c] += p.f[i][c];
+        for (c, sum) in fsum.iter_mut().enumerate() {
+            *sum += p.f[i][c];
             fabs += p.f[i][c].abs();
             ke_rate += p.vhat[i][c] * p.f[i][c];
             scale += (p.vhat[i][c] * p.f[i][c]).abs();

@@ -53,7 +53,7 @@ pub fn inverse(a: &Mat3, tol: f64) -> Option<Mat3> {
     };
     let det = a[0][0] * c(0, 0) + a[0][1] * c(0, 1) + a[0][2] * c(0, 2);
     let scale = a.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
-    if !(det.abs() > tol * scale * scale * scale) {
+    if det.is_nan() || det.abs() <= tol * scale * scale * scale {
         return None;
     }
     // inverse = adjugate / det, adjugate = cofactor matrix transposed
@@ -89,16 +89,14 @@ pub fn symmetric_eigen(a: &Mat3) -> ([f64; 3], Mat3) {
             let c = 1.0 / (t * t + 1.0).sqrt();
             let s = t * c;
             // a <- J^T a J with J the rotation in the (p, r) plane
-            for k in 0..3 {
-                let (akp, akr) = (a[k][p], a[k][r]);
-                a[k][p] = c * akp - s * akr;
-                a[k][r] = s * akp + c * akr;
+            for row in a.iter_mut() {
+                let (akp, akr) = (row[p], row[r]);
+                row[p] = c * akp - s * akr;
+                row[r] = s * akp + c * akr;
             }
-            for k in 0..3 {
-                let (apk, ark) = (a[p][k], a[r][k]);
-                a[p][k] = c * apk - s * ark;
-                a[r][k] = s * apk + c * ark;
-            }
+            let (ap, ar) = (a[p], a[r]);
+            a[p] = std::array::from_fn(|k| c * ap[k] - s * ar[k]);
+            a[r] = std::array::from_fn(|k| s * ap[k] + c * ar[k]);
             for row in q.iter_mut() {
                 let (qp, qr) = (row[p], row[r]);
                 row[p] = c * qp - s * qr;
