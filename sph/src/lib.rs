@@ -30,6 +30,12 @@
 //! `Profile::setup_evaluates_density_and_eos`. The stable step is the minimum of `stable_dt`
 //! over ranks. `energies` and `gravity_power` give per-rank sums for the energy balance.
 //!
+//! Solid particles (`solid`, `strength`): a particle whose material has a `StressModel`
+//! carries the Cauchy stress; between steps 4 and 6 the step adds the velocity-gradient pass
+//! (ghost sums to owners), the stress update, and the stress to the ghosts, and step 6 is
+//! `solid::stress_force_pass` (see the `solid` module doc; `SolidSim` is the serial sequence).
+//! A run without solids never calls them.
+//!
 //! Two profiles: `Profile::Standard` (textbook forms, second-order leapfrog) and
 //! `Profile::Liggghts`, which reproduces LIGGGHTS-PUBLIC 3.8.0's `sph/artVisc/tensCorr` pair
 //! style and `nve/sph` integrator to round-off (checked by `tests/liggghts.rs`).
@@ -47,6 +53,8 @@ pub mod particles;
 pub mod passes;
 pub mod periodic;
 pub mod serial;
+pub mod solid;
+pub mod strength;
 
 pub use diagnostics::{energies, gravity_power, interpolate, Energies};
 pub use eos::Eos;
@@ -64,3 +72,5 @@ pub use passes::{
 };
 pub use periodic::{periodic_images, Periodic};
 pub use serial::SerialSim;
+pub use solid::{ArtificialStress, SolidSim, Solids};
+pub use strength::StressModel;

@@ -24,9 +24,9 @@ pub struct SerialSim {
     /// Pairs computed in the last evaluation.
     pub n_pairs: usize,
     /// Owner of each ghost entry (index `i - n_owned`).
-    ghost_owner: Vec<usize>,
+    pub(crate) ghost_owner: Vec<usize>,
     /// The grids of the pair sums.
-    grids: PassGrids,
+    pub(crate) grids: PassGrids,
 }
 
 impl SerialSim {
@@ -103,7 +103,7 @@ impl SerialSim {
     }
 
     /// Periodic images of the owned particles within 2 h_max of the box.
-    fn make_images(&mut self) {
+    pub(crate) fn make_images(&mut self) {
         self.parts.truncate_ghosts();
         self.ghost_owner.clear();
         let Some(per) = self.params.periodic else {

@@ -2,6 +2,8 @@
 //! Flood 2014) so that the tests need no external crate and keep fixed seeds.
 #![allow(dead_code)]
 
+pub mod elastic;
+
 /// SplitMix64.
 pub struct Rng(pub u64);
 

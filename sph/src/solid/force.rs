@@ -1,0 +1,188 @@
+//! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
+use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
+use super::Solids;
+use crate::params::Params;
+use crate::particles::Particles;
+use crate::passes::PairWork;
+
+/// Monaghan's artificial stress against the tensile instability of solids (Gray, Monaghan &
+/// Swift, CMAME 190 (2001) 6641, §3; Monaghan, J. Comput. Phys. 159 (2000) 290).
+///
+/// Per particle, in the principal frame of sigma_a (sigma_a = Q diag(s_1, s_2, s_3) Q^T):
+///
+/// ```text
+/// R'_kk = -epsilon s_k / rho_a^2   if s_k > 0 (tension), else 0     (Gray et al. 2001, eq. 25)
+/// R_a   = Q diag(R'_11, R'_22, R'_33) Q^T                            Pa m^6/kg^2 = m^5/(kg s^2)
+/// ```
+///
+/// and per pair the term (R_a + R_b) f_ab^n added to sigma_a/rho_a^2 + sigma_b/rho_b^2, with
+/// f_ab = W(r_ab, h) / W(delta_p, h) (dimensionless, 1 at the initial spacing delta_p, so the
+/// correction acts where particles close up beyond the lattice: a repulsion that stops the
+/// clumping of particles in tension). A fluid's stress is -p I: its R is epsilon p/rho^2 I
+/// where p < 0 (Monaghan 2000's correction without the compression term).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArtificialStress {
+    /// epsilon (Gray et al. 2001 use 0.3).
+    pub epsilon: f64,
+    /// Exponent n of f_ab^n (Gray et al. 2001: n = 4).
+    pub n: i32,
+    /// The initial particle spacing delta_p, m.
+    pub delta_p: f64,
+}
+
+/// Gray et al. (2001)'s epsilon of the artificial stress.
+pub const ARTIFICIAL_STRESS_EPSILON: f64 = 0.3;
+/// Gray et al. (2001)'s exponent n of the artificial stress.
+pub const ARTIFICIAL_STRESS_EXPONENT: i32 = 4;
+
+impl ArtificialStress {
+    /// epsilon = 0.3, n = 4 (Gray et al. 2001) at the spacing `delta_p`, m.
+    pub fn new(delta_p: f64) -> Self {
+        Self {
+            epsilon: ARTIFICIAL_STRESS_EPSILON,
+            n: ARTIFICIAL_STRESS_EXPONENT,
+            delta_p,
+        }
+    }
+
+    /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3).
+    pub fn tensor(&self, sigma: &[f64; 6], rho: f64) -> Mat3 {
+        let (lam, q) = symmetric_eigen(&from_voigt(sigma));
+        let scale = -self.epsilon / (rho * rho);
+        let d: Mat3 = std::array::from_fn(|k| {
+            std::array::from_fn(|l| if k == l { scale * lam[k].max(0.0) } else { 0.0 })
+        });
+        mul(&mul(&q, &d), &transpose(&q))
+    }
+}
+
+/// The stress of entry `i` as a matrix: a solid's sigma, a fluid's -p I, Pa.
+fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
+    if s.is_solid(p.mat[i]) {
+        from_voigt(&s.stress[i])
+    } else {
+        let q = -p.p[i];
+        [[q, 0.0, 0.0], [0.0, q, 0.0], [0.0, 0.0, q]]
+    }
+}
+
+/// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
+/// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
+/// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
+fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64, r2: f64) -> f64 {
+    match params.viscosity {
+        Some(av) => {
+            let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
+            let c_mean = 0.5 * (p.c[i] + p.c[j]);
+            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
+            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+        }
+        None => 0.0,
+    }
+}
+
+/// Force pass with the stress tensor, over every pair (solids and fluids: a fluid's stress is
+/// -p I and its B = I). With g = grad_a W_ab = (dW/dr / r)(x_a - x_b), 1/m^4, B_a the
+/// kernel-gradient correction (`Solids::correction`, Randles & Libersky 1996) and
+///
+/// ```text
+/// T_ab g = (sigma_a/rho_a^2 B_a + sigma_b/rho_b^2 B_b) g + (R_a + R_b) f_ab^n g - Pi_ab g
+/// f_a  += m_a m_b T_ab g,   f_b -= the same                   N    (Gray et al. 2001, eq. 10,
+///                                                                   with Bonet & Lok, CMAME 180
+///                                                                   (1999) 97, eq. 50's B g)
+/// de_a += -1/2 m_b v^_ab . (T_ab g),  de_b += -1/2 m_a (same)  W/kg
+/// ```
+///
+/// (T in m^5/(kg s^2)). The pair term is the same tensor applied to g for a and to -g for b,
+/// so the forces are equal and opposite (momentum conserved) whatever B. B makes a linear
+/// stress field's divergence exact at the free surface too; without it (B = I, Gray et al.'s
+/// form) a surface particle's truncated kernel carries only part of its stress, and a bent
+/// plate is as stiff as one (n_y - 1) particle spacings thick rather than n_y. For a fluid pair
+/// T g = -(p_a/rho_a^2 + p_b/rho_b^2 + Pi) g: the fluid pass's Monaghan (1992) eqs. 3.3-3.4.
+/// The two halves of -m_a m_b v^_ab . (T g) given to a and b are what the forces take from the
+/// kinetic energy (d/dt sum 1/2 m v^2 = sum_pairs m_a m_b v^_ab . T g at v = v^), so kinetic +
+/// sum m e is conserved as in the fluid pass. Sets `f` and `de` of EVERY entry (plain sums in
+/// pair order, see the module doc; the caller adds ghosts' to owners). Returns the work rate:
+/// `pressure` from the stress and artificial stress, `viscosity` from Pi.
+pub fn stress_force_pass(
+    pairs: &[(u32, u32)],
+    p: &mut Particles,
+    s: &Solids,
+    params: &Params,
+    art: Option<&ArtificialStress>,
+) -> PairWork {
+    let n = p.len();
+    let k = params.smoothing_kernel();
+    // sigma_a / rho_a^2 B_a (B = I for fluids)
+    let sr: Vec<Mat3> = (0..n)
+        .map(|i| {
+            let t = stress_of(p, s, i);
+            let r2 = 1.0 / (p.rho[i] * p.rho[i]);
+            let sb = mul(&t, &s.correction[i]);
+            std::array::from_fn(|a| std::array::from_fn(|b| sb[a][b] * r2))
+        })
+        .collect();
+    let rt: Vec<Mat3> = match art {
+        Some(a) => (0..n)
+            .map(|i| a.tensor(&super::tensor::to_voigt(&stress_of(p, s, i)), p.rho[i]))
+            .collect(),
+        None => Vec::new(),
+    };
+    let mut f = vec![[0.0; 3]; n];
+    let mut de = vec![0.0; n];
+    let mut work = PairWork::default();
+    for &(i, j) in pairs {
+        let (i, j) = (i as usize, j as usize);
+        let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let r = r2.sqrt();
+        if r == 0.0 {
+            continue;
+        }
+        let h = 0.5 * (p.h[i] + p.h[j]);
+        let gr = k.dw_dr(r, h) / r;
+        let g = [gr * d[0], gr * d[1], gr * d[2]];
+        let dv: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
+        let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+        let pi = viscosity(params, p, i, j, h, vr, r2);
+        // f_ab^n = (W(r)/W(delta_p))^n, 0 without artificial stress
+        let fn_ab = match art {
+            Some(a) => {
+                let w_dp = k.w(a.delta_p, h);
+                if w_dp > 0.0 {
+                    (k.w(r, h) / w_dp).powi(a.n)
+                } else {
+                    0.0
+                }
+            }
+            None => 0.0,
+        };
+        // T g without the viscous part
+        let mut tg = [0.0; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                let mut t = sr[i][a][b] + sr[j][a][b];
+                if fn_ab != 0.0 {
+                    t += (rt[i][a][b] + rt[j][a][b]) * fn_ab;
+                }
+                tg[a] += t * g[b];
+            }
+        }
+        let mm = p.m[i] * p.m[j];
+        // the viscous part -Pi I g, kept apart for the work split
+        let tv = [-pi * g[0], -pi * g[1], -pi * g[2]];
+        let full = [tg[0] + tv[0], tg[1] + tv[1], tg[2] + tv[2]];
+        for c in 0..3 {
+            f[i][c] += mm * full[c];
+            f[j][c] -= mm * full[c];
+        }
+        let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
+        de[i] -= 0.5 * p.m[j] * e;
+        de[j] -= 0.5 * p.m[i] * e;
+        work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
+        work.viscosity += mm * pi * gr * vr;
+    }
+    p.f = f;
+    p.de = de;
+    work
+}

@@ -1,0 +1,116 @@
+//! A complete single-box run with solid particles: the serial reference sequence of one step
+//! with the solid passes (see the parent module), over `SerialSim`'s particles and periodic
+//! images.
+use super::{
+    settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
+    ArtificialStress, Solids,
+};
+use crate::exact::exact_pass;
+use crate::integrate::{first_half, second_half, setup_state};
+use crate::neighbour::pairs;
+use crate::params::{DensityMode, Params};
+use crate::particles::Particles;
+use crate::passes::{add_gravity, density_pass, update_eos, PairWork};
+use crate::serial::SerialSim;
+use crate::strength::StressModel;
+use std::sync::Arc;
+
+/// A serial SPH run with solids (the standard profile, continuity density). `params.eos` must
+/// hold an entry for every material index; a solid's is not used (its p and c come from its
+/// stress and model). Fluids in the same run see the stress pass with sigma = -p I (the same
+/// physics as `force_pass`, other round-off; a run without solids uses `SerialSim`).
+#[derive(Clone, Debug)]
+pub struct SolidSim {
+    /// The particles, the model, the time and the periodic images.
+    pub sim: SerialSim,
+    /// The solid state beside the particles.
+    pub solids: Solids,
+    /// Monaghan's artificial stress, if any.
+    pub art: Option<ArtificialStress>,
+}
+
+impl SolidSim {
+    /// A run over `parts` (owned entries), with the stress model of each material index
+    /// (`None`: a fluid). Call `setup` before the first `step`.
+    pub fn new(
+        parts: Particles,
+        params: Params,
+        models: Vec<Option<Arc<dyn StressModel>>>,
+        art: Option<ArtificialStress>,
+    ) -> Self {
+        assert_eq!(
+            params.density,
+            DensityMode::Continuity,
+            "solids need continuity"
+        );
+        let sim = SerialSim::new(parts, params);
+        let solids = Solids::new(models, &sim.parts);
+        Self { sim, solids, art }
+    }
+
+    /// The owned particles' state and rates at t = 0 (zero stress unless set before).
+    pub fn setup(&mut self) -> PairWork {
+        setup_state(&mut self.sim.parts, &self.sim.params);
+        solid_pressure(&mut self.sim.parts, &self.solids);
+        self.evaluate(None)
+    }
+
+    /// One step of `dt`, s; returns the pair work rate of its evaluation.
+    pub fn step(&mut self, dt: f64) -> PairWork {
+        first_half(&mut self.sim.parts, dt, &self.sim.params);
+        let work = self.evaluate(Some(dt));
+        second_half(&mut self.sim.parts, dt, &self.sim.params);
+        // second_half ran the EOS on every owned particle: the solids' p, c from their stress
+        solid_pressure(&mut self.sim.parts, &self.solids);
+        self.sim.time += dt;
+        self.sim.steps += 1;
+        work
+    }
+
+    /// Images, pairs, density pass, the velocity gradient, (with `dt`) the stress update, then
+    /// the stress force pass and gravity.
+    fn evaluate(&mut self, dt: Option<f64>) -> PairWork {
+        let sim = &mut self.sim;
+        sim.make_images();
+        let pairs = pairs(&sim.parts, &sim.params.search_options(), |_| true);
+        sim.n_pairs = pairs.len();
+        let (p, params, owners) = (&mut sim.parts, &sim.params, &sim.ghost_owner);
+        exact_pass(
+            &mut sim.grids,
+            |m| *m,
+            |g, m| density_pass(&pairs, p, params, g, m),
+        );
+        for (g, &o) in owners.iter().enumerate() {
+            let s = p.pair_sums(p.n_owned + g);
+            p.add_pair_sums(o, &s);
+        }
+        p.settle_density(false);
+        update_eos(p, params);
+        let s = &mut self.solids;
+        // the gradient pass also gives the correction B of the force pass (set-up included)
+        velocity_gradient_pass(&pairs, p, s, &params.smoothing_kernel());
+        for (g, &o) in owners.iter().enumerate() {
+            s.fold_ghost(p.n_owned + g, o);
+        }
+        settle_gradients(p, s);
+        match dt {
+            Some(dt) => update_stress(p, s, dt),
+            None => solid_pressure(p, s),
+        }
+        for (g, &o) in owners.iter().enumerate() {
+            let st = p.eos_state(o);
+            p.set_eos_state(p.n_owned + g, &st);
+            s.copy_to_ghost(p.n_owned + g, o);
+        }
+        let work = stress_force_pass(&pairs, p, s, params, self.art.as_ref());
+        for (g, &o) in owners.iter().enumerate() {
+            let e = p.n_owned + g;
+            for c in 0..3 {
+                p.f[o][c] += p.f[e][c];
+            }
+            p.de[o] += p.de[e];
+        }
+        add_gravity(p, params);
+        work
+    }
+}

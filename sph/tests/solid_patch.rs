@@ -1,0 +1,199 @@
+//! Patch tests of the solid particles' velocity gradient and stress update, and the
+//! conservation laws of the stress force pass.
+//!
+//! A linear velocity field v = G x must give the exact gradient L = G at every particle, the
+//! free surface included, thanks to the kernel-gradient correction (Randles & Libersky 1996:
+//! sum_b V_b (v_b - v_a) (x) grad W = G sum_b V_b (x_b - x_a) (x) grad W, exactly); the stress
+//! increment of one step is then the analytic dt (C : D + W sigma - sigma W).
+mod common;
+
+use common::elastic::LinearElastic;
+use common::{jittered_lattice, Rng};
+use sph::solid::tensor::{from_voigt, mul, to_voigt, Mat3};
+use sph::solid::{settle_gradients, stress_force_pass, update_stress, velocity_gradient_pass};
+use sph::{
+    pairs, ArtificialStress, ArtificialViscosity, Eos, NewParticle, Params, Particles, Solids,
+    StressModel,
+};
+use std::sync::Arc;
+
+const DX: f64 = 0.01;
+const RHO: f64 = 1000.0;
+
+/// A jittered block of n^3 particles (spacing DX, h = 1.2 DX) moving with v = G x.
+fn block(n: usize, jitter: f64, g: &Mat3, seed: u64) -> Particles {
+    let mut rng = Rng(seed);
+    let mut p = Particles::new();
+    for (k, x) in jittered_lattice(&mut rng, n, DX, [0.0; 3], jitter)
+        .into_iter()
+        .enumerate()
+    {
+        let v = std::array::from_fn(|a| g[a][0] * x[0] + g[a][1] * x[1] + g[a][2] * x[2]);
+        p.push(NewParticle {
+            id: k as u64 + 1,
+            x,
+            v,
+            m: RHO * DX * DX * DX,
+            rho: RHO,
+            e: 0.0,
+            h: 1.2 * DX,
+            mat: 0,
+            fixed: false,
+        });
+    }
+    p
+}
+
+fn params() -> Params {
+    Params::new(vec![Eos::Tait {
+        rho0: RHO,
+        c0: 50.0,
+        gamma: 7.0,
+    }])
+}
+
+fn elastic() -> LinearElastic {
+    LinearElastic::from_bulk_shear(3.25e6, 7.15e5)
+}
+
+fn solids_for(p: &Particles) -> Solids {
+    let m: Arc<dyn StressModel> = Arc::new(elastic());
+    Solids::new(vec![Some(m)], p)
+}
+
+fn max_abs(m: &Mat3) -> f64 {
+    m.iter().flatten().fold(0.0, |s, x| s.max(x.abs()))
+}
+
+/// A general (non-symmetric) gradient: stretch, shear and spin together, 1/s.
+const G: Mat3 = [[0.3, -0.7, 0.2], [0.5, -0.1, 0.4], [-0.6, 0.25, 0.15]];
+
+#[test]
+fn linear_velocity_gives_exact_gradient_and_stress_rate() {
+    for jitter in [0.0, 0.2] {
+        let mut p = block(7, jitter, &G, 7);
+        let params = params();
+        let mut s = solids_for(&p);
+        let pr = pairs(&p, &params.search_options(), |_| true);
+        velocity_gradient_pass(&pr, &p, &mut s, &params.smoothing_kernel());
+        settle_gradients(&p, &mut s);
+        for i in 0..p.n_owned {
+            let err: Mat3 =
+                std::array::from_fn(|a| std::array::from_fn(|b| s.grad_v[i][a][b] - G[a][b]));
+            // the correction is exact for a linear field: only round-off of ~60 terms of size
+            // |G| remains (1e-10 relative, the brief's patch-test tolerance)
+            assert!(
+                max_abs(&err) < 1e-10 * max_abs(&G),
+                "particle {i}: L - G = {err:?}"
+            );
+        }
+        // one stress update from a prestress sigma0: dt (C : D + W sigma0 - sigma0 W)
+        let sigma0 = [1.0e4, -2.0e4, 5.0e3, 3.0e3, -1.0e3, 2.0e3];
+        for st in s.stress.iter_mut() {
+            *st = sigma0;
+        }
+        let dt = 1e-5;
+        update_stress(&mut p, &mut s, dt);
+        let d = to_voigt(&G);
+        let w: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| 0.5 * (G[a][b] - G[b][a])));
+        let sg = from_voigt(&sigma0);
+        let (ws, sw) = (mul(&w, &sg), mul(&sg, &w));
+        let jau = to_voigt(&std::array::from_fn(|a| {
+            std::array::from_fn(|b| ws[a][b] - sw[a][b])
+        }));
+        let inc = elastic().increment(&d.map(|x| x * dt));
+        let expect: [f64; 6] = std::array::from_fn(|c| sigma0[c] + dt * jau[c] + inc[c]);
+        let scale = 2.0 * elastic().mu * 1.0 * dt; // the size of the increment, Pa
+        for i in 0..p.n_owned {
+            for (c, (got, want)) in s.stress[i].iter().zip(&expect).enumerate() {
+                let e = (got - want).abs();
+                // the increment exact to 1e-10 of its size (plus the prestress's round-off)
+                assert!(
+                    e < 1e-10 * scale + 1e-15 * 2.0e4,
+                    "particle {i} comp {c}: {e}"
+                );
+            }
+            let tr = expect[0] + expect[1] + expect[2];
+            assert!((p.p[i] + tr / 3.0).abs() < 1e-9, "p = -tr(sigma)/3");
+        }
+    }
+}
+
+/// Equal and opposite pair forces conserve momentum, and the energy rate given to the particles
+/// is what the forces take from the kinetic energy: sum m de = -sum v^ . f (to round-off), with
+/// random stresses (tension and compression), the kernel-gradient correction, artificial
+/// stress and viscosity.
+#[test]
+fn stress_force_pass_conserves_momentum_and_energy() {
+    let zero = [[0.0; 3]; 3];
+    let mut p = block(6, 0.2, &zero, 11);
+    let mut rng = Rng(5);
+    for i in 0..p.n_owned {
+        p.vhat[i] = [0, 1, 2].map(|_| rng.range(-1.0, 1.0));
+        p.rho[i] = rng.range(990.0, 1010.0);
+        p.c[i] = 60.0;
+    }
+    let mut params = params();
+    params.viscosity = Some(ArtificialViscosity::new(1.0, 2.0));
+    let mut s = solids_for(&p);
+    for st in s.stress.iter_mut() {
+        *st = [0; 6].map(|_| rng.range(-1.0e5, 1.0e5));
+    }
+    let pr = pairs(&p, &params.search_options(), |_| true);
+    // the kernel-gradient correction B of each particle (not the identity on a jittered block)
+    velocity_gradient_pass(&pr, &p, &mut s, &params.smoothing_kernel());
+    settle_gradients(&p, &mut s);
+    let art = ArtificialStress::new(DX);
+    let work = stress_force_pass(&pr, &mut p, &s, &params, Some(&art));
+    let (mut fsum, mut fabs, mut ke_rate, mut ie_rate, mut scale) = ([0.0; 3], 0.0, 0.0, 0.0, 0.0);
+    for i in 0..p.n_owned {
+        for (c, sum) in fsum.iter_mut().enumerate() {
+            *sum += p.f[i][c];
+            fabs += p.f[i][c].abs();
+            ke_rate += p.vhat[i][c] * p.f[i][c];
+            scale += (p.vhat[i][c] * p.f[i][c]).abs();
+        }
+        ie_rate += p.m[i] * p.de[i];
+    }
+    for c in 0..3 {
+        // round-off of ~10^4 terms: 1e-13 of the sum of magnitudes
+        assert!(fsum[c].abs() < 1e-13 * fabs, "momentum: {fsum:?} vs {fabs}");
+    }
+    assert!(
+        (ke_rate + ie_rate).abs() < 1e-12 * scale,
+        "energy: {ke_rate} + {ie_rate}"
+    );
+    assert!(
+        (work.total() - ie_rate).abs() < 1e-12 * scale,
+        "work = sum m de"
+    );
+    assert!(work.viscosity >= 0.0, "viscosity only dissipates");
+}
+
+/// The artificial stress tensor of a uniaxial tension sigma_xx = s > 0 rotated by an angle:
+/// R = -epsilon s / rho^2 n n^T (n the tension's direction), zero for compression (Gray et al.
+/// 2001, eq. 25).
+#[test]
+fn artificial_stress_acts_on_tension_only() {
+    let art = ArtificialStress::new(DX);
+    let (s, th) = (2.0e5, 0.3f64);
+    let n = [th.cos(), th.sin(), 0.0];
+    let sig: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| s * n[a] * n[b]));
+    let r = art.tensor(&to_voigt(&sig), RHO);
+    let k = -art.epsilon * s / (RHO * RHO);
+    for a in 0..3 {
+        for b in 0..3 {
+            // eigen-decomposition round-off, 1e-14 of |R|
+            assert!(
+                (r[a][b] - k * n[a] * n[b]).abs() < 1e-14 * k.abs(),
+                "R[{a}][{b}]"
+            );
+        }
+    }
+    let comp: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| -sig[a][b]));
+    let r = art.tensor(&to_voigt(&comp), RHO);
+    assert!(
+        max_abs(&r) < 1e-14 * k.abs(),
+        "compression: no artificial stress"
+    );
+}
