@@ -177,6 +177,28 @@ pub fn bar_scene(dir: &Path, n: usize, run: &str, extra: &str) -> PathBuf {
     p
 }
 
+/// scenes/kirchhoff_plate.toml in implicit mode (`mode = "implicit"`, dt = 1 ms: 48 steps, about
+/// a fifth of the plate's first period), its mesh path made absolute, written into `dir`.
+pub fn implicit_plate_scene(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("scenes/kirchhoff_plate.toml"))
+        .unwrap()
+        .replace(
+            "end_time = 0.048\n",
+            "end_time = 0.048\nmode = \"implicit\"\ndt = 1.0e-3\n",
+        )
+        .replace(
+            "\"../meshes/",
+            &format!("\"{}/", root().join("meshes").display()),
+        );
+    assert!(
+        text.contains("mode = \"implicit\""),
+        "the plate scene's [run]"
+    );
+    let scene = dir.join("plate_implicit.toml");
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
 /// Steel: rho, E, nu and the dilatational wave speed sqrt((lambda + 2 mu)/rho).
 pub const RHO: f64 = 7850.0;
 /// Young's modulus, Pa.

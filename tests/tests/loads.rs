@@ -94,22 +94,7 @@ fn clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
 fn implicit_clamped_plate_under_ramped_pressure_deflects_as_kirchhoff_says() {
     let want = reference_value("kirchhoff_plate", "centre deflection");
     let dir = workdir("loads_plate_implicit");
-    let text = std::fs::read_to_string(root().join("scenes/kirchhoff_plate.toml"))
-        .unwrap()
-        .replace(
-            "end_time = 0.048\n",
-            "end_time = 0.048\nmode = \"implicit\"\ndt = 1.0e-3\n",
-        )
-        .replace(
-            "\"../meshes/",
-            &format!("\"{}/", root().join("meshes").display()),
-        );
-    assert!(
-        text.contains("mode = \"implicit\""),
-        "the plate scene's [run]"
-    );
-    let scene = dir.join("plate_implicit.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = implicit_plate_scene(&dir);
     let mut outs = Vec::new();
     for np in [1, 3] {
         let out = dir.join(format!("np{np}"));

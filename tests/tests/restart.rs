@@ -634,22 +634,7 @@ fn implicit_run_with_a_pressure_load_stopped_and_restarted_continues() {
     // `implicit_run_checkpointed_on_3_ranks_continues_on_2`): limit 1e-6 of each column's
     // largest value for the energies, the work and the probe.
     let dir = workdir("restart_implicit_load");
-    let text = std::fs::read_to_string(root().join("scenes/kirchhoff_plate.toml"))
-        .unwrap()
-        .replace(
-            "end_time = 0.048\n",
-            "end_time = 0.048\nmode = \"implicit\"\ndt = 1.0e-3\n",
-        )
-        .replace(
-            "\"../meshes/",
-            &format!("\"{}/", root().join("meshes").display()),
-        );
-    assert!(
-        text.contains("mode = \"implicit\""),
-        "the plate scene's [run]"
-    );
-    let scene = dir.join("plate_implicit.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = implicit_plate_scene(&dir);
     let (a, b) = (dir.join("A"), dir.join("B"));
     run_ok(1, &scene, &a);
     stop_after_rows(1, &scene, &b, 20, &[]);
