@@ -5,6 +5,7 @@
 mod contact_body;
 pub mod setup;
 pub mod stage;
+pub mod strength;
 
 use super::{Stage, StageEnergies, StageError};
 use crate::input::particles::{self as particles_setup, ParticleIds};
