@@ -48,6 +48,9 @@ mod queries;
 mod restart;
 pub use contact::ContactCorrection;
 mod setup;
+mod tets;
+pub use queries::ElementRef;
+pub use tets::{TetPart, TetSums};
 pub use loads::{face_forces, Loads, PressureLoad};
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 
@@ -128,6 +131,10 @@ pub struct ExplicitSetup<'a> {
     pub mesh: &'a LocalMesh,
     /// One material per element (index into `materials`).
     pub elem_material: Vec<usize>,
+    /// One material per native tetrahedron (`LocalMesh::tets`; index into `materials`).
+    pub tet_material: Vec<usize>,
+    /// One block per native tetrahedron (below `n_blocks`).
+    pub tet_block: Vec<u32>,
     /// One block per element (below `n_blocks`): energies are also kept per block.
     pub elem_block: Vec<u32>,
     /// Number of blocks (at least 1).
@@ -250,6 +257,8 @@ pub struct ExplicitFe {
     lane_materials: Vec<LaneMaterial>,
     /// Whether each node has a constraint (its reactions are the only ones not zero).
     constrained: Vec<bool>,
+    /// The native tetrahedra (`crate::tet`), where the mesh has any (on any rank).
+    pub tets: Option<TetPart>,
 }
 
 /// What the element loop sums over elements.

@@ -58,6 +58,8 @@ struct MeshLayout {
     owned_nodes: Vec<usize>,
     node_ids: Vec<u64>,
     rank_field: Vec<i32>,
+    /// Global id of each local element (hexahedra, then native tetrahedra).
+    elem_ids: Vec<u64>,
 }
 
 /// The open output files of a run.
@@ -108,7 +110,8 @@ impl Outputs {
             MeshLayout {
                 node_ids: owned_nodes.iter().map(|&n| l.node_id[n]).collect(),
                 owned_nodes,
-                rank_field: vec![rank; st.elems.len()],
+                rank_field: vec![rank; st.n_elements()],
+                elem_ids: (0..st.n_elements()).map(|e| st.element_id(e)).collect(),
             }
         });
         let counts = GlobalCounts {
@@ -244,7 +247,7 @@ impl Outputs {
             })
         };
         let vel = |i| fe.map_or([0.0; 3], |(_, st, _)| st.v[node(i)]);
-        let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.state.stress(e));
+        let stress = |e: usize| fe.map_or([0.0; 6], |(_, st, _)| st.stress(e));
         let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
         let pressure = |e| fe.map_or(0.0, |(_, st, _)| st.pressure(e));
         let temperature = |e| fe.map_or(f64::NAN, |(_, st, _)| st.temperature(e));
@@ -254,11 +257,18 @@ impl Outputs {
             displacement: Some(Values::Made(&disp)),
             velocity: Some(Values::Made(&vel)),
         });
+        let corners = |e: usize| fe.map_or([0; 8], |(_, st, _)| st.element_nodes(e));
         let elems = fe.map(|(m, st, local_ids)| ElementFrame {
-            ids: &st.elem_id,
-            connectivity: Connectivity::Local {
-                nodes: &st.elems,
-                ids: local_ids,
+            ids: &m.elem_ids,
+            connectivity: match st.tets {
+                None => Connectivity::Local {
+                    nodes: &st.elems,
+                    ids: local_ids,
+                },
+                Some(_) => Connectivity::Made {
+                    nodes: &corners,
+                    ids: local_ids,
+                },
             },
             stress: Some(Values::Made(&stress)),
             plastic_strain: Some(Values::Made(&eps)),

@@ -10,7 +10,7 @@
 use crate::input::particles as particles_setup;
 use crate::input::scene::Scene;
 use crate::kernels::collective::first_error;
-use fe_petsc::explicit::ExplicitFe;
+use fe_petsc::explicit::{ElementRef, ExplicitFe};
 use fe_petsc::hex;
 use mpi::topology::SimpleCommunicator;
 use rustc_hash::FxHashMap as HashMap;
@@ -34,10 +34,12 @@ pub fn check(world: &SimpleCommunicator, scene: &Scene, fe: &ExplicitFe) -> Resu
 /// This rank's first particle (in seed order) inside one of its elements, as the error line.
 fn first_inside(scene: &Scene, fe: &ExplicitFe) -> Option<String> {
     let (seeds, _) = particles_setup::particles(scene, 0, 1).ok()?;
-    let corners =
-        |e: usize| -> [[f64; 3]; 8] { std::array::from_fn(|k| fe.x0[fe.elems[e][k] as usize]) };
+    let corners = |e: usize| -> [[f64; 3]; 8] {
+        let conn = fe.element_nodes(e);
+        std::array::from_fn(|k| fe.x0[conn[k] as usize])
+    };
     // A grid of cells of the mean element size over the elements' boxes.
-    let n = fe.elems.len();
+    let n = fe.n_elements();
     if n == 0 {
         return None;
     }
@@ -80,12 +82,9 @@ fn first_inside(scene: &Scene, fe: &ExplicitFe) -> Option<String> {
             if (0..3).any(|c| s.x[c] <= lo[c] || s.x[c] >= hi[c]) {
                 continue;
             }
-            let Some(xi) = hex::natural_coords(&corners(e), s.x, 0.0) else {
-                continue;
-            };
-            if xi.iter().all(|v| v.abs() < 1.0 - INSIDE_MARGIN) {
+            if inside(fe, e, &corners(e), s.x) {
                 let def = &scene.particles[s.entry];
-                let block = &scene.blocks[fe.blocks.block_of(e)].group;
+                let block = &scene.blocks[fe.element_block(e)].group;
                 return Some(format!(
                     "{}: particles[{}] \"{}\": a particle at ({}, {}, {}) starts inside block \"{block}\" (element {}): particle regions must not overlap meshed bodies (move the region, or shrink it by a particle spacing)",
                     scene.file.display(),
@@ -94,10 +93,32 @@ fn first_inside(scene: &Scene, fe: &ExplicitFe) -> Option<String> {
                     s.x[0],
                     s.x[1],
                     s.x[2],
-                    fe.elem_id[e]
+                    fe.element_id(e)
                 ));
             }
         }
     }
     None
+}
+
+/// Whether `p` lies inside element `e` (its corners `x`, a tetrahedron collapsed as in
+/// `ExplicitFe::element_nodes`) by more than [`INSIDE_MARGIN`]: a hexahedron's natural
+/// coordinates within [-1 + margin, 1 - margin], a tetrahedron's barycentric ones above
+/// margin / 2 (the same margin on the natural coordinates' [-1, 1] scale).
+fn inside(fe: &ExplicitFe, e: usize, x: &[[f64; 3]; 8], p: [f64; 3]) -> bool {
+    match fe.element(e) {
+        ElementRef::Hex(_) => hex::natural_coords(x, p, 0.0)
+            .is_some_and(|xi| xi.iter().all(|v| v.abs() < 1.0 - INSIDE_MARGIN)),
+        ElementRef::Tet(_) => {
+            let xt = [x[0], x[1], x[2], x[4]];
+            let (g, _) = fe_petsc::tet::gradients(&xt);
+            (0..4).all(|a| {
+                let l = 0.25
+                    + (0..3)
+                        .map(|k| g[a][k] * (p[k] - 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k])))
+                        .sum::<f64>();
+                l > 0.5 * INSIDE_MARGIN
+            })
+        }
+    }
 }

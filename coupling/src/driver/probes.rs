@@ -8,7 +8,7 @@
 use crate::input::scene::{Probe, ProbeField};
 use crate::kernels::collective::first_error;
 use crate::stages::sph::stage::SphStage;
-use fe_petsc::explicit::ExplicitFe;
+use fe_petsc::explicit::{ElementRef, ExplicitFe};
 use fe_petsc::hex;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -17,11 +17,20 @@ use mpi::traits::*;
 /// Distance within which a point counts as inside an element, m (docs/scene.md).
 const LOCATE_TOL_M: f64 = 1e-9;
 
+/// Where in its element a probe lies: a hexahedron's natural coordinates, or a tetrahedron's
+/// barycentric ones (the weights of its 4 nodes).
+#[derive(Debug, Clone, Copy)]
+enum At {
+    Hex([f64; 3]),
+    Tet([f64; 4]),
+}
+
 /// A probe located on this rank (or not).
 #[derive(Debug, Clone)]
 struct Located {
-    /// Local element index and natural coordinates, when this rank evaluates it.
-    here: Option<(usize, [f64; 3])>,
+    /// Local element index (`ExplicitFe::element`) and the place in it, when this rank
+    /// evaluates it.
+    here: Option<(usize, At)>,
     fields: Vec<ProbeField>,
     /// Outside the mesh, sampled from the particles.
     particle: Option<Probe>,
@@ -48,24 +57,13 @@ impl Probes {
         let mut columns = Vec::new();
         let mut err = None;
         for (i, p) in probes.iter().enumerate() {
-            let mut best: Option<(u64, usize, [f64; 3])> = None;
-            for (e, conn) in fe.iter().flat_map(|fe| fe.elems.iter().enumerate()) {
+            let mut best: Option<(u64, usize, At)> = None;
+            for e in 0..fe.map_or(0, |fe| fe.n_elements()) {
                 let fe = fe.expect("elements come from the FE stage");
-                let x: [[f64; 3]; 8] = std::array::from_fn(|k| fe.x0[conn[k] as usize]);
-                // Bounding-box reject first, grown by the tolerance.
-                let inside_box = (0..3).all(|c| {
-                    let lo = x.iter().map(|q| q[c]).fold(f64::INFINITY, f64::min);
-                    let hi = x.iter().map(|q| q[c]).fold(f64::NEG_INFINITY, f64::max);
-                    p.point[c] >= lo - LOCATE_TOL_M && p.point[c] <= hi + LOCATE_TOL_M
-                });
-                if !inside_box {
-                    continue;
-                }
-                let size = (hex::volume(&x)).cbrt();
-                if let Some(xi) = hex::natural_coords(&x, p.point, LOCATE_TOL_M / size) {
-                    let id = fe.elem_id[e];
+                if let Some(at) = locate_in(fe, e, p.point) {
+                    let id = fe.element_id(e);
                     if best.is_none_or(|b| id < b.0) {
-                        best = Some((id, e, xi));
+                        best = Some((id, e, at));
                     }
                 }
             }
@@ -102,7 +100,7 @@ impl Probes {
         for l in &self.located {
             for f in &l.fields {
                 vals.push(match (l.here, fe) {
-                    (Some((e, xi)), Some(fe)) => value(fe, e, xi, f),
+                    (Some((e, at)), Some(fe)) => value(fe, e, at, f),
                     _ => 0.0,
                 });
             }
@@ -139,14 +137,61 @@ impl Probes {
     }
 }
 
+/// Where `point` lies in element `e` of `fe` (in the reference configuration, to within
+/// [`LOCATE_TOL_M`]), or `None` outside it.
+fn locate_in(fe: &ExplicitFe, e: usize, point: [f64; 3]) -> Option<At> {
+    let conn = fe.element_nodes(e);
+    let x: [[f64; 3]; 8] = std::array::from_fn(|k| fe.x0[conn[k] as usize]);
+    // Bounding-box reject first, grown by the tolerance.
+    let inside_box = (0..3).all(|c| {
+        let lo = x.iter().map(|q| q[c]).fold(f64::INFINITY, f64::min);
+        let hi = x.iter().map(|q| q[c]).fold(f64::NEG_INFINITY, f64::max);
+        point[c] >= lo - LOCATE_TOL_M && point[c] <= hi + LOCATE_TOL_M
+    });
+    if !inside_box {
+        return None;
+    }
+    match fe.element(e) {
+        ElementRef::Hex(_) => {
+            let size = (hex::volume(&x)).cbrt();
+            hex::natural_coords(&x, point, LOCATE_TOL_M / size).map(At::Hex)
+        }
+        ElementRef::Tet(_) => {
+            // Barycentric coordinates: N_a(p) = 1/4 + grad N_a . (p - centroid), exact for
+            // the linear tetrahedron; inside when none is below -tol / (its altitude).
+            let xt = [x[0], x[1], x[2], x[4]];
+            let (g, _) = fe_petsc::tet::gradients(&xt);
+            let c: [f64; 3] = std::array::from_fn(|k| 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k]));
+            let l: [f64; 4] = std::array::from_fn(|a| {
+                0.25 + (0..3).map(|k| g[a][k] * (point[k] - c[k])).sum::<f64>()
+            });
+            let inside = (0..4).all(|a| {
+                let gn = (g[a][0] * g[a][0] + g[a][1] * g[a][1] + g[a][2] * g[a][2]).sqrt();
+                l[a] >= -LOCATE_TOL_M * gn
+            });
+            inside.then_some(At::Tet(l))
+        }
+    }
+}
+
 /// Interpolates a nodal field with the shape functions, or reads an element field.
-fn value(fe: &ExplicitFe, e: usize, xi: [f64; 3], f: &ProbeField) -> f64 {
-    let conn = &fe.elems[e];
+fn value(fe: &ExplicitFe, e: usize, at: At, f: &ProbeField) -> f64 {
+    let conn = fe.element_nodes(e);
     let nodal = |get: &dyn Fn(usize) -> f64| -> f64 {
-        let n = hex::shape(xi);
-        (0..8).map(|k| n[k] * get(conn[k] as usize)).sum()
+        match at {
+            At::Hex(xi) => {
+                let n = hex::shape(xi);
+                (0..8).map(|k| n[k] * get(conn[k] as usize)).sum()
+            }
+            // The collapsed hexahedron (a, b, c, c, d, ...): corners 0, 1, 2 and 4.
+            At::Tet(l) => [0, 1, 2, 4]
+                .iter()
+                .zip(l)
+                .map(|(&k, w)| w * get(conn[k] as usize))
+                .sum(),
+        }
     };
-    let s = &fe.state.stress(e);
+    let s = &fe.stress(e);
     use ProbeField::*;
     match f {
         DisplacementX => nodal(&|n| fe.x[n][0] - fe.x0[n][0]),

@@ -3,7 +3,7 @@
 //! stage when it has particles, the contact stage when it has `[contact]`, and the probes.
 use super::{Algorithms, RunFailure};
 use crate::driver::probes::Probes;
-use crate::input::scene::{self, Mode, Scene};
+use crate::input::scene::{self, Mode, Scene, Tetrahedra};
 use crate::input::split::{self, SplitSummary};
 use crate::input::{gmsh, msh_check};
 use crate::kernels::collective::first_error;
@@ -159,6 +159,12 @@ pub fn build(
         fe.choose_kernel(world, algorithms.kernel)
             .map_err(RunFailure::from)?;
         super::overlap::check(world, scene, fe.state()).map_err(RunFailure::from)?;
+        if scene.contact.is_some() && fe.mesh.local.global_tets > 0 {
+            // Every rank has the same scene and the same global count: the same answer.
+            return Err(RunFailure::from(format!(
+                "{file}: [contact] with native tetrahedra ([run] tetrahedra = \"nodal_pressure\"): contact surfaces of triangles are not run yet; use tetrahedra = \"split\" (the default), whose faces contact sees"
+            )));
+        }
     }
     let sph = if scene.particles.is_empty() {
         None
@@ -308,6 +314,11 @@ fn check_on_root(
         msh_check::check_file(&m22).map_err(|e| format!("mesh {}: {e}", msh.display()))?;
     if summary.not_hexahedral == 0 {
         // Hexahedra only: the file runs as it is (not read again).
+        return Ok((m22, summary, None));
+    }
+    if scene.run.tetrahedra == Tetrahedra::NodalPressure {
+        // Tetrahedra run natively: the file as it is, once checked for what they cannot be.
+        split::check_native(&m22).map_err(|e| format!("mesh: {e}"))?;
         return Ok((m22, summary, None));
     }
     let (run, split) = split::split_file(&m22, &cache).map_err(|e| format!("mesh: {e}"))?;

@@ -33,6 +33,20 @@ pub enum Mode {
     Implicit,
 }
 
+/// `run.tetrahedra`: how a mesh's tetrahedra run (docs/scene.md, docs/element.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Tetrahedra {
+    /// Each tetrahedron as 4 hexahedra (`input::split`): no locking in plastic flow or in
+    /// bending, at about 4 hexahedra per tetrahedron and a shorter step.
+    #[default]
+    Split,
+    /// The native 4-node tetrahedron with a nodal-averaged volumetric strain
+    /// (`fe_petsc::tet`): no locking in plastic flow, one element per tetrahedron at the
+    /// tetrahedron's own step; stiff in bending at a coarse size.
+    NodalPressure,
+}
+
 /// Bulk-viscosity coefficients.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -213,6 +227,9 @@ pub struct Run {
     /// Hourglass control.
     #[serde(default = "d_hg")]
     pub hourglass: Hourglass,
+    /// How the mesh's tetrahedra run.
+    #[serde(default)]
+    pub tetrahedra: Tetrahedra,
 }
 
 /// `[compare]` (optional): what `tdyn compare` measures.

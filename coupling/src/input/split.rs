@@ -388,6 +388,27 @@ pub(crate) fn split(m: &Msh22) -> Result<Option<(Msh22, SplitSummary)>, String> 
     )))
 }
 
+/// The check of a mesh whose tetrahedra run natively (`[run] tetrahedra = "nodal_pressure"`):
+/// hexahedra and tetrahedra only; pyramids, second-order elements and prisms are refused with
+/// one line (prisms run only as hexahedra, with the split). Returns the counts of tetrahedra and
+/// hexahedra.
+pub fn check_native(msh: &Path) -> Result<(usize, usize), MeshError> {
+    let m = gmsh::read_msh22(msh)?;
+    refuse(&m.elements).map_err(|why| gmsh::bad(msh, &why))?;
+    let count = |ty: i32| m.elements.iter().filter(|e| e.0 == ty).count();
+    let prisms = count(PRISM);
+    if prisms > 0 {
+        return Err(gmsh::bad(
+            msh,
+            &format!(
+                "the mesh has {} prisms, which run only as hexahedra: set [run] tetrahedra = \"split\" (the default), or mesh without extrusions of triangles (tetrahedra and hexahedra run natively)",
+                grouped(prisms)
+            ),
+        ));
+    }
+    Ok((count(TET), count(HEX)))
+}
+
 /// The split of the checked msh 2.2 file `msh`, cached in `cache_dir` by the file's content:
 /// the file itself (and `None`) for a mesh without tetrahedra and prisms, which runs as it is.
 pub fn split_file(

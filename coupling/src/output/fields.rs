@@ -89,6 +89,14 @@ pub enum Connectivity<'a> {
         /// Global id of each local node.
         ids: &'a [u64],
     },
+    /// Each element's local nodes, made when written (a tetrahedron among hexahedra as a
+    /// collapsed hexahedron), and the global id of each local node.
+    Made {
+        /// Local node indices of element i.
+        nodes: &'a dyn Fn(usize) -> [u32; 8],
+        /// Global id of each local node.
+        ids: &'a [u64],
+    },
 }
 
 /// This rank's particles for a frame.
@@ -334,6 +342,9 @@ impl FieldWriter {
             Connectivity::Ids(c) => rows(move |e| c[e].map(|n| n as f64)),
             Connectivity::Local { nodes, ids } => {
                 rows(move |e| nodes[e].map(|n| ids[n as usize] as f64))
+            }
+            Connectivity::Made { nodes, ids } => {
+                rows(move |e| nodes(e).map(|n| ids[n as usize] as f64))
             }
         };
         let mut cols: Vec<Column> = vec![("connectivity", 8, conn, true)];

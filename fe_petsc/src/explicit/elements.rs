@@ -2,6 +2,7 @@
 //! through the element kernel ([`Batch`]), the forces added to the nodes in canonical element
 //! order.
 use super::*;
+use super::tets;
 use crate::batch::GroupInverted;
 
 impl ExplicitFe {
@@ -39,16 +40,18 @@ impl ExplicitFe {
             Width::W8 => self.element_loop::<batch::w8::LaneGroup>(dt, &mut sums),
         }
         self.dt_stable_local = sums.dt_min;
+        let t1 = std::time::Instant::now();
+        self.timers.elements += (t1 - t0).as_secs_f64();
+        // The shared nodes' forces in canonical element order over all ranks holding them.
+        self.assembly.finish(&mut self.force, exchange)?;
+        // The native tetrahedra: their two passes, their forces summed apart and added.
+        self.tet_forces(dt, &mut sums, exchange)?;
         if sums.inverted.is_none() {
             // The nodes' displacement over the step, dt v(n+1/2) (see `NodalSums::add`).
             let v = &self.v;
             self.blocks
                 .accept(|n| std::array::from_fn(|c| dt * v[n][c]));
         }
-        let t1 = std::time::Instant::now();
-        self.timers.elements += (t1 - t0).as_secs_f64();
-        // The shared nodes' forces in canonical element order over all ranks holding them.
-        self.assembly.finish(&mut self.force, exchange)?;
         // The pressure loads at the step's end, added to the summed element forces.
         self.add_loads(self.time + dt, exchange)?;
         self.timers.exchange += t1.elapsed().as_secs_f64();
@@ -56,6 +59,42 @@ impl ExplicitFe {
             Some(e) => Err(e),
             None => Ok(sums.hg_work),
         }
+    }
+
+    /// The native tetrahedra's forces added to the summed hexahedra's ([`TetPart::forces`]),
+    /// their stable step and first inverted element in `sums` (collective where the mesh has
+    /// tetrahedra).
+    fn tet_forces(
+        &mut self,
+        dt: f64,
+        sums: &mut LoopSums,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), StepError> {
+        let Some(tets) = &mut self.tets else {
+            return Ok(());
+        };
+        let t0 = std::time::Instant::now();
+        let offset = self.elems.len();
+        let t = tets.forces(
+            (&self.x, &self.v, dt),
+            &self.materials,
+            &self.controls,
+            (&mut self.force, &mut self.blocks, offset),
+            exchange,
+        )?;
+        self.dt_stable_local = self.dt_stable_local.min(t.dt_min);
+        if let (None, Some((e, volume))) = (&sums.inverted, t.inverted) {
+            let xe = tets::gather4(&self.x, &tets.conn[e]);
+            sums.inverted = Some(StepError::Inverted {
+                elem: tets.id[e],
+                volume,
+                at: tets::centroid4(&xe),
+                time: self.time + dt,
+                step: self.step + 1,
+            });
+        }
+        self.timers.elements += t0.elapsed().as_secs_f64();
+        Ok(())
     }
 
     /// Every element's update, in element order: each run of consecutive elements of one

@@ -74,6 +74,19 @@ impl ExplicitFe {
                 }
             }
         }
+        if let Some(t) = &self.tets {
+            let nh = self.elems.len();
+            for (e, conn) in t.conn.iter().enumerate() {
+                let me = self.materials[t.material[e]].density() * t.vol0[e] / 4.0;
+                let b = self.blocks.block_of(nh + e);
+                for &n in conn {
+                    let v = self.v[n as usize];
+                    for c in 0..3 {
+                        ge.add(&mut s[4 + b], me * (v[c] * v[c]));
+                    }
+                }
+            }
+        }
         let flat = exact_sum::flatten(&s);
         let mut g = vec![0.0; flat.len()];
         comm.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());

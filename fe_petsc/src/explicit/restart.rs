@@ -10,8 +10,10 @@ pub enum RestartLayout {
     /// same values (each rank integrates its ghosts with the same summed force), so any copy
     /// serves.
     Node,
-    /// A fixed number of values per local element, in local order.
+    /// A fixed number of values per local hexahedron, in local order.
     Element,
+    /// A fixed number of values per local native tetrahedron, in local order.
+    Tet,
     /// The same on every rank (global energies, the clock), except the entry
     /// [`RESTART_DT_STABLE`] of `fe.scalars`: this rank's smallest stable step.
     Global,
@@ -35,6 +37,7 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "implicit.force_n"
         | "implicit.reaction_n" => Node,
         "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
+        "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
         _ => return None,
     })
@@ -69,7 +72,12 @@ impl ExplicitFe {
             .iter()
             .flat_map(|b| [b.internal, b.hourglass, b.kinetic0, b.internal_plus_hg])
             .collect();
-        vec![
+        // The per-block work: the hexahedra's, then the tetrahedra's apart (each by its ids).
+        let mut block_forces = self.blocks.restart_state();
+        let tet_block_forces = block_forces.split_off(block_forces.len().min(
+            if self.blocks.active() { 24 * self.elems.len() } else { 0 },
+        ));
+        let mut out = vec![
             ("fe.x", flat(&self.x)),
             // Without kept start positions, the positions (read back only where kept).
             (
@@ -86,8 +94,14 @@ impl ExplicitFe {
             ("fe.mat_state", self.mat_state.clone()),
             ("fe.scalars", scalars),
             ("fe.block_energies", blocks),
-            ("fe.block_forces", self.blocks.restart_state()),
-        ]
+            ("fe.block_forces", block_forces),
+        ];
+        if let Some(t) = &self.tets {
+            out.push(("fe.tet_state", t.state.iter().flat_map(|s| s.stress).collect()));
+            out.push(("fe.tet_mat_state", t.mat_state.clone()));
+            out.push(("fe.tet_block_forces", tet_block_forces));
+        }
+        out
     }
 
     /// Sets the state [`ExplicitFe::restart_state`] gave (the same mesh on the same ranks);
@@ -149,7 +163,16 @@ impl ExplicitFe {
             be.internal_plus_hg = c[3];
         }
         // The step sums are filled by the next force evaluation before they are read.
-        let w = get("fe.block_forces").ok_or("fe.block_forces: missing")?;
+        let mut w = get("fe.block_forces").ok_or("fe.block_forces: missing")?;
+        if let Some(t) = &mut self.tets {
+            let n = t.len();
+            let st = take("fe.tet_state", 6 * n)?;
+            for (s, c) in t.state.iter_mut().zip(st.chunks_exact(6)) {
+                s.stress.copy_from_slice(c);
+            }
+            t.mat_state = take("fe.tet_mat_state", t.mat_state.len())?;
+            w.extend(get("fe.tet_block_forces").ok_or("fe.tet_block_forces: missing")?);
+        }
         if !self.blocks.set_restart_state(&w) {
             return Err("fe.block_forces: does not fit this rank's mesh".into());
         }

@@ -15,11 +15,22 @@ impl ExplicitFe {
             .unwrap_or(0);
         let MassSetup {
             assembly,
-            mass,
+            mut mass,
             vol0,
             mat_state,
         } = lumped_masses(&setup, mat_stride, exchange)?;
-        let blocks = BlockWork::new(&m.elems, setup.elem_block, setup.n_blocks);
+        let tets = tet_part(&setup, mat_stride, &mut mass, exchange)?;
+        // The blocks' work over the hexahedra, then the tetrahedra as collapsed hexahedra
+        // (a, b, c, c, d, d, d, d), their repeated corners given no force.
+        let corners: Vec<[u32; 8]> = m
+            .elems
+            .iter()
+            .copied()
+            .chain(m.tets.iter().map(|&[a, b, c, d]| [a, b, c, c, d, d, d, d]))
+            .collect();
+        let mut elem_block = setup.elem_block.clone();
+        elem_block.extend(&setup.tet_block);
+        let blocks = BlockWork::new(&corners, elem_block, setup.n_blocks);
         let mut fe = ExplicitFe {
             elems: m.elems.clone(),
             elem_id: m.elem_id.clone(),
@@ -68,6 +79,7 @@ impl ExplicitFe {
             lane_materials: Vec::new(),
             width: batch::widest(),
             constrained: vec![false; nn],
+            tets,
         };
         fe.start();
         Ok(fe)
@@ -123,8 +135,48 @@ impl ExplicitFe {
                 div_v,
             ));
         }
+        if let Some(t) = &self.tets {
+            dt = dt.min(t.initial_stable_dt(&self.x, &self.v, &self.materials, &self.controls));
+        }
         dt
     }
+}
+
+/// The native tetrahedra, where the mesh has any (collective): their masses added to `mass`
+/// (each node: the hexahedra's sum, then the tetrahedra's).
+fn tet_part(
+    setup: &ExplicitSetup,
+    mat_stride: usize,
+    mass: &mut [f64],
+    exchange: &mut NodeExchange,
+) -> Result<Option<TetPart>, StepError> {
+    let m = setup.mesh;
+    if m.global_tets == 0 {
+        return Ok(None);
+    }
+    let mut mass3: Vec<[f64; 3]> = vec![[0.0; 3]; mass.len()];
+    let (part, bad) = TetPart::new(
+        m,
+        setup.tet_material.clone(),
+        &setup.materials,
+        mat_stride,
+        &mut mass3,
+        exchange,
+    )?;
+    for (m, t) in mass.iter_mut().zip(&mass3) {
+        *m += t[0];
+    }
+    if let Some((e, volume)) = bad {
+        let xe = tets::gather4(&m.coords, &m.tets[e]);
+        return Err(StepError::Inverted {
+            elem: m.tet_id[e],
+            volume,
+            at: tets::centroid4(&xe),
+            time: 0.0,
+            step: 0,
+        });
+    }
+    Ok(Some(part))
 }
 
 /// Each velocity constraint with a curve: (index in `constraints`, velocity, curve), in

@@ -216,6 +216,12 @@ fn check_run(cx: &Ctx, r: &Run) -> Result<(), SceneError> {
             "mode = \"implicit\" needs a fixed step run.dt (seconds)".into(),
         ));
     }
+    if r.mode == Mode::Implicit && r.tetrahedra == Tetrahedra::NodalPressure {
+        return Err(cx.err(
+            "run.tetrahedra",
+            "\"nodal_pressure\" tetrahedra run in explicit mode only (its nodal average has no implicit tangent here): use \"split\" (the default) with mode = \"implicit\"".into(),
+        ));
+    }
     if let Some(o) = r.output_every {
         if !pos(o) {
             return Err(cx.err(

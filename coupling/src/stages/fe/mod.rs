@@ -72,6 +72,8 @@ impl Fe {
             mesh: &mesh.local,
             elem_material: inputs.elem_material,
             elem_block: inputs.elem_block,
+            tet_material: inputs.tet_material,
+            tet_block: inputs.tet_block,
             n_blocks: scene.blocks.len(),
             materials: inputs.materials,
             velocity: inputs.velocity,
@@ -351,7 +353,7 @@ impl Stage for Fe {
         report.fe = Some(StageStats::reduce(
             world,
             self.wall_s,
-            fe.elems.len() as f64,
+            fe.n_elements() as f64,
             self.mesh.exchange.bytes_sent as f64,
         ));
         report.ns_per_element_cycle = Some(if elements > 0 && steps > 0 {

@@ -22,6 +22,7 @@ use std::collections::HashMap;
 const NODE_ID: &str = "fe.node_id";
 const NODE_OWNED: &str = "fe.node_owned";
 const ELEM_ID: &str = "fe.elem_id";
+const TET_ID: &str = "fe.tet_id";
 
 /// Writes the global ids of this rank's nodes and elements and which nodes it owns: what a
 /// restart on another rank count maps the arrays by.
@@ -30,6 +31,9 @@ pub fn save_ids(w: &mut StateWriter, mesh: &LocalMesh, fe: &ExplicitFe) {
     let owned: Vec<u8> = fe.owned.iter().map(|&o| o as u8).collect();
     w.put(NODE_OWNED, &owned);
     w.put(ELEM_ID, &fe.elem_id);
+    if let Some(t) = &fe.tets {
+        w.put(TET_ID, &t.id);
+    }
 }
 
 /// Where the items (nodes or elements) of the writing ranks lie.
@@ -100,6 +104,14 @@ pub fn arrays(fe: &Fe, pieces: &[StateReader]) -> Result<HashMap<&'static str, V
     let first = pieces.first().ok_or("checkpoint: no rank files")?;
     let nodes = locate(pieces, NODE_ID, Some(NODE_OWNED))?;
     let elems = locate(pieces, ELEM_ID, None)?;
+    let tet_ids: &[u64] = match &fe.integrator {
+        super::Integrator::Explicit(e) => e.tets.as_ref().map_or(&[], |t| &t.id),
+        super::Integrator::Implicit(_) => &[],
+    };
+    let tets = match tet_ids.is_empty() {
+        true => None,
+        false => Some(locate(pieces, TET_ID, None)?),
+    };
     let now = match &fe.integrator {
         super::Integrator::Explicit(e) => e.restart_state(),
         super::Integrator::Implicit(i) => i.restart_state(),
@@ -118,6 +130,11 @@ pub fn arrays(fe: &Fe, pieces: &[StateReader]) -> Result<HashMap<&'static str, V
             RestartLayout::Element => {
                 let w = per(st.elem_id.len());
                 gather(pieces, name, w, &st.elem_id, &elems)?
+            }
+            RestartLayout::Tet => {
+                let w = per(tet_ids.len());
+                let from = tets.as_ref().ok_or("checkpoint: tetrahedra's state without them")?;
+                gather(pieces, name, w, tet_ids, from)?
             }
             RestartLayout::Global => {
                 let mut a: Vec<f64> = first.get(name)?;

@@ -24,6 +24,10 @@ pub struct FeInputs {
     pub elem_material: Vec<usize>,
     /// Block of each local element: its index in the scene's `[[block]]` list.
     pub elem_block: Vec<u32>,
+    /// Material index of each local native tetrahedron (`LocalMesh::tets`).
+    pub tet_material: Vec<usize>,
+    /// Block of each local native tetrahedron.
+    pub tet_block: Vec<u32>,
     /// Materials, in scene order.
     pub materials: Vec<Box<dyn Material>>,
     /// Initial velocity of each local node.
@@ -80,30 +84,10 @@ pub fn prepare(
     }
     let m: &LocalMesh = &dm.local;
     let mut err = None;
-    let mut elem_material = Vec::with_capacity(m.elems.len());
-    let mut elem_block = Vec::with_capacity(m.elems.len());
-    for (e, &tag) in m.elem_block.iter().enumerate() {
-        match by_tag.get(&tag) {
-            Some((mi, _, bi)) => {
-                elem_material.push(*mi);
-                elem_block.push(*bi);
-            }
-            None => {
-                elem_block.push(0);
-                let name = groups
-                    .volumes
-                    .iter()
-                    .find(|(_, &t)| t == tag)
-                    .map(|(n, _)| format!("physical volume \"{n}\""))
-                    .unwrap_or_else(|| "no physical volume".to_string());
-                err.get_or_insert(format!(
-                    "{file}: element {} is in {name}, which no [[block]] gives a material (add a [[block]] with group = ...)",
-                    m.elem_id[e]
-                ));
-                elem_material.push(0);
-            }
-        }
-    }
+    let (elem_material, elem_block) =
+        block_materials(&m.elem_block, &m.elem_id, &by_tag, groups, &file, &mut err);
+    let (tet_material, tet_block) =
+        block_materials(&m.tet_block, &m.tet_id, &by_tag, groups, &file, &mut err);
     first_error(comm, err)?;
 
     // Initial velocity: the mean over the blocks of the elements around the node (weighted by
@@ -116,8 +100,10 @@ pub fn prepare(
     // the exchange sums three values per node: the counts go in groups of three blocks
     let groups_of_3 = nb.div_ceil(3);
     let mut parts = vec![vec![0.0; 3 * nn]; groups_of_3];
-    for (e, conn) in m.elems.iter().enumerate() {
-        let b = elem_block[e] as usize;
+    let hexes = m.elems.iter().zip(&elem_block).map(|(c, &b)| (&c[..], b));
+    let tets = m.tets.iter().zip(&tet_block).map(|(c, &b)| (&c[..], b));
+    for (conn, b) in hexes.chain(tets) {
+        let b = b as usize;
         for &n in conn {
             parts[b / 3][3 * n as usize + b % 3] += 1.0;
         }
@@ -157,12 +143,52 @@ pub fn prepare(
     Ok(FeInputs {
         elem_material,
         elem_block,
+        tet_material,
+        tet_block,
         materials,
         velocity,
         constraints,
         reaction_groups,
         velocity_curves,
     })
+}
+
+/// Each element's material index and block (its index in the scene's `[[block]]` list) from
+/// its physical volume `tags` (`by_tag`: tag -> (material, velocity, block)); the first element
+/// no block covers is kept in `err`.
+fn block_materials(
+    tags: &[i32],
+    ids: &[u64],
+    by_tag: &BTreeMap<i32, (usize, [f64; 3], u32)>,
+    groups: &Groups,
+    file: &str,
+    err: &mut Option<String>,
+) -> (Vec<usize>, Vec<u32>) {
+    let mut material = Vec::with_capacity(tags.len());
+    let mut block = Vec::with_capacity(tags.len());
+    for (e, &tag) in tags.iter().enumerate() {
+        match by_tag.get(&tag) {
+            Some((mi, _, bi)) => {
+                material.push(*mi);
+                block.push(*bi);
+            }
+            None => {
+                block.push(0);
+                let name = groups
+                    .volumes
+                    .iter()
+                    .find(|(_, &t)| t == tag)
+                    .map(|(n, _)| format!("physical volume \"{n}\""))
+                    .unwrap_or_else(|| "no physical volume".to_string());
+                err.get_or_insert(format!(
+                    "{file}: element {} is in {name}, which no [[block]] gives a material (add a [[block]] with group = ...)",
+                    ids[e]
+                ));
+                material.push(0);
+            }
+        }
+    }
+    (material, block)
 }
 
 /// The `fixed` and `velocity` groups in scene order (each name once), each with the owned
