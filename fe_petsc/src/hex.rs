@@ -535,7 +535,7 @@ fn velocity_gradient(v: &[[f64; 3]; 8], bvh: &[[f64; 3]; 8], ivh: f64) -> [[f64;
 /// The stress `s` (Voigt xx,yy,zz,xy,yz,zx) rotated by the step's Hughes-Winget increment of
 /// the spin W = skew(L): R s R^T.
 #[inline(always)]
-fn rotated_stress(l: &[[f64; 3]; 3], dt: f64, s: &[f64; 6]) -> [f64; 6] {
+pub(crate) fn rotated_stress(l: &[[f64; 3]; 3], dt: f64, s: &[f64; 6]) -> [f64; 6] {
     // Spin W = skew(L): w[0] = W_yz... store as the full antisymmetric matrix.
     let w01 = 0.5 * (l[0][1] - l[1][0]);
     let w12 = 0.5 * (l[1][2] - l[2][1]);

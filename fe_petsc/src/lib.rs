@@ -1,6 +1,7 @@
 //! Finite elements on PETSc DMPlex: mesh load, METIS distribution, ghost exchange, the PRONTO-3D
-//! hexahedron, materials, the explicit central-difference integrator and the implicit Newmark
-//! integrator (tangent in a PETSc matrix, solved by KSP).
+//! hexahedron, the nodal-averaged tetrahedron (`tet`), materials, the explicit
+//! central-difference integrator and the implicit Newmark integrator (tangent in a PETSc
+//! matrix, solved by KSP).
 #![warn(missing_docs)]
 // Index loops over nodes and components read like the formulas they implement; `!(x > 0.0)`
 // deliberately also rejects NaN.
@@ -26,5 +27,6 @@ pub mod objects;
 pub mod petsc;
 pub mod solver;
 pub mod states;
+pub mod tet;
 
 pub use petsc_sys as sys;
