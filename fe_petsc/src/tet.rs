@@ -338,6 +338,25 @@ fn critical_dt(omega: f64, gamma: f64) -> f64 {
     2.0 / ((omega * omega + gamma * gamma).sqrt() + gamma)
 }
 
+/// The stable step (s, no safety factor) of a tetrahedron at positions `x` (m), density `rho`
+/// (kg/m^3) and volumetric rate `theta` (1/s) with the material's constant moduli: what
+/// [`update`] reports, for the start of a run (the hexahedron's `hex::stable_dt`).
+pub fn stable_dt(
+    x: &[[f64; 3]; 4],
+    rho: f64,
+    mat: &dyn Material,
+    ctl: &HexControls,
+    theta: f64,
+) -> f64 {
+    let (g, _) = gradients(x);
+    let gg: f64 = g.iter().flatten().map(|c| c * c).sum();
+    let modulus = mat.dilatational_modulus();
+    let c = (modulus / rho).sqrt();
+    let (_, eta) = bulk_viscosity(ctl, gg, rho, c, theta);
+    let omega = max_frequency(&g, rho, modulus, mat.shear_modulus());
+    critical_dt(omega, 2.0 * eta * gg / rho)
+}
+
 /// The nodal forces -V (sigma + q I) grad N_a (`bv` = V grad N_a at t(n+1)), N.
 #[inline(always)]
 fn stress_forces(bv: &[[f64; 3]; 4], s: &[f64; 6], q: f64) -> [[f64; 3]; 4] {
