@@ -22,6 +22,13 @@
 //! give other sums. The node numbering only places values in memory (no sum depends on it): a
 //! file's numbering that is already about as local is kept ([`KEEP_FACTOR`]). The mesh module
 //! renumbers the ghost exchange's leaves with the nodes (`mesh::DistributedMesh::load`).
+//!
+//! Tetrahedra are ordered the same way, by the same key on the same box (the centroids of
+//! all cells, both kinds), as an array of their own beside the hexahedra's: each kind's element
+//! loop runs over its own array. The nodes are numbered as the hexahedra first touch them,
+//! then as the tetrahedra do: a mesh of hexahedra alone is numbered as before tetrahedra were
+//! read, and the hexahedra's nodes stay together in memory whatever tetrahedra sit beside them
+//! (in a mixed mesh the two kinds meet only along a band of shared nodes).
 use crate::mesh::LocalMesh;
 
 /// Bits per axis of the curve's grid (3 x 21 = 63 bits of key).
@@ -47,22 +54,26 @@ fn morton(i: u64, j: u64, k: u64) -> u64 {
 /// than this many times the first-touch numbering's ([`node_order`]).
 pub const KEEP_FACTOR: f64 = 2.0;
 
-/// The centroid of element `c` (the mean of its 8 nodes), m.
-fn centroid(mesh: &LocalMesh, c: &[u32; 8]) -> [f64; 3] {
+/// The centroid of the element of nodes `c` (their mean: 8 for a hexahedron, 4 for a
+/// tetrahedron), m. For a hexahedron the sum and the division by 8 are those before
+/// tetrahedra were read, so its key is too.
+fn centroid(mesh: &LocalMesh, c: &[u32]) -> [f64; 3] {
     let mut s = [0.0; 3];
     for &v in c {
         for d in 0..3 {
             s[d] += mesh.coords[v as usize][d];
         }
     }
-    s.map(|x| x / 8.0)
+    s.map(|x| x / c.len() as f64)
 }
 
-/// The smallest and largest centroid coordinates of `mesh`'s elements, m (infinite when it
-/// has none): over all ranks, the bounding box of [`order_elements`]' curve.
+/// The smallest and largest centroid coordinates of `mesh`'s elements (hexahedra and
+/// tetrahedra), m (infinite when it has none): over all ranks, the bounding box of
+/// [`order_elements`]' curve.
 pub fn centroid_bounds(mesh: &LocalMesh) -> ([f64; 3], [f64; 3]) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for c in &mesh.elems {
+    let hexes = mesh.elems.iter().map(|c| &c[..]);
+    for c in hexes.chain(mesh.tets.iter().map(|c| &c[..])) {
         let c = centroid(mesh, c);
         for d in 0..3 {
             lo[d] = lo[d].min(c[d]);
@@ -77,9 +88,9 @@ pub fn centroid_bounds(mesh: &LocalMesh) -> ([f64; 3], [f64; 3]) {
 /// centroid bounds, the same on every rank), then by global id; sets `mesh.elem_key` to each
 /// element's key. The order is the same for any partition (a rank's elements in it are the
 /// whole mesh's order restricted to them), so the element loop meets each node's elements in
-/// the same order on every rank count: the nodal sums' order ([`crate::assembly`]).
+/// the same order on every rank count: the nodal sums' order ([`crate::assembly`]). The
+/// tetrahedra likewise, in their own arrays (`tets`, `tet_id`, `tet_block`, `tet_key`).
 pub fn order_elements(mesh: &mut LocalMesh, lo: [f64; 3], hi: [f64; 3]) {
-    let n = mesh.elems.len();
     let top = ((1u64 << BITS) - 1) as f64;
     let cell = |x: f64, d: usize| {
         let span = hi[d] - lo[d];
@@ -89,34 +100,54 @@ pub fn order_elements(mesh: &mut LocalMesh, lo: [f64; 3], hi: [f64; 3]) {
             0
         }
     };
-    let keys: Vec<[u64; 3]> = (0..n)
-        .map(|e| {
-            let c = centroid(mesh, &mesh.elems[e]);
-            let m = morton(cell(c[0], 0), cell(c[1], 1), cell(c[2], 2));
-            // The block tag as an order-preserving u64 (tags may be -1).
-            let b = (mesh.elem_block[e] as i64 as u64) ^ (1 << 63);
-            [b, m, mesh.elem_id[e]]
-        })
+    let key = |c: &[u32], block: i32, id: u64| {
+        let c = centroid(mesh, c);
+        let m = morton(cell(c[0], 0), cell(c[1], 1), cell(c[2], 2));
+        // The block tag as an order-preserving u64 (tags may be -1).
+        let b = (block as i64 as u64) ^ (1 << 63);
+        [b, m, id]
+    };
+    let hex_keys: Vec<[u64; 3]> = (0..mesh.elems.len())
+        .map(|e| key(&mesh.elems[e], mesh.elem_block[e], mesh.elem_id[e]))
         .collect();
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_unstable_by_key(|&e| keys[e]);
+    let tet_keys: Vec<[u64; 3]> = (0..mesh.tets.len())
+        .map(|e| key(&mesh.tets[e], mesh.tet_block[e], mesh.tet_id[e]))
+        .collect();
+    let order = sorted_by_key(&hex_keys);
     mesh.elems = order.iter().map(|&e| mesh.elems[e]).collect();
     mesh.elem_id = order.iter().map(|&e| mesh.elem_id[e]).collect();
     mesh.elem_block = order.iter().map(|&e| mesh.elem_block[e]).collect();
-    mesh.elem_key = order.iter().map(|&e| keys[e]).collect();
+    mesh.elem_key = order.iter().map(|&e| hex_keys[e]).collect();
+    let order = sorted_by_key(&tet_keys);
+    mesh.tets = order.iter().map(|&e| mesh.tets[e]).collect();
+    mesh.tet_id = order.iter().map(|&e| mesh.tet_id[e]).collect();
+    mesh.tet_block = order.iter().map(|&e| mesh.tet_block[e]).collect();
+    mesh.tet_key = order.iter().map(|&e| tet_keys[e]).collect();
 }
 
-/// A node numbering that follows the element order: nodes numbered as the elements first
-/// touch them (nodes in no element after, in file order), as `new_of_old`; `None` when the
-/// file's numbering is already about as local: its mean span of node numbers within an element
-/// at most [`KEEP_FACTOR`] times the first-touch numbering's. Measured with
-/// `examples/hex_bench` on the 47^3 block: nodes numbered at random 190 ns per element update
-/// against 128 in the file's (lexicographic) numbering.
+/// The indices of `keys` in the order of their keys (distinct: the last is the global id).
+fn sorted_by_key(keys: &[[u64; 3]]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..keys.len()).collect();
+    order.sort_unstable_by_key(|&e| keys[e]);
+    order
+}
+
+/// A node numbering that follows the element order: nodes numbered as the hexahedra first
+/// touch them, then as the tetrahedra do (nodes in no element after, in file order), as
+/// `new_of_old`; `None` when the file's numbering is already about as local: its mean span of
+/// node numbers within an element (over both kinds) at most [`KEEP_FACTOR`] times the
+/// first-touch numbering's. Measured with `examples/hex_bench` on the 47^3 block: nodes
+/// numbered at random 190 ns per element update against 128 in the file's (lexicographic)
+/// numbering.
 pub fn node_order(mesh: &LocalMesh) -> Option<Vec<u32>> {
     let nn = mesh.coords.len();
+    let cells = || {
+        let hexes = mesh.elems.iter().map(|c| &c[..]);
+        hexes.chain(mesh.tets.iter().map(|c| &c[..]))
+    };
     let mut new_of_old = vec![u32::MAX; nn];
     let mut next = 0u32;
-    for c in &mesh.elems {
+    for c in cells() {
         for &v in c {
             if new_of_old[v as usize] == u32::MAX {
                 new_of_old[v as usize] = next;
@@ -128,13 +159,14 @@ pub fn node_order(mesh: &LocalMesh) -> Option<Vec<u32>> {
         *n = next;
         next += 1;
     }
-    if mesh.elems.is_empty() {
+    let ncells = mesh.elems.len() + mesh.tets.len();
+    if ncells == 0 {
         return None;
     }
+    // Summed over the hexahedra then the tetrahedra: for hexahedra alone, the sum before
+    // tetrahedra were read.
     let span = |f: &dyn Fn(u32) -> u32| {
-        let total: f64 = mesh
-            .elems
-            .iter()
+        let total: f64 = cells()
             .map(|c| {
                 let (lo, hi) = c.iter().fold((u32::MAX, 0), |(lo, hi), &v| {
                     let n = f(v);
@@ -143,7 +175,7 @@ pub fn node_order(mesh: &LocalMesh) -> Option<Vec<u32>> {
                 (hi - lo) as f64
             })
             .sum();
-        total / mesh.elems.len() as f64
+        total / ncells as f64
     };
     let (file, touch) = (span(&|v| v), span(&|v| new_of_old[v as usize]));
     (file > KEEP_FACTOR * touch).then_some(new_of_old)
@@ -160,7 +192,7 @@ pub fn permute<T: Copy>(v: &mut Vec<T>, new_of_old: &[u32]) {
 }
 
 /// Renumbers `mesh`'s nodes by `new_of_old` ([`node_order`]): the node arrays (coordinates,
-/// ids, surfaces; ownership once known) moved, the connectivity rewritten.
+/// ids, surfaces; ownership once known) moved, both kinds' connectivity rewritten.
 pub fn renumber_nodes(mesh: &mut LocalMesh, new_of_old: &[u32]) {
     permute(&mut mesh.coords, new_of_old);
     permute(&mut mesh.node_id, new_of_old);
@@ -169,6 +201,11 @@ pub fn renumber_nodes(mesh: &mut LocalMesh, new_of_old: &[u32]) {
         permute(&mut mesh.owned, new_of_old);
     }
     for c in mesh.elems.iter_mut() {
+        for v in c.iter_mut() {
+            *v = new_of_old[*v as usize];
+        }
+    }
+    for c in mesh.tets.iter_mut() {
         for v in c.iter_mut() {
             *v = new_of_old[*v as usize];
         }
@@ -286,5 +323,81 @@ mod tests {
         got.sort_by_key(|t| t.1);
         cells.sort_by_key(|t| t.1);
         assert_eq!(got, cells, "an element lost its nodes or block");
+    }
+
+    /// A hexahedron (the unit cube) beside a unit cube split into six tetrahedra (Kuhn's split
+    /// along the diagonal 0-7): the tetrahedra, given in two orders, end in one order with
+    /// their keys, ids and blocks; the hexahedron keeps its key from the box of all centroids;
+    /// renumbering the nodes moves the tetrahedra's corners with them (same coordinates).
+    #[test]
+    fn tetrahedra_are_ordered_and_renumbered_beside_hexahedra() {
+        let mut mesh = LocalMesh::default();
+        for x0 in [0.0, 2.0] {
+            for k in 0..8 {
+                let (i, j, l) = (k & 1, k >> 1 & 1, k >> 2 & 1);
+                mesh.coords.push([x0 + i as f64, j as f64, l as f64]);
+            }
+        }
+        mesh.node_id = (0..16).collect();
+        mesh.node_surfaces = vec![0; 16];
+        mesh.elems.push([0, 1, 3, 2, 4, 5, 7, 6]);
+        mesh.elem_id.push(6);
+        mesh.elem_block.push(1);
+        // Kuhn's six paths from corner 0 to corner 7 of the second cube (nodes 8..16).
+        let paths = [[1, 3], [1, 5], [2, 3], [2, 6], [4, 5], [4, 6]];
+        let tets: Vec<[u32; 4]> = paths.iter().map(|p| [8, 8 + p[0], 8 + p[1], 15]).collect();
+        let mut orders = Vec::new();
+        for reverse in [false, true] {
+            let mut m = mesh.clone();
+            let mut ids: Vec<usize> = (0..6).collect();
+            if reverse {
+                ids.reverse();
+            }
+            for &t in &ids {
+                m.tets.push(tets[t]);
+                m.tet_id.push(t as u64);
+                m.tet_block.push(2);
+            }
+            let (lo, hi) = centroid_bounds(&m);
+            // x from the hexahedron's centroid (0.5) to that of the tetrahedra with three
+            // corners on x = 3 (paths 0-1-3-7 and 0-1-5-7: (2 + 3 + 3 + 3) / 4).
+            assert_eq!(
+                (lo[0], hi[0]),
+                (0.5, 2.75),
+                "the box spans both kinds' centroids"
+            );
+            order_elements(&mut m, lo, hi);
+            assert!(
+                m.tet_key.windows(2).all(|w| w[0] < w[1]),
+                "tetrahedra sorted"
+            );
+            for e in 0..6 {
+                let id = m.tet_id[e] as usize;
+                assert_eq!((m.tets[e], m.tet_key[e][2]), (tets[id], id as u64));
+            }
+            orders.push(m);
+        }
+        assert_eq!(
+            orders[0].tet_id, orders[1].tet_id,
+            "one order from either input"
+        );
+        let mut m = orders.pop().unwrap();
+        assert_eq!(m.elem_key[0][2], 6);
+        let before: Vec<[[f64; 3]; 4]> = m
+            .tets
+            .iter()
+            .map(|c| c.map(|v| m.coords[v as usize]))
+            .collect();
+        let new_of_old: Vec<u32> = (0..16u32).map(|v| (v * 5 + 3) % 16).collect();
+        renumber_nodes(&mut m, &new_of_old);
+        let after: Vec<[[f64; 3]; 4]> = m
+            .tets
+            .iter()
+            .map(|c| c.map(|v| m.coords[v as usize]))
+            .collect();
+        assert_eq!(
+            before, after,
+            "a tetrahedron's corners moved with the renumbering"
+        );
     }
 }

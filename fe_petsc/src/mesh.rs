@@ -1,11 +1,12 @@
 //! Mesh load, METIS partition and DMPlex distribution, and the flat arrays the element loop uses.
 //!
 //! Rank 0 reads the gmsh file into a DMPlex (PETSc's reader), checks that every cell is a
-//! hexahedron, marks the vertices of each physical surface, and partitions the cells' dual graph
-//! with METIS; PETSc's shell partitioner applies that partition and `DMPlexDistribute` moves the
-//! mesh (no overlap). After distribution everything the time loop needs is extracted once into
-//! contiguous arrays ([`LocalMesh`]); only the DM's star forest stays alive, for the ghost exchange
-//! ([`NodeExchange`]).
+//! hexahedron or a tetrahedron, marks the vertices of each physical surface, and partitions the
+//! cells' dual graph with METIS; PETSc's shell partitioner applies that partition and
+//! `DMPlexDistribute` moves the mesh (no overlap). After distribution everything the time loop
+//! needs is extracted once into contiguous arrays ([`LocalMesh`]: the hexahedra and the
+//! tetrahedra in arrays of their own); only the DM's star forest stays alive, for the ghost
+//! exchange ([`NodeExchange`]).
 use crate::objects::{Dm, Section, StarForest};
 use crate::petsc::{Petsc, PetscError};
 use crate::petsc_call;
@@ -36,6 +37,17 @@ pub enum MeshError {
 /// (1,-1,1) (1,1,1) (-1,1,1). gmsh/VTK lists both faces counter-clockwise seen from +z.
 const PETSC_TO_VTK_HEX: [usize; 8] = [0, 3, 2, 1, 4, 5, 6, 7];
 
+/// gmsh tetrahedron node order from PETSc's closure order of a tet's vertices.
+///
+/// PETSc's reference tetrahedron lists its first face clockwise seen from outside (inward
+/// normal, as the hexahedron's bottom face): (-1,-1,-1) (-1,1,-1) (1,-1,-1) (-1,-1,1), so
+/// det[x1-x0, x2-x0, x3-x0] < 0; gmsh's is (0,0,0) (1,0,0) (0,1,0) (0,0,1), positive. PETSc's
+/// gmsh reader turns a file's tetrahedron into its own orientation by swapping the first two
+/// vertices (as it swaps the hexahedron's 1 and 3, undone by [`PETSC_TO_VTK_HEX`]); swapping
+/// them back gives the file's node order exactly (checked against the files, with the volumes'
+/// sign, in tests/tet_mesh.rs).
+const PETSC_TO_GMSH_TET: [usize; 4] = [1, 0, 2, 3];
+
 /// Most physical surfaces a mesh may have (one bit each in a node's surface mask).
 pub const MAX_SURFACES: usize = 31;
 
@@ -55,9 +67,11 @@ pub struct LocalMesh {
     /// Unit normal of each physical surface (bit order) when all its faces are parallel
     /// (one plane, or parallel planes); `None` for a curved or bent surface.
     pub surface_normals: Vec<Option<[f64; 3]>>,
-    /// Connectivity of the local elements, local node indices, gmsh/VTK hexahedron order.
+    /// Connectivity of the local hexahedra, local node indices, gmsh/VTK hexahedron order
+    /// (the `elem_*` arrays are the hexahedra's; the tetrahedra's are `tet*`).
     pub elems: Vec<[u32; 8]>,
-    /// Global id of each local element (the mesh's cell number, 0-based, rank-independent).
+    /// Global id of each local hexahedron (the mesh's cell number over all cells, 0-based,
+    /// rank-independent).
     pub elem_id: Vec<u64>,
     /// gmsh tag of the physical volume each element belongs to (-1: none).
     pub elem_block: Vec<i32>,
@@ -65,10 +79,28 @@ pub struct LocalMesh {
     /// whole mesh's box, global id), the same on every rank count: the local elements are in
     /// this order ([`crate::locality::order_elements`]).
     pub elem_key: Vec<[u64; 3]>,
+    /// Connectivity of the local tetrahedra, local node indices, gmsh order (positive volume:
+    /// det[x1-x0, x2-x0, x3-x0] > 0 for a valid element).
+    pub tets: Vec<[u32; 4]>,
+    /// Global id of each local tetrahedron: the mesh's cell number over all cells (0-based,
+    /// rank-independent), the numbering `elem_id` takes from too, so the two never collide.
+    pub tet_id: Vec<u64>,
+    /// gmsh tag of the physical volume each tetrahedron belongs to (-1: none).
+    pub tet_block: Vec<i32>,
+    /// Each tetrahedron's place in the canonical order, as `elem_key` (block, Morton key of its
+    /// centroid on the whole mesh's box of all cells' centroids, global id): the local
+    /// tetrahedra are in this order.
+    pub tet_key: Vec<[u64; 3]>,
     /// Nodes in the whole mesh.
     pub global_nodes: u64,
-    /// Elements in the whole mesh.
+    /// Cells (elements) in the whole mesh, of both kinds: `global_hexes + global_tets`, and
+    /// one more than the largest `elem_id` or `tet_id`. For a mesh of hexahedra alone, its
+    /// hexahedra, as before tetrahedra were read.
     pub global_elems: u64,
+    /// Hexahedra in the whole mesh.
+    pub global_hexes: u64,
+    /// Tetrahedra in the whole mesh.
+    pub global_tets: u64,
     /// Whether this rank put its elements in a new order and renumbered its nodes for memory
     /// locality (`crate::locality`: only where the file's order is poor).
     pub reordered: [bool; 2],
@@ -190,8 +222,8 @@ struct RootFacts {
     mask: Vec<i32>,
     /// METIS's part of each cell (none: one rank, or the user chose a PETSc partitioner).
     partition: Option<Vec<i32>>,
-    /// Cells and vertices in the whole mesh.
-    totals: [u64; 2],
+    /// Cells, vertices, hexahedra and tetrahedra in the whole mesh.
+    totals: [u64; 4],
 }
 
 /// The physical surfaces as rank 0's check of the mesh file found them: the DM is read
@@ -235,6 +267,8 @@ impl DistributedMesh {
             surface_normals: facts.surface_normals,
             global_elems: facts.totals[0],
             global_nodes: facts.totals[1],
+            global_hexes: facts.totals[2],
+            global_tets: facts.totals[3],
             ..Default::default()
         };
         let extracted = extract_local(&dm, &orig, &mask, &mut local);
@@ -288,7 +322,7 @@ fn read_gmsh(comm: &SimpleCommunicator, path: &Path) -> Result<Dm, MeshError> {
     Ok(dm)
 }
 
-/// Rank 0, on the whole mesh: it is 3D and all hexahedra (tetrahedra and prisms were split
+/// Rank 0, on the whole mesh: it is 3D and all hexahedra and tetrahedra (prisms were split
 /// into hexahedra before, `coupling::input::split`), its physical surfaces (tags,
 /// planar normals, vertex masks), the original numbers, and the METIS partition. Any failure
 /// (PETSc's included) is a message for the agreement step.
@@ -303,7 +337,7 @@ fn inspect_on_root(
     let (p0, p1) = dm.chart().map_err(s)?;
     let (c0, c1) = dm.height_stratum(0).map_err(s)?;
     let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
-    check_cells(dm, path, c0, c1)?;
+    let [nhex, ntet] = check_cells(dm, path, c0, c1)?;
     if file.nodes != 0 && file.nodes != (v1 - v0) as usize {
         return Err(format!(
             "mesh {}: PETSc read {} vertices from a file of {} nodes: its surfaces cannot be matched to them",
@@ -316,7 +350,7 @@ fn inspect_on_root(
     let mut facts = RootFacts {
         orig: vec![-1i32; npts],
         mask: vec![0i32; npts],
-        totals: [(c1 - c0) as u64, (v1 - v0) as u64],
+        totals: [(c1 - c0) as u64, (v1 - v0) as u64, nhex, ntet],
         ..Default::default()
     };
     facts.surface_tags = surfaces.iter().map(|(t, _)| *t).collect();
@@ -356,8 +390,10 @@ fn inspect_on_root(
     Ok(facts)
 }
 
-/// The mesh has cells, is 3D, and every cell is a hexahedron.
-fn check_cells(dm: &Dm, path: &Path, c0: i32, c1: i32) -> Result<(), String> {
+/// The mesh has cells, is 3D, and every cell is a hexahedron or a tetrahedron; returns how
+/// many of each. Prisms, pyramids and anything else are refused (the driver splits prisms into
+/// hexahedra before this read: coupling/src/input/split.rs).
+fn check_cells(dm: &Dm, path: &Path, c0: i32, c1: i32) -> Result<[u64; 2], String> {
     let mut dim = 0;
     petsc_call!(DMGetDimension(dm.0, &mut dim)).map_err(|e| e.to_string())?;
     if c1 == c0 {
@@ -365,34 +401,37 @@ fn check_cells(dm: &Dm, path: &Path, c0: i32, c1: i32) -> Result<(), String> {
     }
     if dim != 3 {
         return Err(format!(
-            "mesh {} is {}-dimensional: a 3D hexahedral mesh is needed",
+            "mesh {} is {}-dimensional: a 3D mesh of hexahedra and tetrahedra is needed",
             path.display(),
             dim
         ));
     }
-    let (mut nhex, mut other) = (0usize, 0usize);
+    let (mut counts, mut other) = ([0u64; 2], 0usize);
     let mut first_other = None;
     for c in c0..c1 {
         let mut t: sys::DMPolytopeType = 0;
         petsc_call!(DMPlexGetCellType(dm.0, c, &mut t)).map_err(|e| e.to_string())?;
-        if t == sys::DM_POLYTOPE_HEXAHEDRON {
-            nhex += 1;
-        } else {
-            other += 1;
-            first_other.get_or_insert((c - c0, t));
+        match t {
+            sys::DM_POLYTOPE_HEXAHEDRON => counts[0] += 1,
+            sys::DM_POLYTOPE_TETRAHEDRON => counts[1] += 1,
+            _ => {
+                other += 1;
+                first_other.get_or_insert((c - c0, t));
+            }
         }
     }
     if let Some((c, t)) = first_other {
         let kind = match t {
-            sys::DM_POLYTOPE_TETRAHEDRON => "tetrahedron",
-            _ => "non-hexahedral cell",
+            sys::DM_POLYTOPE_TRI_PRISM | sys::DM_POLYTOPE_TRI_PRISM_TENSOR => "prism",
+            sys::DM_POLYTOPE_PYRAMID => "pyramid",
+            _ => "cell of another kind",
         };
         return Err(format!(
-            "mesh {}: element {} is a {} ({} hexahedra, {} other cells): the FE stage reads 8-node hexahedra (the driver splits tetrahedra and prisms into hexahedra before this read: coupling/src/input/split.rs)",
-            path.display(), c, kind, nhex, other
+            "mesh {}: element {} is a {} ({} hexahedra, {} tetrahedra, {} other cells): the FE stage reads 8-node hexahedra and 4-node tetrahedra (the driver splits prisms into hexahedra before this read: coupling/src/input/split.rs)",
+            path.display(), c, kind, counts[0], counts[1], other
         ));
     }
-    Ok(())
+    Ok(counts)
 }
 
 /// Rank 0's vertices: the chart's first point, the vertex range, their coordinates.
@@ -577,7 +616,8 @@ fn distribute(
     Ok((dist, o, m))
 }
 
-/// This rank's elements (gmsh/VTK hex order, local node indices, original ids, blocks), node
+/// This rank's hexahedra (gmsh/VTK hex order) and tetrahedra (gmsh order), as local node
+/// indices, with their original ids and blocks; its node
 /// ids, surface masks and coordinates into `local`. Local: the caller agrees on its error.
 fn extract_local(dm: &Dm, orig: &[i32], mask: &[i32], local: &mut LocalMesh) -> Result<(), String> {
     let s = |e: PetscError| e.to_string();
@@ -589,22 +629,27 @@ fn extract_local(dm: &Dm, orig: &[i32], mask: &[i32], local: &mut LocalMesh) -> 
     for c in c0..c1 {
         dm.closure(c, &mut cl).map_err(s)?;
         let verts: Vec<i32> = cl.iter().copied().filter(|&q| q >= v0 && q < v1).collect();
-        if verts.len() != 8 {
-            return Err(format!(
-                "element {} has {} vertices, expected 8",
-                orig[(c - p0) as usize],
-                verts.len()
-            ));
+        let id = orig[(c - p0) as usize] as u64;
+        let block = dm.label_value(&cell_sets, c).map_err(s)?;
+        // The kind by the vertex count: rank 0 checked every cell is a hexahedron or a
+        // tetrahedron (`check_cells`).
+        match verts.len() {
+            8 => {
+                local
+                    .elems
+                    .push(PETSC_TO_VTK_HEX.map(|j| (verts[j] - v0) as u32));
+                local.elem_id.push(id);
+                local.elem_block.push(block);
+            }
+            4 => {
+                local
+                    .tets
+                    .push(PETSC_TO_GMSH_TET.map(|j| (verts[j] - v0) as u32));
+                local.tet_id.push(id);
+                local.tet_block.push(block);
+            }
+            n => return Err(format!("element {id} has {n} vertices, expected 8 or 4")),
         }
-        let mut conn = [0u32; 8];
-        for (k, &j) in PETSC_TO_VTK_HEX.iter().enumerate() {
-            conn[k] = (verts[j] - v0) as u32;
-        }
-        local.elems.push(conn);
-        local.elem_id.push(orig[(c - p0) as usize] as u64);
-        local
-            .elem_block
-            .push(dm.label_value(&cell_sets, c).map_err(s)?);
     }
     local.node_id = (v0..v1).map(|v| orig[(v - p0) as usize] as u64).collect();
     local.node_surfaces = (v0..v1).map(|v| mask[(v - p0) as usize] as u32).collect();
@@ -673,8 +718,8 @@ fn vertex_coords(dm: &Dm, v0: i32, v1: i32) -> Result<Vec<[f64; 3]>, PetscError>
     Ok(out)
 }
 
-/// Unit normal of a (quadrilateral) face from the cross product of its diagonals' span, or
-/// None for a degenerate face. Any vertex order: the normal's sign is irrelevant here.
+/// Unit normal of a face (a triangle or a quadrilateral: any corner count) from the largest
+/// cross product of its edges from the first corner, or None for a degenerate face. Any vertex order: the normal's sign is irrelevant here.
 fn face_normal(v: &[[f64; 3]]) -> Option<[f64; 3]> {
     if v.len() < 3 {
         return None;
@@ -716,7 +761,6 @@ fn face_normal(v: &[[f64; 3]]) -> Option<[f64; 3]> {
     Some(n)
 }
 
-/// METIS k-way partition of the cells' dual graph (cells sharing a face), on rank 0.
 /// A hexahedron's faces as positions in its DMPlex vertex cone, in the order of the faces in
 /// an interpolated DMPlex's cell cone (PETSc's `DMPlexGetRawFaces_Internal`).
 const HEX_CONE_FACES: [[usize; 4]; 6] = [
@@ -728,9 +772,17 @@ const HEX_CONE_FACES: [[usize; 4]; 6] = [
     [0, 4, 7, 1],
 ];
 
+/// A tetrahedron's faces as positions in its DMPlex vertex cone, in the same function's order
+/// for a tetrahedron.
+const TET_CONE_FACES: [[usize; 3]; 4] = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [2, 1, 3]];
+
+/// METIS k-way partition of the cells' dual graph (cells sharing a face), on rank 0.
 fn metis_partition(dm: &Dm, c0: i32, c1: i32, nparts: i32) -> Result<Vec<i32>, String> {
     // The cell dual graph: two hexahedra are neighbours when they share a face, i.e. four
-    // vertices (the DM holds cells and vertices only: no face points to walk through).
+    // vertices, two tetrahedra when they share three (the DM holds cells and vertices only: no
+    // face points to walk through). A hexahedron and a tetrahedron share no face in a
+    // conforming mesh, so a neighbour is sought among cells of the face's own kind only; on a
+    // mesh of hexahedra alone the graph is the one before tetrahedra were read.
     let nc = (c1 - c0) as usize;
     let s = |e: PetscError| e.to_string();
     let (v0, v1) = dm.depth_stratum(0).map_err(s)?;
@@ -749,20 +801,37 @@ fn metis_partition(dm: &Dm, c0: i32, c1: i32, nparts: i32) -> Result<Vec<i32>, S
     let mut adj: Vec<i32> = Vec::with_capacity(6 * nc);
     xadj.push(0);
     for (c, cone) in cones.iter().enumerate() {
-        if cone.len() != 8 {
-            return Err(format!("cell {c} has {} vertices, not 8", cone.len()));
-        }
-        // The faces in the order PETSc's interpolation gives a hexahedron's cone (bottom, top,
-        // front, back, right, left), so the graph, and METIS's partition, are those of the
-        // interpolated mesh the code read before.
-        for face in HEX_CONE_FACES {
-            let v: [i32; 4] = face.map(|k| cone[k]);
+        // The faces in the order PETSc's interpolation gives a cell's cone (for a hexahedron:
+        // bottom, top, front, back, right, left), so the graph, and METIS's partition, are
+        // those of the interpolated mesh the code read before.
+        // Each face's corners, padded to four (a tetrahedron's face uses three).
+        let mut faces = [[0usize; 4]; 6];
+        let (nf, nv) = match cone.len() {
+            8 => {
+                faces = HEX_CONE_FACES;
+                (6, 4)
+            }
+            4 => {
+                for (f, t) in faces.iter_mut().zip(TET_CONE_FACES) {
+                    f[..3].copy_from_slice(&t);
+                }
+                (4, 3)
+            }
+            n => return Err(format!("cell {c} has {n} vertices, not 8 or 4")),
+        };
+        for face in &faces[..nf] {
+            let mut corners = [0i32; 4];
+            for (x, &k) in corners.iter_mut().zip(&face[..nv]) {
+                *x = cone[k];
+            }
+            let v = &corners[..nv];
             if v.iter().any(|&x| x < v0 || x >= v1) {
                 continue;
             }
             let first = &cells_of[(v[0] - v0) as usize];
             let n = first.iter().copied().find(|&n| {
                 n as usize != c
+                    && cones[n as usize].len() == cone.len()
                     && v[1..]
                         .iter()
                         .all(|&x| cells_of[(x - v0) as usize].contains(&n))
