@@ -100,17 +100,34 @@ fn foot_pressure_scatter(out: &std::path::Path, z_max: f64) -> f64 {
         .read_raw()
         .unwrap();
     let pos = fr.positions.last().unwrap();
+    // An element's distinct nodes: a native tetrahedron is written as the collapsed
+    // hexahedron (a, b, c, c, d, d, d, d).
+    let distinct = |c: &[usize; 8]| {
+        let mut v = c.to_vec();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
     let foot: Vec<bool> = fr
         .connectivity
         .iter()
-        .map(|c| c.iter().map(|&n| pos[n][2]).sum::<f64>() / 8.0 < z_max)
+        .map(|c| {
+            let d = distinct(c);
+            d.iter().map(|&n| pos[n][2]).sum::<f64>() / (d.len() as f64) < z_max
+        })
         .collect();
-    let mut by_face: std::collections::HashMap<[usize; 4], usize> = Default::default();
+    // Faces by their distinct nodes (a collapsed hexahedron's triangles have 3; its edge and
+    // point faces are no faces).
+    let mut by_face: std::collections::HashMap<Vec<usize>, usize> = Default::default();
     let (mut diff2, mut pairs) = (0.0, 0usize);
     for (e, c) in fr.connectivity.iter().enumerate().filter(|(e, _)| foot[*e]) {
         for face in tdyn_tests::frames::FACES {
-            let mut key = face.map(|k| c[k]);
+            let mut key: Vec<usize> = face.iter().map(|&k| c[k]).collect();
             key.sort_unstable();
+            key.dedup();
+            if key.len() < 3 {
+                continue;
+            }
             if let Some(other) = by_face.insert(key, e) {
                 diff2 += (p[e] - p[other]).powi(2);
                 pairs += 1;

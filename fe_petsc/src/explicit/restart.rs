@@ -163,7 +163,7 @@ impl ExplicitFe {
             be.internal_plus_hg = c[3];
         }
         // The step sums are filled by the next force evaluation before they are read.
-        let mut w = get("fe.block_forces").ok_or("fe.block_forces: missing")?;
+        let mut w = take("fe.block_forces", if self.blocks.active() { 24 * self.elems.len() } else { 0 })?;
         if let Some(t) = &mut self.tets {
             let n = t.len();
             let st = take("fe.tet_state", 6 * n)?;
@@ -171,7 +171,8 @@ impl ExplicitFe {
                 s.stress.copy_from_slice(c);
             }
             t.mat_state = take("fe.tet_mat_state", t.mat_state.len())?;
-            w.extend(get("fe.tet_block_forces").ok_or("fe.tet_block_forces: missing")?);
+            let nb = if self.blocks.active() { 24 * n } else { 0 };
+            w.extend(take("fe.tet_block_forces", nb)?);
         }
         if !self.blocks.set_restart_state(&w) {
             return Err("fe.block_forces: does not fit this rank's mesh".into());
