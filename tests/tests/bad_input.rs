@@ -30,6 +30,21 @@ fn documented_mistakes_give_clear_messages() {
         "bogus",
     );
     expect_error(
+        "native_tets_implicit",
+        |s| {
+            s.replace(
+                "[run]\n",
+                "[run]\ntetrahedra = \"nodal_pressure\"\nmode = \"implicit\"\ndt = 1.0e-6\n",
+            )
+        },
+        "run.tetrahedra",
+    );
+    expect_error(
+        "unknown_tetrahedra",
+        |s| s.replace("[run]\n", "[run]\ntetrahedra = \"nodal\"\n"),
+        "tetrahedra",
+    );
+    expect_error(
         "negative_end",
         |s| s.replace("end_time = 1.0e-5", "end_time = -1.0"),
         "run.end_time",
@@ -224,6 +239,65 @@ fn pyramids_and_second_order_meshes_are_refused_in_one_line() {
                 }),
                 "{err}"
             );
+        }
+    }
+}
+
+/// Native tetrahedra (`[run] tetrahedra = "nodal_pressure"`) refuse, in one line at np 1 and
+/// 3, what they do not run yet: a mesh with prisms (they run only as hexahedra, split) and
+/// `[contact]` on a mesh with tetrahedra (contact sees quadrilateral faces: those of the split).
+#[test]
+fn native_tetrahedra_refuse_prisms_and_contact_in_one_line() {
+    let cases = [
+        (
+            "native_prisms",
+            // A triangle-meshed square extruded in layers (gmsh's built-in kernel): prisms.
+            "Point(1) = {0, 0, 0}; Point(2) = {1, 0, 0}; Point(3) = {1, 1, 0}; Point(4) = {0, 1, 0};\n\
+             Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n\
+             Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n\
+             Extrude {0, 0, 1} { Surface{1}; Layers{2}; Recombine; }\n",
+            "",
+            "prisms, which run only as hexahedra",
+        ),
+        (
+            "native_contact",
+            "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\n",
+            "[contact]\nsurfaces = [\"left\"]\n",
+            "[contact] with native tetrahedra",
+        ),
+    ];
+    for (name, shape, extra, needle) in cases {
+        let dir = workdir(name);
+        let geo = dir.join(format!("{name}.geo"));
+        std::fs::write(
+            &geo,
+            format!(
+                "{shape}Mesh.MeshSizeMax = 0.5;\n\
+                 Physical Volume(\"bar\") = {{1}};\nPhysical Surface(\"left\") = {{1}};\n\
+                 Physical Surface(\"sides_y\") = {{3, 4}};\nPhysical Surface(\"sides_z\") = {{5, 6}};\n"
+            ),
+        )
+        .unwrap();
+        let scene = bar_scene(
+            &dir,
+            4,
+            "end_time = 1.0e-5\ntetrahedra = \"nodal_pressure\"",
+            extra,
+        );
+        let text = std::fs::read_to_string(&scene).unwrap();
+        let bar = root().join("meshes").join("bar.geo").display().to_string();
+        std::fs::write(&scene, text.replace(&bar, &geo.display().to_string())).unwrap();
+        for np in [1, 3] {
+            let o = run(np, &scene, &dir.join(format!("out{np}")));
+            assert!(!o.status.success(), "{name}: must be refused at np {np}");
+            let err = String::from_utf8_lossy(&o.stderr);
+            let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
+            assert_eq!(
+                lines.len(),
+                1,
+                "{name} at np {np}: one line naming {needle}:\n{err}"
+            );
+            assert!(lines[0].contains("split"), "{name}: the way out: {err}");
         }
     }
 }

@@ -319,3 +319,65 @@ fn tetrahedral_mesh_is_the_same_bits_at_1_to_3_ranks() {
         }
     }
 }
+
+/// The same bar as above with its tetrahedra run natively (`[run] tetrahedra =
+/// "nodal_pressure"`, fe_petsc/src/tet.rs), at np 1 to 3: the tetrahedra's two nodal sums per
+/// step (dilatation, then forces) are the canonical-order sums of `fe_petsc::assembly`, so
+/// fields.h5, probes.csv and history.csv are the same bits at every rank count; report.json
+/// counts one element per tetrahedron, and no split is made.
+#[test]
+fn native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
+    let dir = workdir("one_answer_native_tets");
+    let scene = dir.join("tets.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "title = \"tetrahedral bar, native tetrahedra\"\n[run]\nend_time = 2.0e-5\noutput_every = 1.0e-5\n\
+             tetrahedra = \"nodal_pressure\"\n\
+             [[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = 0.025 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"j2_plastic\"\ndensity = 7850.0\n\
+             youngs_modulus = 200.0e9\npoisson_ratio = 0.3\nyield_stress = 350.0e6\nhardening_modulus = 1.0e9\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\nvelocity = [-10.0, 0.0, 0.0]\n\
+             [[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n\
+             [[probe]]\nname = \"mid\"\npoint = [0.1, 0.025, 0.025]\nfields = [\"velocity_x\", \"pressure\"]\n",
+            root().join("meshes/bar_tets.geo").display()
+        ),
+    )
+    .unwrap();
+    let report = |out: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+    };
+    let base = dir.join("np1");
+    run_ok(1, &scene, &base);
+    let r = report(&base);
+    assert!(
+        r["mesh_split"].is_null(),
+        "native tetrahedra are not split: {}",
+        r["mesh_split"]
+    );
+    // The file's tetrahedra, one element each (meshes/bar_tets.geo at H = 0.025: a few
+    // hundred).
+    let elements = r["elements"].as_u64().unwrap();
+    assert!(elements > 100, "a tetrahedral mesh: {elements} elements");
+    let (h, rows) = read_csv(&base.join("probes.csv"));
+    let v = column(&h, &rows, "mid.velocity_x");
+    assert!(
+        v.iter().any(|&x| x != 0.0) && v.iter().all(|x| x.is_finite()),
+        "the bar moves: {v:?}"
+    );
+    for np in [2, 3] {
+        let out = dir.join(format!("np{np}"));
+        run_ok(np, &scene, &out);
+        assert_eq!(report(&out)["elements"].as_u64(), Some(elements));
+        if let Err(e) = fields_differ(&base, &out) {
+            panic!("np {np} against np 1: fields.h5 {e} (same bits expected)");
+        }
+        for file in ["probes.csv", "history.csv"] {
+            let bad = csv_columns_differ(&base, &out, file, &[]);
+            assert!(
+                bad.is_empty(),
+                "np {np} against np 1: {file} columns differ: {bad:?}"
+            );
+        }
+    }
+}
