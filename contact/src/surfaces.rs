@@ -1,4 +1,5 @@
-//! Contact surfaces and bodies from a hexahedral mesh.
+//! Contact surfaces and bodies from a hexahedral mesh (a tetrahedron as the collapsed
+//! hexahedron (a, b, c, c, d, d, d, d): its triangles are faces with a repeated corner).
 //!
 //! Hexahedra use the VTK (and gmsh) node order: `0-1-2-3` the bottom face counter-clockwise seen
 //! from above, `4-5-6-7` the top face above them. A face of the mesh is a *boundary* face when
@@ -73,11 +74,26 @@ impl Surfaces {
     }
 }
 
-/// The face's nodes sorted: the same key for both orientations, to match faces between elements.
+/// The face's distinct nodes sorted (padded with `u64::MAX`): the same key for both
+/// orientations, to match faces between elements. A tetrahedron is handed in as the collapsed
+/// hexahedron (a, b, c, c, d, d, d, d), whose triangles repeat a corner, and not the same one
+/// in the two tetrahedra sharing a triangle: the key of its distinct nodes matches them.
 pub fn face_key(nodes: [u64; 4]) -> [u64; 4] {
     let mut k = nodes;
     k.sort_unstable();
+    for i in (1..4).rev() {
+        if k[i] == k[i - 1] {
+            k[i..].rotate_left(1);
+            k[3] = u64::MAX;
+        }
+    }
     k
+}
+
+/// Whether a face has an area: at least 3 distinct corners (a collapsed hexahedron's point and
+/// edge "faces" have not).
+fn is_face(key: &[u64; 4]) -> bool {
+    key[2] != u64::MAX
 }
 
 /// Union-find with path halving; the root of a set is its smallest element.
@@ -142,7 +158,8 @@ pub fn surfaces(hexes: &[[u64; 8]], selected: impl Fn(usize) -> bool) -> Surface
         }
         for (s, side) in HEX_FACES.iter().enumerate() {
             let nodes = corners(h, side);
-            if uses[&face_key(nodes)] == 1 {
+            let key = face_key(nodes);
+            if is_face(&key) && uses[&key] == 1 {
                 faces.push(BoundaryFace {
                     nodes,
                     element: e,

@@ -131,3 +131,63 @@ fn interior_faces_stay_interior_under_selection() {
         "the corner hex shows 3 faces on the block boundary"
     );
 }
+
+/// Tetrahedra as collapsed hexahedra (a, b, c, c, d, d, d, d): the unit cube split into the 6
+/// tetrahedra around its diagonal (Kuhn) has 12 boundary triangles (2 per cube face, counted by
+/// hand) and no interior face counted as boundary, although two neighbours repeat different
+/// corners of the triangle they share; no point or edge "face"; each triangle's normal points
+/// out of the cube.
+#[test]
+fn collapsed_tetrahedra_give_the_boundary_triangles() {
+    // Cube corners by bits (x, y, z) -> id.
+    let x = |id: u64| -> V3 {
+        [
+            (id & 1) as f64,
+            ((id >> 1) & 1) as f64,
+            ((id >> 2) & 1) as f64,
+        ]
+    };
+    // Paths 0 -> 7 through one axis then two: (0, p, q, 7), oriented positive.
+    let mut tets = Vec::new();
+    for (p, q) in [(1, 3), (1, 5), (2, 3), (2, 6), (4, 5), (4, 6)] {
+        let mut t = [0u64, p, q, 7];
+        let v = dot(
+            sub(x(t[1]), x(t[0])),
+            cross(sub(x(t[2]), x(t[0])), sub(x(t[3]), x(t[0]))),
+        );
+        if v < 0.0 {
+            t.swap(2, 3);
+        }
+        let [a, b, c, d] = t;
+        tets.push([a, b, c, c, d, d, d, d]);
+    }
+    let s = surfaces(&tets, |_| true);
+    assert_eq!(s.n_bodies, 1);
+    assert_eq!(s.faces.len(), 12, "2 triangles per cube face");
+    for f in &s.faces {
+        let mut d = f.nodes.to_vec();
+        d.sort_unstable();
+        d.dedup();
+        assert_eq!(d.len(), 3, "a triangle: {:?}", f.nodes);
+        let key = face_key(f.nodes);
+        assert_eq!(key[3], u64::MAX, "the key of its 3 distinct nodes: {key:?}");
+        let p: Vec<V3> = d.iter().map(|&n| x(n)).collect();
+        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+        // Outward: the face's corners in its own order give a normal away from the centre.
+        let q: Vec<V3> = f.nodes.iter().map(|&n| x(n)).collect();
+        let (a, b) = (sub(q[2], q[0]), sub(q[3], q[1]));
+        let outward = cross(a, b);
+        let centre = [0.5, 0.5, 0.5];
+        let mid = [
+            (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+            (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+            (p[0][2] + p[1][2] + p[2][2]) / 3.0,
+        ];
+        assert!(dot(n, n) > 0.0);
+        assert!(
+            dot(outward, sub(mid, centre)) > 0.0,
+            "face {:?} points into the cube",
+            f.nodes
+        );
+    }
+}

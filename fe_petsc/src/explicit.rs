@@ -49,10 +49,10 @@ mod restart;
 pub use contact::ContactCorrection;
 mod setup;
 mod tets;
-pub use queries::ElementRef;
-pub use tets::{TetPart, TetSums};
 pub use loads::{face_forces, Loads, PressureLoad};
+pub use queries::ElementRef;
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
+pub use tets::{TetPart, TetSums};
 
 /// A nodal constraint from a boundary condition.
 #[derive(Debug, Clone, PartialEq)]

@@ -126,6 +126,9 @@ pub const INSIDE_BOUND: f64 = 2.0;
 /// a parallelogram (the kites of a split tetrahedron: a corner, two edge midpoints, a face
 /// centroid) folds over outside its square, where the projection's normal can point either way.
 pub fn depth_inside(p: [f64; 3], x: &[[f64; 3]; 8]) -> f64 {
+    if is_collapsed_tet(x) {
+        return depth_inside_tet(p, [x[0], x[1], x[2], x[4]]);
+    }
     let mean = x.iter().fold([0.0; 3], |m, c| {
         [m[0] + c[0] / 8.0, m[1] + c[1] / 8.0, m[2] + c[2] / 8.0]
     });
@@ -157,8 +160,18 @@ pub fn boundary_faces(conn: &[[usize; 8]], elems: &[usize]) -> Vec<[usize; 4]> {
     for &e in elems {
         for f in &FACES {
             let nodes = f.map(|i| conn[e][i]);
+            // Matched by their distinct nodes: a native tetrahedron comes as the collapsed
+            // hexahedron (a, b, c, c, d, d, d, d), its triangles with a repeated corner (not
+            // the same in two neighbours), its point and edge "faces" no faces.
             let mut key = nodes;
             key.sort_unstable();
+            let mut distinct = key.to_vec();
+            distinct.dedup();
+            if distinct.len() < 3 {
+                continue;
+            }
+            distinct.resize(4, usize::MAX);
+            key.copy_from_slice(&distinct);
             uses.entry(key).or_insert((nodes, 0)).1 += 1;
         }
     }
@@ -226,7 +239,7 @@ pub fn deepest_penetration(
             .iter()
             .filter(|f| !f.contains(&n))
             .map(|f| {
-                let (c, _) = project(p, &f.map(|i| pos[i]), 1.0);
+                let c = closest_on_face(p, &f.map(|i| pos[i]));
                 dot(sub(p, c), sub(p, c)).sqrt()
             })
             .fold(f64::INFINITY, f64::min);
@@ -337,4 +350,83 @@ pub fn deepest_between_bodies(
         }
     }
     worst
+}
+
+/// Whether the corners `x` are a tetrahedron written as the collapsed hexahedron (a, b, c, c,
+/// d, d, d, d) (fields.h5's form of a native tetrahedron).
+pub fn is_collapsed_tet(x: &[[f64; 3]; 8]) -> bool {
+    x[3] == x[2] && x[5] == x[4] && x[6] == x[4] && x[7] == x[4] && x[4] != x[2]
+}
+
+/// How deep `p` lies inside the tetrahedron `t` (gmsh order, positive volume): the smallest
+/// distance behind its 4 planar faces (negative outside one).
+pub fn depth_inside_tet(p: [f64; 3], t: [[f64; 3]; 4]) -> f64 {
+    // Each face (i, j, k) with the fourth corner l behind it: the inward normal points to l.
+    [(1, 2, 3, 0), (0, 2, 3, 1), (0, 1, 3, 2), (0, 1, 2, 3)]
+        .iter()
+        .map(|&(i, j, k, l)| {
+            let n = cross(sub(t[j], t[i]), sub(t[k], t[i]));
+            let len = dot(n, n).sqrt();
+            let s = if dot(sub(t[l], t[i]), n) > 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            s * dot(sub(p, t[i]), n) / len
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The point of the triangle `t` closest to `p` (by the region of the triangle's plane `p`
+/// projects into: a vertex, an edge or the inside; C. Ericson, Real-Time Collision Detection,
+/// 2005, section 5.1.5).
+pub fn closest_on_triangle(p: [f64; 3], t: [[f64; 3]; 3]) -> [f64; 3] {
+    let (a, b, c) = (t[0], t[1], t[2]);
+    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
+    let at = |u: f64, v: f64| -> [f64; 3] { std::array::from_fn(|k| a[k] + u * ab[k] + v * ac[k]) };
+    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = sub(p, b);
+    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return at(d1 / (d1 - d3), 0.0);
+    }
+    let cp = sub(p, c);
+    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return at(0.0, d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return std::array::from_fn(|k| b[k] + w * (c[k] - b[k]));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    at(vb * denom, vc * denom)
+}
+
+/// The point of a skin face `q` (a quadrangle, or a triangle with a repeated corner) closest
+/// to `p`.
+pub fn closest_on_face(p: [f64; 3], q: &[[f64; 3]; 4]) -> [f64; 3] {
+    let mut tri = Vec::with_capacity(4);
+    for c in q {
+        if !tri.contains(c) {
+            tri.push(*c);
+        }
+    }
+    if tri.len() == 3 {
+        closest_on_triangle(p, [tri[0], tri[1], tri[2]])
+    } else {
+        project(p, q, 1.0).0
+    }
 }

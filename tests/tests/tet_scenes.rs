@@ -24,8 +24,29 @@ const MEASURED: [&str; 2] = ["contact_imbalance", "contact_bytes"];
 ///   the contact's onset and its peak force).
 #[test]
 fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
-    let scene = root().join("scenes/ball_plate_tet.toml");
-    let base = workdir("tet_ball_plate_np1").join("out");
+    ball_on_plate(&root().join("scenes/ball_plate_tet.toml"), "tet_ball_plate");
+}
+
+/// The same scene with its tetrahedra run natively (`[run] tetrahedra = "nodal_pressure"`,
+/// fe_petsc/src/tet.rs; 3,477 elements): contact on their triangles (each a contact face with
+/// a repeated corner), with the same references and bounds as above.
+#[test]
+fn native_tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
+    let dir = workdir("native_tet_ball_plate");
+    let text = std::fs::read_to_string(root().join("scenes/ball_plate_tet.toml"))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+        .replace("[run]\n", "[run]\ntetrahedra = \"nodal_pressure\"\n");
+    assert!(text.contains("nodal_pressure"), "the scene's [run]");
+    let scene = dir.join("ball_plate_tet_nodal.toml");
+    std::fs::write(&scene, text).unwrap();
+    ball_on_plate(&scene, "native_tet_ball_plate");
+}
+
+/// The checks of the tests above on `scene`, its runs in workdirs named after `tag`.
+fn ball_on_plate(scene: &std::path::Path, tag: &str) {
+    let scene = scene.to_path_buf();
+    let base = workdir(&format!("{tag}_np1")).join("out");
     run_ok(1, &scene, &base);
     let (h, rows) = read_csv(&base.join("history.csv"));
     let contacts = column(&h, &rows, "contacts");
@@ -53,7 +74,7 @@ fn tet_ball_on_tet_plate_stays_out_conserves_energy_and_gives_one_answer() {
         deepest.1
     );
     assert!(err_max < 0.02, "energy error {err_max} at most (limit 2 %)");
-    np3_gives_np1s_rows(&scene, &base, 1.0e-5, "tet_ball_plate_np3");
+    np3_gives_np1s_rows(&scene, &base, 1.0e-5, &format!("{tag}_np3"));
 }
 
 /// Runs `scene` at np 3 to `end_time` (s; before the np 1 run's end, to keep the test short) in

@@ -115,7 +115,9 @@ fn inside(fe: &ExplicitFe, e: usize, x: &[[f64; 3]; 8], p: [f64; 3]) -> bool {
             (0..4).all(|a| {
                 let l = 0.25
                     + (0..3)
-                        .map(|k| g[a][k] * (p[k] - 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k])))
+                        .map(|k| {
+                            g[a][k] * (p[k] - 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k]))
+                        })
                         .sum::<f64>();
                 l > 0.5 * INSIDE_MARGIN
             })

@@ -161,7 +161,8 @@ fn locate_in(fe: &ExplicitFe, e: usize, point: [f64; 3]) -> Option<At> {
             // the linear tetrahedron; inside when none is below -tol / (its altitude).
             let xt = [x[0], x[1], x[2], x[4]];
             let (g, _) = fe_petsc::tet::gradients(&xt);
-            let c: [f64; 3] = std::array::from_fn(|k| 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k]));
+            let c: [f64; 3] =
+                std::array::from_fn(|k| 0.25 * (xt[0][k] + xt[1][k] + xt[2][k] + xt[3][k]));
             let l: [f64; 4] = std::array::from_fn(|a| {
                 0.25 + (0..3).map(|k| g[a][k] * (point[k] - c[k])).sum::<f64>()
             });

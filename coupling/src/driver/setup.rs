@@ -159,12 +159,6 @@ pub fn build(
         fe.choose_kernel(world, algorithms.kernel)
             .map_err(RunFailure::from)?;
         super::overlap::check(world, scene, fe.state()).map_err(RunFailure::from)?;
-        if scene.contact.is_some() && fe.mesh.local.global_tets > 0 {
-            // Every rank has the same scene and the same global count: the same answer.
-            return Err(RunFailure::from(format!(
-                "{file}: [contact] with native tetrahedra ([run] tetrahedra = \"nodal_pressure\"): contact surfaces of triangles are not run yet; use tetrahedra = \"split\" (the default), whose faces contact sees"
-            )));
-        }
     }
     let sph = if scene.particles.is_empty() {
         None

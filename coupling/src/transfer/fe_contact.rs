@@ -131,11 +131,19 @@ fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> 
 /// its owned nodes (gid, surface bits), and each element's flag of a master volume and block
 /// (the index in `block_tags`; `block_tags.len()` for none).
 fn local_inputs(mesh: &LocalMesh, master_volumes: &[i32], block_tags: &[i32]) -> [Vec<u64>; 4] {
+    // Native tetrahedra as collapsed hexahedra (a, b, c, c, d, d, d, d): their triangles are
+    // the faces with a repeated corner (`contact::face_key`).
+    let tets = mesh
+        .tets
+        .iter()
+        .map(|&[a, b, c, d]| [a, b, c, c, d, d, d, d]);
     let elems: Vec<u64> = mesh
         .elems
         .iter()
-        .zip(&mesh.elem_id)
-        .flat_map(|(c, &id)| std::iter::once(id).chain(c.iter().map(|&n| mesh.node_id[n as usize])))
+        .copied()
+        .chain(tets)
+        .zip(mesh.elem_id.iter().chain(&mesh.tet_id))
+        .flat_map(|(c, &id)| std::iter::once(id).chain(c.map(|n| mesh.node_id[n as usize])))
         .collect();
     let nodes: Vec<u64> = (0..mesh.node_id.len())
         .filter(|&n| mesh.owned[n])
@@ -144,12 +152,14 @@ fn local_inputs(mesh: &LocalMesh, master_volumes: &[i32], block_tags: &[i32]) ->
     let in_master: Vec<u64> = mesh
         .elem_block
         .iter()
+        .chain(&mesh.tet_block)
         .map(|t| master_volumes.contains(t) as u64)
         .collect();
     let nb = block_tags.len();
     let in_block: Vec<u64> = mesh
         .elem_block
         .iter()
+        .chain(&mesh.tet_block)
         .map(|t| block_tags.iter().position(|b| b == t).unwrap_or(nb) as u64)
         .collect();
     [elems, nodes, in_master, in_block]

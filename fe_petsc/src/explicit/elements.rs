@@ -1,8 +1,8 @@
 //! The element loop and its kernel dispatch: groups of consecutive elements of one material
 //! through the element kernel ([`Batch`]), the forces added to the nodes in canonical element
 //! order.
-use super::*;
 use super::tets;
+use super::*;
 use crate::batch::GroupInverted;
 
 impl ExplicitFe {

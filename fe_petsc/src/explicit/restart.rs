@@ -74,9 +74,12 @@ impl ExplicitFe {
             .collect();
         // The per-block work: the hexahedra's, then the tetrahedra's apart (each by its ids).
         let mut block_forces = self.blocks.restart_state();
-        let tet_block_forces = block_forces.split_off(block_forces.len().min(
-            if self.blocks.active() { 24 * self.elems.len() } else { 0 },
-        ));
+        let tet_block_forces =
+            block_forces.split_off(block_forces.len().min(if self.blocks.active() {
+                24 * self.elems.len()
+            } else {
+                0
+            }));
         let mut out = vec![
             ("fe.x", flat(&self.x)),
             // Without kept start positions, the positions (read back only where kept).
@@ -97,7 +100,10 @@ impl ExplicitFe {
             ("fe.block_forces", block_forces),
         ];
         if let Some(t) = &self.tets {
-            out.push(("fe.tet_state", t.state.iter().flat_map(|s| s.stress).collect()));
+            out.push((
+                "fe.tet_state",
+                t.state.iter().flat_map(|s| s.stress).collect(),
+            ));
             out.push(("fe.tet_mat_state", t.mat_state.clone()));
             out.push(("fe.tet_block_forces", tet_block_forces));
         }
@@ -163,7 +169,14 @@ impl ExplicitFe {
             be.internal_plus_hg = c[3];
         }
         // The step sums are filled by the next force evaluation before they are read.
-        let mut w = take("fe.block_forces", if self.blocks.active() { 24 * self.elems.len() } else { 0 })?;
+        let mut w = take(
+            "fe.block_forces",
+            if self.blocks.active() {
+                24 * self.elems.len()
+            } else {
+                0
+            },
+        )?;
         if let Some(t) = &mut self.tets {
             let n = t.len();
             let st = take("fe.tet_state", 6 * n)?;

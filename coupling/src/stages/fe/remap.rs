@@ -133,7 +133,9 @@ pub fn arrays(fe: &Fe, pieces: &[StateReader]) -> Result<HashMap<&'static str, V
             }
             RestartLayout::Tet => {
                 let w = per(tet_ids.len());
-                let from = tets.as_ref().ok_or("checkpoint: tetrahedra's state without them")?;
+                let from = tets
+                    .as_ref()
+                    .ok_or("checkpoint: tetrahedra's state without them")?;
                 gather(pieces, name, w, tet_ids, from)?
             }
             RestartLayout::Global => {
