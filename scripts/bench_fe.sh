@@ -5,7 +5,10 @@
 # (TETS=1, the default) the same block meshed by gmsh's default tetrahedra of about the same node
 # count (scenes/bench_block_tet.toml): ns per tetrahedron-cycle and per hexahedron-cycle of its
 # split (4 hexahedra per tetrahedron), the runs interleaved with the hexahedral block's (hex,
-# tet, hex, tet, ...) so that the ratio of each pair holds when the machine's speed drifts.
+# tet, hex, tet, ...) so that the ratio of each pair holds when the machine's speed drifts;
+# and the same tetrahedra run natively (scenes/bench_block_tet_nodal.toml, `[run] tetrahedra =
+# "nodal_pressure"`): ns per tetrahedron-cycle of the native element, its stable step against
+# the split's, and the cost per simulated microsecond of both.
 # NPS (default "1 2") lists the rank counts. One run on tetrahedra takes minutes: its set-up
 # (the split, PETSc's partition and distribution of 2.5 million cells) about 3 on 2 cores.
 set -euo pipefail
@@ -18,13 +21,14 @@ target/release/tdyn mesh meshes/bar.geo -p L=1 -p A=1 -p N=47 -p M=47 >/dev/null
 kinds="hex"
 if [ "$TETS" = 1 ]; then
   target/release/tdyn mesh meshes/block_tet.geo -p L=1 -p A=1 -p H=0.0195 >/dev/null
-  kinds="hex tet"
+  kinds="hex tet tetn"
 fi
 for np in $NPS; do
   for r in $(seq "$REPEATS"); do
     for kind in $kinds; do
       scene=scenes/bench_block.toml
       [ "$kind" = tet ] && scene=scenes/bench_block_tet.toml
+      [ "$kind" = tetn ] && scene=scenes/bench_block_tet_nodal.toml
       mpirun -np "$np" target/release/tdyn run "$scene" --quiet --overwrite --out "out/bench_${kind}_np${np}_r${r}"
     done
   done
@@ -53,5 +57,15 @@ if "tet" in runs:
     ratio = [t["ns_per_element_cycle"] / h["ns_per_element_cycle"] for h, t in zip(runs["hex"], runs["tet"])]
     print(f"np {np_}: split hexahedron-cycle / hexahedron-cycle, pair by pair: median "
           f"{statistics.median(ratio):.3f} (" + ", ".join(f"{x:.3f}" for x in ratio) + ")")
+if "tetn" in runs:
+    # CPU seconds per simulated microsecond: elements x steps x ns per element-cycle over the
+    # 10 us both tetrahedral bench scenes run.
+    def per_us(x):
+        return x["elements"] * x["steps"] * x["ns_per_element_cycle"] * 1e-9 / 10.0
+    tets = (runs["tet"][0].get("mesh_split") or {}).get("tetrahedra", 0)
+    n = runs["tetn"][0]["elements"]
+    print(f"np {np_}: {n} native tetrahedra, {tets} split: CPU seconds per simulated microsecond "
+          f"native {statistics.median(per_us(x) for x in runs['tetn']):.3f}, split "
+          f"{statistics.median(per_us(x) for x in runs['tet']):.3f}")
 PY
 done

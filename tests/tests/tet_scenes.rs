@@ -159,10 +159,15 @@ fn last_element_state(out: &std::path::Path) -> ElementState {
         .connectivity
         .iter()
         .map(|c| {
+            // The mean of the distinct nodes (a native tetrahedron is written as the collapsed
+            // hexahedron (a, b, c, c, d, d, d, d)).
+            let mut d = c.to_vec();
+            d.sort_unstable();
+            d.dedup();
             let mut m = [0.0; 3];
-            for &n in c {
+            for &n in &d {
                 for k in 0..3 {
-                    m[k] += x0[n][k] / 8.0;
+                    m[k] += x0[n][k] / d.len() as f64;
                 }
             }
             m
