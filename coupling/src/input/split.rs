@@ -21,16 +21,16 @@
 //! 22 V constraints (one pressure per hexahedron): 3.3 dofs per constraint, the ratio of a
 //! hexahedral mesh (3 dofs per node, one node per element), which does not lock.
 //!
-//! The alternatives of the anchors, not taken: nodal-averaged-pressure tetrahedra
-//! (LS-DYNA ELFORM 13; OpenRadioss `Itetra4 = 3`, which averages each node's volume ratio over
-//! its tetrahedra) and the 10-node composite tetrahedron (Thoutireddy et al. 2002) would each be a
-//! second element, with its own kernel, stable step, hourglass-free stabilisation of spurious
-//! pressure modes (Gee, Dohrmann, Key & Wall), contact faces, output topology, probes, particle
-//! fill, implicit tangent and restart. The split reuses all of them unchanged: PETSc, the
-//! lane kernel, contact, output, probes, particle fill, implicit mode, restart and the
-//! reproducibility guarantee see hexahedra as for any hexahedral mesh. The cost: 4 hexahedra per
-//! tetrahedron, and a stable step about half the tetrahedron's (the sub-hexahedra are about half
-//! as thick).
+//! The alternative is `[run] tetrahedra = "nodal_pressure"` (the native tetrahedron with a
+//! nodal-averaged pressure, LS-DYNA ELFORM 13 / OpenRadioss `Itetra4 = 3`: `fe_petsc::tet`), with
+//! no split at all ([`check_native`] only refuses what it cannot run). It removes the locking in
+//! plastic flow another way at the tetrahedron's own cost and step, but stays stiff in bending
+//! (docs/element.md compares them): the split is the default because it is right in both. The
+//! 10-node composite tetrahedron (Thoutireddy et al. 2002) is not built. The split reuses the
+//! hexahedron unchanged: PETSc, the lane kernel, contact, output, probes, particle fill,
+//! implicit mode, restart and the reproducibility guarantee see hexahedra as for any
+//! hexahedral mesh. The cost: 4 hexahedra per tetrahedron, and a stable step about half the
+//! tetrahedron's (the sub-hexahedra are about half as thick).
 //!
 //! # The split (exact)
 //!
