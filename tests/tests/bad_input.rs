@@ -244,28 +244,19 @@ fn pyramids_and_second_order_meshes_are_refused_in_one_line() {
 }
 
 /// Native tetrahedra (`[run] tetrahedra = "nodal_pressure"`) refuse, in one line at np 1 and
-/// 3, what they do not run yet: a mesh with prisms (they run only as hexahedra, split) and
-/// `[contact]` on a mesh with tetrahedra (contact sees quadrilateral faces: those of the split).
+/// 3, what they do not run: a mesh with prisms (they run only as hexahedra, split).
 #[test]
-fn native_tetrahedra_refuse_prisms_and_contact_in_one_line() {
-    let cases = [
-        (
-            "native_prisms",
-            // A triangle-meshed square extruded in layers (gmsh's built-in kernel): prisms.
-            "Point(1) = {0, 0, 0}; Point(2) = {1, 0, 0}; Point(3) = {1, 1, 0}; Point(4) = {0, 1, 0};\n\
+fn native_tetrahedra_refuse_prisms_in_one_line() {
+    let cases = [(
+        "native_prisms",
+        // A triangle-meshed square extruded in layers (gmsh's built-in kernel): prisms.
+        "Point(1) = {0, 0, 0}; Point(2) = {1, 0, 0}; Point(3) = {1, 1, 0}; Point(4) = {0, 1, 0};\n\
              Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n\
              Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n\
              Extrude {0, 0, 1} { Surface{1}; Layers{2}; Recombine; }\n",
-            "",
-            "prisms, which run only as hexahedra",
-        ),
-        (
-            "native_contact",
-            "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\n",
-            "[contact]\nsurfaces = [\"left\"]\n",
-            "[contact] with native tetrahedra",
-        ),
-    ];
+        "",
+        "prisms, which run only as hexahedra",
+    )];
     for (name, shape, extra, needle) in cases {
         let dir = workdir(name);
         let geo = dir.join(format!("{name}.geo"));
