@@ -208,6 +208,20 @@ pub fn deepest_penetration(
     nodes: &[usize],
     body: &Body,
 ) -> (f64, usize) {
+    let points: Vec<(usize, [f64; 3])> = nodes.iter().map(|&n| (n, pos[n])).collect();
+    deepest_point_inside(pos, conn, &points, body)
+}
+
+/// [`deepest_penetration`] for any points `(label, point)`: a point is in the body when it lies
+/// inside one of its elements that it is not a corner of (a label equal to a corner's node id
+/// is that node), and is then as deep as its distance to the nearest face of the body's skin
+/// it is not a corner of. Returns (depth, label), depth 0 when none is inside.
+pub fn deepest_point_inside(
+    pos: &[[f64; 3]],
+    conn: &[[usize; 8]],
+    points: &[(usize, [f64; 3])],
+    body: &Body,
+) -> (f64, usize) {
     let boxes: Vec<([f64; 3], [f64; 3])> = body
         .elems
         .iter()
@@ -224,8 +238,7 @@ pub fn deepest_penetration(
         })
         .collect();
     let mut worst = (0.0, usize::MAX);
-    for &n in nodes {
-        let p = pos[n];
+    for &(n, p) in points {
         let inside = boxes.iter().zip(&body.elems).any(|(b, &e)| {
             (0..3).all(|k| p[k] >= b.0[k] && p[k] <= b.1[k])
                 && !conn[e].contains(&n)
