@@ -53,11 +53,12 @@ fn johnson_cook_thermal_taylor_bar_matches_dynela_and_abaqus() {
 /// run as 4 hexahedra): length within 2 % and foot radius within 4 % of the literature at np 1
 /// and 3; and the pressure in the foot free of checkerboarding: its scatter between face
 /// neighbours (`foot_pressure_scatter`) at most `CHECKERBOARD_FACTOR` times the O-grid's
-/// (scenes/taylor_copper.toml, N = 6). Ignored in `make test`: about 20 min per rank count on
-/// 2 cores (35,336 hexahedra at a step of 1-6 ns, docs/element.md "Cost");
+/// (scenes/taylor_copper.toml, N = 6). Ignored in `make test`: 66,457 steps of 35,336
+/// hexahedra (133 s at np 2 on an idle 2-core AVX-512 Xeon; about twice that per rank count on
+/// an AVX2 CPU or a loaded machine); the same bar on native tetrahedra runs in the suite (below);
 /// `cargo test --release -p tdyn-tests --test validation tetrahedra -- --ignored`.
 #[test]
-#[ignore = "about 40 min on 2 cores: the tetrahedral Taylor bar at np 1 and 3"]
+#[ignore = "minutes per rank count: the split tetrahedral Taylor bar at np 1 and 3"]
 fn taylor_copper_bar_on_tetrahedra_within_the_literature_without_checkerboard() {
     passes_full_at_np1_and_np3("taylor_copper_tets");
     let tets = root()
@@ -186,10 +187,11 @@ fn foot_pressure_scatter_of_runs() {
 
 /// Issue 30's "done when": the cantilever meshed with gmsh's default tetrahedra of size
 /// depth/4 (validation/cantilever_tets): first bending period within 5 % of Timoshenko at np 1
-/// and 3. Ignored in `make test`: about 135,000 steps of 14,400 hexahedra, 10-15 min per rank
-/// count on 2 cores.
+/// and 3. Ignored in `make test`: about 135,000 steps of 14,400 hexahedra, minutes per rank
+/// count on 2 cores. (The native tetrahedra's cantilever, `scenes/cantilever_tets_nodal.toml`,
+/// runs in 16 s at np 2 but is 6.0 % fast: docs/element.md "Native tetrahedra".)
 #[test]
-#[ignore = "about 25 min on 2 cores: the tetrahedral cantilever at np 1 and 3"]
+#[ignore = "minutes per rank count: the split tetrahedral cantilever at np 1 and 3"]
 fn cantilever_on_tetrahedra_bending_period_within_timoshenko() {
     passes_full_at_np1_and_np3("cantilever_tets");
 }
