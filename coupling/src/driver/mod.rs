@@ -544,7 +544,20 @@ fn start_info<'a>(
         dt_stable: stable0,
         dt,
         end_time: scene.run.end_time,
-        mesh_split: model.mesh_split.map(|s| s.describe()),
+        mesh_split: model.mesh_split.map(|s| s.describe()).or_else(|| {
+            // Native tetrahedra: say so, as the split says what it did.
+            let tets = mesh.map_or(0, |l| l.global_tets);
+            (tets > 0).then(|| {
+                format!(
+                    "{} tetrahedra run natively (nodal-averaged pressure, [run] tetrahedra = \"nodal_pressure\"){}",
+                    crate::input::split::grouped(tets as usize),
+                    match mesh.map_or(0, |l| l.global_hexes) {
+                        0 => String::new(),
+                        h => format!(", beside {} hexahedra", crate::input::split::grouped(h as usize)),
+                    }
+                )
+            })
+        }),
     }
 }
 

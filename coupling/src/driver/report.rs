@@ -133,6 +133,12 @@ pub fn write(
             }),
         );
     }
+    if let Some(l) = fe_mesh.filter(|l| l.global_tets > 0) {
+        ex.insert(
+            "native_tetrahedra".into(),
+            serde_json::json!({ "tetrahedra": l.global_tets, "hexahedra": l.global_hexes }),
+        );
+    }
     if let Some(fe) = &model.fe {
         ex.insert("blocks".into(), f.hourglass.report(fe.state()));
         // How many ranks put their elements and nodes in a new order (a poor file order).
