@@ -381,3 +381,71 @@ fn native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
         }
     }
 }
+
+/// A mesh of hexahedra and native tetrahedra together (`[run] tetrahedra = "nodal_pressure"`;
+/// two `[[mesh]]` entries merged: the hexahedral bar of meshes/bar.geo and the tetrahedral one
+/// of meshes/bar_tets.geo beside it, one block), both struck at 10 m/s against their fixed
+/// ends, at np 1 to 3: the two element kinds' ordered sums (each node's force the hexahedra's
+/// sum, then the tetrahedra's) give the same bits in fields.h5, probes.csv and history.csv at
+/// every rank count; report.json counts both kinds, and a probe in each bar reads its own
+/// element kind.
+#[test]
+fn hexahedra_beside_native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
+    let dir = workdir("one_answer_mixed_native");
+    let scene = dir.join("mixed.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "title = \"hexahedral and tetrahedral bars\"\n[run]\nend_time = 2.0e-5\noutput_every = 1.0e-5\n\
+             tetrahedra = \"nodal_pressure\"\n\
+             [[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, N = 8, M = 2 }}\n\
+             [[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = 0.025 }}\ntranslate = [0.0, 0.1, 0.0]\n\
+             [[material]]\nname = \"steel\"\nmodel = \"j2_plastic\"\ndensity = 7850.0\n\
+             youngs_modulus = 200.0e9\npoisson_ratio = 0.3\nyield_stress = 350.0e6\nhardening_modulus = 1.0e9\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\nvelocity = [-10.0, 0.0, 0.0]\n\
+             [[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n\
+             [[probe]]\nname = \"hex\"\npoint = [0.1, 0.025, 0.025]\nfields = [\"velocity_x\", \"pressure\"]\n\
+             [[probe]]\nname = \"tet\"\npoint = [0.1, 0.125, 0.025]\nfields = [\"velocity_x\", \"pressure\"]\n",
+            root().join("meshes/bar.geo").display(),
+            root().join("meshes/bar_tets.geo").display()
+        ),
+    )
+    .unwrap();
+    let report = |out: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+    };
+    let base = dir.join("np1");
+    run_ok(1, &scene, &base);
+    let r = report(&base);
+    let kinds = &r["native_tetrahedra"];
+    let (tets, hexes) = (
+        kinds["tetrahedra"].as_u64().unwrap(),
+        kinds["hexahedra"].as_u64().unwrap(),
+    );
+    assert_eq!(hexes, 8 * 2 * 2, "the hexahedral bar's N x M x M: {kinds}");
+    assert!(tets > 100, "the tetrahedral bar: {kinds}");
+    assert_eq!(r["elements"].as_u64(), Some(tets + hexes), "both kinds counted");
+    let (h, rows) = read_csv(&base.join("probes.csv"));
+    for bar in ["hex", "tet"] {
+        let v = column(&h, &rows, &format!("{bar}.velocity_x"));
+        assert!(
+            v.iter().any(|&x| x != 0.0) && v.iter().all(|x| x.is_finite()),
+            "the {bar} bar moves: {v:?}"
+        );
+    }
+    for np in [2, 3] {
+        let out = dir.join(format!("np{np}"));
+        run_ok(np, &scene, &out);
+        assert_eq!(&report(&out)["native_tetrahedra"], kinds);
+        if let Err(e) = fields_differ(&base, &out) {
+            panic!("np {np} against np 1: fields.h5 {e} (same bits expected)");
+        }
+        for file in ["probes.csv", "history.csv"] {
+            let bad = csv_columns_differ(&base, &out, file, &[]);
+            assert!(
+                bad.is_empty(),
+                "np {np} against np 1: {file} columns differ: {bad:?}"
+            );
+        }
+    }
+}
