@@ -12,7 +12,8 @@
 # The same files on two rank counts, two kernels, two CPUs or before and after a change that
 # must not change results say that the results are the same bits. SCENES (space-separated names
 # without .toml) chooses the scenes; by default every scene but the long tetrahedral and
-# benchmark ones (bench_block_tet, taylor_copper_tets, cantilever_tets). Needs the release
+# benchmark ones (bench_block_tet, bench_block_tet_nodal, taylor_copper_tets, cantilever_tets).
+# Needs the release
 # build (`cargo build --release --workspace --bins`). A run that fails prints "SCENE failed".
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,7 +24,7 @@ WORK=${WORK:-/tmp/scene_digests}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 if [ -z "${SCENES:-}" ]; then
   SCENES=$(ls scenes/*.toml | xargs -n1 basename | sed 's/\.toml$//' |
-    grep -vx -e bench_block_tet -e taylor_copper_tets -e cantilever_tets)
+    grep -vx -e bench_block_tet -e bench_block_tet_nodal -e taylor_copper_tets -e cantilever_tets)
 fi
 for s in $SCENES; do
   end=$(grep -m1 -E '^end_time *=' "scenes/$s.toml" | sed -E 's/^end_time *= *([^ #]+).*/\1/')
