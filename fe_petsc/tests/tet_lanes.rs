@@ -377,3 +377,44 @@ fn tet_lanes_report_the_inverted_lane() {
         .expect_err("an inverted lane");
     assert_eq!((bad.lane, bad.volume), (2, expected));
 }
+
+/// Pass 1 in lanes gives `tet::rates`'s bits in every width, a part group padded.
+fn rates_match<B: TetBatch>(steps: &[Step]) {
+    let mut g = B::default();
+    let dt = 1e-7;
+    for s in steps {
+        for g0 in (0..ELEMS).step_by(B::LANES) {
+            let n = B::LANES.min(ELEMS - g0);
+            for l in 0..B::LANES {
+                let e = g0 + if l < n { l } else { 0 };
+                g.load_nodes(l, &s.x[e], &s.v[e]);
+            }
+            g.rates(dt);
+            for l in 0..n {
+                let r = tet::rates(&s.x[g0 + l], &s.v[g0 + l], dt).expect("not inverted");
+                let b = g.lane_rates(l);
+                let bits = |r: &tet::TetRates| [r.vol, r.vol_mid, r.vol_rate].map(f64::to_bits);
+                assert_eq!(
+                    bits(&r),
+                    bits(&b),
+                    "{} lanes: element {}: {r:?} != {b:?}",
+                    B::LANES,
+                    g0 + l
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn tet_lane_rates_equal_tet_rates_bits() {
+    let steps = steps(3, 1e-7);
+    for w in batch::available() {
+        match w {
+            Width::W1 => rates_match::<batch::w1::TetGroup>(&steps),
+            Width::W4 => rates_match::<batch::w4::TetGroup>(&steps),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => rates_match::<batch::w8::TetGroup>(&steps),
+        }
+    }
+}

@@ -38,7 +38,7 @@
 use crate::hex::{HexControls, HexOutput, HexState, NODES};
 use crate::hourglass::{self, Hourglass};
 use crate::material::{LaneLaw, Material, MAX_STATE};
-use crate::tet::{TetAverages, TetOutput};
+use crate::tet::{TetAverages, TetOutput, TetRates};
 
 /// A group of elements in lanes, as the explicit element loop uses it: load the group's
 /// elements, update them, read each lane's state and output back.
@@ -110,6 +110,18 @@ pub trait TetBatch: Default {
 
     /// Loads one tetrahedron's inputs and state into lane `l`.
     fn load(&mut self, l: usize, input: &TetInput<'_>);
+
+    /// Loads one tetrahedron's nodal coordinates `x` (t(n+1)) and velocities `v` (t(n+1/2))
+    /// into lane `l`, for [`TetBatch::rates`].
+    fn load_nodes(&mut self, l: usize, x: &[[f64; 3]; 4], v: &[[f64; 3]; 4]);
+
+    /// The first pass over the step `dt` of the loaded tetrahedra: in each lane what
+    /// [`crate::tet::rates`] computes, the same bits, without its check of the volumes
+    /// ([`TetBatch::lane_rates`] are what it checks).
+    fn rates(&mut self, dt: f64);
+
+    /// Lane `l`'s result of [`TetBatch::rates`].
+    fn lane_rates(&self, l: usize) -> TetRates;
 
     /// One explicit update over the step `dt` of the loaded tetrahedra of the material `model`
     /// (`m` its lane form): in each lane what [`crate::tet::update`] computes for its element
@@ -360,6 +372,12 @@ pub mod w1 {
         hex::update_lanes_inline(g, io, dt, m, ctl)
     }
 
+    /// [`super::TetBatch::rates`] for one lane.
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        tet::rates_inline(g, dt)
+    }
+
     /// [`super::TetBatch::update`] for one lane.
     #[inline]
     fn tet_entry(
@@ -444,6 +462,24 @@ pub mod w4 {
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         hex::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// [`super::TetBatch::rates`] for four lanes, built as [`entry`].
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { tet_rates_avx2(g, dt) };
+        }
+        tet::rates_inline(g, dt)
+    }
+
+    /// [`tet_rates_entry`]'s AVX2 build.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn tet_rates_avx2(g: &mut TetGroup, dt: f64) {
+        tet::rates_inline(g, dt)
     }
 
     /// [`super::TetBatch::update`] for four lanes, built as [`entry`].
@@ -550,6 +586,24 @@ pub mod w8 {
     ) -> Result<(), GroupInverted> {
         super::aligned_frame();
         hex::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// [`super::TetBatch::rates`] for eight lanes, built as [`entry`].
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        assert!(
+            std::arch::is_x86_feature_detected!("avx512f"),
+            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe { tet_rates_avx512(g, dt) }
+    }
+
+    /// [`tet_rates_entry`]'s AVX-512F build.
+    #[target_feature(enable = "avx512f")]
+    fn tet_rates_avx512(g: &mut TetGroup, dt: f64) {
+        super::aligned_frame();
+        tet::rates_inline(g, dt)
     }
 
     /// [`super::TetBatch::update`] for eight lanes, built as [`entry`].

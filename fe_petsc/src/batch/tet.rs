@@ -22,7 +22,8 @@ use crate::batch::{GroupInverted, LaneMaterial};
 use crate::hex::HexControls;
 use crate::hourglass::THIRD;
 use crate::material::{Material, MAX_STATE};
-use crate::tet::{TetAverages, TetOutput, NODES, ROUNDING_MARGIN, SQRT_2_3};
+use crate::batch::TetBatch;
+use crate::tet::{TetAverages, TetOutput, TetRates, NODES, ROUNDING_MARGIN, SQRT_2_3};
 
 /// Nodal vectors of a group's tetrahedra in lanes: `[node][component]`.
 pub type TetNodes = [[F; 3]; NODES];
@@ -57,6 +58,10 @@ pub struct TetGroup {
     dt_stable: F,
     /// Pressures without bulk viscosity, Pa.
     pressure: F,
+    /// Pass 1's mid-step volumes, m^3 (its end-of-step volumes in `volume`).
+    vol_mid: F,
+    /// Pass 1's volume rates V(n+1/2) tr D, m^3/s.
+    vol_rate: F,
 }
 
 /// a x b in lanes (`crate::tet`'s `cross`).
@@ -91,6 +96,34 @@ fn volume_gradient(x: &TetNodes) -> (TetNodes, F) {
     }
     let vol = e[0][0] * bv[1][0] + e[0][1] * bv[1][1] + e[0][2] * bv[1][2];
     (bv, vol)
+}
+
+/// The mid-step positions x(n+1) - dt/2 v(n+1/2) (`crate::tet`'s `mid_step`).
+#[inline(always)]
+fn mid_step(x: &TetNodes, v: &TetNodes, dt: f64) -> TetNodes {
+    let h = F::splat(0.5 * dt);
+    let mut xh = [[F::ZERO; 3]; 4];
+    for a in 0..4 {
+        for k in 0..3 {
+            xh[a][k] = x[a][k] - h * v[a][k];
+        }
+    }
+    xh
+}
+
+/// Pass 1 ([`crate::tet::rates`]) in lanes, its operations in its order, so the same bits:
+/// the volumes at t(n+1) (`volume`) and at mid-step (`vol_mid`) and
+/// `vol_rate` = sum_a v_a . dV/dx_a(n+1/2), the nodes summed in order. No check: the loop
+/// checks each lane's volumes as [`crate::tet::rates`] does.
+#[inline(always)]
+pub(super) fn rates_inline(g: &mut TetGroup, dt: f64) {
+    let (_, vol) = volume_gradient(&g.x);
+    let (bvh, vol_mid) = volume_gradient(&mid_step(&g.x, &g.v, dt));
+    let v = &g.v;
+    let node = |a: usize| v[a][0] * bvh[a][0] + v[a][1] * bvh[a][1] + v[a][2] * bvh[a][2];
+    g.vol_rate = node(0) + node(1) + node(2) + node(3);
+    g.volume = vol;
+    g.vol_mid = vol_mid;
 }
 
 /// L = (sum_a v_a (x) V grad N_a) / V (`ivh` = 1/V at the geometry of `bvh`), the nodes summed
@@ -188,14 +221,7 @@ pub(super) fn update_inline(
     ctl: &HexControls,
 ) -> Result<(), GroupInverted> {
     let (bv, vol) = volume_gradient(&g.x);
-    let h = F::splat(0.5 * dt);
-    let mut xh = [[F::ZERO; 3]; 4];
-    for a in 0..4 {
-        for k in 0..3 {
-            xh[a][k] = g.x[a][k] - h * g.v[a][k];
-        }
-    }
-    let (bvh, volh) = volume_gradient(&xh);
+    let (bvh, volh) = volume_gradient(&mid_step(&g.x, &g.v, dt));
     if !(valid_volume(vol).all() && valid_volume(volh).all()) {
         return Err(first_inverted(vol, volh));
     }
@@ -255,17 +281,12 @@ pub(super) fn update_inline(
     Ok(())
 }
 
-impl crate::batch::TetBatch for TetGroup {
+impl TetBatch for TetGroup {
     const LANES: usize = LANES;
 
     #[inline]
     fn load(&mut self, l: usize, input: &crate::batch::TetInput<'_>) {
-        for a in 0..NODES {
-            for k in 0..3 {
-                self.x[a][k].0[l] = input.x[a][k];
-                self.v[a][k].0[l] = input.v[a][k];
-            }
-        }
+        self.load_nodes(l, input.x, input.v);
         self.vol0.0[l] = input.vol0;
         let TetAverages { theta, j } = input.avg;
         self.theta.0[l] = theta;
@@ -277,6 +298,30 @@ impl crate::batch::TetBatch for TetGroup {
         *h = [0.0; MAX_STATE];
         h[..input.history.len()].copy_from_slice(input.history);
         self.plastic.0[l] = h[0];
+    }
+
+    #[inline]
+    fn load_nodes(&mut self, l: usize, x: &[[f64; 3]; 4], v: &[[f64; 3]; 4]) {
+        for a in 0..NODES {
+            for k in 0..3 {
+                self.x[a][k].0[l] = x[a][k];
+                self.v[a][k].0[l] = v[a][k];
+            }
+        }
+    }
+
+    #[inline]
+    fn rates(&mut self, dt: f64) {
+        super::tet_rates_entry(self, dt);
+    }
+
+    #[inline]
+    fn lane_rates(&self, l: usize) -> TetRates {
+        TetRates {
+            vol: self.volume.0[l],
+            vol_mid: self.vol_mid.0[l],
+            vol_rate: self.vol_rate.0[l],
+        }
     }
 
     #[inline]

@@ -21,7 +21,7 @@
 use crate::assembly::Assembly;
 use crate::batch::{self, GroupInverted, LaneMaterial, TetBatch, TetInput, Width};
 use crate::blocks::BlockWork;
-use crate::hex::{ElementError, HexControls};
+use crate::hex::HexControls;
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
 use crate::petsc::PetscError;
@@ -174,7 +174,13 @@ impl TetPart {
             dt_min: f64::INFINITY,
             inverted: None,
         };
-        self.nodal_rates(x, v, dt, &mut out, exchange)?;
+        match width {
+            Width::W1 => self.nodal_rates::<batch::w1::TetGroup>(x, v, dt, &mut out),
+            Width::W4 => self.nodal_rates::<batch::w4::TetGroup>(x, v, dt, &mut out),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => self.nodal_rates::<batch::w8::TetGroup>(x, v, dt, &mut out),
+        }
+        self.assembly.finish(&mut self.sums, exchange)?;
         let ratios = self.node_ratios();
         self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
         let pass = Pass2 {
@@ -305,34 +311,50 @@ impl TetPart {
         }
     }
 
-    /// Pass 1: each tetrahedron's volume rate, mid-step and end volumes summed at its nodes
-    /// into `self.sums` (canonical order, collective).
-    fn nodal_rates(
+    /// Pass 1: each tetrahedron's volume rate, mid-step and end volumes ([`tet::rates`], in
+    /// groups of `B::LANES` consecutive tetrahedra through the lane kernel: the same bits)
+    /// added at its nodes into `self.sums` and recorded for the ordered sum, in element order;
+    /// an inverted one adds zeros and is reported in `out`.
+    fn nodal_rates<B: TetBatch>(
         &mut self,
         x: &[[f64; 3]],
         v: &[[f64; 3]],
         dt: f64,
         out: &mut TetSums,
-        exchange: &mut NodeExchange,
-    ) -> Result<(), PetscError> {
+    ) {
         self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
-        for (e, conn) in self.conn.iter().enumerate() {
-            let r = match tet::rates(&gather4(x, conn), &gather4(v, conn), dt) {
-                Ok(r) => [r.vol_rate, r.vol_mid, r.vol],
-                Err(ElementError::Inverted { volume }) => {
-                    out.inverted.get_or_insert((e, volume));
-                    [0.0; 3]
-                }
-            };
-            for &n in conn {
-                let s = &mut self.sums[n as usize];
-                for c in 0..3 {
-                    s[c] += r[c];
-                }
+        let mut g = Box::<B>::default();
+        let len = self.conn.len();
+        for e0 in (0..len).step_by(B::LANES) {
+            let n = B::LANES.min(len - e0);
+            for l in 0..B::LANES {
+                let conn = &self.conn[e0 + if l < n { l } else { 0 }];
+                g.load_nodes(l, &gather4(x, conn), &gather4(v, conn));
             }
-            self.assembly.record(e, |_| r);
+            g.rates(dt);
+            for l in 0..n {
+                let e = e0 + l;
+                let r = g.lane_rates(l);
+                // tet::rates's checks, in its order.
+                let bad = [r.vol, r.vol_mid]
+                    .into_iter()
+                    .find(|&v| !(v > 0.0) || !v.is_finite());
+                let r = match bad {
+                    None => [r.vol_rate, r.vol_mid, r.vol],
+                    Some(volume) => {
+                        out.inverted.get_or_insert((e, volume));
+                        [0.0; 3]
+                    }
+                };
+                for &node in &self.conn[e] {
+                    let s = &mut self.sums[node as usize];
+                    for c in 0..3 {
+                        s[c] += r[c];
+                    }
+                }
+                self.assembly.record(e, |_| r);
+            }
         }
-        self.assembly.finish(&mut self.sums, exchange)
     }
 
     /// Each node's dilatation rate theta_a = (sum of V_mid tr D) / (sum of V_mid), 1/s, and
