@@ -1,14 +1,16 @@
-//! The tetrahedron's second pass ([`crate::tet::update`]) on a group of elements at once, one
-//! element per lane (the parent module's lane type `F`): in each lane the operations of
-//! [`crate::tet::update`] in its order, with the element kernel's Hughes-Winget rotation and
-//! lane laws (`hex.rs`, `law.rs`: elastic and J2 in lanes, the other models' scalar functions
-//! lane by lane through `pointwise.rs`), and 1/V and 1/V(n+1/2) from one reciprocal. Those
-//! differ from the scalar forms by round-off only, so this kernel agrees with
-//! [`crate::tet::update`] to round-off (`tests/tet_lanes.rs`: 1e-12 relative required); every
-//! width runs the same IEEE operations in the same order (no fused multiply-adds), so every
-//! width gives the same bits, and this kernel (one lane for `--kernel scalar`) is what runs:
-//! [`crate::tet::update`] is the tests' reference, as [`crate::hex::update`] is the
-//! hexahedron's.
+//! The tetrahedron's two passes on a group of elements at once, one element per lane (the
+//! parent module's lane type `F`).
+//!
+//! Pass 1 ([`rates_inline`]) runs [`crate::tet::rates`]'s operations in its order: the same
+//! bits. Pass 2 ([`update_inline`]) runs [`crate::tet::update`]'s in its order, except for
+//! the element kernel's Hughes-Winget rotation and lane laws (`hex.rs`, `law.rs`: elastic and
+//! J2 in lanes; the other models' scalar functions lane by lane through `pointwise.rs`) and
+//! 1/V and 1/V(n+1/2) from one reciprocal: round-off apart, so pass 2 agrees with
+//! [`crate::tet::update`] to round-off (`tests/tet_lanes.rs`: 1e-12 relative required, about
+//! 1e-15 measured). Every width runs the same IEEE operations in the same order (no fused
+//! multiply-adds), so every width gives the same bits, and this kernel (one lane for
+//! `--kernel scalar`) is what the explicit loop runs: [`crate::tet::update`] is the tests'
+//! reference, as [`crate::hex::update`] is the hexahedron's.
 //!
 //! Cost per element: 2 x 50 for the volume gradients, 12 for the mid-step positions, 40 for
 //! L, 45 + 90 for the rotation, 20 for Dbar dt, 12-70 for the material in lanes, 40 for the
