@@ -246,10 +246,10 @@ fn averaged_increment(l: &[[f64; 3]; 3], theta: f64, dt: f64) -> [f64; 6] {
 }
 
 /// 1 + 1e-12: [`max_frequency`]'s margin for rounding (the bound can be exact).
-const ROUNDING_MARGIN: f64 = 1.0 + 1e-12;
+pub(crate) const ROUNDING_MARGIN: f64 = 1.0 + 1e-12;
 
 /// sqrt(2/3) rounded.
-const SQRT_2_3: f64 = 0.816_496_580_927_726;
+pub(crate) const SQRT_2_3: f64 = 0.816_496_580_927_726;
 
 /// Upper bound of the largest eigenvalue of G G^T = sum_a g_a g_a^T (1/m^2), `gg` its trace.
 ///
@@ -371,6 +371,10 @@ fn stress_forces(bv: &[[f64; 3]; 4], s: &[f64; 6], q: f64) -> [[f64; 3]; 4] {
 }
 
 /// Second pass: one explicit update of one element with the nodal averages `avg`.
+///
+/// The explicit loop runs this update in lanes (`batch/tet.rs`, every width the same bits),
+/// which agrees with this function to round-off: this is its reference in the tests
+/// (`tests/tet_lanes.rs`, 1e-12 relative), as [`crate::hex::update`] is the hexahedron's.
 ///
 /// `x`: nodal positions at t(n+1), m; `v`: velocities at t(n+1/2), m/s; `dt`: the step, s;
 /// `rho0` (kg/m^3), `vol0` (m^3): reference density and volume. L from the mid-step gradients,

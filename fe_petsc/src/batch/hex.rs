@@ -118,7 +118,7 @@ pub fn gather(xs: &[[f64; 3]], conn: [&[u32; NODES]; LANES], out: &mut LaneNodes
 
 /// Lanes whose volume is positive and finite.
 #[inline(always)]
-fn valid_volume(v: F) -> M {
+pub(super) fn valid_volume(v: F) -> M {
     v.gt(F::ZERO).and(v.is_finite())
 }
 
@@ -232,7 +232,7 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Result<Kinematics, GroupInvert
 /// finite, with that volume (the end-of-step one first, as [`crate::hex::update`] checks them).
 #[cold]
 #[inline(never)]
-fn first_inverted(vol: F, volh: F) -> GroupInverted {
+pub(super) fn first_inverted(vol: F, volh: F) -> GroupInverted {
     let bad = |v: f64| !(v > 0.0 && v.is_finite());
     (0..LANES)
         .find_map(|lane| {
@@ -259,7 +259,7 @@ pub(super) fn dot3(a0: F, b0: F, a1: F, b1: F, a2: F, b2: F) -> F {
 /// singular or non-finite determinant, det(I - A) = 1 + theta^2, is kept. About 45 operations
 /// per element (the cofactor form: 60).
 #[inline(always)]
-fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
+pub(super) fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
     let h = F::splat(-0.5 * dt);
     // A = [[0, h w01, -h w20], [-h w01, 0, h w12], [h w20, -h w12, 0]] (h = dt/2) = skew(om).
     let om = [w12 * h, w20 * h, w01 * h];
@@ -294,7 +294,7 @@ fn hughes_winget(w01: F, w12: F, w20: F, dt: f64) -> [[F; 3]; 3] {
 
 /// sigma <- R sigma R^T (Voigt in, Voigt out). 90 flops per element.
 #[inline(always)]
-fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
+pub(super) fn rotate(r: &[[F; 3]; 3], s: &[F; 6]) -> [F; 6] {
     let sm = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
     let mut rs = [[F::ZERO; 3]; 3];
     for i in 0..3 {

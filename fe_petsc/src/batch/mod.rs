@@ -26,6 +26,10 @@
 //! are not inlined into the target-feature builds, and each lane operation inside them becomes
 //! a call.
 //!
+//! The native tetrahedron's second pass ([`crate::tet::update`]) has its kernel here too
+//! (`tet.rs`, in the same frame: every width the same bits, the lane laws and `pointwise.rs`
+//! for the material); [`TetBatch`] is what its loop and tests see of it.
+//!
 //! [`widest`] picks the width for this CPU; [`Batch`] is what the element loops and the tests
 //! see of any.
 // The kernel's files are compiled once per width on purpose (each width its own lane type):
@@ -34,6 +38,7 @@
 use crate::hex::{HexControls, HexOutput, HexState, NODES};
 use crate::hourglass::{self, Hourglass};
 use crate::material::{LaneLaw, Material, MAX_STATE};
+use crate::tet::{TetAverages, TetOutput, TetRates};
 
 /// A group of elements in lanes, as the explicit element loop uses it: load the group's
 /// elements, update them, read each lane's state and output back.
@@ -93,6 +98,65 @@ pub trait Batch: Default {
     /// The last update's hourglass work, volume, stable step and pressure of each lane, in
     /// lane order (`LANES` values each).
     fn scalars(&self) -> [&[f64]; 4];
+}
+
+/// A group of native tetrahedra in lanes ([`crate::tet`]'s second pass), as the tetrahedra's
+/// loop uses it: load each lane's element, update the group, read each lane's state and output
+/// back. A group of fewer than `LANES` elements fills its other lanes with copies of its first
+/// (their results dropped: lanes are independent).
+pub trait TetBatch: Default {
+    /// Elements per group.
+    const LANES: usize;
+
+    /// Loads one tetrahedron's inputs and state into lane `l`.
+    fn load(&mut self, l: usize, input: &TetInput<'_>);
+
+    /// Loads one tetrahedron's nodal coordinates `x` (t(n+1)) and velocities `v` (t(n+1/2))
+    /// into lane `l`, for [`TetBatch::rates`].
+    fn load_nodes(&mut self, l: usize, x: &[[f64; 3]; 4], v: &[[f64; 3]; 4]);
+
+    /// The first pass over the step `dt` of the loaded tetrahedra: in each lane what
+    /// [`crate::tet::rates`] computes, the same bits, without its check of the volumes
+    /// ([`TetBatch::lane_rates`] are what it checks).
+    fn rates(&mut self, dt: f64);
+
+    /// Lane `l`'s result of [`TetBatch::rates`].
+    fn lane_rates(&self, l: usize) -> TetRates;
+
+    /// One explicit update over the step `dt` of the loaded tetrahedra of the material `model`
+    /// (`m` its lane form): in each lane what [`crate::tet::update`] computes for its element
+    /// (to round-off; the same bits in every width). `Err`, with the state untouched, when a
+    /// lane's volume (end of step or mid-step) is not positive and finite.
+    fn update(
+        &mut self,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted>;
+
+    /// Lane `l`'s stress and history values after the update (the model's `n_state` first).
+    fn lane_state(&self, l: usize) -> ([f64; 6], [f64; MAX_STATE]);
+
+    /// Lane `l`'s output of the update.
+    fn lane_output(&self, l: usize) -> TetOutput;
+}
+
+/// One tetrahedron's inputs to [`TetBatch::load`].
+#[derive(Clone, Copy, Debug)]
+pub struct TetInput<'a> {
+    /// Nodal coordinates at t(n+1), m.
+    pub x: &'a [[f64; 3]; 4],
+    /// Nodal velocities at t(n+1/2), m/s.
+    pub v: &'a [[f64; 3]; 4],
+    /// Reference volume, m^3.
+    pub vol0: f64,
+    /// The means of its nodes' ratios.
+    pub avg: TetAverages,
+    /// Its stress (Voigt), Pa.
+    pub stress: &'a [f64; 6],
+    /// Its history values (the model's `n_state`, at most [`MAX_STATE`]).
+    pub history: &'a [f64],
 }
 
 /// A whole group's inputs and state in the element arrays, for [`Batch::update_lanes`].
@@ -266,7 +330,10 @@ macro_rules! kernel_files {
         mod modes;
         #[path = "pointwise.rs"]
         mod pointwise;
+        #[path = "tet.rs"]
+        pub mod tet;
         pub use hex::LaneGroup;
+        pub use tet::TetGroup;
     };
 }
 
@@ -303,6 +370,24 @@ pub mod w1 {
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         hex::update_lanes_inline(g, io, dt, m, ctl)
+    }
+
+    /// [`super::TetBatch::rates`] for one lane.
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        tet::rates_inline(g, dt)
+    }
+
+    /// [`super::TetBatch::update`] for one lane.
+    #[inline]
+    fn tet_entry(
+        g: &mut TetGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        tet::update_inline(g, dt, m, model, ctl)
     }
 }
 
@@ -377,6 +462,54 @@ pub mod w4 {
         ctl: &HexControls,
     ) -> Result<(), GroupInverted> {
         hex::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// [`super::TetBatch::rates`] for four lanes, built as [`entry`].
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { tet_rates_avx2(g, dt) };
+        }
+        tet::rates_inline(g, dt)
+    }
+
+    /// [`tet_rates_entry`]'s AVX2 build.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn tet_rates_avx2(g: &mut TetGroup, dt: f64) {
+        tet::rates_inline(g, dt)
+    }
+
+    /// [`super::TetBatch::update`] for four lanes, built as [`entry`].
+    #[inline]
+    fn tet_entry(
+        g: &mut TetGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { tet_avx2(g, dt, m, model, ctl) };
+        }
+        tet::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// The four-lane tetrahedron kernel compiled for AVX2 (as [`update_avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn tet_avx2(
+        g: &mut TetGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        tet::update_inline(g, dt, m, model, ctl)
     }
 }
 
@@ -453,5 +586,53 @@ pub mod w8 {
     ) -> Result<(), GroupInverted> {
         super::aligned_frame();
         hex::update_inline(g, dt, m, model, ctl)
+    }
+
+    /// [`super::TetBatch::rates`] for eight lanes, built as [`entry`].
+    #[inline]
+    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
+        assert!(
+            std::arch::is_x86_feature_detected!("avx512f"),
+            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe { tet_rates_avx512(g, dt) }
+    }
+
+    /// [`tet_rates_entry`]'s AVX-512F build.
+    #[target_feature(enable = "avx512f")]
+    fn tet_rates_avx512(g: &mut TetGroup, dt: f64) {
+        super::aligned_frame();
+        tet::rates_inline(g, dt)
+    }
+
+    /// [`super::TetBatch::update`] for eight lanes, built as [`entry`].
+    #[inline]
+    fn tet_entry(
+        g: &mut TetGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        assert!(
+            std::arch::is_x86_feature_detected!("avx512f"),
+            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+        );
+        // SAFETY: the CPU has AVX-512F, checked just above.
+        unsafe { tet_avx512(g, dt, m, model, ctl) }
+    }
+
+    /// The eight-lane tetrahedron kernel compiled for AVX-512F (as [`update_avx512`]).
+    #[target_feature(enable = "avx512f")]
+    fn tet_avx512(
+        g: &mut TetGroup,
+        dt: f64,
+        m: &LaneMaterial,
+        model: &dyn Material,
+        ctl: &HexControls,
+    ) -> Result<(), GroupInverted> {
+        super::aligned_frame();
+        tet::update_inline(g, dt, m, model, ctl)
     }
 }

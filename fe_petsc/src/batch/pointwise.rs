@@ -39,6 +39,17 @@ impl Pointwise<'_> {
         }
     }
 
+    /// Each lane's current wave modulus rho c^2 ([`Material::wave_modulus`]), Pa, at the
+    /// density `rho`, kg/m^3.
+    #[inline]
+    pub fn wave_modulus(&self, rho: F) -> F {
+        let mut m = F::ZERO;
+        for l in 0..LANES {
+            m.0[l] = self.model.wave_modulus(rho.0[l], &self.history[l][..self.n_state]);
+        }
+        m
+    }
+
     /// The sound speed c = sqrt(rho c^2 / rho), m/s, of each lane from the model's current
     /// wave modulus ([`Material::wave_modulus`]) at the density `rho`, kg/m^3.
     #[inline]

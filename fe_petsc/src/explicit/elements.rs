@@ -80,7 +80,7 @@ impl ExplicitFe {
         let offset = self.elems.len();
         let t = tets.forces(
             (&self.x, &self.v, dt),
-            &self.materials,
+            (&self.materials, &self.lane_materials, self.width),
             &self.controls,
             (&mut self.force, &mut self.blocks, offset),
             exchange,

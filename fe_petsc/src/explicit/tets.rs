@@ -7,8 +7,11 @@
 //! 1998; `crate::tet`). So a step takes two passes over the tetrahedra:
 //!
 //! 1. each element's volumes and volume rate ([`tet::rates`]) summed at the nodes;
-//! 2. each element's update with the means of its nodes' ratios ([`tet::update`]), its forces
-//!    summed at the nodes.
+//! 2. each element's update with the means of its nodes' ratios, its forces summed at the
+//!    nodes: groups of consecutive tetrahedra of one material through the lane kernel
+//!    (`batch/tet.rs`, [`TetBatch`]: one, four or eight at once, `ExplicitFe::width`), which
+//!    computes what [`tet::update`] computes to round-off and gives the same bits at every
+//!    width; [`tet::update`] is the tests' reference (`tests/tet_lanes.rs`).
 //!
 //! Both nodal sums are the canonical-order sums of [`crate::assembly`] (the tetrahedra are in
 //! their canonical order, `LocalMesh::tet_key`), so they are the same bits at any rank count.
@@ -16,8 +19,9 @@
 //! sums are complete: each node's force is (hexahedra's sum) + (tetrahedra's sum), the same
 //! two ordered sums and the same addition on every rank count.
 use crate::assembly::Assembly;
+use crate::batch::{self, GroupInverted, LaneMaterial, TetBatch, TetInput, Width};
 use crate::blocks::BlockWork;
-use crate::hex::{ElementError, HexControls};
+use crate::hex::HexControls;
 use crate::material::Material;
 use crate::mesh::{LocalMesh, NodeExchange};
 use crate::petsc::PetscError;
@@ -46,6 +50,26 @@ pub struct TetPart {
     node_vol0: Vec<f64>,
     /// Scratch: the nodal sums of pass 1, then the tetrahedra's nodal forces.
     sums: Vec<[f64; 3]>,
+}
+
+/// Pass 2's inputs shared by every group.
+struct Pass2<'a> {
+    /// Positions at t(n+1), m.
+    x: &'a [[f64; 3]],
+    /// Velocities at t(n+1/2), m/s.
+    v: &'a [[f64; 3]],
+    /// The step, s.
+    dt: f64,
+    /// Each node's [theta_a, J_a] ([`TetPart::node_ratios`]).
+    ratios: &'a [[f64; 2]],
+    /// The models.
+    materials: &'a [Box<dyn Material>],
+    /// Their lane forms.
+    lanes: &'a [LaneMaterial],
+    /// The element controls (bulk viscosity).
+    ctl: &'a HexControls,
+    /// Tetrahedron t's block element: `offset + t`.
+    offset: usize,
 }
 
 /// What the tetrahedra's passes found: the smallest stable step and the first inverted one.
@@ -134,13 +158,14 @@ impl TetPart {
     /// An inverted tetrahedron leaves the states of the others updated but is reported (the
     /// step fails; both sums are still made, so that no rank waits alone).
     ///
-    /// `(x, v, dt)`: the positions, velocities and step; `(force, blocks, offset)`: the nodal
-    /// forces, the per-block work (where tetrahedron t is element `offset + t`, a collapsed
-    /// hexahedron: `ExplicitFe::element_nodes`).
+    /// `(x, v, dt)`: the positions, velocities and step; `(materials, lanes, width)`: the
+    /// models, their lane forms ([`LaneMaterial::new`]) and the element kernel's width;
+    /// `(force, blocks, offset)`: the nodal forces, the per-block work (where tetrahedron t is
+    /// element `offset + t`, a collapsed hexahedron: `ExplicitFe::element_nodes`).
     pub fn forces(
         &mut self,
         (x, v, dt): (&[[f64; 3]], &[[f64; 3]], f64),
-        materials: &[Box<dyn Material>],
+        (materials, lanes, width): (&[Box<dyn Material>], &[LaneMaterial], Width),
         ctl: &HexControls,
         (force, blocks, offset): (&mut [[f64; 3]], &mut BlockWork, usize),
         exchange: &mut NodeExchange,
@@ -149,48 +174,30 @@ impl TetPart {
             dt_min: f64::INFINITY,
             inverted: None,
         };
-        self.nodal_rates(x, v, dt, &mut out, exchange)?;
+        match width {
+            Width::W1 => self.nodal_rates::<batch::w1::TetGroup>(x, v, dt, &mut out),
+            Width::W4 => self.nodal_rates::<batch::w4::TetGroup>(x, v, dt, &mut out),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => self.nodal_rates::<batch::w8::TetGroup>(x, v, dt, &mut out),
+        }
+        self.assembly.finish(&mut self.sums, exchange)?;
         let ratios = self.node_ratios();
         self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
-        for e in 0..self.conn.len() {
-            let conn = self.conn[e];
-            let avg = mean_ratios(&ratios, &conn);
-            let mi = self.material[e];
-            let mat = &*materials[mi];
-            let s = self.stride;
-            let res = tet::update(
-                &gather4(x, &conn),
-                &gather4(v, &conn),
-                dt,
-                mat.density(),
-                self.vol0[e],
-                avg,
-                mat,
-                ctl,
-                &mut self.state[e],
-                &mut self.mat_state[e * s..(e + 1) * s],
-            );
-            match res {
-                Ok(o) => {
-                    for (k, &n) in conn.iter().enumerate() {
-                        let f = &mut self.sums[n as usize];
-                        for c in 0..3 {
-                            f[c] += o.force[k][c];
-                        }
-                    }
-                    self.assembly.record(e, |k| o.force[k]);
-                    out.dt_min = out.dt_min.min(o.dt_stable);
-                    if blocks.active() {
-                        let f = o.force;
-                        let z = [0.0; 3];
-                        blocks.add(offset + e, &[f[0], f[1], f[2], z, f[3], z, z, z], 0.0);
-                    }
-                }
-                Err(ElementError::Inverted { volume }) => {
-                    self.assembly.record(e, |_| [0.0; 3]);
-                    out.inverted.get_or_insert((e, volume));
-                }
-            }
+        let pass = Pass2 {
+            x,
+            v,
+            dt,
+            ratios: &ratios,
+            materials,
+            lanes,
+            ctl,
+            offset,
+        };
+        match width {
+            Width::W1 => self.update_all::<batch::w1::TetGroup>(&pass, blocks, &mut out),
+            Width::W4 => self.update_all::<batch::w4::TetGroup>(&pass, blocks, &mut out),
+            #[cfg(target_arch = "x86_64")]
+            Width::W8 => self.update_all::<batch::w8::TetGroup>(&pass, blocks, &mut out),
         }
         self.assembly.finish(&mut self.sums, exchange)?;
         for (f, s) in force.iter_mut().zip(&self.sums) {
@@ -201,34 +208,153 @@ impl TetPart {
         Ok(out)
     }
 
-    /// Pass 1: each tetrahedron's volume rate, mid-step and end volumes summed at its nodes
-    /// into `self.sums` (canonical order, collective).
-    fn nodal_rates(
+    /// Pass 2 over every tetrahedron in element order: runs of consecutive tetrahedra of one
+    /// material in groups of `B::LANES` through the lane kernel ([`TetBatch`]), a run's last
+    /// group padded with copies of its first element (results dropped). Every width runs the
+    /// same operations in every lane, so an element's result does not depend on its group
+    /// (docs/scene.md, "One answer"). A group with an inverted element is redone one element
+    /// at a time (one lane: the same bits), so that the others are updated as by any width.
+    fn update_all<B: TetBatch>(
+        &mut self,
+        p: &Pass2<'_>,
+        blocks: &mut BlockWork,
+        out: &mut TetSums,
+    ) {
+        let mut g = Box::<B>::default();
+        let mut e = 0;
+        while e < self.conn.len() {
+            let mi = self.material[e];
+            let end = (e + B::LANES).min(self.conn.len());
+            let n = (e..end).take_while(|&k| self.material[k] == mi).count();
+            if self.update_group(p, e, n, &mut *g).is_ok() {
+                self.accept_group(p, e, n, &*g, blocks, out);
+            } else {
+                let mut one = batch::w1::TetGroup::default();
+                for k in e..e + n {
+                    match self.update_group(p, k, 1, &mut one) {
+                        Ok(()) => self.accept_group(p, k, 1, &one, blocks, out),
+                        Err(bad) => {
+                            self.assembly.record(k, |_| [0.0; 3]);
+                            out.inverted.get_or_insert((k, bad.volume));
+                        }
+                    }
+                }
+            }
+            e += n;
+        }
+    }
+
+    /// Loads the tetrahedra `e0..e0 + n` (one material, `n` at most `B::LANES`; the other lanes
+    /// copies of `e0`) into `g` and updates them; `Err`, with nothing stored, when one is
+    /// inverted.
+    fn update_group<B: TetBatch>(
+        &self,
+        p: &Pass2<'_>,
+        e0: usize,
+        n: usize,
+        g: &mut B,
+    ) -> Result<(), GroupInverted> {
+        let mi = self.material[e0];
+        let ns = p.lanes[mi].n_state();
+        let s = self.stride;
+        for l in 0..B::LANES {
+            let e = if l < n { e0 + l } else { e0 };
+            let conn = &self.conn[e];
+            g.load(
+                l,
+                &TetInput {
+                    x: &gather4(p.x, conn),
+                    v: &gather4(p.v, conn),
+                    vol0: self.vol0[e],
+                    avg: mean_ratios(p.ratios, conn),
+                    stress: &self.state[e].stress,
+                    history: &self.mat_state[e * s..e * s + ns],
+                },
+            );
+        }
+        g.update(p.dt, &p.lanes[mi], &*p.materials[mi], p.ctl)
+    }
+
+    /// Stores the first `n` lanes' states of `g` (tetrahedra `e0..`), adds their forces to the
+    /// nodes and records them for the ordered sum in element order, and feeds the blocks and
+    /// the smallest stable step.
+    fn accept_group<B: TetBatch>(
+        &mut self,
+        p: &Pass2<'_>,
+        e0: usize,
+        n: usize,
+        g: &B,
+        blocks: &mut BlockWork,
+        out: &mut TetSums,
+    ) {
+        let ns = p.lanes[self.material[e0]].n_state();
+        let s = self.stride;
+        for l in 0..n {
+            let e = e0 + l;
+            let (stress, history) = g.lane_state(l);
+            self.state[e].stress = stress;
+            self.mat_state[e * s..e * s + ns].copy_from_slice(&history[..ns]);
+            let o = g.lane_output(l);
+            for (k, &node) in self.conn[e].iter().enumerate() {
+                let f = &mut self.sums[node as usize];
+                for c in 0..3 {
+                    f[c] += o.force[k][c];
+                }
+            }
+            self.assembly.record(e, |k| o.force[k]);
+            out.dt_min = out.dt_min.min(o.dt_stable);
+            if blocks.active() {
+                let f = o.force;
+                let z = [0.0; 3];
+                blocks.add(p.offset + e, &[f[0], f[1], f[2], z, f[3], z, z, z], 0.0);
+            }
+        }
+    }
+
+    /// Pass 1: each tetrahedron's volume rate, mid-step and end volumes ([`tet::rates`], in
+    /// groups of `B::LANES` consecutive tetrahedra through the lane kernel: the same bits)
+    /// added at its nodes into `self.sums` and recorded for the ordered sum, in element order;
+    /// an inverted one adds zeros and is reported in `out`.
+    fn nodal_rates<B: TetBatch>(
         &mut self,
         x: &[[f64; 3]],
         v: &[[f64; 3]],
         dt: f64,
         out: &mut TetSums,
-        exchange: &mut NodeExchange,
-    ) -> Result<(), PetscError> {
+    ) {
         self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
-        for (e, conn) in self.conn.iter().enumerate() {
-            let r = match tet::rates(&gather4(x, conn), &gather4(v, conn), dt) {
-                Ok(r) => [r.vol_rate, r.vol_mid, r.vol],
-                Err(ElementError::Inverted { volume }) => {
-                    out.inverted.get_or_insert((e, volume));
-                    [0.0; 3]
-                }
-            };
-            for &n in conn {
-                let s = &mut self.sums[n as usize];
-                for c in 0..3 {
-                    s[c] += r[c];
-                }
+        let mut g = Box::<B>::default();
+        let len = self.conn.len();
+        for e0 in (0..len).step_by(B::LANES) {
+            let n = B::LANES.min(len - e0);
+            for l in 0..B::LANES {
+                let conn = &self.conn[e0 + if l < n { l } else { 0 }];
+                g.load_nodes(l, &gather4(x, conn), &gather4(v, conn));
             }
-            self.assembly.record(e, |_| r);
+            g.rates(dt);
+            for l in 0..n {
+                let e = e0 + l;
+                let r = g.lane_rates(l);
+                // tet::rates's checks, in its order.
+                let bad = [r.vol, r.vol_mid]
+                    .into_iter()
+                    .find(|&v| !(v > 0.0) || !v.is_finite());
+                let r = match bad {
+                    None => [r.vol_rate, r.vol_mid, r.vol],
+                    Some(volume) => {
+                        out.inverted.get_or_insert((e, volume));
+                        [0.0; 3]
+                    }
+                };
+                for &node in &self.conn[e] {
+                    let s = &mut self.sums[node as usize];
+                    for c in 0..3 {
+                        s[c] += r[c];
+                    }
+                }
+                self.assembly.record(e, |_| r);
+            }
         }
-        self.assembly.finish(&mut self.sums, exchange)
     }
 
     /// Each node's dilatation rate theta_a = (sum of V_mid tr D) / (sum of V_mid), 1/s, and
