@@ -424,7 +424,11 @@ fn hexahedra_beside_native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
     );
     assert_eq!(hexes, 8 * 2 * 2, "the hexahedral bar's N x M x M: {kinds}");
     assert!(tets > 100, "the tetrahedral bar: {kinds}");
-    assert_eq!(r["elements"].as_u64(), Some(tets + hexes), "both kinds counted");
+    assert_eq!(
+        r["elements"].as_u64(),
+        Some(tets + hexes),
+        "both kinds counted"
+    );
     let (h, rows) = read_csv(&base.join("probes.csv"));
     for bar in ["hex", "tet"] {
         let v = column(&h, &rows, &format!("{bar}.velocity_x"));

@@ -1,8 +1,8 @@
 //! The tetrahedron's two passes on a group of elements at once, one element per lane (the
 //! parent module's lane type `F`).
 //!
-//! Pass 1 ([`rates_inline`]) runs [`crate::tet::rates`]'s operations in its order: the same
-//! bits. Pass 2 ([`update_inline`]) runs [`crate::tet::update`]'s in its order, except for
+//! Pass 1 (`rates_inline`) runs [`crate::tet::rates`]'s operations in its order: the same
+//! bits. Pass 2 (`update_inline`) runs [`crate::tet::update`]'s in its order, except for
 //! the element kernel's Hughes-Winget rotation and lane laws (`hex.rs`, `law.rs`: elastic and
 //! J2 in lanes; the other models' scalar functions lane by lane through `pointwise.rs`) and
 //! 1/V and 1/V(n+1/2) from one reciprocal: round-off apart, so pass 2 agrees with
