@@ -193,104 +193,75 @@ fn pyramids_and_second_order_meshes_are_refused_in_one_line() {
     // Tetrahedra and prisms are split into hexahedra (coupling/src/input/split.rs); pyramids
     // (gmsh makes them where a recombined surface meets tetrahedra) and second-order elements
     // are refused with their count and the gmsh option that avoids them (issue 30).
-    let cases = [
-        (
-            "pyramids",
-            "Recombine Surface{1};\n",
-            "Mesh.SubdivisionAlgorithm = 2",
-        ),
-        (
-            "order2",
-            "Mesh.ElementOrder = 2;\n",
-            "Mesh.ElementOrder = 1",
-        ),
-    ];
-    for (name, extra, option) in cases {
-        let dir = workdir(name);
-        let geo = dir.join(format!("{name}.geo"));
-        std::fs::write(
-            &geo,
-            format!(
-                "SetFactory(\"OpenCASCADE\");\nBox(1) = {{0,0,0,1,1,1}};\nMesh.MeshSizeMax = 0.5;\n{extra}\
-                 Physical Volume(\"bar\") = {{1}};\nPhysical Surface(\"left\") = {{1}};\n\
-                 Physical Surface(\"sides_y\") = {{3, 4}};\nPhysical Surface(\"sides_z\") = {{5, 6}};\n"
-            ),
-        )
-        .unwrap();
-        let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
-        let text = std::fs::read_to_string(&scene).unwrap();
-        let bar = root().join("meshes").join("bar.geo").display().to_string();
-        std::fs::write(&scene, text.replace(&bar, &geo.display().to_string())).unwrap();
-        for np in [1, 3] {
-            let o = run(np, &scene, &dir.join(format!("out{np}")));
-            assert!(!o.status.success(), "{name}: must be refused at np {np}");
-            let err = String::from_utf8_lossy(&o.stderr);
-            let lines: Vec<&str> = err.lines().filter(|l| l.contains(option)).collect();
-            assert_eq!(
-                lines.len(),
-                1,
-                "{name} at np {np}: one line naming the count and {option}:\n{err}"
-            );
-            assert!(
-                lines[0].contains(if name == "pyramids" {
-                    "pyramids"
-                } else {
-                    "second-order"
-                }),
-                "{err}"
-            );
-        }
-    }
+    let unit_box = "SetFactory(\"OpenCASCADE\");\nBox(1) = {0,0,0,1,1,1};\n";
+    let line = refused_mesh(
+        "pyramids",
+        &format!("{unit_box}Recombine Surface{{1}};\n"),
+        "",
+        "Mesh.SubdivisionAlgorithm = 2",
+    );
+    assert!(line.contains("pyramids"), "{line}");
+    let line = refused_mesh(
+        "order2",
+        &format!("{unit_box}Mesh.ElementOrder = 2;\n"),
+        "",
+        "Mesh.ElementOrder = 1",
+    );
+    assert!(line.contains("second-order"), "{line}");
 }
 
 /// Native tetrahedra (`[run] tetrahedra = "nodal_pressure"`) refuse, in one line at np 1 and
 /// 3, what they do not run: a mesh with prisms (they run only as hexahedra, split).
 #[test]
 fn native_tetrahedra_refuse_prisms_in_one_line() {
-    let cases = [(
-        "native_prisms",
-        // A triangle-meshed square extruded in layers (gmsh's built-in kernel): prisms.
+    // A triangle-meshed square extruded in layers (gmsh's built-in kernel): prisms.
+    let prisms =
         "Point(1) = {0, 0, 0}; Point(2) = {1, 0, 0}; Point(3) = {1, 1, 0}; Point(4) = {0, 1, 0};\n\
-             Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n\
-             Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n\
-             Extrude {0, 0, 1} { Surface{1}; Layers{2}; Recombine; }\n",
-        "",
+                  Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n\
+                  Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n\
+                  Extrude {0, 0, 1} { Surface{1}; Layers{2}; Recombine; }\n";
+    let line = refused_mesh(
+        "native_prisms",
+        prisms,
+        "tetrahedra = \"nodal_pressure\"",
         "prisms, which run only as hexahedra",
-    )];
-    for (name, shape, extra, needle) in cases {
-        let dir = workdir(name);
-        let geo = dir.join(format!("{name}.geo"));
-        std::fs::write(
-            &geo,
-            format!(
-                "{shape}Mesh.MeshSizeMax = 0.5;\n\
-                 Physical Volume(\"bar\") = {{1}};\nPhysical Surface(\"left\") = {{1}};\n\
-                 Physical Surface(\"sides_y\") = {{3, 4}};\nPhysical Surface(\"sides_z\") = {{5, 6}};\n"
-            ),
-        )
-        .unwrap();
-        let scene = bar_scene(
-            &dir,
-            4,
-            "end_time = 1.0e-5\ntetrahedra = \"nodal_pressure\"",
-            extra,
+    );
+    assert!(line.contains("split"), "the way out: {line}");
+}
+
+/// The bar scene (`bar_scene`, the `[run]` lines `run_lines` added) on the mesh of the gmsh geometry
+/// `shape` (its physical groups added) is refused at np 1 and 3 with exactly one line holding
+/// `needle`; returns that line (np 3's).
+fn refused_mesh(name: &str, shape: &str, run_lines: &str, needle: &str) -> String {
+    let dir = workdir(name);
+    let geo = dir.join(format!("{name}.geo"));
+    std::fs::write(
+        &geo,
+        format!(
+            "{shape}Mesh.MeshSizeMax = 0.5;\n\
+             Physical Volume(\"bar\") = {{1}};\nPhysical Surface(\"left\") = {{1}};\n\
+             Physical Surface(\"sides_y\") = {{3, 4}};\nPhysical Surface(\"sides_z\") = {{5, 6}};\n"
+        ),
+    )
+    .unwrap();
+    let scene = bar_scene(&dir, 4, &format!("end_time = 1.0e-5\n{run_lines}"), "");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let bar = root().join("meshes").join("bar.geo").display().to_string();
+    std::fs::write(&scene, text.replace(&bar, &geo.display().to_string())).unwrap();
+    let mut last = String::new();
+    for np in [1, 3] {
+        let o = run(np, &scene, &dir.join(format!("out{np}")));
+        assert!(!o.status.success(), "{name}: must be refused at np {np}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
+        assert_eq!(
+            lines.len(),
+            1,
+            "{name} at np {np}: one line naming {needle}:\n{err}"
         );
-        let text = std::fs::read_to_string(&scene).unwrap();
-        let bar = root().join("meshes").join("bar.geo").display().to_string();
-        std::fs::write(&scene, text.replace(&bar, &geo.display().to_string())).unwrap();
-        for np in [1, 3] {
-            let o = run(np, &scene, &dir.join(format!("out{np}")));
-            assert!(!o.status.success(), "{name}: must be refused at np {np}");
-            let err = String::from_utf8_lossy(&o.stderr);
-            let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
-            assert_eq!(
-                lines.len(),
-                1,
-                "{name} at np {np}: one line naming {needle}:\n{err}"
-            );
-            assert!(lines[0].contains("split"), "{name}: the way out: {err}");
-        }
+        last = lines[0].to_string();
     }
+    last
 }
 
 /// One bad-input case: a scene (and its arguments) that once hung a rank or ran on silently,

@@ -280,9 +280,6 @@ fn tetrahedral_mesh_is_the_same_bits_at_1_to_3_ranks() {
         ),
     )
     .unwrap();
-    let report = |out: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
-    };
     let base = dir.join("np1");
     run_ok(1, &scene, &base);
     let r = report(&base);
@@ -299,25 +296,13 @@ fn tetrahedral_mesh_is_the_same_bits_at_1_to_3_ranks() {
         Some(4 * tets),
         "the hexahedra run are counted"
     );
-    for np in [2, 3] {
-        let out = dir.join(format!("np{np}"));
-        run_ok(np, &scene, &out);
-        assert_eq!(
-            &report(&out)["mesh_split"],
-            split,
-            "np {np}: the same split"
-        );
-        if let Err(e) = fields_differ(&base, &out) {
-            panic!("np {np} against np 1: fields.h5 {e} (same bits expected)");
-        }
-        for file in ["probes.csv", "history.csv"] {
-            let bad = csv_columns_differ(&base, &out, file, &[]);
-            assert!(
-                bad.is_empty(),
-                "np {np} against np 1: {file} columns differ: {bad:?}"
-            );
-        }
-    }
+    np2_and_np3_give_np1s_bits(
+        &dir,
+        &scene,
+        &base,
+        "mesh_split",
+        &["probes.csv", "history.csv"],
+    );
 }
 
 /// The same bar as above with its tetrahedra run natively (`[run] tetrahedra =
@@ -344,9 +329,6 @@ fn native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
         ),
     )
     .unwrap();
-    let report = |out: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
-    };
     let base = dir.join("np1");
     run_ok(1, &scene, &base);
     let r = report(&base);
@@ -365,21 +347,13 @@ fn native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
         v.iter().any(|&x| x != 0.0) && v.iter().all(|x| x.is_finite()),
         "the bar moves: {v:?}"
     );
-    for np in [2, 3] {
-        let out = dir.join(format!("np{np}"));
-        run_ok(np, &scene, &out);
-        assert_eq!(report(&out)["elements"].as_u64(), Some(elements));
-        if let Err(e) = fields_differ(&base, &out) {
-            panic!("np {np} against np 1: fields.h5 {e} (same bits expected)");
-        }
-        for file in ["probes.csv", "history.csv"] {
-            let bad = csv_columns_differ(&base, &out, file, &[]);
-            assert!(
-                bad.is_empty(),
-                "np {np} against np 1: {file} columns differ: {bad:?}"
-            );
-        }
-    }
+    np2_and_np3_give_np1s_bits(
+        &dir,
+        &scene,
+        &base,
+        "elements",
+        &["probes.csv", "history.csv"],
+    );
 }
 
 /// A mesh of hexahedra and native tetrahedra together (`[run] tetrahedra = "nodal_pressure"`;
@@ -411,9 +385,6 @@ fn hexahedra_beside_native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
         ),
     )
     .unwrap();
-    let report = |out: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
-    };
     let base = dir.join("np1");
     run_ok(1, &scene, &base);
     let r = report(&base);
@@ -437,15 +408,40 @@ fn hexahedra_beside_native_tetrahedra_are_the_same_bits_at_1_to_3_ranks() {
             "the {bar} bar moves: {v:?}"
         );
     }
+    np2_and_np3_give_np1s_bits(
+        &dir,
+        &scene,
+        &base,
+        "native_tetrahedra",
+        &["probes.csv", "history.csv"],
+    );
+}
+
+/// A run's report.json.
+fn report(out: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+}
+
+/// `scene` at np 2 and 3 (runs in `dir`/npN) gives the np 1 run's (`base`) bits in fields.h5 and
+/// in each of `files`, and the same report.json entry `key` (what ran: the split, the element
+/// kinds).
+fn np2_and_np3_give_np1s_bits(
+    dir: &std::path::Path,
+    scene: &std::path::Path,
+    base: &std::path::Path,
+    key: &str,
+    files: &[&str],
+) {
+    let want = report(base)[key].clone();
     for np in [2, 3] {
         let out = dir.join(format!("np{np}"));
-        run_ok(np, &scene, &out);
-        assert_eq!(&report(&out)["native_tetrahedra"], kinds);
-        if let Err(e) = fields_differ(&base, &out) {
+        run_ok(np, scene, &out);
+        assert_eq!(report(&out)[key], want, "np {np}: report.json's {key}");
+        if let Err(e) = fields_differ(base, &out) {
             panic!("np {np} against np 1: fields.h5 {e} (same bits expected)");
         }
-        for file in ["probes.csv", "history.csv"] {
-            let bad = csv_columns_differ(&base, &out, file, &[]);
+        for file in files {
+            let bad = csv_columns_differ(base, &out, file, &[]);
             assert!(
                 bad.is_empty(),
                 "np {np} against np 1: {file} columns differ: {bad:?}"
