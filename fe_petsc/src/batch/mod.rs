@@ -337,6 +337,110 @@ macro_rules! kernel_files {
     };
 }
 
+/// The entries of a width's kernel that [`Batch`] and [`TetBatch`] call (`entry`,
+/// `entry_lanes`, `tet_rates_entry`, `tet_entry`), each its kernel function built by `$build`:
+/// [`plain`] (one lane: the baseline build), [`avx2_or_baseline`] (four lanes) or
+/// [`avx512_only`] (eight lanes).
+macro_rules! entries {
+    ($build:ident) => {
+        $build!(
+            /// [`super::Batch::update`].
+            entry,
+            update_built,
+            hex::update_inline,
+            (g: &mut LaneGroup, dt: f64, m: &LaneMaterial, model: &dyn Material, ctl: &HexControls)
+                -> Result<(), GroupInverted>
+        );
+        $build!(
+            /// [`super::Batch::update_lanes`].
+            entry_lanes,
+            update_lanes_built,
+            hex::update_lanes_inline,
+            (g: &mut LaneGroup, io: &mut super::GroupLanes<'_>, dt: f64, m: &LaneMaterial, ctl: &HexControls)
+                -> Result<(), GroupInverted>
+        );
+        $build!(
+            /// [`super::TetBatch::rates`].
+            tet_rates_entry,
+            tet_rates_built,
+            tet::rates_inline,
+            (g: &mut TetGroup, dt: f64) -> ()
+        );
+        $build!(
+            /// [`super::TetBatch::update`].
+            tet_entry,
+            tet_built,
+            tet::update_inline,
+            (g: &mut TetGroup, dt: f64, m: &LaneMaterial, model: &dyn Material, ctl: &HexControls)
+                -> Result<(), GroupInverted>
+        );
+    };
+}
+
+/// An entry that calls its kernel function as the module's target builds it.
+macro_rules! plain {
+    ($(#[$doc:meta])* $name:ident, $built:ident, $inner:path, ($($a:ident: $t:ty),*) -> $r:ty) => {
+        $(#[$doc])*
+        #[inline]
+        fn $name($($a: $t),*) -> $r {
+            $inner($($a),*)
+        }
+    };
+}
+
+/// An entry that calls the AVX2 build of its kernel function when the CPU has AVX2, the
+/// baseline build otherwise (chosen at run time).
+macro_rules! avx2_or_baseline {
+    ($(#[$doc:meta])* $name:ident, $built:ident, $inner:path, ($($a:ident: $t:ty),*) -> $r:ty) => {
+        $(#[$doc])*
+        #[inline]
+        fn $name($($a: $t),*) -> $r {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                return unsafe { $built($($a),*) };
+            }
+            $inner($($a),*)
+        }
+
+        /// The kernel function compiled for AVX2: one instruction per lane operation, and
+        /// three-operand forms that spare the register copies of SSE2's two-operand ones. The
+        /// same IEEE operations in the same order (no FMA), so the same bits as the baseline
+        /// build.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn $built($($a: $t),*) -> $r {
+            $inner($($a),*)
+        }
+    };
+}
+
+/// An entry that calls the AVX-512F build of its kernel function; panics on a CPU without
+/// AVX-512F (the loops take eight lanes only where [`widest`] found it).
+macro_rules! avx512_only {
+    ($(#[$doc:meta])* $name:ident, $built:ident, $inner:path, ($($a:ident: $t:ty),*) -> $r:ty) => {
+        $(#[$doc])*
+        #[inline]
+        fn $name($($a: $t),*) -> $r {
+            assert!(
+                std::arch::is_x86_feature_detected!("avx512f"),
+                "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
+            );
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            unsafe { $built($($a),*) }
+        }
+
+        /// The kernel function compiled for AVX-512F: every lane operation one instruction on
+        /// a 512-bit register (`lanes8`), inlined here, in a frame aligned for its spills
+        /// ([`super::aligned_frame`]).
+        #[target_feature(enable = "avx512f")]
+        fn $built($($a: $t),*) -> $r {
+            super::aligned_frame();
+            $inner($($a),*)
+        }
+    };
+}
+
 /// The kernel on one lane (`fixed.rs`): one element at a time, for the baseline x86-64 (no
 /// vector instructions to gain from).
 #[path = "."]
@@ -348,47 +452,7 @@ pub mod w1 {
 
     kernel_files!();
 
-    /// [`super::Batch::update`] for one lane.
-    #[inline]
-    fn entry(
-        g: &mut LaneGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        hex::update_inline(g, dt, m, model, ctl)
-    }
-
-    /// [`super::Batch::update_lanes`] for one lane.
-    #[inline]
-    fn entry_lanes(
-        g: &mut LaneGroup,
-        io: &mut super::GroupLanes<'_>,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        hex::update_lanes_inline(g, io, dt, m, ctl)
-    }
-
-    /// [`super::TetBatch::rates`] for one lane.
-    #[inline]
-    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
-        tet::rates_inline(g, dt)
-    }
-
-    /// [`super::TetBatch::update`] for one lane.
-    #[inline]
-    fn tet_entry(
-        g: &mut TetGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        tet::update_inline(g, dt, m, model, ctl)
-    }
+    entries!(plain);
 }
 
 /// The kernel on four lanes of fixed-size arrays (`fixed.rs`).
@@ -401,116 +465,7 @@ pub mod w4 {
 
     kernel_files!();
 
-    /// [`super::Batch::update`] for four lanes: the AVX2 build when the CPU has AVX2, the
-    /// baseline build otherwise.
-    #[inline]
-    fn entry(
-        g: &mut LaneGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { update_avx2(g, dt, m, model, ctl) };
-        }
-        hex::update_inline(g, dt, m, model, ctl)
-    }
-
-    /// [`super::Batch::update_lanes`] for four lanes, built as [`entry`].
-    #[inline]
-    fn entry_lanes(
-        g: &mut LaneGroup,
-        io: &mut super::GroupLanes<'_>,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { update_lanes_avx2(g, io, dt, m, ctl) };
-        }
-        hex::update_lanes_inline(g, io, dt, m, ctl)
-    }
-
-    /// [`update_avx2`] with the group's loads and stores.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn update_lanes_avx2(
-        g: &mut LaneGroup,
-        io: &mut super::GroupLanes<'_>,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        hex::update_lanes_inline(g, io, dt, m, ctl)
-    }
-
-    /// The four-lane kernel compiled for AVX2: one instruction per lane operation, and
-    /// three-operand forms that spare the register copies of SSE2's two-operand ones. The same
-    /// IEEE operations in the same order (no FMA), so the same bits as the baseline build.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn update_avx2(
-        g: &mut LaneGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        hex::update_inline(g, dt, m, model, ctl)
-    }
-
-    /// [`super::TetBatch::rates`] for four lanes, built as [`entry`].
-    #[inline]
-    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { tet_rates_avx2(g, dt) };
-        }
-        tet::rates_inline(g, dt)
-    }
-
-    /// [`tet_rates_entry`]'s AVX2 build.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn tet_rates_avx2(g: &mut TetGroup, dt: f64) {
-        tet::rates_inline(g, dt)
-    }
-
-    /// [`super::TetBatch::update`] for four lanes, built as [`entry`].
-    #[inline]
-    fn tet_entry(
-        g: &mut TetGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { tet_avx2(g, dt, m, model, ctl) };
-        }
-        tet::update_inline(g, dt, m, model, ctl)
-    }
-
-    /// The four-lane tetrahedron kernel compiled for AVX2 (as [`update_avx2`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn tet_avx2(
-        g: &mut TetGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        tet::update_inline(g, dt, m, model, ctl)
-    }
+    entries!(avx2_or_baseline);
 }
 
 /// The kernel on eight lanes in AVX-512 registers (`lanes8.rs`); its update needs AVX-512F
@@ -526,113 +481,5 @@ pub mod w8 {
 
     kernel_files!();
 
-    /// [`super::Batch::update`] for eight lanes. Panics on a CPU without AVX-512F: the element
-    /// loop takes this width only where [`super::widest`] found it.
-    #[inline]
-    fn entry(
-        g: &mut LaneGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        assert!(
-            std::arch::is_x86_feature_detected!("avx512f"),
-            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
-        );
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe { update_avx512(g, dt, m, model, ctl) }
-    }
-
-    /// [`super::Batch::update_lanes`] for eight lanes, built as [`entry`].
-    #[inline]
-    fn entry_lanes(
-        g: &mut LaneGroup,
-        io: &mut super::GroupLanes<'_>,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        assert!(
-            std::arch::is_x86_feature_detected!("avx512f"),
-            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
-        );
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe { update_lanes_avx512(g, io, dt, m, ctl) }
-    }
-
-    /// [`update_avx512`] with the group's loads and stores.
-    #[target_feature(enable = "avx512f")]
-    fn update_lanes_avx512(
-        g: &mut LaneGroup,
-        io: &mut super::GroupLanes<'_>,
-        dt: f64,
-        m: &LaneMaterial,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        super::aligned_frame();
-        hex::update_lanes_inline(g, io, dt, m, ctl)
-    }
-
-    /// The eight-lane kernel compiled for AVX-512F: every lane operation one instruction on a
-    /// 512-bit register (`lanes8`), inlined here.
-    #[target_feature(enable = "avx512f")]
-    fn update_avx512(
-        g: &mut LaneGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        super::aligned_frame();
-        hex::update_inline(g, dt, m, model, ctl)
-    }
-
-    /// [`super::TetBatch::rates`] for eight lanes, built as [`entry`].
-    #[inline]
-    fn tet_rates_entry(g: &mut TetGroup, dt: f64) {
-        assert!(
-            std::arch::is_x86_feature_detected!("avx512f"),
-            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
-        );
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe { tet_rates_avx512(g, dt) }
-    }
-
-    /// [`tet_rates_entry`]'s AVX-512F build.
-    #[target_feature(enable = "avx512f")]
-    fn tet_rates_avx512(g: &mut TetGroup, dt: f64) {
-        super::aligned_frame();
-        tet::rates_inline(g, dt)
-    }
-
-    /// [`super::TetBatch::update`] for eight lanes, built as [`entry`].
-    #[inline]
-    fn tet_entry(
-        g: &mut TetGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        assert!(
-            std::arch::is_x86_feature_detected!("avx512f"),
-            "the eight-lane element kernel needs AVX-512F, which this CPU lacks"
-        );
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        unsafe { tet_avx512(g, dt, m, model, ctl) }
-    }
-
-    /// The eight-lane tetrahedron kernel compiled for AVX-512F (as [`update_avx512`]).
-    #[target_feature(enable = "avx512f")]
-    fn tet_avx512(
-        g: &mut TetGroup,
-        dt: f64,
-        m: &LaneMaterial,
-        model: &dyn Material,
-        ctl: &HexControls,
-    ) -> Result<(), GroupInverted> {
-        super::aligned_frame();
-        tet::update_inline(g, dt, m, model, ctl)
-    }
+    entries!(avx512_only);
 }
