@@ -76,9 +76,11 @@ mod elements;
 mod exact_cg;
 mod restart;
 mod tangent;
+mod walls;
 
 use exact_cg::{CgSystem, ExactCg};
 pub use tangent::material_tangent;
+pub use walls::{WallPlane, MAX_ROUNDS as MAX_WALL_ROUNDS};
 
 /// Default Newton tolerance on the residual relative to the force scale (`-tdyn_newton_rtol`).
 pub const NEWTON_RTOL: f64 = 1e-8;
@@ -157,6 +159,14 @@ pub enum ImplicitError {
         /// Iterations taken.
         iterations: u32,
     },
+    /// The nodes in contact with the rigid walls did not settle.
+    #[error("the nodes in contact with the rigid walls did not settle at t = {time:e} s, step {step}: their set changed in {MAX_WALL_ROUNDS} solves of the step (reduce run.dt)")]
+    WallSet {
+        /// Time at the end of the step.
+        time: f64,
+        /// The step.
+        step: u64,
+    },
     /// This rank is fine; another one failed (its message is the one to report).
     #[error("another rank failed")]
     OtherRank,
@@ -176,6 +186,14 @@ enum NodeDof {
     Projected([[f64; 3]; 3]),
     /// The velocity is prescribed (fixed: zero); no free component.
     Prescribed([f64; 3]),
+    /// On rigid walls (`walls`): the increment is `p d + du`, the velocity at the step's end
+    /// `p v' + v`, with `du` and `v` along the constrained directions (symmetry planes and
+    /// walls) and `p` the projection on the free ones.
+    Walled {
+        p: [[f64; 3]; 3],
+        du: [f64; 3],
+        v: [f64; 3],
+    },
 }
 
 impl NodeDof {
@@ -205,8 +223,21 @@ impl NodeDof {
     fn free(&self, w: [f64; 3]) -> [f64; 3] {
         match self {
             NodeDof::Free => w,
-            NodeDof::Projected(p) => mat3_vec(p, &w),
+            NodeDof::Projected(p) | NodeDof::Walled { p, .. } => mat3_vec(p, &w),
             NodeDof::Prescribed(_) => [0.0; 3],
+        }
+    }
+
+    /// The velocity at the step's end from Newmark's `v`: prescribed, walled or free part.
+    #[inline]
+    fn velocity(&self, v: [f64; 3]) -> [f64; 3] {
+        match self {
+            NodeDof::Prescribed(p) => *p,
+            NodeDof::Walled { p, v: c, .. } => {
+                let f = mat3_vec(p, &v);
+                std::array::from_fn(|k| f[k] + c[k])
+            }
+            dof => dof.free(v),
         }
     }
 
@@ -215,7 +246,7 @@ impl NodeDof {
     fn matrix(&self) -> Option<[[f64; 3]; 3]> {
         match self {
             NodeDof::Free => None,
-            NodeDof::Projected(p) => Some(*p),
+            NodeDof::Projected(p) | NodeDof::Walled { p, .. } => Some(*p),
             NodeDof::Prescribed(_) => Some([[0.0; 3]; 3]),
         }
     }
@@ -295,6 +326,10 @@ pub struct ImplicitFe {
     local_buf: Vec<f64>,
     tangent_stale: bool,
     force_scale_max: f64,
+    /// The symmetry-plane normals of the nodes that have them (until the walls take them).
+    plane_normals: std::collections::HashMap<usize, Vec<[f64; 3]>>,
+    /// The rigid walls and their nodes in contact (`set_walls`).
+    walls: Option<Box<walls::WallSet>>,
 }
 
 impl ImplicitFe {
@@ -315,8 +350,12 @@ impl ImplicitFe {
         };
         let nn = setup.mesh.coords.len();
         let mut dofs = vec![NodeDof::Free; nn];
+        let mut plane_normals = std::collections::HashMap::new();
         for (n, c) in &setup.constraints {
             dofs[*n as usize] = NodeDof::from_constraint(c);
+            if let Constraint::Planes(ns) = c {
+                plane_normals.insert(*n as usize, ns.clone());
+            }
         }
         let mut curve_of = vec![u32::MAX; nn];
         let mut curved = Vec::new();
@@ -402,6 +441,8 @@ impl ImplicitFe {
             owned_nodes,
             tangent_stale: true,
             force_scale_max: 0.0,
+            plane_normals,
+            walls: None,
             fe,
         };
         // The reactions at t = 0 (zero stress: M a(0) = M g + R(0)).
@@ -465,8 +506,13 @@ impl ImplicitFe {
     /// M a = f + M g + R solved for R where P removes the constrained directions).
     pub fn constraint_reactions(&self) -> impl Iterator<Item = (u32, [f64; 3])> + '_ {
         (0..self.n_nodes())
-            .filter(|&n| !matches!(self.dofs[n], NodeDof::Free))
+            .filter(|&n| !matches!(self.support_dof(n), NodeDof::Free))
             .map(|n| (n as u32, self.reaction_n[n]))
+    }
+
+    /// Node `n`'s constraint by its supports (boundary groups), without the walls'.
+    fn support_dof(&self, n: usize) -> &NodeDof {
+        self.walls.as_ref().map_or(&self.dofs[n], |w| w.base(n))
     }
 
     /// Number of local nodes.
@@ -497,6 +543,8 @@ impl ImplicitFe {
         if let Some(l) = self.fe.loads_mut() {
             l.keep();
         }
+        // The walls' nodes in contact at the step's start held on their planes at its end.
+        self.apply_walls();
         // Predictor: a(n+1) = a(n).
         for n in 0..self.n_nodes() {
             let (v, a) = (self.fe.v[n], self.fe.a[n]);
@@ -504,22 +552,63 @@ impl ImplicitFe {
             self.du[n] = self.constrained_increment(n, d);
         }
         self.fe.timers.nodal += t0.elapsed().as_secs_f64();
-        let mut prev: Option<f64> = None;
         let mut iterations = 0u32;
+        let mut rounds = 0u32;
+        loop {
+            let tol = self.newton(comm, exchange, &mut iterations)?;
+            if !self.update_wall_sets(comm, tol) {
+                break;
+            }
+            // The set changed: its constraints on the converged increment, and Newton again.
+            rounds += 1;
+            if rounds > walls::MAX_ROUNDS {
+                return Err(ImplicitError::WallSet {
+                    time: self.fe.time + dt,
+                    step: self.fe.step + 1,
+                });
+            }
+            self.apply_walls();
+            for n in 0..self.n_nodes() {
+                self.du[n] = self.constrained_increment(n, self.du[n]);
+            }
+            self.tangent_stale = true;
+        }
+        self.stats.newton_iterations += iterations as u64;
+        self.stats.max_step_iterations = self.stats.max_step_iterations.max(iterations);
+        let sums = self.accept();
+        let mut global = vec![0.0; sums.len()];
+        comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
+        self.fe.accumulate(&global, dt);
+        self.finish_wall_step(comm);
+        Ok(())
+    }
+
+    /// Newton iterations to convergence from the present increment, counting them in
+    /// `iterations`; returns the force below which a residual counts as converged, N
+    /// (collective).
+    fn newton(
+        &mut self,
+        comm: &SimpleCommunicator,
+        exchange: &mut NodeExchange,
+        iterations: &mut u32,
+    ) -> Result<f64, ImplicitError> {
+        let dt = self.dt;
+        let mut prev: Option<f64> = None;
+        let mut solves = 0u32;
         loop {
             let (rnorm, scale) = self.evaluate(comm, exchange)?;
             self.force_scale_max = self.force_scale_max.max(scale);
             let tol = self.options.rtol * scale.max(FORCE_FLOOR * self.force_scale_max);
             if rnorm <= tol {
-                break;
+                return Ok(tol);
             }
-            if iterations >= self.options.max_iterations {
+            if solves >= self.options.max_iterations {
                 return Err(ImplicitError::NoConvergence {
                     time: self.fe.time + dt,
                     step: self.fe.step + 1,
                     residual: rnorm,
                     tolerance: tol,
-                    iterations,
+                    iterations: solves,
                 });
             }
             if prev.is_some_and(|p| rnorm > REFRESH_RATIO * p) {
@@ -531,15 +620,9 @@ impl ImplicitFe {
             }
             self.newton_update(comm, exchange)?;
             prev = Some(rnorm);
-            iterations += 1;
+            solves += 1;
+            *iterations += 1;
         }
-        self.stats.newton_iterations += iterations as u64;
-        self.stats.max_step_iterations = self.stats.max_step_iterations.max(iterations);
-        let sums = self.accept();
-        let mut global = vec![0.0; sums.len()];
-        comm.all_reduce_into(&sums[..], &mut global[..], SystemOperation::sum());
-        self.fe.accumulate(&global, dt);
-        Ok(())
     }
 
     /// A node's increment with its constraint applied: prescribed dt v, or the free part.
@@ -547,6 +630,10 @@ impl ImplicitFe {
     fn constrained_increment(&self, n: usize, d: [f64; 3]) -> [f64; 3] {
         match self.dofs[n] {
             NodeDof::Prescribed(v) => std::array::from_fn(|c| self.dt * v[c]),
+            NodeDof::Walled { p, du, .. } => {
+                let f = mat3_vec(&p, &d);
+                std::array::from_fn(|c| f[c] + du[c])
+            }
             ref dof => dof.free(d),
         }
     }
@@ -724,10 +811,7 @@ impl ImplicitFe {
             let a_raw: [f64; 3] = std::array::from_fn(|c| c_mass * (du[c] - dt * v[c]) - a[c]);
             let mut a_new = self.dofs[n].free(a_raw);
             let v_raw: [f64; 3] = std::array::from_fn(|c| v[c] + 0.5 * dt * (a[c] + a_new[c]));
-            let mut v_new = match self.dofs[n] {
-                NodeDof::Prescribed(p) => p,
-                ref dof => dof.free(v_raw),
-            };
+            let mut v_new = self.dofs[n].velocity(v_raw);
             // A velocity with a curve: v s(t + dt) and its acceleration v ds/dt at the step's
             // end (the reaction then holds the force that changes the node's momentum).
             if let Some((_, pv, c)) = self.curved.get(self.curve_of[n] as usize) {
@@ -735,7 +819,11 @@ impl ImplicitFe {
                 v_new = pv.map(|x| x * s);
                 a_new = pv.map(|x| x * rate);
             }
-            self.reaction[n] = self.constraint_force(n, a_new, f);
+            let full = self.constraint_force(n, a_new, f);
+            // The walls' part of it is theirs (their impulse and energy), the rest the
+            // supports' (reactions.csv, external work).
+            self.reaction[n] =
+                self.book_wall_node(n, full, (v_raw, v_new), (self.gravity_n, self.gravity));
             for c in 0..3 {
                 self.fe.x[n][c] += du[c];
             }

@@ -177,6 +177,33 @@ pub fn bar_scene(dir: &Path, n: usize, run: &str, extra: &str) -> PathBuf {
     p
 }
 
+/// The test bar (steel, 1 m, uniaxial strain, `n` elements) in implicit mode with step `dt`
+/// to `end`, its block given `block` (extra keys) and `extra` appended.
+pub fn implicit_bar(
+    dir: &Path,
+    n: usize,
+    (dt, end): (f64, f64),
+    block: &str,
+    extra: &str,
+) -> PathBuf {
+    let run =
+        format!("end_time = {end:e}\nmode = \"implicit\"\ndt = {dt:e}\noutput_every = {dt:e}");
+    let p = bar_scene(dir, n, &run, extra);
+    let text = std::fs::read_to_string(&p).unwrap();
+    let from = "material = \"steel\"\n\n[[boundary]]";
+    assert!(text.contains(from), "bar_scene's block");
+    let text = text.replace(
+        from,
+        &format!("material = \"steel\"\n{block}\n\n[[boundary]]"),
+    );
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A rigid wall at x = 0 facing +x, named "target" (the implicit bar's wall).
+pub const WALL_AT_0: &str =
+    "[[rigid_wall]]\nname = \"target\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n";
+
 /// scenes/kirchhoff_plate.toml in implicit mode (`mode = "implicit"`, dt = 1 ms: 48 steps, about
 /// a fifth of the plate's first period), its mesh path made absolute, written into `dir`.
 pub fn implicit_plate_scene(dir: &Path) -> PathBuf {

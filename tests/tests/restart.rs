@@ -674,3 +674,45 @@ fn native_tetrahedra_run_restarts_bit_identical_and_on_other_ranks() {
     stop_and_restart_in(&dir, &scene, 2, 300, &[]);
     restart_on_other_ranks(rel, 3, &[1], 300, 0.0, &["--end-time", "1e-5"]);
 }
+
+#[test]
+fn implicit_run_on_a_rigid_wall_stopped_on_3_ranks_continues_on_1() {
+    // The elastic bar bouncing off a rigid wall in implicit mode (tests/tests/implicit_walls.rs),
+    // stopped while it is on the wall: the nodes in contact and the wall's forces at the
+    // accepted state (`implicit.wall_active`, `implicit.wall_force_n`, by node id), the walls'
+    // energy and impulse since the last row continue; the wall still lets go at 2 L / c. A
+    // restarted implicit run assembles a fresh tangent: limit 1e-6 of each column's largest
+    // value, as `implicit_run_checkpointed_on_3_ranks_continues_on_2`.
+    let dir = workdir("restart_implicit_wall");
+    let scene = implicit_bar(
+        &dir,
+        40,
+        (2.0e-6, 5.0e-4),
+        "velocity = [-1.0, 0.0, 0.0]",
+        WALL_AT_0,
+    );
+    let (a, b) = (dir.join("A"), dir.join("B"));
+    run_ok(1, &scene, &a);
+    stop_after_rows(3, &scene, &b, 80, &[]);
+    restart_ok(1, &scene, &b, &[]);
+    let compared = [
+        "kinetic_energy",
+        "internal_energy",
+        "contact_energy",
+        "momentum_x",
+        "time",
+        "target.force_x",
+    ];
+    for f in ["history.csv", "reactions.csv"] {
+        let scale = |name: &str, largest: f64| compared.contains(&name).then_some(largest);
+        let diffs = column_differences(&a.join(f), &b.join(f), &scale)
+            .unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(!diffs.is_empty(), "{f}: columns compared: {diffs:?}");
+        for (name, d) in diffs {
+            assert!(
+                d <= 1e-6,
+                "implicit bar on a wall stopped on 3 ranks, continued on 1: {f} column {name} differs from the run without a stop by {d:e} of its largest value (limit 1e-6: 100 x the Newton tolerance)"
+            );
+        }
+    }
+}

@@ -400,7 +400,7 @@ fn a_wall_moved_by_a_load_curve_follows_its_integral() {
 #[test]
 fn bad_walls_are_refused_by_key() {
     // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit; a
-    // wall in implicit mode is refused (the walls act between the explicit drift and forces).
+    // wall with friction in implicit mode is refused (its Newton holds frictionless walls).
     let dir = workdir("rigid_wall_bad");
     let good = "[[rigid_wall]]\nname = \"w\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n";
     let explicit = "end_time = 1.0e-5";
@@ -440,8 +440,8 @@ fn bad_walls_are_refused_by_key() {
         ),
         (
             "implicit",
-            good.to_string(),
-            "rigid_wall: rigid walls act in explicit mode only",
+            format!("{good}friction = 0.2\n"),
+            "rigid_wall[0].friction: a rigid wall with friction acts in explicit mode only",
         ),
     ];
     for (name, wall, key) in cases {

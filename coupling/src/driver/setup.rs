@@ -121,9 +121,25 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
             "{file}: mesh: the contact stage needs mesh faces: a scene of particles only cannot have a [contact] table"
         ));
     }
-    if implicit && !scene.rigid_walls.is_empty() {
+    if implicit && scene.rigid_walls.len() > 32 {
         return Err(format!(
-            "{file}: rigid_wall: rigid walls act in explicit mode only; use mode = \"explicit\" or remove the [[rigid_wall]] tables"
+            "{file}: rigid_wall: at most 32 rigid walls in implicit mode ({} given)",
+            scene.rigid_walls.len()
+        ));
+    }
+    if let Some((k, w)) = implicit
+        .then(|| {
+            scene
+                .rigid_walls
+                .iter()
+                .enumerate()
+                .find(|(_, w)| w.friction > 0.0)
+        })
+        .flatten()
+    {
+        return Err(format!(
+            "{file}: rigid_wall[{k}].friction: a rigid wall with friction acts in explicit mode only (\"{}\"); use mode = \"explicit\" or friction = 0 in implicit mode",
+            w.name
         ));
     }
     if implicit && scene.run.dt.is_none() {

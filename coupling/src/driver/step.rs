@@ -38,5 +38,9 @@ pub fn step(
     for stage in model.stages_mut() {
         next = next.min(stage.forces(world, dt)?);
     }
+    // An implicit step held nodes on the walls inside Newton: their impulses and energy.
+    if let Some(walls) = &mut model.walls {
+        walls.after_implicit(model.fe.as_ref());
+    }
     Ok(next)
 }

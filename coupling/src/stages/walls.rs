@@ -32,13 +32,21 @@
 //! from the last step's plane to this one, so a node held on it follows `p + W I(t)` to
 //! round-off, and `W . J` takes that mean velocity. Without a curve the wall is the constant
 //! `p + W t` of [`contact::Wall`].
+//!
+//! **Implicit mode.** There a wall is a constraint inside the Newmark step, not a correction
+//! after a drift: the walls of the step (plane at its end, mean velocity) go to the implicit
+//! integrator before it ([`Walls::step`]), which holds the nodes in contact on them by an active
+//! set in Newton (`fe_petsc::implicit::WallPlane`, its module doc), and its impulses and the
+//! energy the walls took come back after it ([`Walls::after_implicit`]), booked as above.
 use super::fe::Fe;
+use super::fe::Integrator;
 use super::sph::Sph;
 use crate::input::curve::Curve;
 use crate::input::scene::RigidWallDef;
 use crate::output::state::{StateReader, StateWriter};
 use contact::Wall;
 use fe_petsc::exact::{self as exact_sum, Folds};
+use fe_petsc::implicit::WallPlane;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -62,6 +70,8 @@ pub struct Walls {
     row_time: f64,
     /// Wall time of the walls' corrections on this rank, s.
     pub wall_s: f64,
+    /// Implicit mode: the walls' mean velocities over the present step.
+    step_velocities: Vec<[f64; 3]>,
 }
 
 /// A wall's correction of every FE node (or particle) it pushes back, as the push-back forces
@@ -112,6 +122,7 @@ impl Walls {
             impulse: vec![[0.0; 3]; defs.len()],
             row_time: 0.0,
             wall_s: 0.0,
+            step_velocities: Vec::new(),
         })
     }
 
@@ -122,13 +133,28 @@ impl Walls {
     pub fn step(
         &mut self,
         world: &SimpleCommunicator,
-        fe: Option<&mut Fe>,
+        mut fe: Option<&mut Fe>,
         sph: Option<&mut Sph>,
         (t1, dt): (f64, f64),
     ) {
         let t0 = Instant::now();
-        let nw = self.walls.len();
         let walls = self.walls_of_step(t1, dt);
+        if let Some(Integrator::Implicit(imp)) = fe.as_mut().map(|f| &mut f.integrator) {
+            // Implicit: the planes at the step's end go into Newton (module doc).
+            let planes = walls
+                .iter()
+                .map(|(w, t)| WallPlane {
+                    point: std::array::from_fn(|c| w.point[c] + w.velocity[c] * t),
+                    normal: w.normal,
+                    velocity: w.velocity,
+                })
+                .collect();
+            imp.set_wall_planes(planes);
+            self.step_velocities = walls.iter().map(|(w, _)| w.velocity).collect();
+            self.wall_s += t0.elapsed().as_secs_f64();
+            return;
+        }
+        let nw = walls.len();
         // [FE work, particles' work, then per wall FE impulse x, y, z and particles' x, y, z]:
         // each on its own stage's grid, added once reduced.
         let mut folds: Vec<Folds> = vec![[0.0; 3]; 2 + 6 * nw];
@@ -142,18 +168,43 @@ impl Walls {
         let mut g = vec![0.0f64; flat.len()];
         world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
         let g = exact_sum::values(&g);
+        let impulses: Vec<[f64; 3]> = (0..nw)
+            .map(|k| std::array::from_fn(|c| g[2 + 6 * k + c] + g[5 + 6 * k + c]))
+            .collect();
+        let velocities: Vec<[f64; 3]> = walls.iter().map(|(w, _)| w.velocity).collect();
+        let work = self.book(&impulses, &velocities);
+        self.energy += work - (g[0] + g[1]);
+        self.wall_s += t0.elapsed().as_secs_f64();
+    }
+
+    /// After an implicit step: its walls' impulses and the energy they took, from the
+    /// integrator (module doc). Every rank holds the same global values.
+    pub fn after_implicit(&mut self, fe: Option<&Fe>) {
+        let Some(Integrator::Implicit(imp)) = fe.map(|f| &f.integrator) else {
+            return;
+        };
+        let Some((impulses, taken)) = imp.wall_step() else {
+            return;
+        };
+        let velocities = std::mem::take(&mut self.step_velocities);
+        // What the walls took: their work and what the integrator found unexplained by the
+        // other forces in the kinetic energy of the nodes in contact.
+        let work = self.book(impulses, &velocities);
+        self.energy += work + taken;
+    }
+
+    /// Adds a step's impulses of the walls (moving at `velocities`) to the row's, and their
+    /// work `W . J` to the run's; returns that work.
+    fn book(&mut self, impulses: &[[f64; 3]], velocities: &[[f64; 3]]) -> f64 {
         let mut work = 0.0;
-        for (k, (imp, (wall, _))) in self.impulse.iter_mut().zip(&walls).enumerate() {
-            let s = &g[2 + 6 * k..8 + 6 * k];
+        for ((imp, j), w) in self.impulse.iter_mut().zip(impulses).zip(velocities) {
             for c in 0..3 {
-                let j = s[c] + s[3 + c];
-                imp[c] += j;
-                work += wall.velocity[c] * j;
+                imp[c] += j[c];
+                work += w[c] * j[c];
             }
         }
         self.work += work;
-        self.energy += work - (g[0] + g[1]);
-        self.wall_s += t0.elapsed().as_secs_f64();
+        work
     }
 
     /// The walls as they stand over the step to `t1` (scene order), each with the time at

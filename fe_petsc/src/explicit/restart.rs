@@ -35,7 +35,9 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "fe.reaction_old"
         | "fe.pushed"
         | "implicit.force_n"
-        | "implicit.reaction_n" => Node,
+        | "implicit.reaction_n"
+        | "implicit.wall_active"
+        | "implicit.wall_force_n" => Node,
         "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,

@@ -14,6 +14,7 @@ impl ImplicitFe {
             self.reaction_n.as_flattened().to_vec(),
         ));
         v.push(("implicit.force_scale_max", vec![self.force_scale_max]));
+        v.extend(self.wall_restart_state());
         v
     }
 
@@ -36,6 +37,7 @@ impl ImplicitFe {
         let r = take("implicit.reaction_n", n3)?;
         self.reaction_n.as_flattened_mut().copy_from_slice(&r);
         self.force_scale_max = take("implicit.force_scale_max", 1)?[0];
+        self.set_wall_restart_state(get)?;
         self.tangent_stale = true;
         Ok(())
     }

@@ -105,6 +105,10 @@ impl Fe {
             Integrator::Implicit(imp) => imp.set_loads(loads, &mut mesh.exchange),
         };
         first_error(world, res.err().map(|e| format!("{file}: {e}")))?;
+        if let (Integrator::Implicit(imp), false) = (&mut integrator, scene.rigid_walls.is_empty())
+        {
+            imp.set_walls(scene.rigid_walls.len());
+        }
         match &mut integrator {
             Integrator::Explicit(fe) => fe.initial_energies(world),
             Integrator::Implicit(imp) => imp.fe.initial_energies(world),

@@ -1,0 +1,205 @@
+//! `[[rigid_wall]]` in implicit mode (docs/scene.md): the nodes in contact held on the plane by an
+//! active set inside Newton (fe_petsc/src/implicit/walls.rs). Each test compares with an answer
+//! the implicit wall did not produce: the 1D elastic impact, the same bar on a bilateral
+//! symmetry plane, the analytic column under its own weight, the bodies' momentum change. At
+//! np 1 and 3, where the answer must also be the same bits.
+use std::path::{Path, PathBuf};
+use tdyn_tests::*;
+
+/// `dir/name`, created.
+fn mkdir(dir: &Path, name: &str) -> PathBuf {
+    let d = dir.join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The time integral of a reactions.csv force column (each row holds the mean force over the
+/// interval since the row before: docs/output.md), N s.
+fn impulse(out: &Path, column_name: &str) -> f64 {
+    let (h, rows) = read_csv(&out.join("reactions.csv"));
+    let (t, f) = (column(&h, &rows, "time"), column(&h, &rows, column_name));
+    (1..t.len()).map(|k| f[k] * (t[k] - t[k - 1])).sum()
+}
+
+/// Every history.csv, reactions.csv and probes.csv column of `b` is the same bits as `a`'s.
+fn same_bits(a: &Path, b: &Path, what: &str) {
+    for file in ["history.csv", "reactions.csv", "probes.csv"] {
+        let d = csv_columns_differ(a, b, file, &[]);
+        assert!(d.is_empty(), "{what}: {file} columns differ: {d:?}");
+    }
+}
+
+#[test]
+fn an_elastic_bar_bounces_off_an_implicit_wall_as_the_1d_impact() {
+    // The bar at V = 1 m/s onto a rigid wall at x = 0 (its face starts on it), uniaxial strain:
+    // the 1D elastic impact (e.g. Graff, Wave Motion in Elastic Solids, 1975, §2.4) holds the
+    // face for 2 L / c (c the dilatational speed), with the wall's force rho c V A, and sends the
+    // bar back at V: momentum -m V to +m V. The wall must let go (the active set's release).
+    // Tolerances: the mean force over the contact within 2 % (Newmark's dispersion rings about
+    // it); the release within 3 steps of 2 L / c; the rebound momentum within 4 % of m V: the
+    // face nodes' arrival is inelastic (1 / (2N) of the kinetic energy, 1.25 % at N = 40) and
+    // the discrete bar leaves ringing (measured -2.8 % at N = 40, dt = 2 us; -1.8 % at N = 80,
+    // dt = 1 us; the explicit wall on the same mesh -5.3 %); the wall's impulse equals the bar's momentum change
+    // to 1e-6 (the velocity update's part included); the energy balance, the walls' share in
+    // contact_energy, to 1e-6.
+    let (v, area, n) = (1.0, 0.05 * 0.05, 40);
+    let c = c_dilatational();
+    let t_c = 2.0 / c;
+    let dt = 2.0e-6;
+    let mass = RHO * area;
+    let dir = workdir("implicit_wall_bounce");
+    let mut first: Option<PathBuf> = None;
+    for np in [1, 3] {
+        let out = dir.join(format!("np{np}"));
+        let scene = implicit_bar(
+            &mkdir(&dir, &format!("scene_np{np}")),
+            n,
+            (dt, 5.0e-4),
+            "velocity = [-1.0, 0.0, 0.0]",
+            WALL_AT_0,
+        );
+        run_ok(np, &scene, &out);
+        let (hr, rr) = read_csv(&out.join("reactions.csv"));
+        let (t, fx) = (column(&hr, &rr, "time"), column(&hr, &rr, "target.force_x"));
+        let amp = RHO * c * v * area;
+        let during: Vec<f64> = t
+            .iter()
+            .zip(&fx)
+            .filter(|(tt, _)| **tt > 0.05 * t_c && **tt < 0.95 * t_c)
+            .map(|(_, f)| *f)
+            .collect();
+        let mean = during.iter().sum::<f64>() / during.len() as f64;
+        assert!(
+            (mean - amp).abs() < 0.02 * amp,
+            "np {np}: the wall's mean force {mean:e} N vs rho c V A = {amp:e} N (2 %)"
+        );
+        let last_touch = t
+            .iter()
+            .zip(&fx)
+            .filter(|(_, f)| **f != 0.0)
+            .map(|(tt, _)| *tt)
+            .fold(0.0, f64::max);
+        assert!(
+            (last_touch - t_c).abs() <= 3.0 * dt,
+            "np {np}: the bar leaves the wall at {last_touch:e} s, 2 L / c = {t_c:e} s (3 steps)"
+        );
+        let (hh, rh) = read_csv(&out.join("history.csv"));
+        let px = column(&hh, &rh, "momentum_x");
+        let (p0, p1) = (px[0], *px.last().unwrap());
+        assert!(
+            (p0 + mass * v).abs() < 1e-9 * mass * v,
+            "np {np}: initial momentum {p0:e}"
+        );
+        assert!(
+            (p1 - mass * v).abs() < 0.04 * mass * v,
+            "np {np}: rebound momentum {p1:e} kg m/s vs m V = {:e} (4 %)",
+            mass * v
+        );
+        let j = impulse(&out, "target.force_x");
+        assert!(
+            (j - (p1 - p0)).abs() < 1e-6 * mass * v,
+            "np {np}: the wall's impulse {j:e} N s vs the momentum change {:e} (1e-6)",
+            p1 - p0
+        );
+        let err = column(&hh, &rh, "energy_error")
+            .iter()
+            .fold(0.0f64, |m, e| m.max(e.abs()));
+        assert!(err < 1e-6, "np {np}: energy error {err:e} (1e-6)");
+        let taken = *column(&hh, &rh, "contact_energy").last().unwrap();
+        let k0 = 0.5 * mass * v * v;
+        assert!(
+            taken > 0.0 && taken < 0.03 * k0,
+            "np {np}: the wall took {taken:e} J of {k0:e} J (the arrivals: about 1 / (2N))"
+        );
+        match &first {
+            None => first = Some(out),
+            Some(a) => same_bits(a, &out, "bouncing bar, np 3 against np 1"),
+        }
+    }
+}
+
+#[test]
+fn a_column_on_an_implicit_wall_under_its_weight_is_the_symmetry_planes_and_the_analytic() {
+    // The bar standing on a rigid wall at x = 0 with gravity -g x ramped over 20 ms (about 30
+    // of its periods 4 L / c: quasi-static). Pressed everywhere on the wall, the bar meets the
+    // bilateral symmetry plane's constraint: the two runs agree to the Newton tolerance (1e-6 of
+    // the top's displacement). Against the analytic column in uniaxial strain, sigma = -rho g
+    // (L - x), u(L) = -rho g L^2 / (2 M), M = lambda + 2 mu, within 1 % after the ramp (the
+    // mesh's linear displacement per element: 0.02 % at N = 20; the ramp's left-over
+    // oscillation); the wall's force equals the weight rho g A L within 1e-3.
+    let (g, area, n) = (9.81, 0.05 * 0.05, 20);
+    let m_mod = E * (1.0 - NU) / ((1.0 + NU) * (1.0 - 2.0 * NU));
+    let u_top = -RHO * g / (2.0 * m_mod);
+    let weight = RHO * area * g;
+    let run_keys = |dir: &Path, support: &str| {
+        let extra = format!(
+            "{support}\n[[probe]]\nname = \"top\"\npoint = [1.0, 0.0, 0.0]\nfields = [\"displacement_x\"]\n"
+        );
+        let p = implicit_bar(dir, n, (2.5e-4, 0.03), "", &extra);
+        let text = std::fs::read_to_string(&p).unwrap().replace(
+            "[run]\n",
+            "gravity = [-9.81, 0.0, 0.0]\ngravity_curve = [[0.0, 0.0], [0.02, 1.0]]\n[run]\n",
+        );
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let dir = workdir("implicit_wall_column");
+    let plane = dir.join("plane");
+    let support = "[[boundary]]\ngroup = \"left\"\nkind = \"symmetry\"\n";
+    run_ok(1, &run_keys(&mkdir(&dir, "scene_plane"), support), &plane);
+    let top = |out: &Path| {
+        let (h, rows) = read_csv(&out.join("probes.csv"));
+        (
+            column(&h, &rows, "time"),
+            column(&h, &rows, "top.displacement_x"),
+        )
+    };
+    let (_, u_plane) = top(&plane);
+    let mut first: Option<PathBuf> = None;
+    for np in [1, 3] {
+        let out = dir.join(format!("np{np}"));
+        run_ok(
+            np,
+            &run_keys(&mkdir(&dir, &format!("scene_np{np}")), WALL_AT_0),
+            &out,
+        );
+        let (t, u) = top(&out);
+        let worst = u
+            .iter()
+            .zip(&u_plane)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-6 * u_top.abs(),
+            "np {np}: the top on the wall differs from the plane's by {worst:e} m (1e-6 of {u_top:e})"
+        );
+        let late: Vec<f64> = t
+            .iter()
+            .zip(&u)
+            .filter(|(tt, _)| **tt > 0.022)
+            .map(|(_, u)| *u)
+            .collect();
+        let mean = late.iter().sum::<f64>() / late.len() as f64;
+        assert!(
+            (mean - u_top).abs() < 0.01 * u_top.abs(),
+            "np {np}: the top's displacement {mean:e} m vs -rho g L^2 / 2M = {u_top:e} m (1 %)"
+        );
+        let (hr, rr) = read_csv(&out.join("reactions.csv"));
+        let (tr, fx) = (column(&hr, &rr, "time"), column(&hr, &rr, "target.force_x"));
+        let f_late: Vec<f64> = tr
+            .iter()
+            .zip(&fx)
+            .filter(|(tt, _)| **tt > 0.022)
+            .map(|(_, f)| *f)
+            .collect();
+        let f = f_late.iter().sum::<f64>() / f_late.len() as f64;
+        assert!(
+            (f - weight).abs() < 1e-3 * weight,
+            "np {np}: the wall carries {f:e} N, the weight is {weight:e} N (1e-3)"
+        );
+        match &first {
+            None => first = Some(out),
+            Some(a) => same_bits(a, &out, "column on a wall, np 3 against np 1"),
+        }
+    }
+}
