@@ -820,10 +820,10 @@ impl ImplicitFe {
                 a_new = pv.map(|x| x * rate);
             }
             let full = self.constraint_force(n, a_new, f);
-            // The walls' part of it is theirs (their impulse and energy), the rest the
-            // supports' (reactions.csv, external work).
-            self.reaction[n] =
-                self.book_wall_node(n, full, (v_raw, v_new), (self.gravity_n, self.gravity));
+            // The walls' part of it is theirs (their impulse and energy, and friction's
+            // change of the velocity), the rest the supports' (reactions.csv, external work).
+            let gravity = (self.gravity_n, self.gravity);
+            (self.reaction[n], v_new) = self.book_wall_node(n, full, (v_raw, v_new), gravity);
             for c in 0..3 {
                 self.fe.x[n][c] += du[c];
             }

@@ -399,12 +399,10 @@ fn a_wall_moved_by_a_load_curve_follows_its_integral() {
 
 #[test]
 fn bad_walls_are_refused_by_key() {
-    // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit; a
-    // wall with friction in implicit mode is refused (its Newton holds frictionless walls).
+    // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit.
     let dir = workdir("rigid_wall_bad");
     let good = "[[rigid_wall]]\nname = \"w\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n";
     let explicit = "end_time = 1.0e-5";
-    let implicit = "end_time = 1.0e-5\nmode = \"implicit\"\ndt = 1.0e-6";
     let cases = [
         (
             "zero_normal",
@@ -438,20 +436,10 @@ fn bad_walls_are_refused_by_key() {
             format!("{good}velocity = [1.0, 0.0, 0.0]\ncurve = [[1.0e-4, 0.0], [0.0, 1.0]]\n"),
             "rigid_wall[0].curve[1]",
         ),
-        (
-            "implicit",
-            format!("{good}friction = 0.2\n"),
-            "rigid_wall[0].friction: a rigid wall with friction acts in explicit mode only",
-        ),
     ];
     for (name, wall, key) in cases {
         let d = mkdir(&dir, name);
-        let run_keys = if name == "implicit" {
-            implicit
-        } else {
-            explicit
-        };
-        let scene = bar_scene(&d, 4, run_keys, &wall);
+        let scene = bar_scene(&d, 4, explicit, &wall);
         assert_scene_refused(name, &scene, &d.join("out"), key);
     }
 }

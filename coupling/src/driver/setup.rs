@@ -127,21 +127,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
             scene.rigid_walls.len()
         ));
     }
-    if let Some((k, w)) = implicit
-        .then(|| {
-            scene
-                .rigid_walls
-                .iter()
-                .enumerate()
-                .find(|(_, w)| w.friction > 0.0)
-        })
-        .flatten()
-    {
-        return Err(format!(
-            "{file}: rigid_wall[{k}].friction: a rigid wall with friction acts in explicit mode only (\"{}\"); use mode = \"explicit\" or friction = 0 in implicit mode",
-            w.name
-        ));
-    }
     if implicit && scene.run.dt.is_none() {
         return Err(format!(
             "{file}: run.dt: mode = \"implicit\" needs a fixed step run.dt (seconds)"

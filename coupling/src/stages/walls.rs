@@ -147,6 +147,7 @@ impl Walls {
                     point: std::array::from_fn(|c| w.point[c] + w.velocity[c] * t),
                     normal: w.normal,
                     velocity: w.velocity,
+                    friction: w.friction,
                 })
                 .collect();
             imp.set_wall_planes(planes);

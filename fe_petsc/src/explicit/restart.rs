@@ -37,6 +37,7 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "implicit.force_n"
         | "implicit.reaction_n"
         | "implicit.wall_active"
+        | "implicit.wall_slip"
         | "implicit.wall_force_n" => Node,
         "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
