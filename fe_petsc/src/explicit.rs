@@ -42,6 +42,7 @@ mod constraints;
 mod contact;
 mod elements;
 mod energies;
+pub mod failure;
 mod integrator;
 mod loads;
 mod queries;
@@ -259,6 +260,8 @@ pub struct ExplicitFe {
     constrained: Vec<bool>,
     /// The native tetrahedra (`crate::tet`), where the mesh has any (on any rank).
     pub tets: Option<TetPart>,
+    /// Element failure and erosion, where a material fails ([`ExplicitFe::set_failure`]).
+    pub(crate) erosion: Option<Box<failure::Erosion>>,
 }
 
 /// What the element loop sums over elements.

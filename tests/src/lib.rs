@@ -204,6 +204,28 @@ pub fn implicit_bar(
 pub const WALL_AT_0: &str =
     "[[rigid_wall]]\nname = \"target\"\npoint = [0.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n";
 
+/// A steel bar (meshes/bar.geo: 1 m, 0.05 x 0.05 m, 20 elements, free sides) of J2 steel
+/// failing at `failure`, hanging from its face x = 1 ("right", fixed) under gravity -x ramped
+/// from 0 to 2e5 m/s^2 over 2 ms, to 3 ms; written into `dir`.
+pub fn hanging_bar_scene(dir: &Path, failure: &str) -> PathBuf {
+    let geo = root().join("meshes").join("bar.geo");
+    let text = format!(
+        "title = \"a bar hanging until its top fails\"\n\
+         gravity = [-2.0e5, 0.0, 0.0]\ngravity_curve = [[0.0, 0.0], [2.0e-3, 1.0]]\n\
+         [run]\nend_time = 3.0e-3\noutput_every = 5.0e-5\n\n\
+         [[mesh]]\nfile = \"{}\"\nparams = {{ L = 1.0, A = 0.05, N = 20, M = 1 }}\n\n\
+         [[material]]\nname = \"steel\"\nmodel = \"j2_plastic\"\ndensity = {RHO:e}\n\
+         youngs_modulus = {E:e}\npoisson_ratio = {NU}\nyield_stress = 350.0e6\n\
+         hardening_modulus = 1.0e9\nfailure = {failure}\n\n\
+         [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\nfailed = \"delete\"\n\n\
+         [[boundary]]\ngroup = \"right\"\nkind = \"fixed\"\n",
+        geo.display()
+    );
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
 /// scenes/kirchhoff_plate.toml in implicit mode (`mode = "implicit"`, dt = 1 ms: 48 steps, about
 /// a fifth of the plate's first period), its mesh path made absolute, written into `dir`.
 pub fn implicit_plate_scene(dir: &Path) -> PathBuf {

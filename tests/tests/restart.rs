@@ -716,3 +716,13 @@ fn implicit_run_on_a_rigid_wall_stopped_on_3_ranks_continues_on_1() {
         }
     }
 }
+
+#[test]
+fn eroding_run_stopped_and_restarted_ends_bit_identical_at_np_2() {
+    // The hanging bar whose top elements fail (tests/tests/erosion.rs), stopped after its
+    // elements failed: the failed flags, the damage and the last plastic strain per element
+    // (`fe.erosion`) continue, and the rest of the fall is the run's without a stop, bit for bit.
+    let dir = workdir("restart_erosion_np2");
+    let scene = hanging_bar_scene(&dir, "{ plastic_strain = 0.05 }");
+    stop_and_restart_in(&dir, &scene, 2, 400, &[]);
+}

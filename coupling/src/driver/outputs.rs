@@ -13,7 +13,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The columns history.csv writes as integers (docs/scene.md).
-pub const HISTORY_INTEGER_COLUMNS: [&str; 2] = ["step", "contacts"];
+pub const HISTORY_INTEGER_COLUMNS: [&str; 3] = ["step", "contacts", "eroded_elements"];
+
+/// Columns history.csv adds after [`HISTORY_COLUMNS`] (and the contact ones) where a material
+/// fails (docs/scene.md `failure`).
+pub const EROSION_HISTORY_COLUMNS: [&str; 3] =
+    ["eroded_elements", "mass_elements", "mass_particles"];
 
 /// Columns of history.csv, in order (docs/scene.md).
 pub const HISTORY_COLUMNS: [&str; 13] = [
@@ -128,6 +133,9 @@ impl Outputs {
         let mut cols: Vec<String> = HISTORY_COLUMNS.iter().map(|c| c.to_string()).collect();
         if model.contact.is_some() {
             cols.extend(CONTACT_HISTORY_COLUMNS.iter().map(|c| c.to_string()));
+        }
+        if model.erosion_masses.is_some() {
+            cols.extend(EROSION_HISTORY_COLUMNS.iter().map(|c| c.to_string()));
         }
         if model.fe.is_some() {
             cols.extend(block_history_columns(scene));
@@ -362,6 +370,9 @@ impl Outputs {
         ];
         if let Some(c) = &model.contact {
             r.extend(c.history_columns());
+        }
+        if let Some(e) = model.erosion_columns() {
+            r.extend(e);
         }
         if let Some(fe) = &model.fe {
             for b in &fe.state().block_energies {

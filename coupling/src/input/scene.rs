@@ -315,8 +315,8 @@ pub struct Block {
     #[serde(default)]
     #[serde(deserialize_with = "vec3::exact")]
     pub velocity: [f64; 3],
-    /// SCENE.md's `failed` (what a failed element becomes): read so that a scene using it is
-    /// refused by name (element failure is not built yet: docs/status.md).
+    /// What a failed element becomes (`"delete"`; `"particles"`, the default where the material
+    /// has `failure`, is refused: not built yet), checked by `failure::check_failed`.
     #[serde(default)]
     pub failed: Option<toml::Value>,
 }
@@ -729,6 +729,8 @@ pub struct Scene {
     pub meshes: Vec<MeshDef>,
     /// `[[material]]`.
     pub materials: Vec<MaterialSpec>,
+    /// Each material's failure criterion (`failure`), in `materials`' order.
+    pub failures: Vec<Option<fe_petsc::explicit::failure::Failure>>,
     /// `[[block]]`.
     pub blocks: Vec<Block>,
     /// `[[boundary]]`.

@@ -30,7 +30,14 @@ pub struct ElementArrays<'a> {
 /// into the lanes of `g`, the lanes from `n` on with copies of element `e0` (lanes are
 /// independent: their results are dropped).
 pub fn load<B: Batch>(g: &mut B, a: &ElementArrays<'_>, e0: usize, n: usize, n_state: usize) {
-    let elem = |l: usize| e0 + if l < n { l } else { 0 };
+    let list: Vec<usize> = (e0..e0 + n).collect();
+    load_list(g, a, &list, n_state);
+}
+
+/// Loads the elements `list` (at most `B::LANES`, at least one) into the first lanes of `g`,
+/// the other lanes with copies of `list[0]` (as [`load`]).
+pub fn load_list<B: Batch>(g: &mut B, a: &ElementArrays<'_>, list: &[usize], n_state: usize) {
+    let elem = |l: usize| list[if l < list.len() { l } else { 0 }];
     let hist = |l: usize| {
         let mut h = [0.0; MAX_STATE];
         let at = elem(l) * a.stride;
@@ -54,8 +61,20 @@ pub fn store<B: Batch>(
     history: &mut [f64],
     stride: usize,
 ) {
-    for l in 0..n {
-        let e = e0 + l;
+    let list: Vec<usize> = (e0..e0 + n).collect();
+    store_list(g, &list, n_state, state, history, stride);
+}
+
+/// Stores lane `l`'s state and history as element `list[l]`'s (as [`store`]).
+pub fn store_list<B: Batch>(
+    g: &B,
+    list: &[usize],
+    n_state: usize,
+    state: &mut HexStates,
+    history: &mut [f64],
+    stride: usize,
+) {
+    for (l, &e) in list.iter().enumerate() {
         let (s, h) = g.lane_state(l);
         state.set(e, &s);
         history[e * stride..e * stride + n_state].copy_from_slice(&h[..n_state]);

@@ -40,6 +40,9 @@ impl ExplicitFe {
             Width::W8 => self.element_loop::<batch::w8::LaneGroup>(dt, &mut sums),
         }
         self.dt_stable_local = sums.dt_min;
+        if sums.inverted.is_none() {
+            self.check_failure(dt);
+        }
         let t1 = std::time::Instant::now();
         self.timers.elements += (t1 - t0).as_secs_f64();
         // The shared nodes' forces in canonical element order over all ranks holding them.
@@ -122,7 +125,13 @@ impl ExplicitFe {
             let mi = self.elem_material[e];
             let m = self.lane_materials[mi];
             let model = &*materials[mi];
-            if let Err(bad) = self.group_update(e, n, &m, model, dt, &mut *group, sums) {
+            let eroded = self.erosion.as_ref().is_some_and(|r| r.any)
+                && (e..e + n).any(|k| self.is_failed(k));
+            let res = match eroded {
+                false => self.group_update(e, n, &m, model, dt, &mut *group, sums),
+                true => self.live_group_update(e, n, (&m, model), dt, &mut *group, sums),
+            };
+            if let Err(bad) = res {
                 self.record_inverted(e + bad.lane, bad.volume, dt, sums);
             }
             e += n;
@@ -194,6 +203,66 @@ impl ExplicitFe {
             self.group_update_by_lane(e0, n, m, model, dt, g)?;
         }
         self.add_group_output(e0, n, g, !whole, sums);
+        Ok(())
+    }
+
+    /// [`ExplicitFe::group_update`] for a group with failed elements (`failure`): its live
+    /// elements through the lane-by-lane path, then every element's output in element order,
+    /// zero for the failed ones. `Err` names the inverted element's offset from `e0`.
+    fn live_group_update<B: Batch>(
+        &mut self,
+        e0: usize,
+        n: usize,
+        (m, model): (&LaneMaterial, &dyn Material),
+        dt: f64,
+        g: &mut B,
+        sums: &mut LoopSums,
+    ) -> Result<(), GroupInverted> {
+        let live: Vec<usize> = (e0..e0 + n).filter(|&e| !self.is_failed(e)).collect();
+        if !live.is_empty() {
+            let n_state = m.n_state();
+            let arrays = batch::arrays::ElementArrays {
+                xs: &self.x,
+                vs: &self.v,
+                elems: &self.elems,
+                vol0: &self.vol0,
+                state: &self.state,
+                history: &self.mat_state,
+                stride: self.mat_stride,
+            };
+            batch::arrays::load_list(g, &arrays, &live, n_state);
+            g.update(dt, m, model, &self.controls)
+                .map_err(|bad| GroupInverted {
+                    lane: live[bad.lane] - e0,
+                    volume: bad.volume,
+                })?;
+            let (state, history) = (&mut self.state, &mut self.mat_state);
+            batch::arrays::store_list(g, &live, n_state, state, history, self.mat_stride);
+        }
+        let [hg_work, _, dt_stable, _] = g.scalars();
+        let mut lane = 0;
+        for e in e0..e0 + n {
+            if self.is_failed(e) {
+                self.assembly.record(e, |_| [0.0; 3]);
+                self.blocks.add(e, &[[0.0; 3]; 8], 0.0);
+                continue;
+            }
+            for (k, &node) in self.elems[e].iter().enumerate() {
+                let f = &mut self.force[node as usize];
+                let fe = g.force(lane, k);
+                f[0] += fe[0];
+                f[1] += fe[1];
+                f[2] += fe[2];
+            }
+            self.assembly.record(e, |k| g.force(lane, k));
+            if self.blocks.active() {
+                let out = g.lane_output(lane);
+                self.blocks.add(e, &out.force, out.hg_work);
+            }
+            sums.grid.add(&mut sums.hg_work, hg_work[lane]);
+            sums.dt_min = sums.dt_min.min(dt_stable[lane]);
+            lane += 1;
+        }
         Ok(())
     }
 

@@ -39,7 +39,7 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "implicit.wall_active"
         | "implicit.wall_slip"
         | "implicit.wall_force_n" => Node,
-        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" => Element,
+        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" | "fe.erosion" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
         _ => return None,
@@ -109,6 +109,13 @@ impl ExplicitFe {
             ));
             out.push(("fe.tet_mat_state", t.mat_state.clone()));
             out.push(("fe.tet_block_forces", tet_block_forces));
+        }
+        if let Some(r) = &self.erosion {
+            // Per element: failed (0 or 1), damage, plastic strain after the last step.
+            let v = (0..self.elems.len())
+                .flat_map(|e| [r.failed[e] as u8 as f64, r.damage[e], r.ep_last[e]])
+                .collect();
+            out.push(("fe.erosion", v));
         }
         out
     }
@@ -192,6 +199,13 @@ impl ExplicitFe {
         }
         if !self.blocks.set_restart_state(&w) {
             return Err("fe.block_forces: does not fit this rank's mesh".into());
+        }
+        if let Some(r) = &mut self.erosion {
+            let v = take("fe.erosion", 3 * r.failed.len())?;
+            for (e, c) in v.chunks_exact(3).enumerate() {
+                (r.failed[e], r.damage[e], r.ep_last[e]) = (c[0] != 0.0, c[1], c[2]);
+            }
+            r.any = r.failed.iter().any(|&f| f);
         }
         Ok(())
     }

@@ -80,6 +80,7 @@ impl ExplicitFe {
             width: batch::widest(),
             constrained: vec![false; nn],
             tets,
+            erosion: None,
         };
         fe.start();
         Ok(fe)

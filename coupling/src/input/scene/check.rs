@@ -57,6 +57,9 @@ impl Ctx {
     }
 }
 
+#[path = "failure.rs"]
+mod failure;
+
 /// A number as a message shows it: plain when short, in exponent form when very large or
 /// very small.
 pub fn num_text(v: f64) -> String {
@@ -84,6 +87,8 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let meshes = check_meshes(&cx, &dir, &raw.mesh, raw.particles.is_empty())?;
     let materials = check_materials(&cx, &raw.material)?;
     check_blocks(&cx, &raw.block, &materials)?;
+    let failures = failure::check_failures(&cx, &raw.material, &materials)?;
+    failure::check_failed(&cx, &raw.block, &materials, &failures)?;
     let gravity_curve = raw
         .gravity_curve
         .as_ref()
@@ -131,6 +136,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         run: raw.run,
         meshes,
         materials,
+        failures,
         blocks: raw.block,
         boundaries,
         loads,
@@ -451,7 +457,7 @@ fn check_material(
         match k.as_str() {
             "name" | "model" | "density" => {}
             "eos" if model == "fluid" => eos = Some(check_eos(cx, i, v)?),
-            "failure" => return Err(cx.err(&key(k), NO_FAILURE.into())),
+            "failure" => {} // `failure::check_failures`
             _ => {
                 let optional = OPTIONAL_KEYS
                     .iter()
@@ -575,14 +581,8 @@ fn material_names(materials: &[MaterialSpec]) -> String {
 
 /// `[[block]]`: each names a defined material; a fluid meshed by a block is built here (its
 /// EOS keys and values checked); particles take their EOS from the SPH side.
-/// What a scene that uses SCENE.md's element failure (`failure`, `failed`) is told.
-const NO_FAILURE: &str = "element failure (and failed elements turned into particles) is not built yet in this version (docs/status.md); remove the key to run without it";
-
 fn check_blocks(cx: &Ctx, blocks: &[Block], materials: &[MaterialSpec]) -> Result<(), SceneError> {
     for (i, b) in blocks.iter().enumerate() {
-        if b.failed.is_some() {
-            return Err(cx.err(&format!("block[{i}].failed"), NO_FAILURE.into()));
-        }
         if let Some(j) = blocks[..i].iter().position(|o| o.group == b.group) {
             return Err(cx.err(
                 &format!("block[{i}].group"),

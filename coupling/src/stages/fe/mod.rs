@@ -109,6 +109,18 @@ impl Fe {
         {
             imp.set_walls(scene.rigid_walls.len());
         }
+        if let Integrator::Explicit(fe) = &mut integrator {
+            // Each element material's failure criterion, in the materials' order (`prepare`:
+            // the materials the blocks use, in scene order).
+            let criteria = scene
+                .materials
+                .iter()
+                .zip(&scene.failures)
+                .filter(|(m, _)| scene.blocks.iter().any(|b| b.material == m.name))
+                .map(|(_, f)| *f)
+                .collect();
+            fe.set_failure(criteria);
+        }
         match &mut integrator {
             Integrator::Explicit(fe) => fe.initial_energies(world),
             Integrator::Implicit(imp) => imp.fe.initial_energies(world),
@@ -241,6 +253,9 @@ impl Fe {
         let mut global = vec![0.0; local.len()];
         world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
         fe.accumulate(&global, dt);
+        if fe.erodes() {
+            fe.count_failed(world);
+        }
         Ok(next)
     }
 
