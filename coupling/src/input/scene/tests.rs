@@ -259,29 +259,28 @@ fn johnson_cook_thermal_keys_by_key_and_temperature_by_default() {
     );
 }
 
-/// SCENE.md's keys for what is not built yet (element failure, solid particles) are refused by
+/// SCENE.md's keys for what is not built yet (failed elements as particles, solid particles) are refused by
 /// name with what is missing, not as unknown keys (docs/status.md).
 #[test]
 fn keys_of_what_is_not_built_yet_are_refused_by_name() {
     let b = base();
     let solid_particles = "[[particles]]\nname = \"p\"\nmaterial = \"steel\"\nspacing = 0.01\n\
                            region = { box = { min = [0.0, 0.0, 0.0], max = [0.1, 0.1, 0.1] } }\n";
+    // A J2 material that fails: its elements become particles by default, not built yet.
+    let j2_failing = b.replace(
+        "model = \"elastic\"\n",
+        "model = \"j2_plastic\"\nyield_stress = 3.5e8\nhardening_modulus = 1.0e9\n\
+         failure = { plastic_strain = 0.5 }\n",
+    );
     let cases: Vec<(String, &str, &str)> = vec![
+        (j2_failing.clone(), "block[0].failed", "particles"),
         (
-            b.replace(
-                "poisson_ratio = 0.3\n",
-                "poisson_ratio = 0.3\nfailure = { plastic_strain = 0.5 }\n",
-            ),
-            "material[0].failure",
-            "no plastic strain",
-        ),
-        (
-            b.replace(
+            j2_failing.replace(
                 "velocity = [1.0, 0.0, 0.0]\n",
-                "velocity = [1.0, 0.0, 0.0]\nfailed = \"delete\"\n",
+                "velocity = [1.0, 0.0, 0.0]\nfailed = \"particles\"\n",
             ),
             "block[0].failed",
-            "has no failure",
+            "particles",
         ),
         (
             b.clone() + "[sph]\nartificial_stress = { epsilon = 0.3, n = 4 }\n",
