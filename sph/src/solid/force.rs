@@ -1,8 +1,9 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
 use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
 use super::Solids;
+use crate::exact::{note, q, PassGrids, TermMax};
 use crate::params::Params;
-use crate::particles::Particles;
+use crate::particles::{PairSums, Particles};
 use crate::passes::PairWork;
 
 /// Monaghan's artificial stress against the tensile instability of solids (Gray, Monaghan &
@@ -101,15 +102,21 @@ fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64
 /// T g = -(p_a/rho_a^2 + p_b/rho_b^2 + Pi) g: the fluid pass's Monaghan (1992) eqs. 3.3-3.4.
 /// The two halves of -m_a m_b v^_ab . (T g) given to a and b are what the forces take from the
 /// kinetic energy (d/dt sum 1/2 m v^2 = sum_pairs m_a m_b v^_ab . T g at v = v^), so kinetic +
-/// sum m e is conserved as in the fluid pass. Sets `f` and `de` of EVERY entry (plain sums in
-/// pair order, see the module doc; the caller adds ghosts' to owners). Returns the work rate:
-/// `pressure` from the stress and artificial stress, `viscosity` from Pi.
+/// sum m e is conserved as in the fluid pass. Sets the force and energy-rate sums and the
+/// partner counts of every entry (`Particles::sums`: exact, on `g`'s force and energy grids,
+/// largest terms into `m`; a pair listed as (b, a) gives each entry the same bits, as T g
+/// changes sign with g) and the owned entries' `f` and `de` from them (the caller merges the
+/// ghosts' sums into their owners and settles again). Returns the work rate: `pressure` from
+/// the stress and artificial stress, `viscosity` from Pi. Flops per pair ~150 + 8 x 8 for the
+/// sums.
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
     s: &Solids,
     params: &Params,
     art: Option<&ArtificialStress>,
+    grids: &PassGrids,
+    m: &mut TermMax,
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
@@ -128,11 +135,19 @@ pub fn stress_force_pass(
             .collect(),
         None => Vec::new(),
     };
-    let mut f = vec![[0.0; 3]; n];
-    let mut de = vec![0.0; n];
+    p.sums.resize(n, PairSums::default());
+    for e in p.sums.iter_mut() {
+        e.f = [[0.0; 2]; 3];
+        e.de = [0.0; 2];
+        e.partners = 0.0;
+    }
+    let (gf, ge) = (grids.grid(q::FORCE), grids.grid(q::ENERGY));
+    let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
     for &(i, j) in pairs {
         let (i, j) = (i as usize, j as usize);
+        p.sums[i].partners += 1.0;
+        p.sums[j].partners += 1.0;
         let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
         let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let r = r2.sqrt();
@@ -172,17 +187,23 @@ pub fn stress_force_pass(
         // the viscous part -Pi I g, kept apart for the work split
         let tv = [-pi * g[0], -pi * g[1], -pi * g[2]];
         let full = [tg[0] + tv[0], tg[1] + tv[1], tg[2] + tv[2]];
-        for c in 0..3 {
-            f[i][c] += mm * full[c];
-            f[j][c] -= mm * full[c];
+        for (c, &fc) in full.iter().enumerate() {
+            let t = mm * fc;
+            gf.add(&mut p.sums[i].f[c], t);
+            gf.add(&mut p.sums[j].f[c], -t);
+            note(&mut mf, t);
         }
         let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-        de[i] -= 0.5 * p.m[j] * e;
-        de[j] -= 0.5 * p.m[i] * e;
+        let (de_i, de_j) = (-0.5 * p.m[j] * e, -0.5 * p.m[i] * e);
+        ge.add(&mut p.sums[i].de, de_i);
+        ge.add(&mut p.sums[j].de, de_j);
+        note(&mut me, de_i);
+        note(&mut me, de_j);
         work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
         work.viscosity += mm * pi * gr * vr;
     }
-    p.f = f;
-    p.de = de;
+    m[q::FORCE] = mf;
+    m[q::ENERGY] = me;
+    p.settle_forces();
     work
 }
