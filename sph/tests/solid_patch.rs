@@ -63,13 +63,13 @@ fn solids_for(p: &Particles) -> Solids {
 }
 
 /// The gradient pass on grids fitted to its terms (serial: every entry owned).
-fn gradients(pr: &[(u32, u32)], p: &Particles, s: &mut Solids, params: &Params) {
+fn gradients(pr: &[(u32, u32)], p: &mut Particles, s: &mut Solids, params: &Params) {
     let k = params.smoothing_kernel();
     let mut g = PassGrids::default();
     exact_pass(
         &mut g,
         |m| *m,
-        |g, m| velocity_gradient_pass(pr, p, s, &k, g, m),
+        |g, m| velocity_gradient_pass(pr, &*p, s, &k, g, m),
     );
     settle_gradients(p, s);
 }
@@ -105,7 +105,7 @@ fn linear_velocity_gives_exact_gradient_and_stress_rate() {
         let params = params();
         let mut s = solids_for(&p);
         let pr = pairs(&p, &params.search_options(), |_| true);
-        gradients(&pr, &p, &mut s, &params);
+        gradients(&pr, &mut p, &mut s, &params);
         for i in 0..p.n_owned {
             let err: Mat3 =
                 std::array::from_fn(|a| std::array::from_fn(|b| s.grad_v[i][a][b] - G[a][b]));
@@ -170,7 +170,7 @@ fn stress_force_pass_conserves_momentum_and_energy() {
     }
     let pr = pairs(&p, &params.search_options(), |_| true);
     // the kernel-gradient correction B of each particle (not the identity on a jittered block)
-    gradients(&pr, &p, &mut s, &params);
+    gradients(&pr, &mut p, &mut s, &params);
     let art = ArtificialStress::new(DX);
     let work = forces(&pr, &mut p, &s, &params, &art);
     let (mut fsum, mut fabs, mut ke_rate, mut ie_rate, mut scale) = ([0.0; 3], 0.0, 0.0, 0.0, 0.0);
@@ -199,8 +199,8 @@ fn stress_force_pass_conserves_momentum_and_energy() {
 }
 
 /// The solid passes' sums are exact (binned sums, `sph::exact`): the pairs in another order,
-/// each listed the other way round, give every particle the same gradient, correction, force
-/// and energy rate bit for bit (tolerance 0: what makes a run the same bits at any rank count,
+/// each listed the other way round, give every particle the same gradient, correction, density
+/// rate, force and energy rate bit for bit (tolerance 0: what makes a run the same bits at any rank count,
 /// docs/scene.md "One answer").
 #[test]
 fn solid_sums_do_not_depend_on_the_order_of_the_pairs() {
@@ -225,19 +225,22 @@ fn solid_sums_do_not_depend_on_the_order_of_the_pairs() {
         }
         gradients(list, p, &mut s, &params);
         forces(list, p, &s, &params, &art);
-        (
+        let out = (
             s.grad_v.clone(),
             s.correction.clone(),
             p.f.clone(),
             p.de.clone(),
-        )
+        );
+        (out, p.drho.clone())
     };
     let a = run(&pr, &mut p.clone());
     let b = run(&other, &mut p.clone());
+    let ((a, da), (b, db)) = (a, b);
     assert!(a.0 == b.0, "velocity gradients differ");
     assert!(a.1 == b.1, "corrections differ");
     assert!(a.2 == b.2, "forces differ");
     assert!(a.3 == b.3, "energy rates differ");
+    assert!(da == db, "density rates differ");
 }
 
 /// The artificial stress tensor of a uniaxial tension sigma_xx = s > 0 rotated by an angle:

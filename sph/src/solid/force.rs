@@ -46,9 +46,19 @@ impl ArtificialStress {
         }
     }
 
-    /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3).
+    /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3). Zero,
+    /// without the eigen-decomposition, where Gershgorin's discs show every principal stress
+    /// <= 0 (each diagonal entry plus its row's off-diagonal magnitudes <= 0: compression).
     pub fn tensor(&self, sigma: &[f64; 6], rho: f64) -> Mat3 {
-        let (lam, q) = symmetric_eigen(&from_voigt(sigma));
+        let a = from_voigt(sigma);
+        let tension = (0..3).any(|k| {
+            let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
+            a[k][k] + off > 0.0
+        });
+        if !tension {
+            return [[0.0; 3]; 3];
+        }
+        let (lam, q) = symmetric_eigen(&a);
         let scale = -self.epsilon / (rho * rho);
         let d: Mat3 = std::array::from_fn(|k| {
             std::array::from_fn(|l| if k == l { scale * lam[k].max(0.0) } else { 0.0 })
@@ -120,6 +130,17 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
+    // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
+    // delta_p beyond the support), remade where h changes (mostly the same for every pair)
+    let at = |h: f64| {
+        let sk = k.at(h);
+        let inv_w_dp = match art {
+            Some(a) if sk.w(a.delta_p) > 0.0 => 1.0 / sk.w(a.delta_p),
+            _ => 0.0,
+        };
+        (sk, inv_w_dp)
+    };
+    let mut kern = at(f64::NAN);
     // sigma_a / rho_a^2 B_a (B = I for fluids)
     let sr: Vec<Mat3> = (0..n)
         .map(|i| {
@@ -155,22 +176,18 @@ pub fn stress_force_pass(
             continue;
         }
         let h = 0.5 * (p.h[i] + p.h[j]);
-        let gr = k.dw_dr(r, h) / r;
+        if kern.0.h != h {
+            kern = at(h);
+        }
+        let gr = kern.0.dw_dr(r) / r;
         let g = [gr * d[0], gr * d[1], gr * d[2]];
         let dv: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
         let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
         let pi = viscosity(params, p, i, j, h, vr, r2);
         // f_ab^n = (W(r)/W(delta_p))^n, 0 without artificial stress
         let fn_ab = match art {
-            Some(a) => {
-                let w_dp = k.w(a.delta_p, h);
-                if w_dp > 0.0 {
-                    (k.w(r, h) / w_dp).powi(a.n)
-                } else {
-                    0.0
-                }
-            }
-            None => 0.0,
+            Some(a) if kern.1 > 0.0 => (kern.0.w(r) * kern.1).powi(a.n),
+            _ => 0.0,
         };
         // T g without the viscous part
         let mut tg = [0.0; 3];

@@ -1,58 +1,104 @@
-//! The velocity-gradient pass of the solids, its exact sums, and the corrected gradient.
+//! The velocity-gradient pass of the solids (with the continuity density rate of every
+//! entry), its exact sums, and the corrected gradient.
 //!
-//! The sums are exact ([`binsum`] two-fold sums on the grids of a [`PassGrids`] of their own:
-//! quantity [`gq::GRAD`] for the velocity-gradient terms, [`gq::SHAPE`] for the shape terms), as
-//! the fluid passes' (see [`crate::exact`]): every entry's sums are the same bits whatever the
-//! order of the pairs, whichever rank computed a pair and however the ghosts' partial sums are
-//! merged into their owners.
+//! The sums are exact ([`binsum`] two-fold sums, 40 bits apart, on the grids of a
+//! [`PassGrids`] of their own: quantity [`gq::GRAD`] for the velocity-gradient terms,
+//! [`gq::SHAPE`] for the shape terms, [`gq::DENSITY`] for the density rate), as the fluid
+//! passes' (see [`crate::exact`]): every entry's sums are the same bits whatever the order of
+//! the pairs, whichever rank computed a pair and however the ghosts' partial sums are merged
+//! into their owners. The 16 sums of an entry lie side by side, fold by fold ([`GradSums`]), so
+//! that a pair's terms are split and added lane by lane (the operations of `Grid2::add` on
+//! each, in vector registers).
 use super::tensor::{self, inverse, mul, Mat3};
 use super::{Solids, CORRECTION_SINGULAR};
 use crate::exact::{note, PassGrids, TermMax};
 use crate::kernel::SmoothingKernel;
 use crate::particles::Particles;
-use binsum::{value2, Folds2};
 use bytemuck::{Pod, Zeroable};
 
 /// The quantities of the gradient pass's sums, as indices of its [`TermMax`] and
-/// [`PassGrids::grid`] (the third grid is unused).
+/// [`PassGrids::grid`].
 pub mod gq {
     /// Velocity-gradient terms V_b (v_b - v_a)_k (grad_a W)_l, 1/s.
     pub const GRAD: usize = 0;
     /// Shape terms V_b (x_b - x_a)_k (grad_a W)_l (dimensionless).
     pub const SHAPE: usize = 1;
+    /// Continuity density-rate terms, kg/(m^3 s).
+    pub const DENSITY: usize = 2;
 }
 
-/// What the gradient pass added to one entry, as exact sums: `grad` and `shape` row by row
-/// (`grad[3 k + l]` is the (k, l) entry). A ghost copy's go to its owner (copies -> owner),
-/// who merges them (exact, in any order) and settles them ([`settle_gradients`]). 288 bytes.
-#[repr(C)]
+/// Sums of one entry: 9 velocity-gradient lanes, 6 shape lanes, the density rate.
+pub const LANES: usize = 16;
+/// The first shape lane.
+const SHAPE0: usize = 9;
+/// The density-rate lane.
+const DENS: usize = 15;
+
+/// What the gradient pass added to one entry, as exact sums, fold by fold (`fold[k][l]`: the
+/// part on grid k of lane l): lanes 0-8 sum_b V_b (v_b - v_a) (x) grad_a W_ab row by row (lane
+/// 3 k + l is the (k, l) entry), 1/s; lanes 9-14 sum_b V_b (x_b - x_a) (x) grad_a W_ab
+/// (symmetric: each term is -gr d (x) d) in Voigt order xx, yy, zz, xy, yz, zx; lane 15 the
+/// continuity density rate, kg/(m^3 s). A ghost copy's go to its owner (copies -> owner), who
+/// merges them (exact, in any order) and settles them ([`settle_gradients`]). 256 bytes.
+#[repr(C, align(32))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GradSums {
-    /// sum_b V_b (v_b - v_a) (x) grad_a W_ab, 1/s.
-    pub grad: [Folds2; 9],
-    /// sum_b V_b (x_b - x_a) (x) grad_a W_ab.
-    pub shape: [Folds2; 9],
+    /// The parts on the top grid (index 0) and the lower grid (index 1) of each lane.
+    pub fold: [[f64; LANES]; 2],
 }
+
+/// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
+const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
 
 impl GradSums {
     /// Merges `o` into these sums (exact).
     #[inline]
     pub fn merge(&mut self, o: &GradSums) {
-        for k in 0..9 {
-            for f in 0..2 {
-                self.grad[k][f] += o.grad[k][f];
-                self.shape[k][f] += o.shape[k][f];
+        for k in 0..2 {
+            for l in 0..LANES {
+                self.fold[k][l] += o.fold[k][l];
             }
         }
     }
 
-    /// The two sums' values as matrices.
-    pub fn values(&self) -> (Mat3, Mat3) {
-        let m = |s: &[Folds2; 9]| -> Mat3 {
-            std::array::from_fn(|k| std::array::from_fn(|l| value2(&s[3 * k + l])))
-        };
-        (m(&self.grad), m(&self.shape))
+    /// The value of lane `l` (the folds added top first, as `binsum::value2`).
+    #[inline]
+    fn value(&self, l: usize) -> f64 {
+        self.fold[0][l] + self.fold[1][l]
     }
+
+    /// The sums' values: the velocity-gradient sum, the shape sum, the density rate.
+    pub fn values(&self) -> (Mat3, Mat3, f64) {
+        let grad = std::array::from_fn(|k| std::array::from_fn(|l| self.value(3 * k + l)));
+        let v: [f64; 6] = std::array::from_fn(|c| self.value(SHAPE0 + c));
+        (grad, tensor::from_voigt(&v), self.value(DENS))
+    }
+
+    /// Adds the terms `x` lane by lane, each split on its lane's grids: t = (r + C_k) - C_k,
+    /// r -= t, fold k += t (`binsum::Grid2::split`, the same operations in the same order).
+    #[inline(always)]
+    fn add(&mut self, x: &[f64; LANES], c: &[[f64; LANES]; 2]) {
+        let mut r = *x;
+        for (fold, ck) in self.fold.iter_mut().zip(c) {
+            for l in 0..LANES {
+                let t = (r[l] + ck[l]) - ck[l];
+                r[l] -= t;
+                fold[l] += t;
+            }
+        }
+    }
+}
+
+/// The shifts of the lanes on each fold: velocity gradient, shape, density rate.
+fn lane_shifts(g: &PassGrids) -> [[f64; LANES]; 2] {
+    let (gv, gs, gd) = (g.grid(gq::GRAD), g.grid(gq::SHAPE), g.grid(gq::DENSITY));
+    std::array::from_fn(|k| {
+        std::array::from_fn(|l| match l {
+            DENS => gd.shift[k],
+            l if l >= SHAPE0 => gs.shift[k],
+            _ => gv.shift[k],
+        })
+    })
 }
 
 /// Velocity-gradient pass over the pairs, for every entry (owned or ghost) that is a solid:
@@ -68,9 +114,12 @@ impl GradSums {
 /// product change sign). The velocity is `Particles::v`, which between the halves of a step is
 /// the half-step velocity v^(n+1/2): the stress increment over the step is then centred (the
 /// central difference of PRONTO-3D; Taylor & Flanagan, SAND87-1912). The positions are
-/// x^(n+1). Zeroes the sums (`Solids::sums`) of every entry first, adds every term exactly on
-/// `g` (quantities [`gq`]) and notes the largest terms in `m`; coincident pairs are skipped.
-/// Flops per pair: ~40 for the geometry and the tensors, 2 x 18 x 8 for the exact sums.
+/// x^(n+1). With them, for every entry (solid or fluid), the continuity density rate of
+/// `passes::density_pass`, m_b (dW/dr)(r_ab . v^_ab)/r (Monaghan 1992, eq. 2.16): the same
+/// walk over the pairs, one fold-back for both. Zeroes the sums (`Solids::sums`) of every entry
+/// first, adds every term exactly on `g` (quantities [`gq`]) and notes the largest terms in
+/// `m`; coincident pairs are skipped. Flops per pair: ~50 for the geometry and the terms, 2 x
+/// 16 x 6 for the exact sums (in lanes).
 pub fn velocity_gradient_pass(
     pairs: &[(u32, u32)],
     p: &Particles,
@@ -81,50 +130,58 @@ pub fn velocity_gradient_pass(
 ) {
     s.resize(p.len());
     s.sums.iter_mut().for_each(|e| *e = GradSums::default());
-    let (gg, gs) = (g.grid(gq::GRAD), g.grid(gq::SHAPE));
-    let (mut mg, mut ms) = (m[gq::GRAD], m[gq::SHAPE]);
+    let shifts = lane_shifts(g);
+    let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
+    // h is mostly the same for every pair: the kernel's factors are remade when it changes
+    let mut kern = k.at(f64::NAN);
     for &(i, j) in pairs {
         let (i, j) = (i as usize, j as usize);
-        let (si, sj) = (s.is_solid(p.mat[i]), s.is_solid(p.mat[j]));
-        if !si && !sj {
-            continue;
-        }
         let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         if r == 0.0 {
             continue;
         }
-        let gr = k.dw_dr(r, 0.5 * (p.h[i] + p.h[j])) / r;
-        let dv: [f64; 3] = std::array::from_fn(|c| p.v[i][c] - p.v[j][c]);
-        // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
-        let tv: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| -dv[a] * gr * d[b]));
-        let tx: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| -d[a] * gr * d[b]));
-        // bounds of the entries' terms (a function of the pair: |d_b| <= r)
-        let dv_max = dv.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
-        let mut add = |e: usize, vol: f64| {
-            let sum = &mut s.sums[e];
-            for a in 0..3 {
-                for b in 0..3 {
-                    gg.add(&mut sum.grad[3 * a + b], vol * tv[a][b]);
-                    gs.add(&mut sum.shape[3 * a + b], vol * tx[a][b]);
-                }
+        let h = 0.5 * (p.h[i] + p.h[j]);
+        if kern.h != h {
+            kern = k.at(h);
+        }
+        let dw = kern.dw_dr(r);
+        let gr = dw / r;
+        let dvh: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
+        let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
+        let (si, sj) = (s.is_solid(p.mat[i]), s.is_solid(p.mat[j]));
+        let mut x = [0.0; LANES];
+        let (mut bv, mut bx) = (0.0, 0.0);
+        if si || sj {
+            let dv: [f64; 3] = std::array::from_fn(|c| p.v[i][c] - p.v[j][c]);
+            // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
+            for e in 0..9 {
+                x[e] = -dv[e / 3] * gr * d[e % 3];
             }
+            for (c, &(a, b)) in VOIGT.iter().enumerate() {
+                x[SHAPE0 + c] = -d[a] * gr * d[b];
+            }
+            // bounds of the entries' terms (a function of the pair: |d_b| <= r)
+            let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
+        }
+        for (e, o, solid) in [(i, j, si), (j, i, sj)] {
+            let vol = if solid { p.m[o] / p.rho[o] } else { 0.0 };
+            let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
+            y[DENS] = p.m[o] * t_rho;
+            s.sums[e].add(&y, &shifts);
             note(&mut mg, vol * bv);
             note(&mut ms, vol * bx);
-        };
-        if si {
-            add(i, p.m[j] / p.rho[j]);
-        }
-        if sj {
-            add(j, p.m[i] / p.rho[i]);
+            note(&mut md, y[DENS]);
         }
     }
     m[gq::GRAD] = mg;
     m[gq::SHAPE] = ms;
+    m[gq::DENSITY] = md;
 }
 
-/// Sets the corrected velocity gradient of every owned solid from its (merged) sums:
+/// Sets the density rate `drho` of every owned entry and the corrected velocity gradient of
+/// every owned solid from its (merged) sums:
 ///
 /// ```text
 /// L_a = grad_sum_a shape_sum_a^-1         (Randles & Libersky 1996, eqs. 29-30), 1/s
@@ -135,13 +192,14 @@ pub fn velocity_gradient_pass(
 /// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum. Also sets
 /// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
 /// B grad_a W is the corrected kernel gradient.
-pub fn settle_gradients(p: &Particles, s: &mut Solids) {
+pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
     s.resize(p.len());
     for i in 0..p.n_owned {
+        let (grad, shape, drho) = s.sums[i].values();
+        p.drho[i] = drho;
         if !s.is_solid(p.mat[i]) {
             continue;
         }
-        let (grad, shape) = s.sums[i].values();
         s.grad_sum[i] = grad;
         s.shape_sum[i] = shape;
         match inverse(&shape, CORRECTION_SINGULAR) {

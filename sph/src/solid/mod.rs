@@ -6,9 +6,9 @@
 //! changes. One evaluation of a step with solids (`SolidSim` is the serial sequence):
 //!
 //! ```text
-//! density_pass (continuity, as for fluids); ghosts -> owners (drho); settle_density
 //! update_eos (owned; the fluids' p and c)
-//! velocity_gradient_pass;  ghosts -> owners (GradSums); settle_gradients
+//! velocity_gradient_pass (and every entry's continuity density rate);
+//!                          ghosts -> owners (GradSums); settle_gradients (drho, L, B)
 //! update_stress (owned solids: rotate, then the model with deps = D dt; p = -tr(sigma)/3,
 //!                c = sqrt(wave modulus / rho))
 //! owners -> ghosts (SolidGhost: rho, p, c, stress, B)

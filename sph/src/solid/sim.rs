@@ -10,7 +10,7 @@ use crate::integrate::{first_half, second_half, setup_state};
 use crate::neighbour::pairs;
 use crate::params::{DensityMode, Params};
 use crate::particles::Particles;
-use crate::passes::{add_gravity, density_pass, update_eos, PairWork};
+use crate::passes::{add_gravity, update_eos, PairWork};
 use crate::serial::SerialSim;
 use crate::strength::StressModel;
 use std::sync::Arc;
@@ -74,28 +74,19 @@ impl SolidSim {
         work
     }
 
-    /// Images, pairs, density pass, the velocity gradient, (with `dt`) the stress update, then
-    /// the stress force pass and gravity.
+    /// Images, pairs, the velocity gradient and density rates, (with `dt`) the stress update,
+    /// then the stress force pass and gravity.
     fn evaluate(&mut self, dt: Option<f64>) -> PairWork {
         let sim = &mut self.sim;
         sim.make_images();
         let pairs = pairs(&sim.parts, &sim.params.search_options(), |_| true);
         sim.n_pairs = pairs.len();
         let (p, params, owners) = (&mut sim.parts, &sim.params, &sim.ghost_owner);
-        exact_pass(
-            &mut sim.grids,
-            |m| *m,
-            |g, m| density_pass(&pairs, p, params, g, m),
-        );
-        for (g, &o) in owners.iter().enumerate() {
-            let s = p.pair_sums(p.n_owned + g);
-            p.add_pair_sums(o, &s);
-        }
-        p.settle_density(false);
         update_eos(p, params);
         let s = &mut self.solids;
         let k = params.smoothing_kernel();
-        // the gradient pass also gives the correction B of the force pass (set-up included)
+        // the gradient pass also gives the density rates and the correction B of the force
+        // pass (set-up included)
         exact_pass(
             &mut self.grad_grids,
             |m| *m,

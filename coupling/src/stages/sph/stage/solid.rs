@@ -3,16 +3,17 @@
 //! the passes of the `sph::solid` module doc with their communication through the ghost plan.
 //!
 //! ```text
-//! density_pass;            ghosts -> owners (PairSums: drho); settle_density
 //! update_eos (owned fluids)
-//! velocity_gradient_pass;  ghosts -> owners (GradSums, 288 B); settle_gradients
+//! velocity_gradient_pass (with every entry's continuity density rate);
+//!                          ghosts -> owners (GradSums, 256 B); settle_gradients (drho, L, B)
 //! update_stress (owned; set-up: solid_pressure)
 //!                          owners -> ghosts (SolidGhost: rho, p, c, stress, B; 144 B)
 //! stress_force_pass;       ghosts -> owners (PairSums: f, de); settle_forces; add_gravity
 //! ```
 //!
 //! The fused continuity-and-force pass of the fluids cannot serve: the forces need the stress
-//! at the end of the step, which needs this step's velocity gradient (a pass of its own). Every
+//! at the end of the step, which needs this step's velocity gradient (a pass of its own, which
+//! takes the continuity density rates along: one walk and one fold-back for both). Every
 //! sum is exact (`sph::exact`), so the particles' rates are the same bits at any rank count.
 use super::*;
 use crate::kernels::rcb::RcbItem;
@@ -122,8 +123,6 @@ impl SphStage {
             sp.solids.truncate(n0);
             sp.solids.resize(self.parts.len());
         }
-        self.exact(|st, g, m| density_pass(&list, &mut st.parts, &st.params, g, m));
-        self.fold_back(true, false);
         update_eos(&mut self.parts, &self.params);
         self.gradients(&list);
         let sp = self.solid.as_mut().expect("solids");
@@ -151,8 +150,9 @@ impl SphStage {
         self.stats.pairs = list.len() as u64;
     }
 
-    /// The velocity-gradient pass (exact, on the solids' own grids, redone until its terms
-    /// fit), the ghosts' sums merged into their owners, the owners' gradients settled.
+    /// The velocity-gradient and density-rate pass (exact, on the solids' own grids, redone
+    /// until its terms fit), the ghosts' sums merged into their owners, the owners' density
+    /// rates and gradients settled.
     fn gradients(&mut self, list: &[(u32, u32)]) {
         let comm = self.comm.clone();
         let reduce = |m: &TermMax| {
@@ -176,7 +176,7 @@ impl SphStage {
         for (k, s) in back.iter().enumerate() {
             sp.solids.sums[self.ghost_src[k]].merge(s);
         }
-        settle_gradients(&self.parts, &mut sp.solids);
+        settle_gradients(&mut self.parts, &mut sp.solids);
     }
 
     /// The owners' new density, pressure, sound speed, stress and correction out to their
