@@ -80,12 +80,12 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
 /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
 /// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
 /// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64, r2: f64) -> f64 {
+fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
     match params.viscosity {
         Some(av) => {
             let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
-            let c_mean = 0.5 * (p.c[i] + p.c[j]);
-            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
+            let c_mean = 0.5 * (a.c + b.c);
+            let rho_mean = 0.5 * (a.rho + b.rho);
             (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
         }
         None => 0.0,
@@ -130,6 +130,7 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
+    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, art, i)).collect();
     // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
     // delta_p beyond the support), remade where h changes (mostly the same for every pair)
     let at = |h: f64| {
@@ -141,21 +142,6 @@ pub fn stress_force_pass(
         (sk, inv_w_dp)
     };
     let mut kern = at(f64::NAN);
-    // sigma_a / rho_a^2 B_a (B = I for fluids)
-    let sr: Vec<Mat3> = (0..n)
-        .map(|i| {
-            let t = stress_of(p, s, i);
-            let r2 = 1.0 / (p.rho[i] * p.rho[i]);
-            let sb = mul(&t, &s.correction[i]);
-            std::array::from_fn(|a| std::array::from_fn(|b| sb[a][b] * r2))
-        })
-        .collect();
-    let rt: Vec<Mat3> = match art {
-        Some(a) => (0..n)
-            .map(|i| a.tensor(&super::tensor::to_voigt(&stress_of(p, s, i)), p.rho[i]))
-            .collect(),
-        None => Vec::new(),
-    };
     p.sums.resize(n, PairSums::default());
     for e in p.sums.iter_mut() {
         e.f = [[0.0; 2]; 3];
@@ -169,58 +155,106 @@ pub fn stress_force_pass(
         let (i, j) = (i as usize, j as usize);
         p.sums[i].partners += 1.0;
         p.sums[j].partners += 1.0;
-        let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
+        let (a, b) = (&slots[i], &slots[j]);
+        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
         let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let r = r2.sqrt();
         if r == 0.0 {
             continue;
         }
-        let h = 0.5 * (p.h[i] + p.h[j]);
+        let h = 0.5 * (a.h + b.h);
         if kern.0.h != h {
             kern = at(h);
         }
         let gr = kern.0.dw_dr(r) / r;
         let g = [gr * d[0], gr * d[1], gr * d[2]];
-        let dv: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
+        let dv: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
         let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-        let pi = viscosity(params, p, i, j, h, vr, r2);
-        // f_ab^n = (W(r)/W(delta_p))^n, 0 without artificial stress
-        let fn_ab = match art {
-            Some(a) if kern.1 > 0.0 => (kern.0.w(r) * kern.1).powi(a.n),
-            _ => 0.0,
-        };
-        // T g without the viscous part
-        let mut tg = [0.0; 3];
-        for a in 0..3 {
-            for b in 0..3 {
-                let mut t = sr[i][a][b] + sr[j][a][b];
-                if fn_ab != 0.0 {
-                    t += (rt[i][a][b] + rt[j][a][b]) * fn_ab;
+        let pi = viscosity(params, a, b, h, vr, r2);
+        // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where either
+        // particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n)
+        let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
+        if let (Some(an), true) = (art, a.tension || b.tension) {
+            if kern.1 > 0.0 {
+                let fn_ab = (kern.0.w(r) * kern.1).powi(an.n);
+                let rg = mat_vec_sum(&a.rt, &b.rt, g);
+                for c in 0..3 {
+                    tg[c] += fn_ab * rg[c];
                 }
-                tg[a] += t * g[b];
             }
         }
-        let mm = p.m[i] * p.m[j];
+        let mm = a.m * b.m;
         // the viscous part -Pi I g, kept apart for the work split
-        let tv = [-pi * g[0], -pi * g[1], -pi * g[2]];
-        let full = [tg[0] + tv[0], tg[1] + tv[1], tg[2] + tv[2]];
-        for (c, &fc) in full.iter().enumerate() {
-            let t = mm * fc;
-            gf.add(&mut p.sums[i].f[c], t);
-            gf.add(&mut p.sums[j].f[c], -t);
-            note(&mut mf, t);
-        }
+        let full: [f64; 3] = std::array::from_fn(|c| tg[c] - pi * g[c]);
         let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-        let (de_i, de_j) = (-0.5 * p.m[j] * e, -0.5 * p.m[i] * e);
-        ge.add(&mut p.sums[i].de, de_i);
-        ge.add(&mut p.sums[j].de, de_j);
-        note(&mut me, de_i);
-        note(&mut me, de_j);
+        let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
         work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
         work.viscosity += mm * pi * gr * vr;
+        let [si, sj] = p
+            .sums
+            .get_disjoint_mut([i, j])
+            .expect("a pair of two entries");
+        for (c, &fc) in full.iter().enumerate() {
+            let t = mm * fc;
+            gf.add(&mut si.f[c], t);
+            gf.add(&mut sj.f[c], -t);
+            note(&mut mf, t);
+        }
+        ge.add(&mut si.de, de_i);
+        ge.add(&mut sj.de, de_j);
+        note(&mut me, de_i);
+        note(&mut me, de_j);
     }
     m[q::FORCE] = mf;
     m[q::ENERGY] = me;
     p.settle_forces();
     work
+}
+
+/// (A + B) g for two matrices stored row by row, summed entry by entry first.
+#[inline(always)]
+fn mat_vec_sum(a: &[f64; 9], b: &[f64; 9], g: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| {
+        let t = |c: usize| a[3 * r + c] + b[3 * r + c];
+        t(0) * g[0] + t(1) * g[1] + t(2) * g[2]
+    })
+}
+
+/// What the force pass reads of one entry, packed: position, h, predicted velocity, mass,
+/// density, sound speed, S = sigma/rho^2 B and the artificial stress R (row by row), and
+/// whether R is not zero.
+struct Slot {
+    x: [f64; 3],
+    h: f64,
+    vhat: [f64; 3],
+    m: f64,
+    rho: f64,
+    c: f64,
+    sr: [f64; 9],
+    rt: [f64; 9],
+    tension: bool,
+}
+
+impl Slot {
+    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a.
+    fn of(p: &Particles, s: &Solids, art: Option<&ArtificialStress>, i: usize) -> Slot {
+        let t = stress_of(p, s, i);
+        let inv_rho2 = 1.0 / (p.rho[i] * p.rho[i]);
+        let sb = mul(&t, &s.correction[i]);
+        let rt = match art {
+            Some(a) => a.tensor(&super::tensor::to_voigt(&t), p.rho[i]),
+            None => [[0.0; 3]; 3],
+        };
+        Slot {
+            x: p.x[i],
+            h: p.h[i],
+            vhat: p.vhat[i],
+            m: p.m[i],
+            rho: p.rho[i],
+            c: p.c[i],
+            sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
+            rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
+            tension: rt.iter().flatten().any(|&x| x != 0.0),
+        }
+    }
 }

@@ -101,6 +101,18 @@ fn lane_shifts(g: &PassGrids) -> [[f64; LANES]; 2] {
     })
 }
 
+/// What the gradient pass reads of one entry, packed: position, h, velocity, predicted
+/// velocity, mass, volume m/rho, and whether it is a solid.
+struct Slot {
+    x: [f64; 3],
+    h: f64,
+    v: [f64; 3],
+    vhat: [f64; 3],
+    m: f64,
+    vol: f64,
+    solid: bool,
+}
+
 /// Velocity-gradient pass over the pairs, for every entry (owned or ghost) that is a solid:
 ///
 /// ```text
@@ -130,46 +142,67 @@ pub fn velocity_gradient_pass(
 ) {
     s.resize(p.len());
     s.sums.iter_mut().for_each(|e| *e = GradSums::default());
+    let slots: Vec<Slot> = (0..p.len())
+        .map(|i| Slot {
+            x: p.x[i],
+            h: p.h[i],
+            v: p.v[i],
+            vhat: p.vhat[i],
+            m: p.m[i],
+            vol: p.m[i] / p.rho[i],
+            solid: s.is_solid(p.mat[i]),
+        })
+        .collect();
     let shifts = lane_shifts(g);
     let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = k.at(f64::NAN);
     for &(i, j) in pairs {
         let (i, j) = (i as usize, j as usize);
-        let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
+        let (a, b) = (&slots[i], &slots[j]);
+        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         if r == 0.0 {
             continue;
         }
-        let h = 0.5 * (p.h[i] + p.h[j]);
+        let h = 0.5 * (a.h + b.h);
         if kern.h != h {
             kern = k.at(h);
         }
         let dw = kern.dw_dr(r);
         let gr = dw / r;
-        let dvh: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
+        let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
         let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
-        let (si, sj) = (s.is_solid(p.mat[i]), s.is_solid(p.mat[j]));
         let mut x = [0.0; LANES];
         let (mut bv, mut bx) = (0.0, 0.0);
-        if si || sj {
-            let dv: [f64; 3] = std::array::from_fn(|c| p.v[i][c] - p.v[j][c]);
+        if a.solid || b.solid {
+            let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
             // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
             for e in 0..9 {
                 x[e] = -dv[e / 3] * gr * d[e % 3];
             }
-            for (c, &(a, b)) in VOIGT.iter().enumerate() {
-                x[SHAPE0 + c] = -d[a] * gr * d[b];
+            for (c, &(k, l)) in VOIGT.iter().enumerate() {
+                x[SHAPE0 + c] = -d[k] * gr * d[l];
             }
             // bounds of the entries' terms (a function of the pair: |d_b| <= r)
             let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
         }
-        for (e, o, solid) in [(i, j, si), (j, i, sj)] {
-            let vol = if solid { p.m[o] / p.rho[o] } else { 0.0 };
+        let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
+            let vol = if me.solid { other.vol } else { 0.0 };
             let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
-            y[DENS] = p.m[o] * t_rho;
-            s.sums[e].add(&y, &shifts);
+            y[DENS] = other.m * t_rho;
+            y
+        };
+        let (yi, yj) = (terms(a, b), terms(b, a));
+        let [si, sj] = s
+            .sums
+            .get_disjoint_mut([i, j])
+            .expect("a pair of two entries");
+        si.add(&yi, &shifts);
+        sj.add(&yj, &shifts);
+        for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
+            let vol = if me.solid { other.vol } else { 0.0 };
             note(&mut mg, vol * bv);
             note(&mut ms, vol * bx);
             note(&mut md, y[DENS]);
