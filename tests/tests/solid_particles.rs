@@ -329,7 +329,7 @@ fn rubber_rings_rebound_intact_with_their_energy() {
 /// never gives energy back (`run_ok`'s check); the block bounces: the momentum, -1.296 kg m/s
 /// at the start (0.1296 kg at -10 m/s), is upward by the end (measured +0.40 kg m/s, block and
 /// plate; the particles leave the faces at about 0.57 ms), and the energy error stays below
-/// 1 % (measured 0.50 %, as the fluid cloud's runs: the push-back's first corrections).
+/// 1 % (measured 0.50 %; the water cloud of the scene itself, 0.43 % to 0.8 ms).
 #[test]
 fn a_block_of_solid_particles_bounces_off_a_meshed_plate() {
     let dir = workdir("solid_on_plate");
