@@ -615,7 +615,7 @@ pub struct SphDef {
     #[serde(default)]
     pub tensile_correction: Option<TensileCorrection>,
     /// Monaghan's artificial stress of solid particles (docs/scene.md); omitted: Gray et al.'s
-    /// epsilon 0.3, n 4 where a [[particles]] entry is of a solid material.
+    /// epsilon 0.3, n 4 where a `[[particles]]` entry is of a solid material.
     #[serde(default)]
     pub artificial_stress: Option<ArtificialStressDef>,
     #[serde(default)]
