@@ -234,6 +234,14 @@ impl Solids {
         self.correction.truncate(n);
     }
 
+    /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for
+    /// laws without thermal softening).
+    pub fn temperature(&self, mat: u16, i: usize) -> Option<f64> {
+        let m = self.model(mat)?;
+        let k = self.stride;
+        m.temperature(&self.state[i * k..i * k + m.n_state()])
+    }
+
     /// The equivalent plastic strain of entry `i` (0 for a fluid).
     pub fn plastic_strain(&self, mat: u16, i: usize) -> f64 {
         match self.model(mat) {

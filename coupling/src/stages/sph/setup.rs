@@ -176,7 +176,8 @@ pub fn particles_from_seeds(
 /// owned particles, summed over ranks (exact, whatever the decomposition), their columns in
 /// order. NaN where no particle reaches the point or the field has no particle meaning
 /// (displacement; plastic strain in a run without solid particles). Stress is a solid's Cauchy
-/// stress, a fluid's -p I; plastic strain a solid's equivalent plastic strain, a fluid's 0.
+/// stress, a fluid's -p I; plastic strain a solid's equivalent plastic strain, a fluid's 0;
+/// temperature a thermally softening solid's (NaN where a particle within reach keeps none).
 pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> Vec<f64> {
     let p = &st.parts;
     let k = st.params.smoothing_kernel();
@@ -216,6 +217,9 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
                         Some(s) => s.plastic_strain(p.mat[i], i),
                         None => f64::NAN,
                     },
+                    ProbeField::Temperature => solids
+                        .and_then(|s| s.temperature(p.mat[i], i))
+                        .unwrap_or(f64::NAN),
                     _ => f64::NAN,
                 };
                 num[f].push(w * v);
