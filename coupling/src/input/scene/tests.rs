@@ -330,6 +330,16 @@ fn solid_particles_and_artificial_stress_are_read_and_bad_values_refused() {
             "sph.profile",
             "standard",
         ),
+        (
+            solid.clone() + "[sph]\ntensile_correction = { epsilon = 0.2 }\n",
+            "sph.tensile_correction",
+            "artificial_stress",
+        ),
+        (
+            solid.clone() + "[sph]\nenergy = true\nconductivity = 0.5\n",
+            "sph.conductivity",
+            "remove the key",
+        ),
     ];
     for (text, key, needle) in cases {
         let e = refused(&text);

@@ -49,8 +49,9 @@ pub(super) fn check_particles(
 const SOLID_MODELS: [&str; 3] = ["elastic", "j2_plastic", "johnson_cook"];
 
 /// Solid particles (a `[[particles]]` entry whose material has no eos): a model of
-/// [`SOLID_MODELS`], `[sph]` with continuity density and the standard profile; `[sph]
-/// artificial_stress` only with them, epsilon >= 0, n an integer from 1 to 16.
+/// [`SOLID_MODELS`], `[sph]` with continuity density and the standard profile and without the
+/// fluid pass's `tensile_correction` and `conductivity`; `[sph] artificial_stress` only with
+/// them, epsilon >= 0, n an integer from 1 to 16.
 fn check_solid_particles(
     cx: &Ctx,
     particles: &[ParticlesDef],
@@ -108,6 +109,29 @@ fn check_solid_particles(
         }
     }
     if let Some((i, name)) = solid {
+        // the stress pass serves every particle of a run with solids (a fluid's stress -p I):
+        // the fluid pass's own corrections have no place in it
+        for (k, set, instead) in [
+            (
+                "sph.tensile_correction",
+                s.tensile_correction.is_some(),
+                "artificial_stress acts on the fluids' tension too",
+            ),
+            (
+                "sph.conductivity",
+                s.conductivity.is_some(),
+                "artificial conductivity is not in the stress pass",
+            ),
+        ] {
+            if set {
+                return Err(cx.err(
+                    k,
+                    format!(
+                        "particles[{i}] are of the solid material \"{name}\": remove the key ({instead})"
+                    ),
+                ));
+            }
+        }
         for (k, v, want) in [
             ("sph.density", &s.density, "continuity"),
             ("sph.profile", &s.profile, "standard"),
