@@ -55,3 +55,27 @@ for np_ in (2, 4):
           f"({s['bytes_sent'] / r['steps'] / r['particles']:.1f} B per particle), ghosts "
           f"{ex['sph_ghosts_last_step']}, RCB migrations {ex['rcb_migrated_last_step']} in the last step")
 PY
+# Solid particles against fluid ones (issue 33: a solid particle costs at most twice a fluid one
+# per particle-step): scenes/rubber_blocks.toml (2,000 elastic particles, artificial stress and
+# viscosity) and the same blocks as a Tait fluid of the same sound speed (no strength, the same
+# viscosity), to 3 ms at np 1, REPEATS times each; medians of us per particle-step and their ratio.
+fluid=out/bench_sph/fluid_blocks.toml
+sed -e 's/^model = "elastic"/model = "fluid"\neos = { kind = "tait", rho0 = 1200.0, sound_speed = 133.6, gamma = 7.0 }/' \
+    -e '/^youngs_modulus\|^poisson_ratio\|^artificial_stress/d' \
+    -e 's/"stress_xy", //; s/, "plastic_strain"\]/]/' scenes/rubber_blocks.toml > "$fluid"
+for r in $(seq "$REPEATS"); do
+  for s in solid fluid; do
+    src=scenes/rubber_blocks.toml
+    [ "$s" = fluid ] && src=$fluid
+    $T run "$src" --quiet --overwrite --end-time 3e-3 --out "out/bench_sph/blocks_${s}_r${r}"
+  done
+done
+python3 - "$REPEATS" <<'PY'
+import json, statistics, sys
+rep = int(sys.argv[1])
+us = {s: [json.load(open(f"out/bench_sph/blocks_{s}_r{r}/report.json"))["us_per_particle_step"]
+          for r in range(1, rep + 1)] for s in ("solid", "fluid")}
+m = {s: statistics.median(v) for s, v in us.items()}
+print(f"blocks np 1: solid {m['solid']:.3f} us/particle-step, fluid {m['fluid']:.3f}, "
+      f"ratio solid/fluid {m['solid'] / m['fluid']:.2f} (median of {rep})")
+PY

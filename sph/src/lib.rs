@@ -31,10 +31,12 @@
 //! over ranks. `energies` and `gravity_power` give per-rank sums for the energy balance.
 //!
 //! Solid particles (`solid`, `strength`): a particle whose material has a `StressModel`
-//! carries the Cauchy stress; between steps 4 and 6 the step adds the velocity-gradient pass
-//! (ghost sums to owners), the stress update, and the stress to the ghosts, and step 6 is
-//! `solid::stress_force_pass` (see the `solid` module doc; `SolidSim` is the serial sequence).
-//! A run without solids never calls them.
+//! carries the Cauchy stress; steps 4-6 are then `solid::velocity_gradient_pass` (which takes
+//! every entry's continuity density rate along; ghost `GradSums` to owners,
+//! `settle_gradients`), `update_eos` and `solid::update_stress`, the owners' `SolidGhost` to
+//! their ghosts, and `solid::stress_force_pass` (ghost `PairSums` to owners), all sums exact;
+//! after step 7 `solid::solid_pressure` (see the `solid` module doc; `SolidSim` is the serial
+//! sequence). A run without solids never calls them.
 //!
 //! Two profiles: `Profile::Standard` (textbook forms, second-order leapfrog) and
 //! `Profile::Liggghts`, which reproduces LIGGGHTS-PUBLIC 3.8.0's `sph/artVisc/tensCorr` pair

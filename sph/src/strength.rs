@@ -45,4 +45,10 @@ pub trait StressModel: Send + Sync + std::fmt::Debug {
     fn plastic_strain(&self, _state: &[f64]) -> f64 {
         0.0
     }
+
+    /// Temperature held in `state`, K, where the law keeps one (thermal softening; output).
+    /// Default `None`.
+    fn temperature(&self, _state: &[f64]) -> Option<f64> {
+        None
+    }
 }

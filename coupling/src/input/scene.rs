@@ -568,6 +568,24 @@ pub struct TensileCorrection {
     pub epsilon: f64,
 }
 
+/// `[sph] artificial_stress` (solid particles; Gray, Monaghan & Swift 2001).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArtificialStressDef {
+    /// epsilon >= 0 (0: off), default 0.3.
+    #[serde(default = "d_art_epsilon")]
+    pub epsilon: f64,
+    /// The exponent n >= 1 of f_ab^n, default 4.
+    #[serde(default = "d_art_n")]
+    pub n: i64,
+}
+fn d_art_epsilon() -> f64 {
+    sph::solid::ARTIFICIAL_STRESS_EPSILON
+}
+fn d_art_n() -> i64 {
+    sph::solid::ARTIFICIAL_STRESS_EXPONENT as i64
+}
+
 /// Periodic box.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -596,10 +614,10 @@ pub struct SphDef {
     pub artificial_viscosity: Option<ArtificialViscosity>,
     #[serde(default)]
     pub tensile_correction: Option<TensileCorrection>,
-    /// SCENE.md's `artificial_stress` (solid particles): read so that a scene using it is
-    /// refused by name (solid particles are not built yet: docs/status.md).
+    /// Monaghan's artificial stress of solid particles (docs/scene.md); omitted: Gray et al.'s
+    /// epsilon 0.3, n 4 where a `[[particles]]` entry is of a solid material.
     #[serde(default)]
-    pub artificial_stress: Option<toml::Value>,
+    pub artificial_stress: Option<ArtificialStressDef>,
     #[serde(default)]
     pub periodic: Option<Periodic>,
     #[serde(default = "d_profile")]

@@ -116,6 +116,10 @@ pub struct ParticleFrame<'a> {
     pub pressure: Option<&'a [f64]>,
     /// Smoothing lengths.
     pub h: Option<&'a [f64]>,
+    /// Cauchy stress xx,yy,zz,xy,yz,zx (runs with solid particles; a fluid's -p I).
+    pub stress: Option<&'a [[f64; 6]]>,
+    /// Equivalent plastic strain (runs with solid particles; 0 for a fluid).
+    pub plastic_strain: Option<&'a [f64]>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -384,6 +388,12 @@ impl FieldWriter {
         }
         if let Some(v) = pf.h {
             cols.push(("h", 1, scalar(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("stress"), pf.stress) {
+            cols.push(("stress", 6, rows(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("plastic_strain"), pf.plastic_strain) {
+            cols.push(("plastic_strain", 1, scalar(move |i| v[i]), false));
         }
         if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
             cols.push(("rank", 1, scalar(move |i| f64::from(v[i])), true));

@@ -1,8 +1,9 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
 use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
 use super::Solids;
+use crate::exact::{note, q, PassGrids, TermMax};
 use crate::params::Params;
-use crate::particles::Particles;
+use crate::particles::{PairSums, Particles};
 use crate::passes::PairWork;
 
 /// Monaghan's artificial stress against the tensile instability of solids (Gray, Monaghan &
@@ -45,9 +46,19 @@ impl ArtificialStress {
         }
     }
 
-    /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3).
+    /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3). Zero,
+    /// without the eigen-decomposition, where Gershgorin's discs show every principal stress
+    /// <= 0 (each diagonal entry plus its row's off-diagonal magnitudes <= 0: compression).
     pub fn tensor(&self, sigma: &[f64; 6], rho: f64) -> Mat3 {
-        let (lam, q) = symmetric_eigen(&from_voigt(sigma));
+        let a = from_voigt(sigma);
+        let tension = (0..3).any(|k| {
+            let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
+            a[k][k] + off > 0.0
+        });
+        if !tension {
+            return [[0.0; 3]; 3];
+        }
+        let (lam, q) = symmetric_eigen(&a);
         let scale = -self.epsilon / (rho * rho);
         let d: Mat3 = std::array::from_fn(|k| {
             std::array::from_fn(|l| if k == l { scale * lam[k].max(0.0) } else { 0.0 })
@@ -69,12 +80,12 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
 /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
 /// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
 /// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64, r2: f64) -> f64 {
+fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
     match params.viscosity {
         Some(av) => {
             let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
-            let c_mean = 0.5 * (p.c[i] + p.c[j]);
-            let rho_mean = 0.5 * (p.rho[i] + p.rho[j]);
+            let c_mean = 0.5 * (a.c + b.c);
+            let rho_mean = 0.5 * (a.rho + b.rho);
             (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
         }
         None => 0.0,
@@ -101,88 +112,149 @@ fn viscosity(params: &Params, p: &Particles, i: usize, j: usize, h: f64, vr: f64
 /// T g = -(p_a/rho_a^2 + p_b/rho_b^2 + Pi) g: the fluid pass's Monaghan (1992) eqs. 3.3-3.4.
 /// The two halves of -m_a m_b v^_ab . (T g) given to a and b are what the forces take from the
 /// kinetic energy (d/dt sum 1/2 m v^2 = sum_pairs m_a m_b v^_ab . T g at v = v^), so kinetic +
-/// sum m e is conserved as in the fluid pass. Sets `f` and `de` of EVERY entry (plain sums in
-/// pair order, see the module doc; the caller adds ghosts' to owners). Returns the work rate:
-/// `pressure` from the stress and artificial stress, `viscosity` from Pi.
+/// sum m e is conserved as in the fluid pass. Sets the force and energy-rate sums and the
+/// partner counts of every entry (`Particles::sums`: exact, on `g`'s force and energy grids,
+/// largest terms into `m`; a pair listed as (b, a) gives each entry the same bits, as T g
+/// changes sign with g) and the owned entries' `f` and `de` from them (the caller merges the
+/// ghosts' sums into their owners and settles again). Returns the work rate: `pressure` from
+/// the stress and artificial stress, `viscosity` from Pi. Flops per pair ~150 + 8 x 8 for the
+/// sums.
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
     s: &Solids,
     params: &Params,
     art: Option<&ArtificialStress>,
+    grids: &PassGrids,
+    m: &mut TermMax,
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
-    // sigma_a / rho_a^2 B_a (B = I for fluids)
-    let sr: Vec<Mat3> = (0..n)
-        .map(|i| {
-            let t = stress_of(p, s, i);
-            let r2 = 1.0 / (p.rho[i] * p.rho[i]);
-            let sb = mul(&t, &s.correction[i]);
-            std::array::from_fn(|a| std::array::from_fn(|b| sb[a][b] * r2))
-        })
-        .collect();
-    let rt: Vec<Mat3> = match art {
-        Some(a) => (0..n)
-            .map(|i| a.tensor(&super::tensor::to_voigt(&stress_of(p, s, i)), p.rho[i]))
-            .collect(),
-        None => Vec::new(),
+    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, art, i)).collect();
+    // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
+    // delta_p beyond the support), remade where h changes (mostly the same for every pair)
+    let at = |h: f64| {
+        let sk = k.at(h);
+        let inv_w_dp = match art {
+            Some(a) if sk.w(a.delta_p) > 0.0 => 1.0 / sk.w(a.delta_p),
+            _ => 0.0,
+        };
+        (sk, inv_w_dp)
     };
-    let mut f = vec![[0.0; 3]; n];
-    let mut de = vec![0.0; n];
+    let mut kern = at(f64::NAN);
+    p.sums.resize(n, PairSums::default());
+    for e in p.sums.iter_mut() {
+        e.f = [[0.0; 2]; 3];
+        e.de = [0.0; 2];
+        e.partners = 0.0;
+    }
+    let (gf, ge) = (grids.grid(q::FORCE), grids.grid(q::ENERGY));
+    let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
     for &(i, j) in pairs {
         let (i, j) = (i as usize, j as usize);
-        let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
+        p.sums[i].partners += 1.0;
+        p.sums[j].partners += 1.0;
+        let (a, b) = (&slots[i], &slots[j]);
+        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
         let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let r = r2.sqrt();
         if r == 0.0 {
             continue;
         }
-        let h = 0.5 * (p.h[i] + p.h[j]);
-        let gr = k.dw_dr(r, h) / r;
+        let h = 0.5 * (a.h + b.h);
+        if kern.0.h != h {
+            kern = at(h);
+        }
+        let gr = kern.0.dw_dr(r) / r;
         let g = [gr * d[0], gr * d[1], gr * d[2]];
-        let dv: [f64; 3] = std::array::from_fn(|c| p.vhat[i][c] - p.vhat[j][c]);
+        let dv: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
         let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-        let pi = viscosity(params, p, i, j, h, vr, r2);
-        // f_ab^n = (W(r)/W(delta_p))^n, 0 without artificial stress
-        let fn_ab = match art {
-            Some(a) => {
-                let w_dp = k.w(a.delta_p, h);
-                if w_dp > 0.0 {
-                    (k.w(r, h) / w_dp).powi(a.n)
-                } else {
-                    0.0
+        let pi = viscosity(params, a, b, h, vr, r2);
+        // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where either
+        // particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n)
+        let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
+        if let (Some(an), true) = (art, a.tension || b.tension) {
+            if kern.1 > 0.0 {
+                let fn_ab = (kern.0.w(r) * kern.1).powi(an.n);
+                let rg = mat_vec_sum(&a.rt, &b.rt, g);
+                for c in 0..3 {
+                    tg[c] += fn_ab * rg[c];
                 }
-            }
-            None => 0.0,
-        };
-        // T g without the viscous part
-        let mut tg = [0.0; 3];
-        for a in 0..3 {
-            for b in 0..3 {
-                let mut t = sr[i][a][b] + sr[j][a][b];
-                if fn_ab != 0.0 {
-                    t += (rt[i][a][b] + rt[j][a][b]) * fn_ab;
-                }
-                tg[a] += t * g[b];
             }
         }
-        let mm = p.m[i] * p.m[j];
+        let mm = a.m * b.m;
         // the viscous part -Pi I g, kept apart for the work split
-        let tv = [-pi * g[0], -pi * g[1], -pi * g[2]];
-        let full = [tg[0] + tv[0], tg[1] + tv[1], tg[2] + tv[2]];
-        for c in 0..3 {
-            f[i][c] += mm * full[c];
-            f[j][c] -= mm * full[c];
-        }
+        let full: [f64; 3] = std::array::from_fn(|c| tg[c] - pi * g[c]);
         let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-        de[i] -= 0.5 * p.m[j] * e;
-        de[j] -= 0.5 * p.m[i] * e;
+        let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
         work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
         work.viscosity += mm * pi * gr * vr;
+        let [si, sj] = p
+            .sums
+            .get_disjoint_mut([i, j])
+            .expect("a pair of two entries");
+        for (c, &fc) in full.iter().enumerate() {
+            let t = mm * fc;
+            gf.add(&mut si.f[c], t);
+            gf.add(&mut sj.f[c], -t);
+            note(&mut mf, t);
+        }
+        ge.add(&mut si.de, de_i);
+        ge.add(&mut sj.de, de_j);
+        note(&mut me, de_i);
+        note(&mut me, de_j);
     }
-    p.f = f;
-    p.de = de;
+    m[q::FORCE] = mf;
+    m[q::ENERGY] = me;
+    p.settle_forces();
     work
+}
+
+/// (A + B) g for two matrices stored row by row, summed entry by entry first.
+#[inline(always)]
+fn mat_vec_sum(a: &[f64; 9], b: &[f64; 9], g: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| {
+        let t = |c: usize| a[3 * r + c] + b[3 * r + c];
+        t(0) * g[0] + t(1) * g[1] + t(2) * g[2]
+    })
+}
+
+/// What the force pass reads of one entry, packed: position, h, predicted velocity, mass,
+/// density, sound speed, S = sigma/rho^2 B and the artificial stress R (row by row), and
+/// whether R is not zero.
+struct Slot {
+    x: [f64; 3],
+    h: f64,
+    vhat: [f64; 3],
+    m: f64,
+    rho: f64,
+    c: f64,
+    sr: [f64; 9],
+    rt: [f64; 9],
+    tension: bool,
+}
+
+impl Slot {
+    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a.
+    fn of(p: &Particles, s: &Solids, art: Option<&ArtificialStress>, i: usize) -> Slot {
+        let t = stress_of(p, s, i);
+        let inv_rho2 = 1.0 / (p.rho[i] * p.rho[i]);
+        let sb = mul(&t, &s.correction[i]);
+        let rt = match art {
+            Some(a) => a.tensor(&super::tensor::to_voigt(&t), p.rho[i]),
+            None => [[0.0; 3]; 3],
+        };
+        Slot {
+            x: p.x[i],
+            h: p.h[i],
+            vhat: p.vhat[i],
+            m: p.m[i],
+            rho: p.rho[i],
+            c: p.c[i],
+            sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
+            rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
+            tension: rt.iter().flatten().any(|&x| x != 0.0),
+        }
+    }
 }

@@ -6,32 +6,72 @@
 //! changes. One evaluation of a step with solids (`SolidSim` is the serial sequence):
 //!
 //! ```text
-//! density_pass (continuity, as for fluids)
-//! velocity_gradient_pass;  ghosts -> owners (grad_sum, shape_sum); settle_gradients
+//! update_eos (owned; the fluids' p and c)
+//! velocity_gradient_pass (and every entry's continuity density rate);
+//!                          ghosts -> owners (GradSums); settle_gradients (drho, L, B)
 //! update_stress (owned solids: rotate, then the model with deps = D dt; p = -tr(sigma)/3,
-//!                c = sqrt(wave modulus / rho));  update_eos for the fluids
-//! owners -> ghosts (rho, p, c, stress)
-//! stress_force_pass;  ghosts -> owners (f, de)
+//!                c = sqrt(wave modulus / rho))
+//! owners -> ghosts (SolidGhost: rho, p, c, stress, B)
+//! stress_force_pass;  ghosts -> owners (PairSums: f, de); settle_forces
 //! ```
 //!
-//! Sums: the gradient and force sums of the solid passes are plain f64 sums in the order of the
-//! pairs (NOT yet the exact sums of [`crate::exact`]): in serial they are reproducible, but a
-//! different pair order or rank count changes their last bits. Making them exact (one grid per
-//! quantity, as the fluid passes) is left to the parallel slice.
+//! and after `second_half` (which runs the EOS on every owned particle) `solid_pressure`.
+//!
+//! Sums: the gradient and force sums of the solid passes are exact ([`crate::exact`], binned
+//! sums as the fluid passes'; the gradient pass on a [`crate::exact::PassGrids`] of its own,
+//! quantities [`gq`]), so every particle's gradient, force and energy rate are the same bits
+//! whatever the order of the pairs and however they are shared between ranks; each pass is run
+//! under [`crate::exact::exact_pass`].
 mod force;
+mod gradient;
 pub mod sim;
 pub mod tensor;
 
 pub use force::{
     stress_force_pass, ArtificialStress, ARTIFICIAL_STRESS_EPSILON, ARTIFICIAL_STRESS_EXPONENT,
 };
+pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums};
 pub use sim::SolidSim;
 
-use crate::kernel::SmoothingKernel;
 use crate::particles::Particles;
 use crate::strength::StressModel;
+use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
-use tensor::{from_voigt, inverse, mul, to_voigt, Mat3};
+use tensor::{from_voigt, mul, to_voigt, Mat3};
+
+/// The most history values a solid particle carries when it migrates ([`SolidRecord`]): the
+/// elements' laws hold at most two (Johnson-Cook with thermal softening: plastic strain and
+/// temperature).
+pub const MAX_STATE: usize = 4;
+
+/// A solid entry's state packed for migration and checkpoints (owner -> new owner): its stress
+/// and its history values (the first `Solids::stride` of `state`). Plain old data, 80 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SolidRecord {
+    /// Cauchy stress, Voigt, Pa.
+    pub stress: [f64; 6],
+    /// History values (zero past the stride).
+    pub state: [f64; MAX_STATE],
+}
+
+/// What a ghost needs of its owner for the stress force pass, sent owner -> copies after the
+/// stress update: density, pressure and sound speed (as `EosState`), stress and the
+/// kernel-gradient correction B (row by row). Plain old data, 144 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SolidGhost {
+    /// Density, kg/m^3.
+    pub rho: f64,
+    /// Pressure, Pa.
+    pub p: f64,
+    /// Sound speed, m/s.
+    pub c: f64,
+    /// Cauchy stress, Voigt, Pa.
+    pub stress: [f64; 6],
+    /// B, `b[3 k + l]` = B_kl.
+    pub b: [f64; 9],
+}
 
 /// Relative size below which the kernel-gradient correction matrix counts as singular
 /// (|det| <= this (max entry)^3): then the uncorrected gradient is used (a particle with
@@ -40,9 +80,10 @@ pub const CORRECTION_SINGULAR: f64 = 1e-6;
 
 /// The solid state of every entry (owned first, ghosts after, as `Particles`), beside the
 /// particles. Communication roles (for the parallel layer): `stress` and `state` are carried
-/// when a particle migrates, written to checkpoints and sent to ghosts after `update_stress`;
-/// `grad_sum` and `shape_sum` are summed back from ghosts to owners; `grad_v` is the owner's
-/// (not carried).
+/// when a particle migrates and written to checkpoints ([`SolidRecord`]); `stress` and
+/// `correction` (with rho, p, c) are sent to ghosts after `update_stress` ([`SolidGhost`]);
+/// `sums` are summed back from ghosts to owners ([`GradSums`]); `grad_sum`, `shape_sum` and
+/// `grad_v` are the owner's (not carried).
 #[derive(Clone, Debug, Default)]
 pub struct Solids {
     /// The stress model of each material index (`Particles::mat`); `None`: a fluid.
@@ -53,7 +94,9 @@ pub struct Solids {
     pub state: Vec<f64>,
     /// History values per entry: the largest `n_state` of the models.
     pub stride: usize,
-    /// sum_b V_b (v_b - v_a) (x) grad_a W_ab, 1/s, this pass's sum.
+    /// The gradient pass's exact sums (every entry; ghosts' go to their owners).
+    pub sums: Vec<GradSums>,
+    /// sum_b V_b (v_b - v_a) (x) grad_a W_ab, 1/s, this pass's sum (owned, settled).
     pub grad_sum: Vec<Mat3>,
     /// sum_b V_b (x_b - x_a) (x) grad_a W_ab (dimensionless; the identity in the continuum).
     pub shape_sum: Vec<Mat3>,
@@ -79,6 +122,10 @@ impl Solids {
             stride,
             ..Self::default()
         };
+        assert!(
+            stride <= MAX_STATE,
+            "a stress model holds {stride} history values, more than a particle carries ({MAX_STATE})"
+        );
         s.resize(p.n_owned);
         for i in 0..p.n_owned {
             if let Some(m) = s.model(p.mat[i]) {
@@ -104,114 +151,105 @@ impl Solids {
     pub fn resize(&mut self, n: usize) {
         self.stress.resize(n, [0.0; 6]);
         self.state.resize(n * self.stride, 0.0);
+        self.sums.resize(n, GradSums::default());
         self.grad_sum.resize(n, [[0.0; 3]; 3]);
         self.shape_sum.resize(n, [[0.0; 3]; 3]);
         self.grad_v.resize(n, [[0.0; 3]; 3]);
         self.correction.resize(n, tensor::IDENTITY);
     }
 
-    /// Copies owner `o`'s stress and history to entry `g` (a ghost copy of it).
-    pub fn copy_to_ghost(&mut self, g: usize, o: usize) {
-        self.stress[g] = self.stress[o];
-        self.correction[g] = self.correction[o];
-        let k = self.stride;
-        self.state.copy_within(o * k..(o + 1) * k, g * k);
+    /// Copies owner `o`'s ghost state to entry `g` (a ghost copy of it; serial images).
+    pub fn copy_to_ghost(&mut self, p: &mut Particles, g: usize, o: usize) {
+        let st = self.ghost_state(p, o);
+        self.set_ghost_state(p, g, &st);
     }
 
-    /// Adds ghost `g`'s gradient sums to its owner `o`.
+    /// Adds ghost `g`'s gradient sums to its owner `o` (exact).
     pub fn fold_ghost(&mut self, g: usize, o: usize) {
-        for k in 0..3 {
-            for l in 0..3 {
-                self.grad_sum[o][k][l] += self.grad_sum[g][k][l];
-                self.shape_sum[o][k][l] += self.shape_sum[g][k][l];
-            }
-        }
+        let s = self.sums[g];
+        self.sums[o].merge(&s);
     }
-}
 
-/// Velocity-gradient pass over the pairs, for every entry (owned or ghost) that is a solid:
-///
-/// ```text
-/// grad_sum_a  += V_b (v_b - v_a) (x) grad_a W_ab      (Libersky & Petschek 1991), 1/s
-/// shape_sum_a += V_b (x_b - x_a) (x) grad_a W_ab      (Randles & Libersky 1996, eq. 29)
-/// ```
-///
-/// with V_b = m_b / rho_b, grad_a W_ab = (dW/dr / r) (x_a - x_b), h = (h_a + h_b)/2, and the
-/// same for b with a and b swapped (grad_b W_ba = -grad_a W_ab: b gets V_a times the same
-/// tensor). The velocity is `Particles::v`, which between the halves of a step is the half-step
-/// velocity v^(n+1/2): the stress increment over the step is then centred (the central
-/// difference of PRONTO-3D; Taylor & Flanagan, SAND87-1912). The positions are x^(n+1).
-/// Zeroes the sums of every entry first; coincident pairs are skipped.
-pub fn velocity_gradient_pass(
-    pairs: &[(u32, u32)],
-    p: &Particles,
-    s: &mut Solids,
-    k: &SmoothingKernel,
-) {
-    s.resize(p.len());
-    for e in 0..p.len() {
-        s.grad_sum[e] = [[0.0; 3]; 3];
-        s.shape_sum[e] = [[0.0; 3]; 3];
+    /// What ghosts of owned entry `i` need for the force pass.
+    pub fn ghost_state(&self, p: &Particles, i: usize) -> SolidGhost {
+        let b = &self.correction[i];
+        SolidGhost {
+            rho: p.rho[i],
+            p: p.p[i],
+            c: p.c[i],
+            stress: self.stress[i],
+            b: std::array::from_fn(|k| b[k / 3][k % 3]),
+        }
     }
-    for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
-        let (si, sj) = (s.is_solid(p.mat[i]), s.is_solid(p.mat[j]));
-        if !si && !sj {
-            continue;
-        }
-        let d: [f64; 3] = std::array::from_fn(|c| p.x[i][c] - p.x[j][c]);
-        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if r == 0.0 {
-            continue;
-        }
-        let gr = k.dw_dr(r, 0.5 * (p.h[i] + p.h[j])) / r;
-        let dv: [f64; 3] = std::array::from_fn(|c| p.v[i][c] - p.v[j][c]);
-        // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
-        let tv: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| -dv[a] * gr * d[b]));
-        let tx: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| -d[a] * gr * d[b]));
-        let mut add = |e: usize, vol: f64| {
-            for a in 0..3 {
-                for b in 0..3 {
-                    s.grad_sum[e][a][b] += vol * tv[a][b];
-                    s.shape_sum[e][a][b] += vol * tx[a][b];
-                }
-            }
+
+    /// Sets (ghost) entry `i` from its owner's [`SolidGhost`] (sizing the fields to `p`).
+    pub fn set_ghost_state(&mut self, p: &mut Particles, i: usize, g: &SolidGhost) {
+        self.resize(p.len());
+        p.rho[i] = g.rho;
+        p.p[i] = g.p;
+        p.c[i] = g.c;
+        self.stress[i] = g.stress;
+        self.correction[i] = std::array::from_fn(|k| std::array::from_fn(|l| g.b[3 * k + l]));
+    }
+
+    /// Owned entry `i` packed for migration or a checkpoint.
+    pub fn record(&self, i: usize) -> SolidRecord {
+        let k = self.stride;
+        let mut r = SolidRecord {
+            stress: self.stress[i],
+            ..SolidRecord::default()
         };
-        if si {
-            add(i, p.m[j] / p.rho[j]);
-        }
-        if sj {
-            add(j, p.m[i] / p.rho[i]);
-        }
+        r.state[..k].copy_from_slice(&self.state[i * k..(i + 1) * k]);
+        r
     }
-}
 
-/// Sets the corrected velocity gradient of every owned solid from its (merged) sums:
-///
-/// ```text
-/// L_a = grad_sum_a shape_sum_a^-1         (Randles & Libersky 1996, eqs. 29-30), 1/s
-/// ```
-///
-/// For a linear field v = G x, v_b - v_a = G (x_b - x_a), so grad_sum_a = G shape_sum_a and
-/// L_a = G exactly, at the free surface too (where the uncorrected sum is short of neighbours).
-/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum. Also sets
-/// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
-/// B grad_a W is the corrected kernel gradient.
-pub fn settle_gradients(p: &Particles, s: &mut Solids) {
-    s.resize(p.len());
-    for i in 0..p.n_owned {
-        if !s.is_solid(p.mat[i]) {
-            continue;
-        }
-        match inverse(&s.shape_sum[i], CORRECTION_SINGULAR) {
-            Some(inv) => {
-                s.grad_v[i] = mul(&s.grad_sum[i], &inv);
-                s.correction[i] = tensor::transpose(&inv);
+    /// Keeps no entry (the models stay): owned entries are then pushed again
+    /// ([`Solids::push_owned`]), in the order of the particles'.
+    pub fn clear(&mut self) {
+        let (models, stride) = (std::mem::take(&mut self.models), self.stride);
+        *self = Self {
+            models,
+            stride,
+            ..Self::default()
+        };
+    }
+
+    /// Appends an entry from a record (after every entry before it; no ghosts).
+    pub fn push_owned(&mut self, r: &SolidRecord) {
+        let n = self.stress.len();
+        self.resize(n + 1);
+        self.stress[n] = r.stress;
+        let k = self.stride;
+        self.state[n * k..(n + 1) * k].copy_from_slice(&r.state[..k]);
+    }
+
+    /// Drops the entries from `n` on (the ghosts, with `n` = the owned count).
+    pub fn truncate(&mut self, n: usize) {
+        self.stress.truncate(n);
+        self.state.truncate(n * self.stride);
+        self.sums.truncate(n);
+        self.grad_sum.truncate(n);
+        self.shape_sum.truncate(n);
+        self.grad_v.truncate(n);
+        self.correction.truncate(n);
+    }
+
+    /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for
+    /// laws without thermal softening).
+    pub fn temperature(&self, mat: u16, i: usize) -> Option<f64> {
+        let m = self.model(mat)?;
+        let k = self.stride;
+        m.temperature(&self.state[i * k..i * k + m.n_state()])
+    }
+
+    /// The equivalent plastic strain of entry `i` (0 for a fluid).
+    pub fn plastic_strain(&self, mat: u16, i: usize) -> f64 {
+        match self.model(mat) {
+            Some(m) => {
+                let k = self.stride;
+                m.plastic_strain(&self.state[i * k..i * k + m.n_state()])
             }
-            None => {
-                s.grad_v[i] = s.grad_sum[i];
-                s.correction[i] = tensor::IDENTITY;
-            }
+            None => 0.0,
         }
     }
 }

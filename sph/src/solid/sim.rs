@@ -5,12 +5,12 @@ use super::{
     settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
     ArtificialStress, Solids,
 };
-use crate::exact::exact_pass;
+use crate::exact::{exact_pass, PassGrids};
 use crate::integrate::{first_half, second_half, setup_state};
 use crate::neighbour::pairs;
 use crate::params::{DensityMode, Params};
 use crate::particles::Particles;
-use crate::passes::{add_gravity, density_pass, update_eos, PairWork};
+use crate::passes::{add_gravity, update_eos, PairWork};
 use crate::serial::SerialSim;
 use crate::strength::StressModel;
 use std::sync::Arc;
@@ -27,6 +27,8 @@ pub struct SolidSim {
     pub solids: Solids,
     /// Monaghan's artificial stress, if any.
     pub art: Option<ArtificialStress>,
+    /// The grids of the gradient pass's exact sums.
+    pub grad_grids: PassGrids,
 }
 
 impl SolidSim {
@@ -45,7 +47,12 @@ impl SolidSim {
         );
         let sim = SerialSim::new(parts, params);
         let solids = Solids::new(models, &sim.parts);
-        Self { sim, solids, art }
+        Self {
+            sim,
+            solids,
+            art,
+            grad_grids: PassGrids::default(),
+        }
     }
 
     /// The owned particles' state and rates at t = 0 (zero stress unless set before).
@@ -67,28 +74,24 @@ impl SolidSim {
         work
     }
 
-    /// Images, pairs, density pass, the velocity gradient, (with `dt`) the stress update, then
-    /// the stress force pass and gravity.
+    /// Images, pairs, the velocity gradient and density rates, (with `dt`) the stress update,
+    /// then the stress force pass and gravity.
     fn evaluate(&mut self, dt: Option<f64>) -> PairWork {
         let sim = &mut self.sim;
         sim.make_images();
         let pairs = pairs(&sim.parts, &sim.params.search_options(), |_| true);
         sim.n_pairs = pairs.len();
         let (p, params, owners) = (&mut sim.parts, &sim.params, &sim.ghost_owner);
-        exact_pass(
-            &mut sim.grids,
-            |m| *m,
-            |g, m| density_pass(&pairs, p, params, g, m),
-        );
-        for (g, &o) in owners.iter().enumerate() {
-            let s = p.pair_sums(p.n_owned + g);
-            p.add_pair_sums(o, &s);
-        }
-        p.settle_density(false);
         update_eos(p, params);
         let s = &mut self.solids;
-        // the gradient pass also gives the correction B of the force pass (set-up included)
-        velocity_gradient_pass(&pairs, p, s, &params.smoothing_kernel());
+        let k = params.smoothing_kernel();
+        // the gradient pass also gives the density rates and the correction B of the force
+        // pass (set-up included)
+        exact_pass(
+            &mut self.grad_grids,
+            |m| *m,
+            |g, m| velocity_gradient_pass(&pairs, p, s, &k, g, m),
+        );
         for (g, &o) in owners.iter().enumerate() {
             s.fold_ghost(p.n_owned + g, o);
         }
@@ -98,18 +101,19 @@ impl SolidSim {
             None => solid_pressure(p, s),
         }
         for (g, &o) in owners.iter().enumerate() {
-            let st = p.eos_state(o);
-            p.set_eos_state(p.n_owned + g, &st);
-            s.copy_to_ghost(p.n_owned + g, o);
+            s.copy_to_ghost(p, p.n_owned + g, o);
         }
-        let work = stress_force_pass(&pairs, p, s, params, self.art.as_ref());
+        let art = self.art.as_ref();
+        let (work, _) = exact_pass(
+            &mut sim.grids,
+            |m| *m,
+            |g, m| stress_force_pass(&pairs, p, s, params, art, g, m),
+        );
         for (g, &o) in owners.iter().enumerate() {
-            let e = p.n_owned + g;
-            for c in 0..3 {
-                p.f[o][c] += p.f[e][c];
-            }
-            p.de[o] += p.de[e];
+            let sums = p.pair_sums(p.n_owned + g);
+            p.add_pair_sums(o, &sums);
         }
+        p.settle_forces();
         add_gravity(p, params);
         work
     }

@@ -96,7 +96,7 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         .transpose()?;
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
     let loads = check_loads(&cx, &raw.load)?;
-    check_particles(&cx, &raw.particles, &materials)?;
+    check_particles(&cx, &raw.particles, &materials, raw.sph.as_ref())?;
     if let Some(s) = &raw.sph {
         check_sph(&cx, s)?;
     }

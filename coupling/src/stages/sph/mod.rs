@@ -57,7 +57,7 @@ impl Sph {
     /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
     /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
     pub fn new(world: &SimpleCommunicator, scene: &Scene, kept_pairs: bool) -> Result<Sph, String> {
-        let (mut params, map) = params_from_scene(scene)?;
+        let (mut params, map, solid_models) = params_from_scene(scene)?;
         // Gravity at t = 0 (`gravity_curve`); `finish` sets it at each step's end.
         if let Some(c) = &scene.gravity_curve {
             let s = c.value(0.0);
@@ -75,6 +75,9 @@ impl Sph {
             }
         }
         let mut stage = SphStage::new(world, parts, params);
+        if let Some(models) = solid_models {
+            stage.set_solids(models);
+        }
         let p = &stage.parts;
         let mass = fe_petsc::exact::total(world, &p.m[..p.n_owned]);
         stage.grids = fe_petsc::exact::SumGrids::for_mass(if mass > 0.0 { mass } else { 1.0 });
@@ -134,7 +137,12 @@ impl Sph {
         labels: &'a mut Vec<u64>,
         rank: i32,
     ) -> ParticleFrame<'a> {
-        particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank)
+        let mut f = particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank);
+        if let Some((stress, eps)) = self.stage.solid_output() {
+            f.stress = Some(stress);
+            f.plastic_strain = Some(eps);
+        }
+        f
     }
 
     /// Sets the global energies, the gravity work and the step count `save` wrote.
@@ -300,6 +308,8 @@ pub fn particle_frame<'a>(
         density: Some(&p.rho[..n]),
         pressure: Some(&p.p[..n]),
         h: Some(&p.h[..n]),
+        stress: None,
+        plastic_strain: None,
         rank: Some(ranks),
     }
 }

@@ -8,24 +8,63 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::{
-    ArtificialViscosity, DensityMode, Kernel, NewParticle, Params, Particles, Periodic, Profile,
-    TensileCorrection,
+    ArtificialStress, ArtificialViscosity, DensityMode, Eos, Kernel, NewParticle, Params,
+    Particles, Periodic, Profile, StressModel, TensileCorrection,
 };
+use std::sync::Arc;
 
 /// Per scene material: its index in the EOS table and its initial specific internal energy
-/// (None: a solid, no EOS).
+/// (None: a material no particle has).
 pub type MaterialMap = Vec<Option<(u16, f64)>>;
 
+/// The stress model of each EOS index (`None`: a fluid) and the artificial stress of a scene
+/// with solid particles.
+pub struct SolidModels {
+    /// Per EOS index (`sph::Particles::mat`).
+    pub models: Vec<Option<Arc<dyn StressModel>>>,
+    /// Monaghan's artificial stress (`[sph] artificial_stress`, default Gray et al.'s).
+    pub art: Option<ArtificialStress>,
+}
+
 /// The SPH model of a scene: the `[sph]` table and the materials' equations of state. Returns
-/// the parameters and, per scene material, its index in the EOS table and its initial specific
-/// internal energy.
-pub fn params_from_scene(scene: &Scene) -> Result<(Params, MaterialMap), String> {
+/// the parameters, per scene material its index in the EOS table and its initial specific
+/// internal energy, and the stress models where particles are of a solid material (`None`
+/// where none is).
+///
+/// A solid material of particles (elastic, j2_plastic, johnson_cook: no eos) takes the
+/// element's law (`fe_petsc::material`, through `strength::MaterialStress`) and, in the EOS
+/// table, a linear Tait entry (gamma 1: p = rho0 c0^2 (rho/rho0 - 1), c = c0 with c0 =
+/// sqrt(wave modulus / rho0)) that only the integrator's EOS calls read: the stage sets a
+/// solid's p and c from its stress after each of them (`sph::solid::solid_pressure`).
+pub fn params_from_scene(
+    scene: &Scene,
+) -> Result<(Params, MaterialMap, Option<SolidModels>), String> {
     let file = scene.file.display();
     let mut eos = Vec::new();
     let mut map = Vec::new();
+    let mut models: Vec<Option<Arc<dyn StressModel>>> = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {
         let Some(spec) = &m.eos else {
-            map.push(None);
+            let used = scene.particles.iter().any(|p| p.material == m.name);
+            if !used {
+                map.push(None);
+                continue;
+            }
+            let law = fe_petsc::material::build_material(m)
+                .map_err(|e| format!("{file}: material[{i}]: {e}"))?;
+            let model: Arc<dyn StressModel> =
+                Arc::new(super::strength::MaterialStress(Arc::from(law)));
+            let mut state = vec![0.0; model.n_state()];
+            model.init_state(&mut state);
+            let c0 = (model.wave_modulus(m.density, &state) / m.density).sqrt();
+            map.push(Some((eos.len() as u16, 0.0)));
+            eos.push(Eos::Tait {
+                rho0: m.density,
+                c0,
+                gamma: 1.0,
+            });
+            models.resize(eos.len() - 1, None);
+            models.push(Some(model));
             continue;
         };
         // the kind, its keys and its initial specific energy: the eos crate's table
@@ -45,6 +84,15 @@ pub fn params_from_scene(scene: &Scene) -> Result<(Params, MaterialMap), String>
         map.push(Some((eos.len() as u16, e0)));
         eos.push(e);
     }
+    let solids = if models.is_empty() {
+        None
+    } else {
+        models.resize(eos.len(), None);
+        Some(SolidModels {
+            models,
+            art: artificial_stress(scene),
+        })
+    };
     let mut params = Params::new(eos);
     params.gravity = scene.gravity;
     if let Some(s) = &scene.sph {
@@ -80,7 +128,25 @@ pub fn params_from_scene(scene: &Scene) -> Result<(Params, MaterialMap), String>
             max: p.max,
         });
     }
-    Ok((params, map))
+    Ok((params, map, solids))
+}
+
+/// The artificial stress of a scene with solid particles: `[sph] artificial_stress`, or Gray et
+/// al.'s epsilon 0.3, n 4 where omitted (None where epsilon = 0), at the initial spacing of the
+/// first solid `[[particles]]` entry (delta_p, where f_ab = 1).
+fn artificial_stress(scene: &Scene) -> Option<ArtificialStress> {
+    let solid = scene.particles.iter().find(|p| {
+        scene
+            .materials
+            .iter()
+            .any(|m| m.name == p.material && m.eos.is_none())
+    })?;
+    let mut a = ArtificialStress::new(solid.spacing);
+    if let Some(d) = scene.sph.as_ref().and_then(|s| s.artificial_stress) {
+        a.epsilon = d.epsilon;
+        a.n = d.n as i32;
+    }
+    (a.epsilon > 0.0).then_some(a)
 }
 
 /// This rank's initial particles (owned) from the seeds.
@@ -90,7 +156,7 @@ pub fn particles_from_seeds(
 ) -> Result<Particles, String> {
     let mut p = Particles::new();
     for s in seeds {
-        let (mat, e0) = map[s.material].ok_or("particles need a material with an eos")?;
+        let (mat, e0) = map[s.material].ok_or("particles of a material without an SPH model")?;
         p.push(NewParticle {
             id: s.id,
             x: s.x,
@@ -109,10 +175,19 @@ pub fn particles_from_seeds(
 /// Shepard-interpolated values of `probes` from the particles (collective): partial sums over
 /// owned particles, summed over ranks (exact, whatever the decomposition), their columns in
 /// order. NaN where no particle reaches the point or the field has no particle meaning
-/// (displacement, plastic strain).
+/// (displacement; plastic strain in a run without solid particles). Stress is a solid's Cauchy
+/// stress, a fluid's -p I; plastic strain a solid's equivalent plastic strain, a fluid's 0;
+/// temperature a thermally softening solid's (NaN where a particle within reach keeps none).
 pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> Vec<f64> {
     let p = &st.parts;
     let k = st.params.smoothing_kernel();
+    let solids = st.solids();
+    // Voigt component c of the stress: a solid's, a fluid's -p I
+    let stress = |i: usize, c: usize| match solids {
+        Some(s) if s.is_solid(p.mat[i]) => s.stress[i][c],
+        _ if c < 3 => -p.p[i],
+        _ => 0.0,
+    };
     // each sum's terms (the denominator, then each field's numerator), summed exactly
     let mut terms: Vec<Vec<f64>> = Vec::new();
     for pr in probes {
@@ -132,8 +207,19 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
                     ProbeField::VelocityZ => p.v[i][2],
                     ProbeField::Pressure => p.p[i],
                     ProbeField::Density => p.rho[i],
-                    ProbeField::StressXx | ProbeField::StressYy | ProbeField::StressZz => -p.p[i],
-                    ProbeField::StressXy | ProbeField::StressYz | ProbeField::StressZx => 0.0,
+                    ProbeField::StressXx => stress(i, 0),
+                    ProbeField::StressYy => stress(i, 1),
+                    ProbeField::StressZz => stress(i, 2),
+                    ProbeField::StressXy => stress(i, 3),
+                    ProbeField::StressYz => stress(i, 4),
+                    ProbeField::StressZx => stress(i, 5),
+                    ProbeField::PlasticStrain => match solids {
+                        Some(s) => s.plastic_strain(p.mat[i], i),
+                        None => f64::NAN,
+                    },
+                    ProbeField::Temperature => solids
+                        .and_then(|s| s.temperature(p.mat[i], i))
+                        .unwrap_or(f64::NAN),
                     _ => f64::NAN,
                 };
                 num[f].push(w * v);

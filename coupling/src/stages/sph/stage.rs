@@ -30,6 +30,8 @@ use std::time::Instant;
 
 mod contact_side;
 mod restart;
+mod solid;
+pub use solid::SolidPart;
 
 /// Margin on a sphere's radius when finding the ranks it reaches (round-off in the COI).
 const REACH_MARGIN: f64 = 1e-9;
@@ -137,6 +139,8 @@ pub struct SphStage {
     pass_grids: PassGrids,
     /// Passes redone because their terms did not fit the grids, so far.
     pub passes_redone: u64,
+    /// The solid particles' state and passes (`stage::solid`); `None` in a run of fluids.
+    solid: Option<SolidPart>,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -188,6 +192,7 @@ impl SphStage {
             pass_buf: sph::PassBuffers::default(),
             pass_grids: PassGrids::default(),
             passes_redone: 0,
+            solid: None,
         }
     }
 
@@ -289,8 +294,13 @@ impl SphStage {
         setup_state(&mut self.parts, &self.params);
         self.rebuild()?;
         self.make_ghosts();
-        let full = self.params.profile.setup_evaluates_density_and_eos();
-        self.evaluate(full);
+        if self.solid.is_some() {
+            self.evaluate_solid(None);
+            self.refresh_output();
+        } else {
+            let full = self.params.profile.setup_evaluates_density_and_eos();
+            self.evaluate(full);
+        }
         self.finish_stats(t0, 0.0);
         self.check_partners()
     }
@@ -359,7 +369,10 @@ impl SphStage {
                 st.make_ghosts();
             }
         };
-        if self.params.density == DensityMode::Continuity {
+        if self.solid.is_some() {
+            ghosts(self);
+            self.evaluate_solid(Some(dt));
+        } else if self.params.density == DensityMode::Continuity {
             // The forces need (rho, p, c) at the new positions, which continuity density has
             // already (rho was advanced in the first half): the EOS runs on the owners before
             // the ghosts are made (they carry it), and one fused pass computes density rates
@@ -372,6 +385,7 @@ impl SphStage {
             self.evaluate(true);
         }
         second_half(&mut self.parts, dt, &self.params);
+        self.solid_pressure_after_step();
         self.hold_on_faces(dt);
         self.finish_stats(t0, self.drift_s);
         self.check_partners()
@@ -389,33 +403,42 @@ impl SphStage {
             return Ok(());
         }
         self.balanced_once = true;
+        if self.solid.is_some() {
+            return self.rebalance_solid();
+        }
         let items: Vec<Item> = (0..self.parts.n_owned)
             .map(|i| Item {
                 rec: self.parts.record(i),
                 weight: 1.0 + self.pair_count.get(i).copied().unwrap_or(0) as f64,
             })
             .collect();
-        let (mine, stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
-        // Nothing came or went (the common case once balanced: RCB keeps its items in order):
-        // the particles stay as they are, no rebuild.
-        let same = mine.len() == self.parts.n_owned
-            && mine
-                .iter()
-                .zip(&self.parts.id)
-                .all(|(it, &id)| it.rec.id == id);
-        if !same {
+        if let Some(mine) = self.balance(items)? {
             let mut parts = Particles::new();
             for it in &mine {
                 parts.push_owned(&it.rec);
             }
             self.parts = parts;
         }
+        Ok(())
+    }
+
+    /// RCB over `items` (the owned particles in their order, with what travels with them):
+    /// this rank's items after it, or `None` where nothing came or went (the common case once
+    /// balanced: RCB keeps its items in order, and the particles stay as they are). Sets the
+    /// box and the statistics.
+    fn balance<T: RcbItem>(&mut self, items: Vec<T>) -> Result<Option<Vec<T>>, String> {
+        let (mine, stats) = self.rcb.balance(items).map_err(|e| e.to_string())?;
+        let same = mine.len() == self.parts.n_owned
+            && mine
+                .iter()
+                .zip(&self.parts.id)
+                .all(|(it, &id)| it.id() == id);
         self.bytes += stats.bytes_sent;
         self.stats.rcb = stats;
         let (lo, hi) = self.rcb.tree().rank_box(self.comm.rank());
         self.box_lo = lo;
         self.box_hi = hi;
-        Ok(())
+        Ok((!same).then_some(mine))
     }
 
     /// 2. Ghost copies (and periodic images) to every rank their sphere reaches.

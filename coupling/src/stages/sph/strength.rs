@@ -43,6 +43,10 @@ impl sph::StressModel for MaterialStress {
     fn plastic_strain(&self, state: &[f64]) -> f64 {
         self.0.plastic_strain(state)
     }
+
+    fn temperature(&self, state: &[f64]) -> Option<f64> {
+        self.0.temperature(state)
+    }
 }
 
 #[cfg(test)]

@@ -251,6 +251,8 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             density: first.then_some(&rho[..]),
             pressure: Some(&pp),
             h: Some(&h),
+            stress: None,
+            plastic_strain: None,
             rank: Some(&part_rank),
         };
         writer.write_frame(time, Some(&nodes), Some(&elements), Some(&particles))?;

@@ -2,35 +2,25 @@
 //! groups against the names the scene gives.
 use super::*;
 
-/// `[[particles]]`: a material with an eos, a positive spacing and h factor, `liggghts_type`
-/// only with a data file.
+/// `[[particles]]`: a known material (a fluid with an eos, or a solid: elastic, j2_plastic,
+/// johnson_cook), a positive spacing and h factor, `liggghts_type` only with a data file;
+/// solid particles only with the standard profile and continuity density.
 pub(super) fn check_particles(
     cx: &Ctx,
     particles: &[ParticlesDef],
     materials: &[MaterialSpec],
+    sph: Option<&SphDef>,
 ) -> Result<(), SceneError> {
     for (i, p) in particles.iter().enumerate() {
-        match materials.iter().find(|m| m.name == p.material) {
-            None => {
-                return Err(cx.err(
-                    &format!("particles[{i}].material"),
-                    format!(
-                        "no material named \"{}\" (materials: {})",
-                        p.material,
-                        material_names(materials)
-                    ),
-                ))
-            }
-            Some(m) if m.eos.is_none() => {
-                return Err(cx.err(
-                    &format!("particles[{i}].material"),
-                    format!(
-                        "material \"{}\" has no eos: particles need a fluid material with an eos (particles of a solid material, carrying stress, are not built yet in this version: docs/status.md)",
-                        p.material
-                    ),
-                ))
-            }
-            _ => {}
+        if !materials.iter().any(|m| m.name == p.material) {
+            return Err(cx.err(
+                &format!("particles[{i}].material"),
+                format!(
+                    "no material named \"{}\" (materials: {})",
+                    p.material,
+                    material_names(materials)
+                ),
+            ));
         }
         if !pos(p.spacing) {
             return Err(cx.err(
@@ -50,6 +40,110 @@ pub(super) fn check_particles(
                 &format!("particles[{i}].liggghts_type"),
                 "only with region = { file = \"<LIGGGHTS data file>\" }".into(),
             ));
+        }
+    }
+    check_solid_particles(cx, particles, materials, sph)
+}
+
+/// The models whose particles carry stress (docs/scene.md `[[particles]] material`).
+const SOLID_MODELS: [&str; 3] = ["elastic", "j2_plastic", "johnson_cook"];
+
+/// Solid particles (a `[[particles]]` entry whose material has no eos): a model of
+/// [`SOLID_MODELS`], `[sph]` with continuity density and the standard profile and without the
+/// fluid pass's `tensile_correction` and `conductivity`; `[sph] artificial_stress` only with
+/// them, epsilon >= 0, n an integer from 1 to 16.
+fn check_solid_particles(
+    cx: &Ctx,
+    particles: &[ParticlesDef],
+    materials: &[MaterialSpec],
+    sph: Option<&SphDef>,
+) -> Result<(), SceneError> {
+    let mut solid = None;
+    for (i, p) in particles.iter().enumerate() {
+        let Some(m) = materials.iter().find(|m| m.name == p.material) else {
+            continue; // check_particles names it
+        };
+        if m.eos.is_some() {
+            continue;
+        }
+        if !SOLID_MODELS.contains(&m.model.as_str()) {
+            return Err(cx.err(
+                &format!("particles[{i}].material"),
+                format!(
+                    "material \"{}\" is a {} without an eos: particles need a fluid with an eos or a solid ({})",
+                    p.material,
+                    m.model,
+                    SOLID_MODELS.join(", ")
+                ),
+            ));
+        }
+        solid.get_or_insert((i, m.name.clone()));
+    }
+    let Some(s) = sph else {
+        return Ok(());
+    };
+    if let Some(a) = &s.artificial_stress {
+        if solid.is_none() {
+            return Err(cx.err(
+                "sph.artificial_stress",
+                "acts on particles of a solid material (elastic, j2_plastic, johnson_cook) and no [[particles]] entry has one; for fluids see tensile_correction".into(),
+            ));
+        }
+        if !(a.epsilon >= 0.0 && a.epsilon.is_finite()) {
+            return Err(cx.err(
+                "sph.artificial_stress.epsilon",
+                format!(
+                    "expected a coefficient >= 0 (Gray et al.: 0.3), got {}",
+                    a.epsilon
+                ),
+            ));
+        }
+        if !(1..=16).contains(&a.n) {
+            return Err(cx.err(
+                "sph.artificial_stress.n",
+                format!(
+                    "expected an integer exponent from 1 to 16 (Gray et al.: 4), got {}",
+                    a.n
+                ),
+            ));
+        }
+    }
+    if let Some((i, name)) = solid {
+        // the stress pass serves every particle of a run with solids (a fluid's stress -p I):
+        // the fluid pass's own corrections have no place in it
+        for (k, set, instead) in [
+            (
+                "sph.tensile_correction",
+                s.tensile_correction.is_some(),
+                "artificial_stress acts on the fluids' tension too",
+            ),
+            (
+                "sph.conductivity",
+                s.conductivity.is_some(),
+                "artificial conductivity is not in the stress pass",
+            ),
+        ] {
+            if set {
+                return Err(cx.err(
+                    k,
+                    format!(
+                        "particles[{i}] are of the solid material \"{name}\": remove the key ({instead})"
+                    ),
+                ));
+            }
+        }
+        for (k, v, want) in [
+            ("sph.density", &s.density, "continuity"),
+            ("sph.profile", &s.profile, "standard"),
+        ] {
+            if v != want {
+                return Err(cx.err(
+                    k,
+                    format!(
+                        "particles[{i}] are of the solid material \"{name}\", which needs {k} = \"{want}\", got \"{v}\""
+                    ),
+                ));
+            }
         }
     }
     Ok(())
@@ -108,12 +202,6 @@ pub(super) fn check_region(cx: &Ctx, i: usize, p: &ParticlesDef) -> Result<(), S
 
 /// `[sph]`: positive optional coefficients, coefficients >= 0, and known names.
 pub(super) fn check_sph(cx: &Ctx, s: &SphDef) -> Result<(), SceneError> {
-    if s.artificial_stress.is_some() {
-        return Err(cx.err(
-            "sph.artificial_stress",
-            "Monaghan's artificial stress is for particles of a solid material, which are not built yet in this version (docs/status.md); remove the key".into(),
-        ));
-    }
     let av = s.artificial_viscosity.as_ref();
     for (k, v) in [
         ("sph.artificial_viscosity.alpha", av.map(|a| a.alpha)),

@@ -2,6 +2,9 @@
 //! another rank count.
 use super::*;
 
+/// A particle's solid record in a checkpoint (`None` in a run of fluids).
+type SolidRecordOf = Option<sph::solid::SolidRecord>;
+
 impl SphStage {
     /// The restart state (`driver::checkpoint`): the owned particles in their order, the RCB
     /// weights and cuts the next balance starts from, this rank's box, and the kept pair list
@@ -11,6 +14,7 @@ impl SphStage {
             .map(|i| self.parts.record(i))
             .collect();
         w.put("sph.particles", &recs);
+        self.save_solid(w);
         w.put("sph.pair_count", &self.pair_count);
         w.put(
             "sph.flags",
@@ -68,11 +72,14 @@ impl SphStage {
     /// Sets the state [`SphStage::save`] wrote (the same rank count).
     pub fn restore(&mut self, r: &StateReader) -> Result<(), String> {
         let recs: Vec<sph::ParticleRecord> = r.get("sph.particles")?;
+        let solid = self.solid_records_of(r, recs.len())?;
         let mut parts = Particles::new();
         for rec in &recs {
             parts.push_owned(rec);
         }
         self.parts = parts;
+        self.set_solid_records(&solid);
+        self.restore_grad_grids(r)?;
         self.pair_count = r.get("sph.pair_count")?;
         let flags: Vec<u64> = r.get("sph.flags")?;
         if flags.len() != 2 {
@@ -163,30 +170,38 @@ impl SphStage {
     /// its items from anywhere) and the pairs are searched afresh. The pairs are then summed
     /// in another order than without the stop: the run agrees with it to round-off.
     pub fn restore_remapped(&mut self, pieces: &[StateReader]) -> Result<(), String> {
-        let mut all: Vec<(sph::ParticleRecord, u32)> = Vec::new();
+        let mut all: Vec<(sph::ParticleRecord, u32, SolidRecordOf)> = Vec::new();
         let mut searches = 0;
         for r in pieces {
             let recs: Vec<sph::ParticleRecord> = r.get("sph.particles")?;
             let counts: Vec<u32> = r.get("sph.pair_count")?;
             let n = recs.len();
+            let solid = self.solid_records_of(r, n)?;
+            let solid = solid.into_iter().map(Some).chain(std::iter::repeat(None));
             all.extend(
                 recs.into_iter()
-                    .zip(counts.into_iter().chain(std::iter::repeat(0)).take(n)),
+                    .zip(counts.into_iter().chain(std::iter::repeat(0)).take(n))
+                    .zip(solid)
+                    .map(|((rec, c), s)| (rec, c, s)),
             );
             searches += r.get::<u64>("sph.flags")?.get(1).copied().unwrap_or(0);
         }
-        all.sort_by_key(|(rec, _)| rec.id);
+        all.sort_by_key(|(rec, _, _)| rec.id);
         if let Some(r) = pieces.first() {
             self.restore_pass_grids(r)?;
+            self.restore_grad_grids(r)?;
         }
         let (p, me) = (self.comm.size() as usize, self.comm.rank() as usize);
         let (lo, hi) = (all.len() * me / p, all.len() * (me + 1) / p);
         let mut parts = Particles::new();
-        for (rec, _) in &all[lo..hi] {
+        for (rec, _, _) in &all[lo..hi] {
             parts.push_owned(rec);
         }
         self.parts = parts;
-        self.pair_count = all[lo..hi].iter().map(|(_, c)| *c).collect();
+        let solid: Vec<sph::solid::SolidRecord> =
+            all[lo..hi].iter().filter_map(|(_, _, s)| *s).collect();
+        self.set_solid_records(&solid);
+        self.pair_count = all[lo..hi].iter().map(|(_, c, _)| *c).collect();
         self.verlet = None;
         // Another rank count: the kept decomposition is rebuilt at the first step.
         self.kept_box = None;

@@ -1,0 +1,281 @@
+//! The SPH stage's solid particles (`sph::solid`): their state beside the particles, carried
+//! where the particles go (migration, checkpoints), and the evaluation of a step with solids:
+//! the passes of the `sph::solid` module doc with their communication through the ghost plan.
+//!
+//! ```text
+//! update_eos (owned fluids)
+//! velocity_gradient_pass (with every entry's continuity density rate);
+//!                          ghosts -> owners (GradSums, 256 B); settle_gradients (drho, L, B)
+//! update_stress (owned; set-up: solid_pressure)
+//!                          owners -> ghosts (SolidGhost: rho, p, c, stress, B; 144 B)
+//! stress_force_pass;       ghosts -> owners (PairSums: f, de); settle_forces; add_gravity
+//! ```
+//!
+//! The fused continuity-and-force pass of the fluids cannot serve: the forces need the stress
+//! at the end of the step, which needs this step's velocity gradient (a pass of its own, which
+//! takes the continuity density rates along: one walk and one fold-back for both). Every
+//! sum is exact (`sph::exact`), so the particles' rates are the same bits at any rank count.
+use super::*;
+use crate::kernels::rcb::RcbItem;
+use sph::solid::{
+    settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
+    GradSums, SolidGhost, SolidRecord,
+};
+use sph::{ArtificialStress, Solids};
+
+/// The solid particles' part of the stage.
+pub struct SolidPart {
+    /// The solid state of every entry, beside `SphStage::parts` (owned entries in their order).
+    pub solids: Solids,
+    /// Monaghan's artificial stress, if any.
+    pub art: Option<ArtificialStress>,
+    /// The grids of the gradient pass's exact sums (the same on every rank).
+    pub grad_grids: PassGrids,
+    /// The owned particles' stress for output (a solid's, a fluid's -p I), Pa, and equivalent
+    /// plastic strain (0 for a fluid), as of the end of the last step (`refresh_output`).
+    pub out_stress: Vec<[f64; 6]>,
+    /// See `out_stress`.
+    pub out_plastic: Vec<f64>,
+}
+
+/// A particle with its solid state as RCB moves it (the fluid runs' `Item` and 80 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct SolidItem {
+    pub(super) rec: ParticleRecord,
+    pub(super) weight: f64,
+    pub(super) solid: SolidRecord,
+}
+
+impl RcbItem for SolidItem {
+    fn position(&self) -> [f64; 3] {
+        self.rec.x
+    }
+    fn id(&self) -> u64 {
+        self.rec.id
+    }
+    fn weight(&self) -> f64 {
+        self.weight
+    }
+}
+
+impl SphStage {
+    /// Makes the particles whose material has a model in `models` solids (before `setup`).
+    pub fn set_solids(&mut self, models: crate::stages::sph::setup::SolidModels) {
+        let solids = Solids::new(models.models, &self.parts);
+        self.solid = Some(SolidPart {
+            solids,
+            art: models.art,
+            grad_grids: PassGrids::default(),
+            out_stress: Vec::new(),
+            out_plastic: Vec::new(),
+        });
+    }
+
+    /// The solid state, where the run has solid particles.
+    pub fn solids(&self) -> Option<&Solids> {
+        self.solid.as_ref().map(|s| &s.solids)
+    }
+
+    /// 1 with solids: RCB over the owned particles with their solid state; the particles and
+    /// their solid state rebuilt in RCB's order where anything came or went.
+    pub(super) fn rebalance_solid(&mut self) -> Result<(), String> {
+        let sp = self.solid.as_mut().expect("solids");
+        sp.solids.truncate(self.parts.n_owned);
+        let items: Vec<SolidItem> = (0..self.parts.n_owned)
+            .map(|i| SolidItem {
+                rec: self.parts.record(i),
+                weight: 1.0 + self.pair_count.get(i).copied().unwrap_or(0) as f64,
+                solid: sp.solids.record(i),
+            })
+            .collect();
+        if let Some(mine) = self.balance(items)? {
+            let s = &mut self.solid.as_mut().expect("solids").solids;
+            let mut parts = Particles::new();
+            s.clear();
+            for it in &mine {
+                parts.push_owned(&it.rec);
+                s.push_owned(&it.solid);
+            }
+            self.parts = parts;
+        }
+        Ok(())
+    }
+
+    /// Sets the owned particles' solid state from `recs` (in their order; restart).
+    pub(super) fn set_solid_records(&mut self, recs: &[SolidRecord]) {
+        if let Some(sp) = &mut self.solid {
+            sp.solids.clear();
+            for r in recs {
+                sp.solids.push_owned(r);
+            }
+        }
+        self.refresh_output();
+    }
+
+    /// 3-4 with solids (module doc): `dt` is the step (None at the set-up: the stress stays,
+    /// p and c follow from it).
+    pub(super) fn evaluate_solid(&mut self, dt: Option<f64>) {
+        let list = self.pair_list();
+        let n0 = self.parts.n_owned;
+        {
+            let sp = self.solid.as_mut().expect("solids");
+            sp.solids.truncate(n0);
+            sp.solids.resize(self.parts.len());
+        }
+        update_eos(&mut self.parts, &self.params);
+        self.gradients(&list);
+        let sp = self.solid.as_mut().expect("solids");
+        match dt {
+            Some(dt) => update_stress(&mut self.parts, &mut sp.solids, dt),
+            None => solid_pressure(&mut self.parts, &sp.solids),
+        }
+        self.solid_to_ghosts();
+        let sp = self.solid.take().expect("solids");
+        let art = sp.art;
+        self.work = self.exact(|st, g, m| {
+            stress_force_pass(
+                &list,
+                &mut st.parts,
+                &sp.solids,
+                &st.params,
+                art.as_ref(),
+                g,
+                m,
+            )
+        });
+        self.solid = Some(sp);
+        self.fold_back(false, true);
+        add_gravity(&mut self.parts, &self.params);
+        self.stats.pairs = list.len() as u64;
+    }
+
+    /// The velocity-gradient and density-rate pass (exact, on the solids' own grids, redone
+    /// until its terms fit), the ghosts' sums merged into their owners, the owners' density
+    /// rates and gradients settled.
+    fn gradients(&mut self, list: &[(u32, u32)]) {
+        let comm = self.comm.clone();
+        let reduce = |m: &TermMax| {
+            let mut g = [0.0; 3];
+            comm.all_reduce_into(&m[..], &mut g[..], SystemOperation::max());
+            g
+        };
+        let k = self.params.smoothing_kernel();
+        let sp = self.solid.as_mut().expect("solids");
+        let p = &self.parts;
+        let (_, redone) = exact_pass(&mut sp.grad_grids, reduce, |g, m| {
+            velocity_gradient_pass(list, p, &mut sp.solids, &k, g, m)
+        });
+        self.passes_redone += redone as u64;
+        let n0 = p.n_owned;
+        let sums: Vec<GradSums> = (0..p.n_ghosts()).map(|g| sp.solids.sums[n0 + g]).collect();
+        let plan = self.plan.as_mut().expect("ghosts made");
+        let back = plan.reverse(&sums);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        for (k, s) in back.iter().enumerate() {
+            sp.solids.sums[self.ghost_src[k]].merge(s);
+        }
+        settle_gradients(&mut self.parts, &mut sp.solids);
+    }
+
+    /// The owners' new density, pressure, sound speed, stress and correction out to their
+    /// ghosts (the fluids' too: their p and c came from `update_eos` in this evaluation).
+    fn solid_to_ghosts(&mut self) {
+        let sp = self.solid.as_mut().expect("solids");
+        let states: Vec<SolidGhost> = self
+            .ghost_src
+            .iter()
+            .map(|&i| sp.solids.ghost_state(&self.parts, i))
+            .collect();
+        let plan = self.plan.as_mut().expect("ghosts made");
+        let got = plan.exchange(&states);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        let n0 = self.parts.n_owned;
+        for (g, s) in got.iter().enumerate() {
+            sp.solids.set_ghost_state(&mut self.parts, n0 + g, s);
+        }
+    }
+
+    /// After the second half of a step (which ran the EOS on every owned particle): the
+    /// solids' p and c from their stress again, and the output's stress and plastic strain.
+    pub(super) fn solid_pressure_after_step(&mut self) {
+        if let Some(sp) = &self.solid {
+            solid_pressure(&mut self.parts, &sp.solids);
+        }
+        self.refresh_output();
+    }
+
+    /// Sets the output's stress and plastic strain of the owned particles (`SolidPart`).
+    pub(super) fn refresh_output(&mut self) {
+        let Some(sp) = &mut self.solid else {
+            return;
+        };
+        let (p, s) = (&self.parts, &sp.solids);
+        let n = p.n_owned;
+        sp.out_stress.clear();
+        sp.out_stress.extend((0..n).map(|i| {
+            if s.is_solid(p.mat[i]) {
+                s.stress[i]
+            } else {
+                let q = -p.p[i];
+                [q, q, q, 0.0, 0.0, 0.0]
+            }
+        }));
+        sp.out_plastic.clear();
+        sp.out_plastic
+            .extend((0..n).map(|i| s.plastic_strain(p.mat[i], i)));
+    }
+
+    /// The owned particles' stress and plastic strain for a field frame (runs with solids).
+    pub fn solid_output(&self) -> Option<(&[[f64; 6]], &[f64])> {
+        self.solid
+            .as_ref()
+            .map(|sp| (&sp.out_stress[..], &sp.out_plastic[..]))
+    }
+
+    /// The solid state of the owned particles for a checkpoint.
+    pub(super) fn save_solid(&self, w: &mut StateWriter) {
+        if let Some(sp) = &self.solid {
+            let recs: Vec<SolidRecord> = (0..self.parts.n_owned)
+                .map(|i| sp.solids.record(i))
+                .collect();
+            w.put("sph.solid", &recs);
+            w.put("sph.grad_grids", &sp.grad_grids.fitted());
+        }
+    }
+
+    /// The gradient grids a checkpoint holds (fitted afresh where it holds none).
+    pub(super) fn restore_grad_grids(&mut self, r: &StateReader) -> Result<(), String> {
+        if let Some(sp) = &mut self.solid {
+            sp.grad_grids = if r.has("sph.grad_grids") {
+                let m: Vec<f64> = r.get("sph.grad_grids")?;
+                let m: TermMax = m
+                    .try_into()
+                    .map_err(|_| "checkpoint: sph.grad_grids".to_string())?;
+                PassGrids::fitted_to(m)
+            } else {
+                PassGrids::default()
+            };
+        }
+        Ok(())
+    }
+
+    /// The solid records a checkpoint holds for its particles (`n` of them), zero where it
+    /// holds none.
+    pub(super) fn solid_records_of(
+        &self,
+        r: &StateReader,
+        n: usize,
+    ) -> Result<Vec<SolidRecord>, String> {
+        if self.solid.is_none() {
+            return Ok(Vec::new());
+        }
+        let recs: Vec<SolidRecord> = r.get("sph.solid")?;
+        if recs.len() != n {
+            return Err("checkpoint: sph.solid".into());
+        }
+        Ok(recs)
+    }
+}

@@ -1,0 +1,249 @@
+//! The velocity-gradient pass of the solids (with the continuity density rate of every
+//! entry), its exact sums, and the corrected gradient.
+//!
+//! The sums are exact ([`binsum`] two-fold sums, 40 bits apart, on the grids of a
+//! [`PassGrids`] of their own: quantity [`gq::GRAD`] for the velocity-gradient terms,
+//! [`gq::SHAPE`] for the shape terms, [`gq::DENSITY`] for the density rate), as the fluid
+//! passes' (see [`crate::exact`]): every entry's sums are the same bits whatever the order of
+//! the pairs, whichever rank computed a pair and however the ghosts' partial sums are merged
+//! into their owners. The 16 sums of an entry lie side by side, fold by fold ([`GradSums`]), so
+//! that a pair's terms are split and added lane by lane (the operations of `Grid2::add` on
+//! each, in vector registers).
+use super::tensor::{self, inverse, mul, Mat3};
+use super::{Solids, CORRECTION_SINGULAR};
+use crate::exact::{note, PassGrids, TermMax};
+use crate::kernel::SmoothingKernel;
+use crate::particles::Particles;
+use bytemuck::{Pod, Zeroable};
+
+/// The quantities of the gradient pass's sums, as indices of its [`TermMax`] and
+/// [`PassGrids::grid`].
+pub mod gq {
+    /// Velocity-gradient terms V_b (v_b - v_a)_k (grad_a W)_l, 1/s.
+    pub const GRAD: usize = 0;
+    /// Shape terms V_b (x_b - x_a)_k (grad_a W)_l (dimensionless).
+    pub const SHAPE: usize = 1;
+    /// Continuity density-rate terms, kg/(m^3 s).
+    pub const DENSITY: usize = 2;
+}
+
+/// Sums of one entry: 9 velocity-gradient lanes, 6 shape lanes, the density rate.
+pub const LANES: usize = 16;
+/// The first shape lane.
+const SHAPE0: usize = 9;
+/// The density-rate lane.
+const DENS: usize = 15;
+
+/// What the gradient pass added to one entry, as exact sums, fold by fold (`fold[k][l]`: the
+/// part on grid k of lane l): lanes 0-8 sum_b V_b (v_b - v_a) (x) grad_a W_ab row by row (lane
+/// 3 k + l is the (k, l) entry), 1/s; lanes 9-14 sum_b V_b (x_b - x_a) (x) grad_a W_ab
+/// (symmetric: each term is -gr d (x) d) in Voigt order xx, yy, zz, xy, yz, zx; lane 15 the
+/// continuity density rate, kg/(m^3 s). A ghost copy's go to its owner (copies -> owner), who
+/// merges them (exact, in any order) and settles them ([`settle_gradients`]). 256 bytes.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GradSums {
+    /// The parts on the top grid (index 0) and the lower grid (index 1) of each lane.
+    pub fold: [[f64; LANES]; 2],
+}
+
+/// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
+const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
+
+impl GradSums {
+    /// Merges `o` into these sums (exact).
+    #[inline]
+    pub fn merge(&mut self, o: &GradSums) {
+        for k in 0..2 {
+            for l in 0..LANES {
+                self.fold[k][l] += o.fold[k][l];
+            }
+        }
+    }
+
+    /// The value of lane `l` (the folds added top first, as `binsum::value2`).
+    #[inline]
+    fn value(&self, l: usize) -> f64 {
+        self.fold[0][l] + self.fold[1][l]
+    }
+
+    /// The sums' values: the velocity-gradient sum, the shape sum, the density rate.
+    pub fn values(&self) -> (Mat3, Mat3, f64) {
+        let grad = std::array::from_fn(|k| std::array::from_fn(|l| self.value(3 * k + l)));
+        let v: [f64; 6] = std::array::from_fn(|c| self.value(SHAPE0 + c));
+        (grad, tensor::from_voigt(&v), self.value(DENS))
+    }
+
+    /// Adds the terms `x` lane by lane, each split on its lane's grids: t = (r + C_k) - C_k,
+    /// r -= t, fold k += t (`binsum::Grid2::split`, the same operations in the same order).
+    #[inline(always)]
+    fn add(&mut self, x: &[f64; LANES], c: &[[f64; LANES]; 2]) {
+        let mut r = *x;
+        for (fold, ck) in self.fold.iter_mut().zip(c) {
+            for l in 0..LANES {
+                let t = (r[l] + ck[l]) - ck[l];
+                r[l] -= t;
+                fold[l] += t;
+            }
+        }
+    }
+}
+
+/// The shifts of the lanes on each fold: velocity gradient, shape, density rate.
+fn lane_shifts(g: &PassGrids) -> [[f64; LANES]; 2] {
+    let (gv, gs, gd) = (g.grid(gq::GRAD), g.grid(gq::SHAPE), g.grid(gq::DENSITY));
+    std::array::from_fn(|k| {
+        std::array::from_fn(|l| match l {
+            DENS => gd.shift[k],
+            l if l >= SHAPE0 => gs.shift[k],
+            _ => gv.shift[k],
+        })
+    })
+}
+
+/// What the gradient pass reads of one entry, packed: position, h, velocity, predicted
+/// velocity, mass, volume m/rho, and whether it is a solid.
+struct Slot {
+    x: [f64; 3],
+    h: f64,
+    v: [f64; 3],
+    vhat: [f64; 3],
+    m: f64,
+    vol: f64,
+    solid: bool,
+}
+
+/// Velocity-gradient pass over the pairs, for every entry (owned or ghost) that is a solid:
+///
+/// ```text
+/// grad_sum_a  += V_b (v_b - v_a) (x) grad_a W_ab      (Libersky & Petschek 1991), 1/s
+/// shape_sum_a += V_b (x_b - x_a) (x) grad_a W_ab      (Randles & Libersky 1996, eq. 29)
+/// ```
+///
+/// with V_b = m_b / rho_b, grad_a W_ab = (dW/dr / r) (x_a - x_b), h = (h_a + h_b)/2, and the
+/// same for b with a and b swapped (grad_b W_ba = -grad_a W_ab: b gets V_a times the same
+/// tensor, and a pair listed as (b, a) gives each entry the same bits: both factors of each
+/// product change sign). The velocity is `Particles::v`, which between the halves of a step is
+/// the half-step velocity v^(n+1/2): the stress increment over the step is then centred (the
+/// central difference of PRONTO-3D; Taylor & Flanagan, SAND87-1912). The positions are
+/// x^(n+1). With them, for every entry (solid or fluid), the continuity density rate of
+/// `passes::density_pass`, m_b (dW/dr)(r_ab . v^_ab)/r (Monaghan 1992, eq. 2.16): the same
+/// walk over the pairs, one fold-back for both. Zeroes the sums (`Solids::sums`) of every entry
+/// first, adds every term exactly on `g` (quantities [`gq`]) and notes the largest terms in
+/// `m`; coincident pairs are skipped. Flops per pair: ~50 for the geometry and the terms, 2 x
+/// 16 x 6 for the exact sums (in lanes).
+pub fn velocity_gradient_pass(
+    pairs: &[(u32, u32)],
+    p: &Particles,
+    s: &mut Solids,
+    k: &SmoothingKernel,
+    g: &PassGrids,
+    m: &mut TermMax,
+) {
+    s.resize(p.len());
+    s.sums.iter_mut().for_each(|e| *e = GradSums::default());
+    let slots: Vec<Slot> = (0..p.len())
+        .map(|i| Slot {
+            x: p.x[i],
+            h: p.h[i],
+            v: p.v[i],
+            vhat: p.vhat[i],
+            m: p.m[i],
+            vol: p.m[i] / p.rho[i],
+            solid: s.is_solid(p.mat[i]),
+        })
+        .collect();
+    let shifts = lane_shifts(g);
+    let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
+    // h is mostly the same for every pair: the kernel's factors are remade when it changes
+    let mut kern = k.at(f64::NAN);
+    for &(i, j) in pairs {
+        let (i, j) = (i as usize, j as usize);
+        let (a, b) = (&slots[i], &slots[j]);
+        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if r == 0.0 {
+            continue;
+        }
+        let h = 0.5 * (a.h + b.h);
+        if kern.h != h {
+            kern = k.at(h);
+        }
+        let dw = kern.dw_dr(r);
+        let gr = dw / r;
+        let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
+        let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
+        let mut x = [0.0; LANES];
+        let (mut bv, mut bx) = (0.0, 0.0);
+        if a.solid || b.solid {
+            let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
+            // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
+            for e in 0..9 {
+                x[e] = -dv[e / 3] * gr * d[e % 3];
+            }
+            for (c, &(k, l)) in VOIGT.iter().enumerate() {
+                x[SHAPE0 + c] = -d[k] * gr * d[l];
+            }
+            // bounds of the entries' terms (a function of the pair: |d_b| <= r)
+            let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
+        }
+        let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
+            let vol = if me.solid { other.vol } else { 0.0 };
+            let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
+            y[DENS] = other.m * t_rho;
+            y
+        };
+        let (yi, yj) = (terms(a, b), terms(b, a));
+        let [si, sj] = s
+            .sums
+            .get_disjoint_mut([i, j])
+            .expect("a pair of two entries");
+        si.add(&yi, &shifts);
+        sj.add(&yj, &shifts);
+        for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
+            let vol = if me.solid { other.vol } else { 0.0 };
+            note(&mut mg, vol * bv);
+            note(&mut ms, vol * bx);
+            note(&mut md, y[DENS]);
+        }
+    }
+    m[gq::GRAD] = mg;
+    m[gq::SHAPE] = ms;
+    m[gq::DENSITY] = md;
+}
+
+/// Sets the density rate `drho` of every owned entry and the corrected velocity gradient of
+/// every owned solid from its (merged) sums:
+///
+/// ```text
+/// L_a = grad_sum_a shape_sum_a^-1         (Randles & Libersky 1996, eqs. 29-30), 1/s
+/// ```
+///
+/// For a linear field v = G x, v_b - v_a = G (x_b - x_a), so grad_sum_a = G shape_sum_a and
+/// L_a = G exactly, at the free surface too (where the uncorrected sum is short of neighbours).
+/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum. Also sets
+/// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
+/// B grad_a W is the corrected kernel gradient.
+pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
+    s.resize(p.len());
+    for i in 0..p.n_owned {
+        let (grad, shape, drho) = s.sums[i].values();
+        p.drho[i] = drho;
+        if !s.is_solid(p.mat[i]) {
+            continue;
+        }
+        s.grad_sum[i] = grad;
+        s.shape_sum[i] = shape;
+        match inverse(&shape, CORRECTION_SINGULAR) {
+            Some(inv) => {
+                s.grad_v[i] = mul(&grad, &inv);
+                s.correction[i] = tensor::transpose(&inv);
+            }
+            None => {
+                s.grad_v[i] = grad;
+                s.correction[i] = tensor::IDENTITY;
+            }
+        }
+    }
+}
