@@ -226,6 +226,21 @@ pub fn hanging_bar_scene(dir: &Path, failure: &str) -> PathBuf {
     p
 }
 
+/// `dir/name`, created.
+pub fn mkdir(dir: &Path, name: &str) -> PathBuf {
+    let d = dir.join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The time integral of a reactions.csv force column (each row holds the mean force over the
+/// interval since the row before: docs/output.md), N s.
+pub fn impulse(out: &Path, column_name: &str) -> f64 {
+    let (h, rows) = read_csv(&out.join("reactions.csv"));
+    let (t, f) = (column(&h, &rows, "time"), column(&h, &rows, column_name));
+    (1..t.len()).map(|k| f[k] * (t[k] - t[k - 1])).sum()
+}
+
 /// scenes/kirchhoff_plate.toml in implicit mode (`mode = "implicit"`, dt = 1 ms: 48 steps, about
 /// a fifth of the plate's first period), its mesh path made absolute, written into `dir`.
 pub fn implicit_plate_scene(dir: &Path) -> PathBuf {

@@ -6,21 +6,6 @@
 use std::path::{Path, PathBuf};
 use tdyn_tests::*;
 
-/// `dir/name`, created.
-fn mkdir(dir: &Path, name: &str) -> PathBuf {
-    let d = dir.join(name);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The time integral of a reactions.csv force column (each row holds the mean force over the
-/// interval since the row before: docs/output.md), N s.
-fn impulse(out: &Path, column_name: &str) -> f64 {
-    let (h, rows) = read_csv(&out.join("reactions.csv"));
-    let (t, f) = (column(&h, &rows, "time"), column(&h, &rows, column_name));
-    (1..t.len()).map(|k| f[k] * (t[k] - t[k - 1])).sum()
-}
-
 /// Every history.csv, reactions.csv and probes.csv column of `b` is the same bits as `a`'s.
 fn same_bits(a: &Path, b: &Path, what: &str) {
     for file in ["history.csv", "reactions.csv", "probes.csv"] {

@@ -76,21 +76,6 @@ fn taylor_mirrored(dir: &Path) -> PathBuf {
     p
 }
 
-/// `dir/name`, created.
-fn mkdir(dir: &Path, name: &str) -> PathBuf {
-    let d = dir.join(name);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The time integral of a reactions.csv force column (each row holds the mean force over the
-/// interval since the row before: docs/output.md), N s.
-fn impulse(out: &Path, column_name: &str) -> f64 {
-    let (h, rows) = read_csv(&out.join("reactions.csv"));
-    let (t, f) = (column(&h, &rows, "time"), column(&h, &rows, column_name));
-    (1..t.len()).map(|k| f[k] * (t[k] - t[k - 1])).sum()
-}
-
 /// Every history.csv and reactions.csv column, and every frame of fields.h5, of `b` are the
 /// same bits as `a`'s.
 fn same_bits(a: &Path, b: &Path, what: &str) {

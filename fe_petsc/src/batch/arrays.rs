@@ -30,8 +30,11 @@ pub struct ElementArrays<'a> {
 /// into the lanes of `g`, the lanes from `n` on with copies of element `e0` (lanes are
 /// independent: their results are dropped).
 pub fn load<B: Batch>(g: &mut B, a: &ElementArrays<'_>, e0: usize, n: usize, n_state: usize) {
-    let list: Vec<usize> = (e0..e0 + n).collect();
-    load_list(g, a, &list, n_state);
+    let mut list = [0usize; super::MAX_LANES];
+    for (l, e) in list.iter_mut().zip(e0..e0 + n) {
+        *l = e;
+    }
+    load_list(g, a, &list[..n], n_state);
 }
 
 /// Loads the elements `list` (at most `B::LANES`, at least one) into the first lanes of `g`,
@@ -61,8 +64,11 @@ pub fn store<B: Batch>(
     history: &mut [f64],
     stride: usize,
 ) {
-    let list: Vec<usize> = (e0..e0 + n).collect();
-    store_list(g, &list, n_state, state, history, stride);
+    let mut list = [0usize; super::MAX_LANES];
+    for (l, e) in list.iter_mut().zip(e0..e0 + n) {
+        *l = e;
+    }
+    store_list(g, &list[..n], n_state, state, history, stride);
 }
 
 /// Stores lane `l`'s state and history as element `list[l]`'s (as [`store`]).

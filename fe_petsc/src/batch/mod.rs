@@ -316,6 +316,9 @@ fn aligned_frame() {
     std::hint::black_box(&mut line);
 }
 
+/// The most lanes of any width (a group's elements fit a stack array of this length).
+pub const MAX_LANES: usize = 8;
+
 /// The kernel's files, declared in each width's module (which names the lane types `F`, `M`
 /// and `LANES` they are compiled on).
 macro_rules! kernel_files {

@@ -220,24 +220,11 @@ impl ExplicitFe {
     ) -> Result<(), GroupInverted> {
         let live: Vec<usize> = (e0..e0 + n).filter(|&e| !self.is_failed(e)).collect();
         if !live.is_empty() {
-            let n_state = m.n_state();
-            let arrays = batch::arrays::ElementArrays {
-                xs: &self.x,
-                vs: &self.v,
-                elems: &self.elems,
-                vol0: &self.vol0,
-                state: &self.state,
-                history: &self.mat_state,
-                stride: self.mat_stride,
-            };
-            batch::arrays::load_list(g, &arrays, &live, n_state);
-            g.update(dt, m, model, &self.controls)
+            self.update_list(&live, m, model, dt, g)
                 .map_err(|bad| GroupInverted {
                     lane: live[bad.lane] - e0,
                     volume: bad.volume,
                 })?;
-            let (state, history) = (&mut self.state, &mut self.mat_state);
-            batch::arrays::store_list(g, &live, n_state, state, history, self.mat_stride);
         }
         let [hg_work, _, dt_stable, _] = g.scalars();
         let mut lane = 0;
@@ -277,6 +264,23 @@ impl ExplicitFe {
         dt: f64,
         g: &mut B,
     ) -> Result<(), GroupInverted> {
+        let mut list = [0usize; batch::MAX_LANES];
+        for (l, e) in list.iter_mut().zip(e0..e0 + n) {
+            *l = e;
+        }
+        self.update_list(&list[..n], m, model, dt, g)
+    }
+
+    /// The elements `list` (at most `B::LANES`) through the kernel lane by lane: loaded,
+    /// updated and stored one element at a time; `Err` names the lane of an inverted one.
+    fn update_list<B: Batch>(
+        &mut self,
+        list: &[usize],
+        m: &LaneMaterial,
+        model: &dyn Material,
+        dt: f64,
+        g: &mut B,
+    ) -> Result<(), GroupInverted> {
         let n_state = m.n_state();
         let arrays = batch::arrays::ElementArrays {
             xs: &self.x,
@@ -287,10 +291,10 @@ impl ExplicitFe {
             history: &self.mat_state,
             stride: self.mat_stride,
         };
-        batch::arrays::load(g, &arrays, e0, n, n_state);
+        batch::arrays::load_list(g, &arrays, list, n_state);
         g.update(dt, m, model, &self.controls)?;
         let (state, history) = (&mut self.state, &mut self.mat_state);
-        batch::arrays::store(g, e0, n, n_state, state, history, self.mat_stride);
+        batch::arrays::store_list(g, list, n_state, state, history, self.mat_stride);
         Ok(())
     }
 
