@@ -80,6 +80,24 @@ fn a_hanging_bar_fails_at_its_top_and_falls_freely() {
                 t[k]
             );
         }
+        // fields.h5 marks the failed elements (`failed`, 1) in its last frame: as many as
+        // history.csv's last row counts.
+        let f = hdf5::File::open(out.join("fields.h5")).unwrap();
+        let mut frames = f.group("frames").unwrap().member_names().unwrap();
+        frames.sort();
+        let marked: Vec<f64> = f
+            .dataset(&format!(
+                "frames/{}/elements/failed",
+                frames.last().unwrap()
+            ))
+            .unwrap()
+            .read_raw()
+            .unwrap();
+        assert_eq!(
+            marked.iter().sum::<f64>(),
+            *eroded.last().unwrap(),
+            "np {np}: fields.h5's failed elements against history.csv's eroded_elements"
+        );
         match &first {
             None => first = Some(out),
             Some(a) => {

@@ -259,6 +259,11 @@ impl Outputs {
         let eps = |e| fe.map_or(0.0, |(_, st, _)| st.plastic_strain(e));
         let pressure = |e| fe.map_or(0.0, |(_, st, _)| st.pressure(e));
         let temperature = |e| fe.map_or(f64::NAN, |(_, st, _)| st.temperature(e));
+        let failed = |e: usize| {
+            fe.map_or(0.0, |(_, st, _)| {
+                (e < st.elems.len() && st.is_failed(e)) as u8 as f64
+            })
+        };
         let nodes = fe.map(|(m, _, _)| NodeFrame {
             ids: &m.node_ids,
             position: Values::Made(&pos),
@@ -282,6 +287,7 @@ impl Outputs {
             plastic_strain: Some(Values::Made(&eps)),
             pressure: Some(Values::Made(&pressure)),
             temperature: Some(Values::Made(&temperature)),
+            failed: Some(Values::Made(&failed)),
             rank: Some(&m.rank_field),
         });
         let rank = self.rank;

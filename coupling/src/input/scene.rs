@@ -447,7 +447,7 @@ impl Probe {
 }
 
 /// Output fields (docs/scene.md `[output] fields`).
-pub const OUTPUT_FIELDS: [&str; 8] = [
+pub const OUTPUT_FIELDS: [&str; 9] = [
     "displacement",
     "velocity",
     "stress",
@@ -456,6 +456,7 @@ pub const OUTPUT_FIELDS: [&str; 8] = [
     "density",
     "rank",
     "temperature",
+    "failed",
 ];
 
 /// `[output]`.
@@ -475,12 +476,12 @@ pub struct OutputDef {
     pub checkpoint_every: Option<f64>,
 }
 
-/// The default `[output] fields`: all but `temperature`, which the scene check adds where a
-/// material has thermal softening.
+/// The default `[output] fields`: all but `temperature` and `failed`, which the scene check adds
+/// where a material has thermal softening or failure.
 pub(crate) fn d_fields() -> Vec<String> {
     OUTPUT_FIELDS
         .iter()
-        .filter(|s| **s != "temperature")
+        .filter(|s| **s != "temperature" && **s != "failed")
         .map(|s| s.to_string())
         .collect()
 }

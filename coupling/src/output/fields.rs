@@ -72,6 +72,8 @@ pub struct ElementFrame<'a> {
     pub pressure: Option<Values<'a, f64>>,
     /// Temperature, K (NaN where the material keeps none).
     pub temperature: Option<Values<'a, f64>>,
+    /// 1 for a failed (eroded) element, else 0.
+    pub failed: Option<Values<'a, f64>>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -360,6 +362,9 @@ impl FieldWriter {
         }
         if let (true, Some(s)) = (self.wants("pressure"), ef.pressure) {
             cols.push(("pressure", 1, scalar(move |e| s.at(e)), false));
+        }
+        if let (true, Some(s)) = (self.wants("failed"), ef.failed) {
+            cols.push(("failed", 1, scalar(move |e| s.at(e)), false));
         }
         if let (true, Some(s)) = (self.wants("temperature"), ef.temperature) {
             cols.push(("temperature", 1, scalar(move |e| s.at(e)), false));

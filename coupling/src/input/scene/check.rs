@@ -111,8 +111,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let thermal = materials
         .iter()
         .any(|m| m.model == "johnson_cook" && m.params.contains_key("m"));
-    if thermal && output.fields == super::d_fields() {
+    let default_fields = output.fields == super::d_fields();
+    if thermal && default_fields {
         output.fields.push("temperature".into());
+    }
+    // The default fields take `failed` where a material fails (an eroded element is still
+    // drawn: 1 marks it, for ParaView's Threshold).
+    if default_fields && failures.iter().any(Option::is_some) {
+        output.fields.push("failed".into());
     }
     if !thermal {
         for (i, p) in raw.probe.iter().enumerate() {

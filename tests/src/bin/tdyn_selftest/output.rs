@@ -241,6 +241,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             plastic_strain: Some(Values::Held(&eps)),
             pressure: Some(Values::Held(&pe)),
             temperature: None,
+            failed: None,
             rank: Some(&elem_rank),
         };
         let particles = ParticleFrame {
