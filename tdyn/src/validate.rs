@@ -25,6 +25,8 @@
 //! name = "final length"
 //! column = "tail.displacement_z"    # probes.csv, else history.csv (or `file = ...`)
 //! how = "final"                     # final | peak | max | min | arrival | plateau | period
+//! # particles = { of = "z", reduce = "max", near_min_z = 2e-4 }   (instead of column and how:
+//! #   a reduction over the last frame's particles; of = x | y | z | radius_z)
 //! offset = 0.0324                   # the value is offset + scale x what `how` finds
 //! range = [0.02142, 0.02147]        # the reference: `reference = x`, `range` (its midpoint),
 //!                                   # or `curve = { file, x, y, at }` (interpolated at `at`)
@@ -162,12 +164,16 @@ pub type Tolerance = (Option<f64>, Option<f64>);
 pub struct MeasureDef {
     /// As the report shows it.
     pub name: String,
-    /// The column (probes.csv, else history.csv, unless `file` says).
+    /// The column (probes.csv, else history.csv, unless `file` says); empty with `particles`.
+    #[serde(default)]
     pub column: String,
     /// The output file holding the column (e.g. crosscheck.csv).
     pub file: Option<String>,
-    /// final | peak | max | min | arrival | plateau | period.
+    /// final | peak | max | min | arrival | plateau | period (not with `particles`).
+    #[serde(default)]
     pub how: String,
+    /// Instead of a column: a reduction over the particles of the last frame of fields.h5.
+    pub particles: Option<ParticlesMeasure>,
     /// arrival: the level the column crosses (after `offset` and `scale`).
     pub level: Option<f64>,
     /// plateau: the time window averaged, s.
@@ -199,7 +205,89 @@ pub struct MeasureDef {
     pub why: String,
 }
 
+/// A measure over the particles of a run's last frame (`particles/position` in fields.h5):
+/// `reduce` of `of` over the particles (those whose z lies within `near_min_z` of the lowest
+/// one's, if given); then `offset` and `scale` as for a column.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesMeasure {
+    /// "x", "y", "z" (a coordinate, m) or "radius_z" (the distance from the z axis, m).
+    pub of: String,
+    /// "max" or "min".
+    pub reduce: String,
+    /// Only the particles with z <= (the lowest z) + this, m (e.g. a bar's foot layer).
+    pub near_min_z: Option<f64>,
+}
+
+impl ParticlesMeasure {
+    /// The value over the last frame's particles of `dir/fields.h5`.
+    fn value(&self, dir: &Path) -> Result<f64, String> {
+        let file = dir.join("fields.h5");
+        let e = |x: hdf5::Error| format!("{}: {x}", file.display());
+        let f = hdf5::File::open(&file).map_err(e)?;
+        let mut names = f.group("frames").map_err(e)?.member_names().map_err(e)?;
+        names.sort();
+        let last = names
+            .last()
+            .ok_or_else(|| format!("{}: no frames", file.display()))?;
+        let x: Vec<f64> = f
+            .dataset(&format!("frames/{last}/particles/position"))
+            .map_err(e)?
+            .read_raw()
+            .map_err(e)?;
+        let pts: Vec<&[f64]> = x.chunks_exact(3).collect();
+        let zmin = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+        let of = |p: &[f64]| -> Result<f64, String> {
+            Ok(match self.of.as_str() {
+                "x" => p[0],
+                "y" => p[1],
+                "z" => p[2],
+                "radius_z" => p[0].hypot(p[1]),
+                o => return Err(format!("particles.of = \"{o}\" (x, y, z, radius_z)")),
+            })
+        };
+        let mut vals = Vec::with_capacity(pts.len());
+        for p in pts
+            .iter()
+            .filter(|p| self.near_min_z.is_none_or(|d| p[2] <= zmin + d))
+        {
+            vals.push(of(p)?);
+        }
+        let v = match self.reduce.as_str() {
+            "max" => vals.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            "min" => vals.iter().copied().fold(f64::INFINITY, f64::min),
+            r => return Err(format!("particles.reduce = \"{r}\" (max, min)")),
+        };
+        v.is_finite()
+            .then_some(v)
+            .ok_or_else(|| format!("{}: no particles in the last frame", file.display()))
+    }
+}
+
 impl MeasureDef {
+    /// What is measured, for the report: "final of `tail.displacement_z`", or the particles'.
+    pub fn what(&self) -> String {
+        match &self.particles {
+            Some(p) => format!(
+                "{} of the particles' {} in the last frame{}",
+                p.reduce,
+                p.of,
+                p.near_min_z
+                    .map(|d| format!(", those within {d} m of the lowest"))
+                    .unwrap_or_default()
+            ),
+            None => format!("{} of `{}`", self.how, self.column),
+        }
+    }
+
+    /// The chart's axis label: `how`, or the particles' reduction.
+    pub fn axis(&self) -> String {
+        match &self.particles {
+            Some(p) => format!("{} {}", p.reduce, p.of),
+            None => self.how.clone(),
+        }
+    }
+
     /// The reference value, its band (range, else the value itself) and a description.
     fn reference(&self, case_dir: &Path) -> Result<(f64, [f64; 2]), String> {
         match (self.reference, self.range, &self.curve) {
@@ -263,6 +351,15 @@ impl MeasureDef {
 
     /// The measured value from one run's output directory.
     fn value(&self, dir: &Path) -> Result<f64, String> {
+        if let Some(pm) = &self.particles {
+            if !self.column.is_empty() || !self.how.is_empty() {
+                return Err(format!(
+                    "measure \"{}\": particles replaces column and how",
+                    self.name
+                ));
+            }
+            return Ok(self.offset + self.scale * pm.value(dir)?);
+        }
         let file = match &self.file {
             Some(f) => dir.join(f),
             None => {

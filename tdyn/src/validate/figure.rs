@@ -109,9 +109,9 @@ impl CaseChart<'_> {
                 .x_label_formatter(&fmt_x)
                 .light_line_style(WHITE)
                 .y_desc(if m.unit.is_empty() {
-                    m.how.clone()
+                    m.axis()
                 } else {
-                    format!("{} ({})", m.how, m.unit)
+                    format!("{} ({})", m.axis(), m.unit)
                 })
                 .y_label_formatter(&|v: &f64| num(*v));
         })?;

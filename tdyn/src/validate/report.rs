@@ -87,10 +87,9 @@ pub(super) fn report_md(
         for m in &case.measure {
             let _ = writeln!(
                 s,
-                "- **{}** ({} of `{}`): {}. Tolerance: {}",
+                "- **{}** ({}): {}. Tolerance: {}",
                 m.name,
-                m.how,
-                m.column,
+                m.what(),
                 m.source.trim(),
                 m.why.trim()
             );
