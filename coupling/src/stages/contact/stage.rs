@@ -351,6 +351,13 @@ impl ContactStage {
         }
     }
 
+    /// Drops the kept decomposition, its ghost faces and candidate lists, so that the next
+    /// step rebuilds them from the faces lent then (the faces changed: failed elements).
+    /// Call on every rank alike.
+    pub fn forget_decomposition(&mut self) {
+        self.sticky = None;
+    }
+
     /// The contact decomposition's cut tree after the last step.
     pub fn tree(&self) -> Option<&CutTree> {
         self.tree.as_ref()
