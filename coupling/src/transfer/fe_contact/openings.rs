@@ -120,3 +120,32 @@ impl Openings {
         true
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two unit cubes along x sharing the face x = 1 (nodes 1, 2, 6, 5 of the first).
+    fn two_cubes() -> Vec<[u64; 8]> {
+        vec![[0, 1, 2, 3, 4, 5, 6, 7], [1, 8, 9, 2, 5, 10, 11, 6]]
+    }
+
+    #[test]
+    fn the_face_a_failing_neighbour_opens_goes_to_the_other_element_outward() {
+        // Only the second may fail: the first gets the shared face as its side x+ (HEX_FACES
+        // [3]: 1, 2, 6, 5), counter-clockwise seen from x > 1; the second gets nothing.
+        let f = opening_faces(&two_cubes(), &[false, true], &[0, 0]);
+        assert_eq!(f.len(), 1);
+        let (face, opener) = f[0];
+        assert_eq!((face.element, face.side, opener), (0, 3, 1));
+        assert_eq!(face.nodes, [1, 2, 6, 5]);
+        // Both may fail: each gets the face, oriented outward from itself (the second as its
+        // side x-, HEX_FACES[5]: 2, 1, 5, 6, the reverse cycle).
+        let f = opening_faces(&two_cubes(), &[true, true], &[0, 0]);
+        assert_eq!(f.len(), 2);
+        assert_eq!((f[1].0.element, f[1].0.side, f[1].1), (1, 5, 0));
+        assert_eq!(f[1].0.nodes, [2, 1, 5, 6]);
+        // Neither fails: no face.
+        assert!(opening_faces(&two_cubes(), &[false, false], &[0, 0]).is_empty());
+    }
+}
