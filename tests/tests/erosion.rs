@@ -115,7 +115,7 @@ fn failure_keys_are_checked_and_what_is_not_built_is_refused_in_one_line() {
     // docs/scene.md: each mistake one line naming the file and the key, a non-zero exit.
     let dir = workdir("erosion_bad");
     let good = "{ plastic_strain = 0.05 }";
-    let cases: [(&str, String, &str); 7] = [
+    let cases: [(&str, String, &str); 6] = [
         (
             "negative",
             "{ plastic_strain = -0.1 }".into(),
@@ -138,7 +138,6 @@ fn failure_keys_are_checked_and_what_is_not_built_is_refused_in_one_line() {
             "must be positive",
         ),
         ("particles_default", good.into(), "block[0].failed"),
-        ("contact", good.into(), "with a [contact] table"),
         ("implicit", good.into(), "with implicit mode"),
     ];
     for (name, failure, needle) in cases {
@@ -148,7 +147,6 @@ fn failure_keys_are_checked_and_what_is_not_built_is_refused_in_one_line() {
         let mut text = std::fs::read_to_string(&scene).unwrap();
         match name {
             "particles_default" => text = text.replace("failed = \"delete\"\n", ""),
-            "contact" => text.push_str("\n[contact]\nsurfaces = [\"right\"]\n"),
             "implicit" => {
                 text = text.replace("[run]\n", "[run]\nmode = \"implicit\"\ndt = 1.0e-5\n")
             }

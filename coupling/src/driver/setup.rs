@@ -143,8 +143,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     if let Some(i) = scene.failures.iter().position(Option::is_some) {
         let why = if implicit {
             Some("implicit mode (its tangent has no erosion)")
-        } else if scene.contact.is_some() {
-            Some("a [contact] table (the faces a failed element opens do not join contact yet)")
         } else if scene
             .particles
             .iter()

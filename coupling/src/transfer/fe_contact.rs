@@ -11,6 +11,12 @@
 //! records (flagged `contact::FLAG_MASTER` on a master body), and at a rebuild each face goes
 //! to the contact owner of its first node (`faces_to_owners`); on a kept decomposition the
 //! nodes' records go straight to the boxes holding them (`send_mesh_records`).
+//!
+//! Where a material fails, the faces inside the mesh that a failed element opens are found at
+//! set-up too, and every node of an element that may fail is a contact node; each step lends
+//! only the active faces ([`openings`]).
+pub mod openings;
+
 use super::is_particle;
 use crate::kernels::comm::CommPlan;
 use crate::kernels::rcb::CutTree;
@@ -22,6 +28,7 @@ use fe_petsc::mesh::LocalMesh;
 use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use openings::Openings;
 use std::collections::HashMap;
 use std::rc::Rc;
 
@@ -55,6 +62,8 @@ pub struct FeContact {
     pub body_block: Vec<u32>,
     /// Whether each block has a contact face (its pairs are columns of contact_forces.csv).
     pub block_in_contact: Vec<bool>,
+    /// Which of `faces` are active after the failures so far (all where nothing fails).
+    pub openings: Openings,
 }
 
 impl FeContact {
@@ -128,9 +137,15 @@ fn scatterv_u64(comm: &SimpleCommunicator, per_rank: Vec<Vec<u64>>) -> Vec<u64> 
 }
 
 /// What [`FeContact::build`] gathers from each rank: its elements (element gid, 8 node gids),
-/// its owned nodes (gid, surface bits), and each element's flag of a master volume and block
-/// (the index in `block_tags`; `block_tags.len()` for none).
-fn local_inputs(mesh: &LocalMesh, master_volumes: &[i32], block_tags: &[i32]) -> [Vec<u64>; 4] {
+/// its owned nodes (gid, surface bits), each element's flag of a master volume and block
+/// (the index in `block_tags`; `block_tags.len()` for none), and each element's flag of a
+/// material that may fail (`can_fail`, per hexahedron; a native tetrahedron does not fail).
+fn local_inputs(
+    mesh: &LocalMesh,
+    master_volumes: &[i32],
+    block_tags: &[i32],
+    can_fail: &[bool],
+) -> [Vec<u64>; 5] {
     // Native tetrahedra as collapsed hexahedra (a, b, c, c, d, d, d, d): their triangles are
     // the faces with a repeated corner (`contact::face_key`).
     let tets = mesh
@@ -162,14 +177,18 @@ fn local_inputs(mesh: &LocalMesh, master_volumes: &[i32], block_tags: &[i32]) ->
         .chain(&mesh.tet_block)
         .map(|t| block_tags.iter().position(|b| b == t).unwrap_or(nb) as u64)
         .collect();
-    [elems, nodes, in_master, in_block]
+    let fails: Vec<u64> = (0..mesh.elems.len() + mesh.tets.len())
+        .map(|e| can_fail.get(e).copied().unwrap_or(false) as u64)
+        .collect();
+    [elems, nodes, in_master, in_block, fails]
 }
 
 /// What rank 0 finds of the whole mesh's contact surfaces ([`root_surfaces`]).
 #[derive(Default)]
 struct RootSurfaces {
-    /// For each rank: its faces (gid, element gid, side, 4 node gids, body), a `u64::MAX`
-    /// marker, then its contact nodes (gid, body).
+    /// For each rank: its faces (gid, element gid, side, 4 node gids, body, the gid of the
+    /// element that opens it or the element's own for a boundary face), a `u64::MAX` marker,
+    /// then its contact nodes (gid, body).
     per_rank: Vec<Vec<u64>>,
     /// Bodies in the mesh.
     n_bodies: u32,
@@ -184,14 +203,15 @@ struct RootSurfaces {
 }
 
 /// On rank 0: the boundary faces and bodies of the whole mesh (elements `all_e` gathered from
-/// `p` ranks in `counts_e`, owned nodes `all_n` in `counts_n`, each element's master flag and
-/// block), the faces kept (all four nodes on a surface of `surface_bits`; every boundary face
-/// for `None`), numbered by (element gid, side), and what each rank gets.
+/// `p` ranks in `counts_e`, owned nodes `all_n` in `counts_n`, each element's master flag,
+/// block and flag of a material that may fail), the faces kept (all four nodes on a surface of
+/// `surface_bits`; every boundary face for `None`) and the faces failing elements may open
+/// ([`openings`]), numbered by (element gid, side), and what each rank gets.
 fn root_surfaces(
     p: usize,
     (all_e, counts_e): (&[u64], &[i32]),
     (all_n, counts_n): (&[u64], &[i32]),
-    (all_master, all_block): (&[u64], &[u64]),
+    (all_master, all_block, all_fail): (&[u64], &[u64], &[u64]),
     (surface_bits, nb): (Option<u32>, usize),
 ) -> RootSurfaces {
     // Element k of the gathered list came from rank elem_rank[k].
@@ -242,13 +262,17 @@ fn root_surfaces(
             }
         };
         if keep {
-            kept.push(*f);
+            // A boundary face: its element is its own opener.
+            kept.push((*f, f.element));
         }
     }
+    // The faces a failing neighbour opens, and every node of a failing element.
+    let fail: Vec<bool> = order.iter().map(|&k| all_fail[k] != 0).collect();
+    kept.extend(openings::opening_faces(&hexes, &fail, &surf.element_body));
     // Deterministic face gids: by (element gid, side), independent of the rank count.
-    kept.sort_by_key(|f| (elem_gid[f.element], f.side));
+    kept.sort_by_key(|(f, _)| (elem_gid[f.element], f.side));
     let mut block_in_contact = vec![0u64; nb];
-    for f in &kept {
+    for (f, _) in &kept {
         let b = all_block[order[f.element]] as usize;
         if b < nb {
             block_in_contact[b] = 1;
@@ -258,13 +282,18 @@ fn root_surfaces(
     // that rank (gid, body), after a marker.
     let mut per_rank = vec![Vec::new(); p];
     let mut node_body: HashMap<u64, u32> = HashMap::new();
-    for (k, f) in kept.iter().enumerate() {
+    for (k, (f, opener)) in kept.iter().enumerate() {
         let r = elem_rank[f.element];
         per_rank[r].extend([k as u64, elem_gid[f.element], f.side as u64]);
         per_rank[r].extend(f.nodes);
-        per_rank[r].push(f.body as u64);
+        per_rank[r].extend([f.body as u64, elem_gid[*opener]]);
         for n in f.nodes {
             node_body.insert(n, f.body);
+        }
+    }
+    for e in (0..hexes.len()).filter(|&e| fail[e]) {
+        for n in hexes[e] {
+            node_body.insert(n, surf.element_body[e]);
         }
     }
     let mut cn: Vec<(u64, u32)> = node_body.into_iter().collect();
@@ -292,17 +321,19 @@ impl FeContact {
     /// the gmsh tags of the physical volumes whose bodies are masters (`[contact] master`).
     ///
     /// `block_tags`: the gmsh tag of each scene block, in scene order (an element of another
-    /// volume counts in no block).
+    /// volume counts in no block). `can_fail`: whether each hexahedron's material may fail.
     pub fn build(
         comm: &SimpleCommunicator,
         mesh: &LocalMesh,
         surface_bits: Option<u32>,
-        master_volumes: &[i32],
-        block_tags: &[i32],
+        (master_volumes, block_tags): (&[i32], &[i32]),
+        can_fail: &[bool],
     ) -> FeContact {
         let nb = block_tags.len();
-        let [elems, nodes, in_master, in_block] = local_inputs(mesh, master_volumes, block_tags);
+        let [elems, nodes, in_master, in_block, fails] =
+            local_inputs(mesh, master_volumes, block_tags, can_fail);
         let (all_block, _, _) = gatherv_u64(comm, &in_block);
+        let (all_fail, _, _) = gatherv_u64(comm, &fails);
         let (all_e, counts_e, _) = gatherv_u64(comm, &elems);
         let (all_master, _, _) = gatherv_u64(comm, &in_master);
         let (all_n, counts_n, _) = gatherv_u64(comm, &nodes);
@@ -315,7 +346,7 @@ impl FeContact {
                 comm.size() as usize,
                 (&all_e, &counts_e),
                 (&all_n, &counts_n),
-                (&all_master, &all_block),
+                (&all_master, &all_block, &all_fail),
                 (surface_bits, nb),
             );
         }
@@ -342,8 +373,8 @@ impl FeContact {
     }
 
     /// This rank's faces and contact nodes from what rank 0 sent it (`mine`: faces as (gid,
-    /// element gid, side, 4 node gids, body), a `u64::MAX` marker, then contact nodes as (gid,
-    /// body)), in local indices of `mesh`.
+    /// element gid, side, 4 node gids, body, opener's gid), a `u64::MAX` marker, then contact
+    /// nodes as (gid, body)), in local indices of `mesh`.
     fn with_mine(mut self, mesh: &LocalMesh, mine: &[u64]) -> FeContact {
         let local: HashMap<u64, u32> = mesh
             .node_id
@@ -355,7 +386,9 @@ impl FeContact {
             .iter()
             .position(|&v| v == u64::MAX)
             .unwrap_or(mine.len());
-        for c in mine[..split].chunks(8) {
+        let mut elems = Vec::new();
+        for c in mine[..split].chunks(9) {
+            elems.push((c[1], c[8]));
             let node_gids = [c[3], c[4], c[5], c[6]];
             let loc = node_gids.map(|g| local[&g]);
             let body = c[7] as u32;
@@ -372,6 +405,7 @@ impl FeContact {
                 loc,
             ));
         }
+        self.openings = Openings::new(elems);
         for c in mine[split.saturating_add(1).min(mine.len())..].chunks(2) {
             let l = local[&c[0]];
             self.nodes.push((l, c[1] as u32));
@@ -416,12 +450,14 @@ impl FeContact {
             .collect()
     }
 
-    /// This step's faces with their nodes' records, after `kick_drift`.
+    /// This step's active faces ([`Openings`]) with their nodes' records, after `kick_drift`.
     pub fn face_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<FullFace> {
         let infinite = fe.fully_constrained();
         self.faces
             .iter()
-            .map(|(f, loc)| FullFace {
+            .zip(&self.openings.active)
+            .filter(|(_, &a)| a)
+            .map(|((f, loc), _)| FullFace {
                 face: *f,
                 nodes: std::array::from_fn(|k| NodeRecord {
                     gid: node_gid[loc[k] as usize],

@@ -126,6 +126,13 @@ impl ExplicitFe {
         self.erosion.as_ref().is_some_and(|r| r.failed[e])
     }
 
+    /// Whether element `e`'s material has a failure criterion (it may fail).
+    pub fn can_fail(&self, e: usize) -> bool {
+        self.erosion
+            .as_ref()
+            .is_some_and(|r| r.criteria[self.elem_material[e]].is_some())
+    }
+
     /// This rank's failed elements.
     pub fn failed_count(&self) -> u64 {
         self.erosion

@@ -7,10 +7,11 @@
 use crate::transfer::fe_contact::FullFace;
 use contact::NodeRecord;
 use fe_petsc::exact::Folds;
+use mpi::topology::SimpleCommunicator;
 
 /// A body in contact: a lender of contact nodes (and faces) that takes the push-back's forces
 /// back. Between the drift and the element or pair forces of a step (Fig. 3, steps 4-5); the
-/// stage calls, in this order, [`ContactBody::contact_nodes`] and
+/// stage calls, in this order, [`ContactBody::update_faces`], [`ContactBody::contact_nodes`] and
 /// [`ContactBody::contact_faces`], [`ContactBody::take_forces`], [`ContactBody::energy_terms`],
 /// [`ContactBody::forces_on_records`], [`ContactBody::apply_impulses`].
 pub trait ContactBody {
@@ -20,6 +21,14 @@ pub trait ContactBody {
     /// of the node plus `gid_offset` (so that no two bodies' ids meet), `dt` the step. Each
     /// node is lent by one rank (its owner).
     fn contact_nodes(&self, gid_offset: u64, dt: f64) -> Vec<NodeRecord>;
+
+    /// Brings the faces [`ContactBody::contact_faces`] lends up to date (collective) and says
+    /// whether they may have changed since the last call, the same on every rank (the stage
+    /// then rebuilds its decomposition). Called first in each step; by default the faces
+    /// never change.
+    fn update_faces(&mut self, _world: &SimpleCommunicator) -> bool {
+        false
+    }
 
     /// This rank's contact faces with their corners' records (as [`ContactBody::contact_nodes`]
     /// writes them, ids without an offset), each face lent by one rank; empty for a body

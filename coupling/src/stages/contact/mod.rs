@@ -319,6 +319,12 @@ impl Contact {
         (t, dt): (f64, f64),
     ) -> Result<(), String> {
         let t0 = Instant::now();
+        // Faces opened by failed elements: the kept decomposition holds the old ones.
+        if mesh.update_faces(world) {
+            if let Search::Dynamic(stage) = &mut self.search {
+                stage.forget_decomposition();
+            }
+        }
         let mut nodes = mesh.contact_nodes(0, dt);
         let n_fe = nodes.len();
         let mut particles = particles.filter(|_| self.particles);

@@ -351,6 +351,13 @@ impl ContactStage {
         }
     }
 
+    /// Drops the kept decomposition, its ghost faces and candidate lists, so that the next
+    /// step rebuilds them from the faces lent then (the faces changed: failed elements).
+    /// Call on every rank alike.
+    pub fn forget_decomposition(&mut self) {
+        self.sticky = None;
+    }
+
     /// The contact decomposition's cut tree after the last step.
     pub fn tree(&self) -> Option<&CutTree> {
         self.tree.as_ref()
@@ -363,7 +370,8 @@ impl ContactStage {
     /// the step `dt`.
     ///
     /// The decomposition (steps 1-6) is rebuilt only when the nodes have moved too far for the
-    /// ghost skin since the last rebuild, or the node lists changed; in between, each step sends
+    /// ghost skin since the last rebuild, or the node lists changed, or the faces did (failed
+    /// elements: [`ContactStage::forget_decomposition`]); in between, each step sends
     /// the nodes' records along the plan of the last rebuild straight into the boxes and
     /// searches there (step 7, with candidate lists), then 7b and 8 as always. The contacts and
     /// forces are those of a rebuild at every step: every node a face can reach in the step is

@@ -49,8 +49,11 @@ impl Fe {
             .iter()
             .map(|b| groups.volumes.get(b).copied().unwrap_or(i32::MIN))
             .collect();
-        self.contact_surfaces
-            .insert(FeContact::build(world, local, bits, &master, &block_tags))
+        // The faces that failing elements open, and their nodes, join (`FeContact::openings`).
+        let state = self.state();
+        let can_fail: Vec<bool> = (0..local.elems.len()).map(|e| state.can_fail(e)).collect();
+        let built = FeContact::build(world, local, bits, (&master, &block_tags), &can_fail);
+        self.contact_surfaces.insert(built)
     }
 
     /// The contact surfaces ([`Fe::set_contact_surfaces`]). Panics before they are set.
@@ -80,6 +83,23 @@ impl ContactBody for Fe {
         debug_assert_eq!(gid_offset, 0, "mesh nodes keep their ids");
         self.surfaces()
             .node_records(self.state(), &self.mesh.local.node_id)
+    }
+
+    /// The faces that elements failed since the last call opened or closed
+    /// ([`crate::transfer::fe_contact::openings`]).
+    fn update_faces(&mut self, world: &SimpleCommunicator) -> bool {
+        let Fe {
+            integrator,
+            contact_surfaces,
+            ..
+        } = self;
+        let state = match integrator {
+            Integrator::Explicit(e) => &*e,
+            Integrator::Implicit(i) => &i.fe,
+        };
+        contact_surfaces
+            .as_mut()
+            .is_some_and(|c| c.openings.update(world, state))
     }
 
     fn contact_faces(&self) -> Vec<FullFace> {

@@ -26,7 +26,7 @@ pub fn pressure_loads(
                 .iter()
                 .position(|&t| t == tag)
                 .map_or(0, |b| 1u32 << b);
-            let faces = FeContact::build(comm, mesh, Some(bit), &[], &[])
+            let faces = FeContact::build(comm, mesh, Some(bit), (&[], &[]), &[])
                 .faces
                 .iter()
                 .map(|(rec, local)| (rec.gid, *local))
