@@ -745,3 +745,27 @@ fn eroding_run_stopped_and_restarted_ends_bit_identical_at_np_2() {
     let scene = hanging_bar_scene(&dir, "{ plastic_strain = 0.05 }");
     stop_and_restart_in(&dir, &scene, 2, 400, &[]);
 }
+
+#[test]
+fn perforation_with_eroding_contact_stopped_and_restarted_ends_bit_identical_at_np_3() {
+    // scenes/ball_perforation.toml stopped at step 300 (11.5 us: the ball halfway through, 80
+    // elements failed): the failed flags come back from the checkpoint, the first contact step
+    // after the restart gathers every failed id, so the opened faces are the run's own; the rest
+    // of the perforation is the run's without a stop, bit for bit (but the contact stage's cost
+    // columns: its decomposition is rebuilt at the restart).
+    let dir = workdir("restart_perforation_np3");
+    let text = std::fs::read_to_string(root().join("scenes/ball_perforation.toml"))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+        .replace("end_time = 3.0e-5", "end_time = 2.0e-5");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("ball_perforation.toml");
+    std::fs::write(&scene, text).unwrap();
+    stop_and_restart_in(
+        &dir,
+        &scene,
+        3,
+        300,
+        &["contact_imbalance", "contact_bytes"],
+    );
+}
