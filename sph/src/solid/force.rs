@@ -1,8 +1,10 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
 use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
+use super::PairGeom;
 use super::Solids;
 use crate::exact::{note, q, PassGrids, TermMax};
-use crate::params::Params;
+use crate::kernel::SmoothingKernel;
+use crate::params::{ArtificialViscosity, Params};
 use crate::particles::{PairSums, Particles};
 use crate::passes::PairWork;
 
@@ -80,8 +82,9 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
 /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
 /// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
 /// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
-    match params.viscosity {
+#[inline(always)]
+fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
+    match av {
         Some(av) => {
             let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
             let c_mean = 0.5 * (a.c + b.c);
@@ -117,8 +120,13 @@ fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f
 /// largest terms into `m`; a pair listed as (b, a) gives each entry the same bits, as T g
 /// changes sign with g) and the owned entries' `f` and `de` from them (the caller merges the
 /// ghosts' sums into their owners and settles again). Returns the work rate: `pressure` from
-/// the stress and artificial stress, `viscosity` from Pi. Flops per pair ~150 + 8 x 8 for the
-/// sums.
+/// the stress and artificial stress, `viscosity` from Pi.
+///
+/// `pairs` must be those of the last [`super::velocity_gradient_pass`] on `s`, at the same
+/// positions: r and dW/dr / r are read from `Solids::pair_geom` (its pairs checked against
+/// `pairs`), not computed again. Flops per pair ~110 (geometry 8, viscosity 12 with one
+/// division, (S_a + S_b) g 24, artificial stress 40 where either end is in tension, force and
+/// energy 20), and 2 x 4 lanes x 6 for the exact sums (the fluid pass's `add4`).
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
@@ -130,7 +138,81 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
+    let geom = &s.pair_geom[..];
+    assert_eq!(
+        geom.len(),
+        pairs.len(),
+        "the force pass runs over the pairs of the last gradient pass"
+    );
     let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, art, i)).collect();
+    // force x, y, z and energy rate of each entry, fold by fold, and its partners
+    let mut sums = vec![Sums4::default(); n];
+    let mut partners = vec![0u32; n];
+    let shifts = lane_shifts(grids);
+    let consts = PassConsts {
+        kernel: k,
+        viscosity: params.viscosity,
+        art: art.copied(),
+        shifts,
+    };
+    let work = force_pairs_built(
+        s.build,
+        pairs,
+        geom,
+        &slots,
+        &mut sums,
+        &mut partners,
+        &consts,
+        m,
+    );
+    p.sums.resize(n, PairSums::default());
+    for ((e, su), &np) in p.sums.iter_mut().zip(&sums).zip(&partners) {
+        let part = |l: usize| [su.fold[0][l], su.fold[1][l]];
+        e.f = [part(0), part(1), part(2)];
+        e.de = part(3);
+        e.partners = np as f64;
+    }
+    p.settle_forces();
+    work
+}
+
+/// What the pair loop of the force pass needs besides the pairs and the entries.
+struct PassConsts {
+    kernel: SmoothingKernel,
+    viscosity: Option<ArtificialViscosity>,
+    art: Option<ArtificialStress>,
+    shifts: [[f64; 4]; 2],
+}
+
+super::build::builds!(
+    /// [`force_pairs`] in the build of the pass.
+    force_pairs_built,
+    force_pairs,
+    (
+        pairs: &[(u32, u32)],
+        geom: &[PairGeom],
+        slots: &[Slot],
+        sums: &mut [Sums4],
+        partners: &mut [u32],
+        c: &PassConsts,
+        m: &mut TermMax
+    ) -> PairWork
+);
+
+/// The pair loop of [`stress_force_pass`] (inlined into each build, [`super::build`]): adds
+/// every pair's force and energy-rate terms to `sums`, counts `partners`, notes the largest
+/// terms in `m`; returns the work rate.
+#[inline(always)]
+fn force_pairs(
+    pairs: &[(u32, u32)],
+    geom: &[PairGeom],
+    slots: &[Slot],
+    sums: &mut [Sums4],
+    partners: &mut [u32],
+    c: &PassConsts,
+    m: &mut TermMax,
+) -> PairWork {
+    let (k, art, shifts) = (&c.kernel, c.art.as_ref(), &c.shifts);
     // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
     // delta_p beyond the support), remade where h changes (mostly the same for every pair)
     let at = |h: f64| {
@@ -142,73 +224,118 @@ pub fn stress_force_pass(
         (sk, inv_w_dp)
     };
     let mut kern = at(f64::NAN);
-    p.sums.resize(n, PairSums::default());
-    for e in p.sums.iter_mut() {
-        e.f = [[0.0; 2]; 3];
-        e.de = [0.0; 2];
-        e.partners = 0.0;
-    }
-    let (gf, ge) = (grids.grid(q::FORCE), grids.grid(q::ENERGY));
     let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
-    for &(i, j) in pairs {
+    for (&(i, j), pg) in pairs.iter().zip(geom) {
+        assert!(
+            (pg.i, pg.j) == (i, j),
+            "the force pass runs over the pairs of the last gradient pass"
+        );
         let (i, j) = (i as usize, j as usize);
-        p.sums[i].partners += 1.0;
-        p.sums[j].partners += 1.0;
-        let (a, b) = (&slots[i], &slots[j]);
-        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let r = r2.sqrt();
+        partners[i] += 1;
+        partners[j] += 1;
+        let r = pg.r;
         if r == 0.0 {
             continue;
         }
+        let (a, b) = (&slots[i], &slots[j]);
+        let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let h = 0.5 * (a.h + b.h);
-        if kern.0.h != h {
-            kern = at(h);
-        }
-        let gr = kern.0.dw_dr(r) / r;
+        let gr = pg.gr;
         let g = [gr * d[0], gr * d[1], gr * d[2]];
-        let dv: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
+        let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
         let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-        let pi = viscosity(params, a, b, h, vr, r2);
+        let pi = viscosity(c.viscosity, a, b, h, vr, r2);
         // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where either
         // particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n)
         let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
         if let (Some(an), true) = (art, a.tension || b.tension) {
+            if kern.0.h != h {
+                kern = at(h);
+            }
             if kern.1 > 0.0 {
-                let fn_ab = (kern.0.w(r) * kern.1).powi(an.n);
+                let fn_ab = powi(kern.0.w(r) * kern.1, an.n);
                 let rg = mat_vec_sum(&a.rt, &b.rt, g);
-                for c in 0..3 {
-                    tg[c] += fn_ab * rg[c];
+                for l in 0..3 {
+                    tg[l] += fn_ab * rg[l];
                 }
             }
         }
         let mm = a.m * b.m;
         // the viscous part -Pi I g, kept apart for the work split
-        let full: [f64; 3] = std::array::from_fn(|c| tg[c] - pi * g[c]);
+        let full: [f64; 3] = std::array::from_fn(|l| tg[l] - pi * g[l]);
         let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
         let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
         work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
         work.viscosity += mm * pi * gr * vr;
-        let [si, sj] = p
-            .sums
-            .get_disjoint_mut([i, j])
-            .expect("a pair of two entries");
-        for (c, &fc) in full.iter().enumerate() {
-            let t = mm * fc;
-            gf.add(&mut si.f[c], t);
-            gf.add(&mut sj.f[c], -t);
-            note(&mut mf, t);
+        let t: [f64; 3] = std::array::from_fn(|l| mm * full[l]);
+        for &tc in &t {
+            note(&mut mf, tc);
         }
-        ge.add(&mut si.de, de_i);
-        ge.add(&mut sj.de, de_j);
         note(&mut me, de_i);
         note(&mut me, de_j);
+        // equal and opposite forces: b's terms are the negated ones, each split on its own
+        add4(&mut sums[i].fold, [t[0], t[1], t[2], de_i], shifts);
+        add4(&mut sums[j].fold, [-t[0], -t[1], -t[2], de_j], shifts);
     }
     m[q::FORCE] = mf;
     m[q::ENERGY] = me;
-    p.settle_forces();
     work
+}
+
+/// What the force pass adds to one entry, as exact sums, fold by fold (`fold[k]` = the parts on
+/// grid k of f_x, f_y, f_z, de: four lanes split and added together, as the fluid pass's).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Sums4 {
+    fold: [[f64; 4]; 2],
+}
+
+/// The shifts of the four lanes of [`Sums4`] on each grid: force, force, force, energy rate.
+#[inline]
+fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
+    let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
+    [0, 1].map(|k| [f[k], f[k], f[k], e[k]])
+}
+
+/// Adds the four terms `x` to `acc`, each split on its lane's grids: t = (r + C_k) - C_k,
+/// r -= t, fold k += t (`binsum::Grid2::add`: the same operations in the same order, lane by
+/// lane in vector registers).
+#[inline(always)]
+fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
+    let mut r = x;
+    for k in 0..2 {
+        for l in 0..4 {
+            let t = (r[l] + c[k][l]) - c[k][l];
+            r[l] -= t;
+            acc[k][l] += t;
+        }
+    }
+}
+
+/// x^n by binary powering, the operations of `f64::powi`'s runtime routine (compiler-builtins'
+/// `__powidf2`: r = 1, r *= x for each set bit of |n| from the lowest, x squared between;
+/// 1/r for n < 0), inlined: x^4 = (x^2)^2, the same bits.
+#[inline(always)]
+fn powi(x: f64, n: i32) -> f64 {
+    let (mut a, mut e) = (x, n.unsigned_abs());
+    let mut r = 1.0;
+    loop {
+        if e & 1 != 0 {
+            r *= a;
+        }
+        e >>= 1;
+        if e == 0 {
+            break;
+        }
+        a *= a;
+    }
+    if n < 0 {
+        1.0 / r
+    } else {
+        r
+    }
 }
 
 /// (A + B) g for two matrices stored row by row, summed entry by entry first.

@@ -47,6 +47,24 @@ pub struct GradSums {
     pub fold: [[f64; LANES]; 2],
 }
 
+/// One pair's geometry as the gradient pass computed it, kept for the force pass over the same
+/// pairs at the same positions (`Solids::pair_geom`): the force pass reads gr and r rather than
+/// computing them again (a square root, the kernel derivative and a division per pair), the
+/// very same bits. `i`, `j`: the pair's entries (the force pass checks them against its list);
+/// `r` = |x_i - x_j|, m (0: coincident, skipped by both passes); `gr` = (dW/dr)(r, h) / r,
+/// 1/m^5, with h = (h_i + h_j)/2. 24 bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairGeom {
+    /// The pair's first entry.
+    pub i: u32,
+    /// The pair's second entry.
+    pub j: u32,
+    /// The distance, m.
+    pub r: f64,
+    /// dW/dr / r, 1/m^5 (0 where `r` = 0).
+    pub gr: f64,
+}
+
 /// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
 const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
 
@@ -142,6 +160,8 @@ pub fn velocity_gradient_pass(
 ) {
     s.resize(p.len());
     s.sums.iter_mut().for_each(|e| *e = GradSums::default());
+    s.pair_geom.clear();
+    s.pair_geom.reserve(pairs.len());
     let slots: Vec<Slot> = (0..p.len())
         .map(|i| Slot {
             x: p.x[i],
@@ -154,6 +174,40 @@ pub fn velocity_gradient_pass(
         })
         .collect();
     let shifts = lane_shifts(g);
+    let (sums, geom) = (&mut s.sums[..], &mut s.pair_geom);
+    let build = s.build;
+    gradient_pairs_built(build, pairs, &slots, sums, geom, k, &shifts, m);
+}
+
+super::build::builds!(
+    /// [`gradient_pairs`] in the build of the pass.
+    gradient_pairs_built,
+    gradient_pairs,
+    (
+        pairs: &[(u32, u32)],
+        slots: &[Slot],
+        sums: &mut [GradSums],
+        geom: &mut Vec<PairGeom>,
+        k: &SmoothingKernel,
+        shifts: &[[f64; LANES]; 2],
+        m: &mut TermMax
+    ) -> ()
+);
+
+/// The pair loop of [`velocity_gradient_pass`] (inlined into each build,
+/// [`super::build`]): adds every pair's terms to `sums`, its geometry to `geom`, its
+/// largest terms to `m`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn gradient_pairs(
+    pairs: &[(u32, u32)],
+    slots: &[Slot],
+    sums: &mut [GradSums],
+    geom: &mut Vec<PairGeom>,
+    k: &SmoothingKernel,
+    shifts: &[[f64; LANES]; 2],
+    m: &mut TermMax,
+) {
     let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = k.at(f64::NAN);
@@ -162,7 +216,14 @@ pub fn velocity_gradient_pass(
         let (a, b) = (&slots[i], &slots[j]);
         let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let (pi, pj) = (i as u32, j as u32);
         if r == 0.0 {
+            geom.push(PairGeom {
+                i: pi,
+                j: pj,
+                r,
+                gr: 0.0,
+            });
             continue;
         }
         let h = 0.5 * (a.h + b.h);
@@ -171,6 +232,12 @@ pub fn velocity_gradient_pass(
         }
         let dw = kern.dw_dr(r);
         let gr = dw / r;
+        geom.push(PairGeom {
+            i: pi,
+            j: pj,
+            r,
+            gr,
+        });
         let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
         let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
         let mut x = [0.0; LANES];
@@ -195,12 +262,11 @@ pub fn velocity_gradient_pass(
             y
         };
         let (yi, yj) = (terms(a, b), terms(b, a));
-        let [si, sj] = s
-            .sums
+        let [si, sj] = sums
             .get_disjoint_mut([i, j])
             .expect("a pair of two entries");
-        si.add(&yi, &shifts);
-        sj.add(&yj, &shifts);
+        si.add(&yi, shifts);
+        sj.add(&yj, shifts);
         for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
             let vol = if me.solid { other.vol } else { 0.0 };
             note(&mut mg, vol * bv);

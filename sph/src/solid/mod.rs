@@ -22,6 +22,7 @@
 //! quantities [`gq`]), so every particle's gradient, force and energy rate are the same bits
 //! whatever the order of the pairs and however they are shared between ranks; each pass is run
 //! under [`crate::exact::exact_pass`].
+pub mod build;
 mod force;
 mod gradient;
 pub mod sim;
@@ -30,7 +31,7 @@ pub mod tensor;
 pub use force::{
     stress_force_pass, ArtificialStress, ARTIFICIAL_STRESS_EPSILON, ARTIFICIAL_STRESS_EXPONENT,
 };
-pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums};
+pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums, PairGeom};
 pub use sim::SolidSim;
 
 use crate::particles::Particles;
@@ -106,6 +107,11 @@ pub struct Solids {
     /// `shape_sum` is singular), set on owners by `settle_gradients`, sent to ghosts: the force
     /// pass uses B grad W (Bonet & Lok 1999).
     pub correction: Vec<Mat3>,
+    /// The geometry of each pair of the last gradient pass, in its order (not carried): the
+    /// force pass over the same pairs reads it ([`PairGeom`]).
+    pub pair_geom: Vec<PairGeom>,
+    /// The build of the pair loops ([`build::Build`]; every build gives the same bits).
+    pub build: build::Build,
 }
 
 impl Solids {
@@ -120,6 +126,7 @@ impl Solids {
         let mut s = Self {
             models,
             stride,
+            build: build::Build::widest(),
             ..Self::default()
         };
         assert!(
@@ -206,10 +213,11 @@ impl Solids {
     /// Keeps no entry (the models stay): owned entries are then pushed again
     /// ([`Solids::push_owned`]), in the order of the particles'.
     pub fn clear(&mut self) {
-        let (models, stride) = (std::mem::take(&mut self.models), self.stride);
+        let (models, stride, build) = (std::mem::take(&mut self.models), self.stride, self.build);
         *self = Self {
             models,
             stride,
+            build,
             ..Self::default()
         };
     }
