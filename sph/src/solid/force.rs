@@ -1,5 +1,9 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
-use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
+use super::build::Build;
+use super::tensor::{
+    from_voigt, mul, mul_lanes, symmetric_eigen, symmetric_eigen_lanes, to_voigt, transpose, Mat3,
+    Mat3Lanes,
+};
 use super::PairGeom;
 use super::Solids;
 use crate::exact::{note, q, PassGrids, TermMax};
@@ -51,13 +55,11 @@ impl ArtificialStress {
     /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3). Zero,
     /// without the eigen-decomposition, where Gershgorin's discs show every principal stress
     /// <= 0 (each diagonal entry plus its row's off-diagonal magnitudes <= 0: compression).
+    /// The force pass takes the same values, bit for bit, `EIGEN_LANES` particles at a time
+    /// ([`ArtificialStress::tensors`]).
     pub fn tensor(&self, sigma: &[f64; 6], rho: f64) -> Mat3 {
         let a = from_voigt(sigma);
-        let tension = (0..3).any(|k| {
-            let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
-            a[k][k] + off > 0.0
-        });
-        if !tension {
+        if !may_have_tension(&a) {
             return [[0.0; 3]; 3];
         }
         let (lam, q) = symmetric_eigen(&a);
@@ -67,7 +69,103 @@ impl ArtificialStress {
         });
         mul(&mul(&q, &d), &transpose(&q))
     }
+
+    /// R of every entry whose stress (Voigt, Pa) and density (kg/m^3) `of` gives, for entries
+    /// `0..n`: [`ArtificialStress::tensor`] of each (the same bits), the decompositions of
+    /// those that may have a tensile principal stress done `EIGEN_LANES` at a time
+    /// ([`symmetric_eigen_lanes`], in `build`).
+    pub fn tensors(
+        &self,
+        n: usize,
+        of: impl Fn(usize) -> ([f64; 6], f64),
+        build: Build,
+    ) -> Vec<Mat3> {
+        let mut out = vec![[[0.0; 3]; 3]; n];
+        let mut batch: Vec<(usize, Mat3, f64)> = Vec::with_capacity(EIGEN_LANES);
+        let flush = |batch: &mut Vec<(usize, Mat3, f64)>, out: &mut [Mat3]| {
+            // lanes past the batch's entries hold zero matrices (converged at once)
+            let mut a = [[[0.0; EIGEN_LANES]; 3]; 3];
+            let mut rho = [1.0; EIGEN_LANES];
+            for (l, (_, m, r)) in batch.iter().enumerate() {
+                for k in 0..3 {
+                    for c in 0..3 {
+                        a[k][c][l] = m[k][c];
+                    }
+                }
+                rho[l] = *r;
+            }
+            let rt = tensor_lanes_built(build, &a, &rho, self.epsilon);
+            for (l, (i, _, _)) in batch.iter().enumerate() {
+                out[*i] = std::array::from_fn(|k| std::array::from_fn(|c| rt[k][c][l]));
+            }
+            batch.clear();
+        };
+        for i in 0..n {
+            let (sigma, rho) = of(i);
+            let a = from_voigt(&sigma);
+            if may_have_tension(&a) {
+                batch.push((i, a, rho));
+                if batch.len() == EIGEN_LANES {
+                    flush(&mut batch, &mut out);
+                }
+            }
+        }
+        if !batch.is_empty() {
+            flush(&mut batch, &mut out);
+        }
+        out
+    }
 }
+
+/// Matrices decomposed together by [`ArtificialStress::tensors`]: two AVX-512 registers per
+/// quantity, so that two chains of divisions and square roots overlap.
+const EIGEN_LANES: usize = 16;
+
+/// Whether Gershgorin's discs of the symmetric `a` reach above zero (some diagonal entry plus
+/// its row's off-diagonal magnitudes > 0): else every eigenvalue is <= 0.
+#[inline]
+fn may_have_tension(a: &Mat3) -> bool {
+    (0..3).any(|k| {
+        let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
+        a[k][k] + off > 0.0
+    })
+}
+
+/// R = Q diag(scale max(lambda_k, 0)) Q^T, scale = -epsilon/rho^2, of `EIGEN_LANES` stresses
+/// at once, as [`ArtificialStress::tensor`] computes each (the same operations lane by lane).
+#[inline(always)]
+fn tensor_lanes(
+    a: &Mat3Lanes<EIGEN_LANES>,
+    rho: &[f64; EIGEN_LANES],
+    epsilon: f64,
+) -> Mat3Lanes<EIGEN_LANES> {
+    let (lam, q) = symmetric_eigen_lanes(a);
+    let d: Mat3Lanes<EIGEN_LANES> = std::array::from_fn(|k| {
+        std::array::from_fn(|c| {
+            std::array::from_fn(|l| {
+                let scale = -epsilon / (rho[l] * rho[l]);
+                if k == c {
+                    scale * lam[k][l].max(0.0)
+                } else {
+                    0.0
+                }
+            })
+        })
+    });
+    let qt: Mat3Lanes<EIGEN_LANES> = std::array::from_fn(|k| std::array::from_fn(|c| q[c][k]));
+    mul_lanes(&mul_lanes(&q, &d), &qt)
+}
+
+super::build::builds!(
+    /// [`tensor_lanes`] in the build of the pass.
+    tensor_lanes_built,
+    tensor_lanes,
+    (
+        a: &Mat3Lanes<EIGEN_LANES>,
+        rho: &[f64; EIGEN_LANES],
+        epsilon: f64
+    ) -> Mat3Lanes<EIGEN_LANES>
+);
 
 /// The stress of entry `i` as a matrix: a solid's sigma, a fluid's -p I, Pa.
 fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
@@ -144,7 +242,11 @@ pub fn stress_force_pass(
         pairs.len(),
         "the force pass runs over the pairs of the last gradient pass"
     );
-    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, art, i)).collect();
+    let rts = match art {
+        Some(a) => a.tensors(n, |i| (to_voigt(&stress_of(p, s, i)), p.rho[i]), s.build),
+        None => vec![[[0.0; 3]; 3]; n],
+    };
+    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, &rts[i], i)).collect();
     // force x, y, z and energy rate of each entry, fold by fold, and its partners
     let mut sums = vec![Sums4::default(); n];
     let mut partners = vec![0u32; n];
@@ -316,9 +418,14 @@ fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
 
 /// x^n by binary powering, the operations of `f64::powi`'s runtime routine (compiler-builtins'
 /// `__powidf2`: r = 1, r *= x for each set bit of |n| from the lowest, x squared between;
-/// 1/r for n < 0), inlined: x^4 = (x^2)^2, the same bits.
+/// 1/r for n < 0), inlined: the same bits. n = 4 (the default) is written out, x^4 =
+/// 1 (x^2)^2 = (x^2)^2, with no loop over the bits of n per pair.
 #[inline(always)]
 fn powi(x: f64, n: i32) -> f64 {
+    if n == 4 {
+        let x2 = x * x;
+        return x2 * x2;
+    }
     let (mut a, mut e) = (x, n.unsigned_abs());
     let mut r = 1.0;
     loop {
@@ -363,15 +470,11 @@ struct Slot {
 }
 
 impl Slot {
-    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a.
-    fn of(p: &Particles, s: &Solids, art: Option<&ArtificialStress>, i: usize) -> Slot {
+    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a (`rt`).
+    fn of(p: &Particles, s: &Solids, rt: &Mat3, i: usize) -> Slot {
         let t = stress_of(p, s, i);
         let inv_rho2 = 1.0 / (p.rho[i] * p.rho[i]);
         let sb = mul(&t, &s.correction[i]);
-        let rt = match art {
-            Some(a) => a.tensor(&super::tensor::to_voigt(&t), p.rho[i]),
-            None => [[0.0; 3]; 3],
-        };
         Slot {
             x: p.x[i],
             h: p.h[i],
@@ -382,6 +485,76 @@ impl Slot {
             sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
             rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
             tension: rt.iter().flatten().any(|&x| x != 0.0),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A xorshift stream of numbers in [-1, 1).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    /// Stresses of every kind: random, near-degenerate, diagonal (zero pivots), compressive,
+    /// zero, and of very different sizes.
+    fn stresses(n: usize) -> Vec<([f64; 6], f64)> {
+        let mut g = Rng(0x9e37_79b9_7f4a_7c15);
+        (0..n)
+            .map(|k| {
+                let scale = [1.0, 1e6, 3e-4, 7.5e9][k % 4];
+                let mut s: [f64; 6] = std::array::from_fn(|_| scale * g.next());
+                match k % 7 {
+                    1 => s[3..].iter_mut().for_each(|x| *x = 0.0),
+                    2 => s = [s[0], s[0], s[0] + 1e-12 * scale, 1e-13 * scale, 0.0, 0.0],
+                    3 => s = [-scale, -2.0 * scale, -0.5 * scale, 0.1 * scale, 0.0, 0.0],
+                    4 => s = [0.0; 6],
+                    _ => {}
+                }
+                (s, 1000.0 + 500.0 * g.next())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tensors_in_lanes_are_the_bits_of_tensor_in_every_build() {
+        let art = ArtificialStress::new(0.004);
+        // 2 x 16 lanes and a partial batch
+        let sts = stresses(16 * 2 + 5 + 40);
+        let want: Vec<Mat3> = sts.iter().map(|(s, r)| art.tensor(s, *r)).collect();
+        assert!(want.iter().any(|m| m.iter().flatten().any(|&x| x != 0.0)));
+        for build in Build::available() {
+            let got = art.tensors(sts.len(), |i| sts[i], build);
+            for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                for k in 0..3 {
+                    for c in 0..3 {
+                        assert_eq!(
+                            g[k][c].to_bits(),
+                            w[k][c].to_bits(),
+                            "{build:?}: entry {i} R[{k}][{c}]"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn powi_is_the_bits_of_f64_powi() {
+        let mut g = Rng(7);
+        for _ in 0..1000 {
+            let x = 3.0 * g.next();
+            for n in [-3, -1, 0, 1, 2, 3, 4, 5, 8, 13] {
+                assert_eq!(powi(x, n).to_bits(), x.powi(n).to_bits(), "{x}^{n}");
+            }
         }
     }
 }
