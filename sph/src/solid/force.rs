@@ -278,6 +278,10 @@ pub fn stress_force_pass(
     work
 }
 
+/// Pairs whose viscosity and artificial-stress factors the force pass computes before their
+/// terms (4 kB, in L1).
+const PAIR_CHUNK: usize = 256;
+
 /// What the pair loop of the force pass needs besides the pairs and the entries.
 struct PassConsts {
     kernel: SmoothingKernel,
@@ -328,58 +332,76 @@ fn force_pairs(
     let mut kern = at(f64::NAN);
     let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
-    for (&(i, j), pg) in pairs.iter().zip(geom) {
-        assert!(
-            (pg.i, pg.j) == (i, j),
-            "the force pass runs over the pairs of the last gradient pass"
-        );
-        let (i, j) = (i as usize, j as usize);
-        partners[i] += 1;
-        partners[j] += 1;
-        let r = pg.r;
-        if r == 0.0 {
-            continue;
-        }
-        let (a, b) = (&slots[i], &slots[j]);
-        let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let h = 0.5 * (a.h + b.h);
-        let gr = pg.gr;
-        let g = [gr * d[0], gr * d[1], gr * d[2]];
-        let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
-        let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-        let pi = viscosity(c.viscosity, a, b, h, vr, r2);
-        // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where either
-        // particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n)
-        let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
-        if let (Some(an), true) = (art, a.tension || b.tension) {
-            if kern.0.h != h {
-                kern = at(h);
+    // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
+    let mut visc = [[0.0; 2]; PAIR_CHUNK];
+    let mut acts = [false; PAIR_CHUNK];
+    for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks(PAIR_CHUNK)) {
+        // the chunk's viscosity and artificial-stress factors first: a short loop whose
+        // divisions, a chain in each pair, overlap from pair to pair
+        let factors = visc.iter_mut().zip(acts.iter_mut());
+        for ((&(i, j), pg), (out, acts)) in chunk.iter().zip(geom).zip(factors) {
+            assert!(
+                (pg.i, pg.j) == (i, j),
+                "the force pass runs over the pairs of the last gradient pass"
+            );
+            let (a, b) = (&slots[i as usize], &slots[j as usize]);
+            let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let h = 0.5 * (a.h + b.h);
+            let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
+            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            out[0] = viscosity(c.viscosity, a, b, h, vr, r2);
+            *acts = false;
+            if let (Some(an), true) = (art, a.tension || b.tension) {
+                if kern.0.h != h {
+                    kern = at(h);
+                }
+                if kern.1 > 0.0 {
+                    out[1] = powi(kern.0.w(pg.r) * kern.1, an.n);
+                    *acts = true;
+                }
             }
-            if kern.1 > 0.0 {
-                let fn_ab = powi(kern.0.w(r) * kern.1, an.n);
+        }
+        for ((pg, &[pi, fn_ab]), &acts) in geom.iter().zip(&visc).zip(&acts) {
+            let (i, j) = (pg.i as usize, pg.j as usize);
+            partners[i] += 1;
+            partners[j] += 1;
+            if pg.r == 0.0 {
+                continue;
+            }
+            let (a, b) = (&slots[i], &slots[j]);
+            let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
+            let gr = pg.gr;
+            let g = [gr * d[0], gr * d[1], gr * d[2]];
+            let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
+            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where
+            // either particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n;
+            // none where delta_p is beyond the support, 1/W(delta_p) = 0)
+            let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
+            if acts {
                 let rg = mat_vec_sum(&a.rt, &b.rt, g);
                 for l in 0..3 {
                     tg[l] += fn_ab * rg[l];
                 }
             }
+            let mm = a.m * b.m;
+            // the viscous part -Pi I g, kept apart for the work split
+            let full: [f64; 3] = std::array::from_fn(|l| tg[l] - pi * g[l]);
+            let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
+            let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
+            work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
+            work.viscosity += mm * pi * gr * vr;
+            let t: [f64; 3] = std::array::from_fn(|l| mm * full[l]);
+            for &tc in &t {
+                note(&mut mf, tc);
+            }
+            note(&mut me, de_i);
+            note(&mut me, de_j);
+            // equal and opposite forces: b's terms are the negated ones, each split on its own
+            add4(&mut sums[i].fold, [t[0], t[1], t[2], de_i], shifts);
+            add4(&mut sums[j].fold, [-t[0], -t[1], -t[2], de_j], shifts);
         }
-        let mm = a.m * b.m;
-        // the viscous part -Pi I g, kept apart for the work split
-        let full: [f64; 3] = std::array::from_fn(|l| tg[l] - pi * g[l]);
-        let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-        let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
-        work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
-        work.viscosity += mm * pi * gr * vr;
-        let t: [f64; 3] = std::array::from_fn(|l| mm * full[l]);
-        for &tc in &t {
-            note(&mut mf, tc);
-        }
-        note(&mut me, de_i);
-        note(&mut me, de_j);
-        // equal and opposite forces: b's terms are the negated ones, each split on its own
-        add4(&mut sums[i].fold, [t[0], t[1], t[2], de_i], shifts);
-        add4(&mut sums[j].fold, [-t[0], -t[1], -t[2], de_j], shifts);
     }
     m[q::FORCE] = mf;
     m[q::ENERGY] = me;

@@ -65,6 +65,9 @@ pub struct PairGeom {
     pub gr: f64,
 }
 
+/// Pairs whose geometry the gradient pass computes before their terms (a few kB, in L1).
+const PAIR_CHUNK: usize = 256;
+
 /// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
 const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
 
@@ -160,8 +163,6 @@ pub fn velocity_gradient_pass(
 ) {
     s.resize(p.len());
     s.sums.iter_mut().for_each(|e| *e = GradSums::default());
-    s.pair_geom.clear();
-    s.pair_geom.reserve(pairs.len());
     let slots: Vec<Slot> = (0..p.len())
         .map(|i| Slot {
             x: p.x[i],
@@ -211,67 +212,73 @@ fn gradient_pairs(
     let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = k.at(f64::NAN);
-    for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
-        let (a, b) = (&slots[i], &slots[j]);
-        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
-        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let (pi, pj) = (i as u32, j as u32);
-        if r == 0.0 {
-            geom.push(PairGeom {
-                i: pi,
-                j: pj,
+    geom.clear();
+    geom.resize(pairs.len(), PairGeom::default());
+    let mut t_rho = [0.0; PAIR_CHUNK];
+    for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks_mut(PAIR_CHUNK)) {
+        // the geometry of the chunk's pairs first: a short loop whose square roots and
+        // divisions, a chain in each pair, overlap from pair to pair
+        for ((&(i, j), g), t_rho) in chunk.iter().zip(geom.iter_mut()).zip(t_rho.iter_mut()) {
+            let (a, b) = (&slots[i as usize], &slots[j as usize]);
+            let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let h = 0.5 * (a.h + b.h);
+            if kern.h != h {
+                kern = k.at(h);
+            }
+            let dw = kern.dw_dr(r);
+            let gr = dw / r;
+            let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
+            *t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
+            // coincident (r = 0): gr 0, and the pair is skipped below and by the force pass
+            *g = PairGeom {
+                i,
+                j,
                 r,
-                gr: 0.0,
-            });
-            continue;
+                gr: if r == 0.0 { 0.0 } else { gr },
+            };
         }
-        let h = 0.5 * (a.h + b.h);
-        if kern.h != h {
-            kern = k.at(h);
-        }
-        let dw = kern.dw_dr(r);
-        let gr = dw / r;
-        geom.push(PairGeom {
-            i: pi,
-            j: pj,
-            r,
-            gr,
-        });
-        let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
-        let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
-        let mut x = [0.0; LANES];
-        let (mut bv, mut bx) = (0.0, 0.0);
-        if a.solid || b.solid {
-            let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
-            // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
-            for e in 0..9 {
-                x[e] = -dv[e / 3] * gr * d[e % 3];
+        for (g, &t_rho) in geom.iter().zip(&t_rho) {
+            let (r, gr) = (g.r, g.gr);
+            if r == 0.0 {
+                continue;
             }
-            for (c, &(k, l)) in VOIGT.iter().enumerate() {
-                x[SHAPE0 + c] = -d[k] * gr * d[l];
+            let (i, j) = (g.i as usize, g.j as usize);
+            let (a, b) = (&slots[i], &slots[j]);
+            let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
+            let mut x = [0.0; LANES];
+            let (mut bv, mut bx) = (0.0, 0.0);
+            if a.solid || b.solid {
+                let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
+                // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
+                for e in 0..9 {
+                    x[e] = -dv[e / 3] * gr * d[e % 3];
+                }
+                for (c, &(k, l)) in VOIGT.iter().enumerate() {
+                    x[SHAPE0 + c] = -d[k] * gr * d[l];
+                }
+                // bounds of the entries' terms (a function of the pair: |d_b| <= r)
+                let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
             }
-            // bounds of the entries' terms (a function of the pair: |d_b| <= r)
-            let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
-        }
-        let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
-            let vol = if me.solid { other.vol } else { 0.0 };
-            let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
-            y[DENS] = other.m * t_rho;
-            y
-        };
-        let (yi, yj) = (terms(a, b), terms(b, a));
-        let [si, sj] = sums
-            .get_disjoint_mut([i, j])
-            .expect("a pair of two entries");
-        si.add(&yi, shifts);
-        sj.add(&yj, shifts);
-        for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
-            let vol = if me.solid { other.vol } else { 0.0 };
-            note(&mut mg, vol * bv);
-            note(&mut ms, vol * bx);
-            note(&mut md, y[DENS]);
+            let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
+                let vol = if me.solid { other.vol } else { 0.0 };
+                let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
+                y[DENS] = other.m * t_rho;
+                y
+            };
+            let (yi, yj) = (terms(a, b), terms(b, a));
+            let [si, sj] = sums
+                .get_disjoint_mut([i, j])
+                .expect("a pair of two entries");
+            si.add(&yi, shifts);
+            sj.add(&yj, shifts);
+            for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
+                let vol = if me.solid { other.vol } else { 0.0 };
+                note(&mut mg, vol * bv);
+                note(&mut ms, vol * bx);
+                note(&mut md, y[DENS]);
+            }
         }
     }
     m[gq::GRAD] = mg;
