@@ -148,6 +148,13 @@ impl Solids {
         self.models.get(mat as usize).cloned().flatten()
     }
 
+    /// The stress model of material `mat`, if it is a solid, borrowed (no reference count
+    /// raised and dropped per particle, as [`Solids::model`]'s clone does).
+    #[inline]
+    pub fn model_ref(&self, mat: u16) -> Option<&dyn StressModel> {
+        self.models.get(mat as usize)?.as_deref()
+    }
+
     /// Whether material `mat` is a solid.
     #[inline]
     pub fn is_solid(&self, mat: u16) -> bool {
@@ -245,14 +252,14 @@ impl Solids {
     /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for
     /// laws without thermal softening).
     pub fn temperature(&self, mat: u16, i: usize) -> Option<f64> {
-        let m = self.model(mat)?;
+        let m = self.model_ref(mat)?;
         let k = self.stride;
         m.temperature(&self.state[i * k..i * k + m.n_state()])
     }
 
     /// The equivalent plastic strain of entry `i` (0 for a fluid).
     pub fn plastic_strain(&self, mat: u16, i: usize) -> f64 {
-        match self.model(mat) {
+        match self.model_ref(mat) {
             Some(m) => {
                 let k = self.stride;
                 m.plastic_strain(&self.state[i * k..i * k + m.n_state()])
@@ -275,23 +282,31 @@ impl Solids {
 /// then p = -tr(sigma)/3, Pa, and c = sqrt(wave_modulus / rho), m/s, for the stable step and
 /// the artificial viscosity (the fluids' p and c are the EOS's: `update_eos`).
 pub fn update_stress(p: &mut Particles, s: &mut Solids, dt: f64) {
+    let Solids {
+        models,
+        stress: stresses,
+        state: states,
+        grad_v,
+        stride,
+        ..
+    } = s;
     for i in 0..p.n_owned {
-        let Some(model) = s.model(p.mat[i]) else {
+        let Some(model) = models.get(p.mat[i] as usize).and_then(|m| m.as_deref()) else {
             continue;
         };
-        let l = s.grad_v[i];
+        let l = grad_v[i];
         let w: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| 0.5 * (l[a][b] - l[b][a])));
-        let sig = from_voigt(&s.stress[i]);
+        let sig = from_voigt(&stresses[i]);
         let (ws, sw) = (mul(&w, &sig), mul(&sig, &w));
         let rate: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| ws[a][b] - sw[a][b]));
         let rot = to_voigt(&rate);
-        let mut stress: [f64; 6] = std::array::from_fn(|c| s.stress[i][c] + dt * rot[c]);
+        let mut stress: [f64; 6] = std::array::from_fn(|c| stresses[i][c] + dt * rot[c]);
         let d = to_voigt(&l);
         let deps: [f64; 6] = std::array::from_fn(|c| d[c] * dt);
-        let k = s.stride;
-        let state = &mut s.state[i * k..i * k + model.n_state()];
+        let k = *stride;
+        let state = &mut states[i * k..i * k + model.n_state()];
         model.update_stress(&mut stress, state, &deps, dt, p.rho[i]);
-        s.stress[i] = stress;
+        stresses[i] = stress;
     }
     solid_pressure(p, s);
 }
@@ -299,7 +314,7 @@ pub fn update_stress(p: &mut Particles, s: &mut Solids, dt: f64) {
 /// Sets p = -tr(sigma)/3 and c = sqrt(wave_modulus(rho, state) / rho) of every owned solid.
 pub fn solid_pressure(p: &mut Particles, s: &Solids) {
     for i in 0..p.n_owned {
-        let Some(model) = s.model(p.mat[i]) else {
+        let Some(model) = s.model_ref(p.mat[i]) else {
             continue;
         };
         let t = &s.stress[i];
