@@ -59,17 +59,20 @@ macro_rules! builds {
     ($(#[$doc:meta])* $name:ident, $inner:path, ($($a:ident: $t:ty),*) -> $r:ty) => {
         $(#[$doc])*
         #[inline]
+        #[allow(clippy::too_many_arguments)]
         fn $name(build: $crate::solid::build::Build, $($a: $t),*) -> $r {
             #[cfg(target_arch = "x86_64")]
             {
                 use $crate::solid::build::Build;
                 /// `$inner` compiled for AVX2 (four lanes per register).
                 #[target_feature(enable = "avx2")]
+                #[allow(clippy::too_many_arguments)]
                 fn avx2($($a: $t),*) -> $r {
                     $inner($($a),*)
                 }
                 /// `$inner` compiled for AVX-512F (eight lanes per register).
                 #[target_feature(enable = "avx512f")]
+                #[allow(clippy::too_many_arguments)]
                 fn avx512($($a: $t),*) -> $r {
                     $inner($($a),*)
                 }

@@ -151,8 +151,13 @@ struct Slot {
 /// `passes::density_pass`, m_b (dW/dr)(r_ab . v^_ab)/r (Monaghan 1992, eq. 2.16): the same
 /// walk over the pairs, one fold-back for both. Zeroes the sums (`Solids::sums`) of every entry
 /// first, adds every term exactly on `g` (quantities [`gq`]) and notes the largest terms in
-/// `m`; coincident pairs are skipped. Flops per pair: ~50 for the geometry and the terms, 2 x
-/// 16 x 6 for the exact sums (in lanes).
+/// `m`; coincident pairs are skipped. Keeps each pair's r and dW/dr / r in
+/// `Solids::pair_geom` for the force pass. Flops per pair: ~50 for the geometry and the terms
+/// (one square root, two divisions), 2 x 16 x 6 for the exact sums (in lanes: 2 x 12 vector
+/// operations of 8 lanes in the AVX-512F build, `super::build`); bytes: 2 x 112 of packed
+/// inputs read, 2 x 256 of sums read and written, 24 of geometry written. The pairs go in
+/// chunks of `PAIR_CHUNK`: the geometry of the chunk first (its square roots and divisions
+/// overlap from pair to pair), then the terms; each pair's operations are the same.
 pub fn velocity_gradient_pass(
     pairs: &[(u32, u32)],
     p: &Particles,

@@ -12,7 +12,8 @@
 //! update_stress (owned solids: rotate, then the model with deps = D dt; p = -tr(sigma)/3,
 //!                c = sqrt(wave modulus / rho))
 //! owners -> ghosts (SolidGhost: rho, p, c, stress, B)
-//! stress_force_pass;  ghosts -> owners (PairSums: f, de); settle_forces
+//! stress_force_pass (over the same pairs: r and dW/dr / r kept from the gradient pass,
+//!                      `Solids::pair_geom`);  ghosts -> owners (PairSums: f, de); settle_forces
 //! ```
 //!
 //! and after `second_half` (which runs the EOS on every owned particle) `solid_pressure`.
@@ -21,7 +22,9 @@
 //! sums as the fluid passes'; the gradient pass on a [`crate::exact::PassGrids`] of its own,
 //! quantities [`gq`]), so every particle's gradient, force and energy rate are the same bits
 //! whatever the order of the pairs and however they are shared between ranks; each pass is run
-//! under [`crate::exact::exact_pass`].
+//! under [`crate::exact::exact_pass`]. The pair loops and the artificial stress's
+//! eigen-decompositions run in the widest build the CPUs share ([`build`]: the same operations,
+//! the same bits, in fewer vector instructions).
 pub mod build;
 mod force;
 mod gradient;
