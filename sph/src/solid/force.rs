@@ -335,6 +335,8 @@ fn force_pairs(
     // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
     let mut visc = [[0.0; 2]; PAIR_CHUNK];
     let mut acts = [false; PAIR_CHUNK];
+    // per pair of a chunk: the terms of its two entries (force x, y, z and energy rate)
+    let mut terms = [[[0.0; 4]; 2]; PAIR_CHUNK];
     for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks(PAIR_CHUNK)) {
         // the chunk's viscosity and artificial-stress factors first: a short loop whose
         // divisions, a chain in each pair, overlap from pair to pair
@@ -362,14 +364,13 @@ fn force_pairs(
                 }
             }
         }
-        for ((pg, &[pi, fn_ab]), &acts) in geom.iter().zip(&visc).zip(&acts) {
-            let (i, j) = (pg.i as usize, pg.j as usize);
-            partners[i] += 1;
-            partners[j] += 1;
+        // then the chunk's terms, each pair apart (no sum in between: pairs overlap) ...
+        let pair_factors = geom.iter().zip(&visc).zip(&acts);
+        for (((pg, &[pi, fn_ab]), &acts), out) in pair_factors.zip(terms.iter_mut()) {
             if pg.r == 0.0 {
                 continue;
             }
-            let (a, b) = (&slots[i], &slots[j]);
+            let (a, b) = (&slots[pg.i as usize], &slots[pg.j as usize]);
             let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
             let gr = pg.gr;
             let g = [gr * d[0], gr * d[1], gr * d[2]];
@@ -399,8 +400,18 @@ fn force_pairs(
             note(&mut me, de_i);
             note(&mut me, de_j);
             // equal and opposite forces: b's terms are the negated ones, each split on its own
-            add4(&mut sums[i].fold, [t[0], t[1], t[2], de_i], shifts);
-            add4(&mut sums[j].fold, [-t[0], -t[1], -t[2], de_j], shifts);
+            *out = [[t[0], t[1], t[2], de_i], [-t[0], -t[1], -t[2], de_j]];
+        }
+        // ... and last their exact sums, in the order of the pairs
+        for (pg, out) in geom.iter().zip(&terms) {
+            let (i, j) = (pg.i as usize, pg.j as usize);
+            partners[i] += 1;
+            partners[j] += 1;
+            if pg.r == 0.0 {
+                continue;
+            }
+            add4(&mut sums[i].fold, out[0], shifts);
+            add4(&mut sums[j].fold, out[1], shifts);
         }
     }
     m[q::FORCE] = mf;
