@@ -222,9 +222,14 @@ fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f6
 ///
 /// `pairs` must be those of the last [`super::velocity_gradient_pass`] on `s`, at the same
 /// positions: r and dW/dr / r are read from `Solids::pair_geom` (its pairs checked against
-/// `pairs`), not computed again. Flops per pair ~110 (geometry 8, viscosity 12 with one
-/// division, (S_a + S_b) g 24, artificial stress 40 where either end is in tension, force and
-/// energy 20), and 2 x 4 lanes x 6 for the exact sums (the fluid pass's `add4`).
+/// `pairs`), not computed again. Flops per pair ~110 (geometry 8, viscosity 12 with two
+/// divisions, (S_a + S_b) g 24, artificial stress 40 where either end is in tension, force and
+/// energy 20), and 2 x 4 lanes x 6 for the exact sums (the fluid pass's `add4`); bytes: 2 x 240
+/// of packed inputs read, 2 x 64 of sums read and written, 24 of geometry read. The pairs go
+/// in chunks of `PAIR_CHUNK`, in three short loops: the viscosity and f_ab^n (the divisions),
+/// then the terms (no sum between pairs: they overlap), then the exact sums in the pairs'
+/// order; each pair's operations are the same. The artificial stress R of every entry first
+/// ([`ArtificialStress::tensors`], 16 eigen-decompositions at a time).
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
