@@ -197,7 +197,12 @@ pub fn build(
     let sph = if scene.particles.is_empty() {
         None
     } else {
-        Some(Sph::new(world, scene, algorithms.sph_kept_pairs)?)
+        Some(Sph::new(
+            world,
+            scene,
+            algorithms.sph_kept_pairs,
+            algorithms.kernel,
+        )?)
     };
     let probes = Probes::locate(
         world,

@@ -193,17 +193,31 @@ impl KeptPairs {
         let (x, h) = (&parts.x_real, &parts.h);
         count.clear();
         count.resize(parts.len(), 0);
-        let mut list = Vec::with_capacity(self.pairs.len());
-        for (i, j) in self.entry_pairs() {
-            let (a, b) = (x[i as usize], x[j as usize]);
+        // each slot's position and h packed in slot order (read nearly in sequence), then every
+        // candidate tested without a jump: written, and kept (the end advanced, the counts
+        // raised) by the test's outcome, 0 or 1
+        let xh: Vec<[f64; 4]> = self
+            .order
+            .iter()
+            .map(|&e| {
+                let (p, r) = (x[e as usize], h[e as usize]);
+                [p[0], p[1], p[2], r]
+            })
+            .collect();
+        let mut list = vec![(0u32, 0u32); self.pairs.len()];
+        let mut n = 0;
+        for &(sa, sb) in &self.pairs {
+            let (a, b) = (xh[sa as usize], xh[sb as usize]);
             let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let reach = h[i as usize] + h[j as usize];
-            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
-                list.push((i, j));
-                count[i as usize] += 1;
-                count[j as usize] += 1;
-            }
+            let reach = a[3] + b[3];
+            let close = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach;
+            let (i, j) = (self.order[sa as usize], self.order[sb as usize]);
+            list[n] = (i, j);
+            n += close as usize;
+            count[i as usize] += close as u32;
+            count[j as usize] += close as u32;
         }
+        list.truncate(n);
         list
     }
 

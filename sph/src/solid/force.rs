@@ -1,8 +1,14 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
-use super::tensor::{from_voigt, mul, symmetric_eigen, transpose, Mat3};
+use super::build::Build;
+use super::tensor::{
+    from_voigt, mul, mul_lanes, symmetric_eigen, symmetric_eigen_lanes, to_voigt, transpose, Mat3,
+    Mat3Lanes,
+};
+use super::PairGeom;
 use super::Solids;
 use crate::exact::{note, q, PassGrids, TermMax};
-use crate::params::Params;
+use crate::kernel::SmoothingKernel;
+use crate::params::{ArtificialViscosity, Params};
 use crate::particles::{PairSums, Particles};
 use crate::passes::PairWork;
 
@@ -49,13 +55,11 @@ impl ArtificialStress {
     /// R_a of a particle with stress `sigma` (Voigt, Pa) and density `rho` (kg/m^3). Zero,
     /// without the eigen-decomposition, where Gershgorin's discs show every principal stress
     /// <= 0 (each diagonal entry plus its row's off-diagonal magnitudes <= 0: compression).
+    /// The force pass takes the same values, bit for bit, `EIGEN_LANES` particles at a time
+    /// ([`ArtificialStress::tensors`]).
     pub fn tensor(&self, sigma: &[f64; 6], rho: f64) -> Mat3 {
         let a = from_voigt(sigma);
-        let tension = (0..3).any(|k| {
-            let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
-            a[k][k] + off > 0.0
-        });
-        if !tension {
+        if !may_have_tension(&a) {
             return [[0.0; 3]; 3];
         }
         let (lam, q) = symmetric_eigen(&a);
@@ -65,7 +69,103 @@ impl ArtificialStress {
         });
         mul(&mul(&q, &d), &transpose(&q))
     }
+
+    /// R of every entry whose stress (Voigt, Pa) and density (kg/m^3) `of` gives, for entries
+    /// `0..n`: [`ArtificialStress::tensor`] of each (the same bits), the decompositions of
+    /// those that may have a tensile principal stress done `EIGEN_LANES` at a time
+    /// ([`symmetric_eigen_lanes`], in `build`).
+    pub fn tensors(
+        &self,
+        n: usize,
+        of: impl Fn(usize) -> ([f64; 6], f64),
+        build: Build,
+    ) -> Vec<Mat3> {
+        let mut out = vec![[[0.0; 3]; 3]; n];
+        let mut batch: Vec<(usize, Mat3, f64)> = Vec::with_capacity(EIGEN_LANES);
+        let flush = |batch: &mut Vec<(usize, Mat3, f64)>, out: &mut [Mat3]| {
+            // lanes past the batch's entries hold zero matrices (converged at once)
+            let mut a = [[[0.0; EIGEN_LANES]; 3]; 3];
+            let mut rho = [1.0; EIGEN_LANES];
+            for (l, (_, m, r)) in batch.iter().enumerate() {
+                for k in 0..3 {
+                    for c in 0..3 {
+                        a[k][c][l] = m[k][c];
+                    }
+                }
+                rho[l] = *r;
+            }
+            let rt = tensor_lanes_built(build, &a, &rho, self.epsilon);
+            for (l, (i, _, _)) in batch.iter().enumerate() {
+                out[*i] = std::array::from_fn(|k| std::array::from_fn(|c| rt[k][c][l]));
+            }
+            batch.clear();
+        };
+        for i in 0..n {
+            let (sigma, rho) = of(i);
+            let a = from_voigt(&sigma);
+            if may_have_tension(&a) {
+                batch.push((i, a, rho));
+                if batch.len() == EIGEN_LANES {
+                    flush(&mut batch, &mut out);
+                }
+            }
+        }
+        if !batch.is_empty() {
+            flush(&mut batch, &mut out);
+        }
+        out
+    }
 }
+
+/// Matrices decomposed together by [`ArtificialStress::tensors`]: two AVX-512 registers per
+/// quantity, so that two chains of divisions and square roots overlap.
+const EIGEN_LANES: usize = 16;
+
+/// Whether Gershgorin's discs of the symmetric `a` reach above zero (some diagonal entry plus
+/// its row's off-diagonal magnitudes > 0): else every eigenvalue is <= 0.
+#[inline]
+fn may_have_tension(a: &Mat3) -> bool {
+    (0..3).any(|k| {
+        let off: f64 = (0..3).filter(|&l| l != k).map(|l| a[k][l].abs()).sum();
+        a[k][k] + off > 0.0
+    })
+}
+
+/// R = Q diag(scale max(lambda_k, 0)) Q^T, scale = -epsilon/rho^2, of `EIGEN_LANES` stresses
+/// at once, as [`ArtificialStress::tensor`] computes each (the same operations lane by lane).
+#[inline(always)]
+fn tensor_lanes(
+    a: &Mat3Lanes<EIGEN_LANES>,
+    rho: &[f64; EIGEN_LANES],
+    epsilon: f64,
+) -> Mat3Lanes<EIGEN_LANES> {
+    let (lam, q) = symmetric_eigen_lanes(a);
+    let d: Mat3Lanes<EIGEN_LANES> = std::array::from_fn(|k| {
+        std::array::from_fn(|c| {
+            std::array::from_fn(|l| {
+                let scale = -epsilon / (rho[l] * rho[l]);
+                if k == c {
+                    scale * lam[k][l].max(0.0)
+                } else {
+                    0.0
+                }
+            })
+        })
+    });
+    let qt: Mat3Lanes<EIGEN_LANES> = std::array::from_fn(|k| std::array::from_fn(|c| q[c][k]));
+    mul_lanes(&mul_lanes(&q, &d), &qt)
+}
+
+super::build::builds!(
+    /// [`tensor_lanes`] in the build of the pass.
+    tensor_lanes_built,
+    tensor_lanes,
+    (
+        a: &Mat3Lanes<EIGEN_LANES>,
+        rho: &[f64; EIGEN_LANES],
+        epsilon: f64
+    ) -> Mat3Lanes<EIGEN_LANES>
+);
 
 /// The stress of entry `i` as a matrix: a solid's sigma, a fluid's -p I, Pa.
 fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
@@ -80,8 +180,9 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
 /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
 /// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
 /// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
-    match params.viscosity {
+#[inline(always)]
+fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
+    match av {
         Some(av) => {
             let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
             let c_mean = 0.5 * (a.c + b.c);
@@ -117,8 +218,18 @@ fn viscosity(params: &Params, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f
 /// largest terms into `m`; a pair listed as (b, a) gives each entry the same bits, as T g
 /// changes sign with g) and the owned entries' `f` and `de` from them (the caller merges the
 /// ghosts' sums into their owners and settles again). Returns the work rate: `pressure` from
-/// the stress and artificial stress, `viscosity` from Pi. Flops per pair ~150 + 8 x 8 for the
-/// sums.
+/// the stress and artificial stress, `viscosity` from Pi.
+///
+/// `pairs` must be those of the last [`super::velocity_gradient_pass`] on `s`, at the same
+/// positions: r and dW/dr / r are read from `Solids::pair_geom` (its pairs checked against
+/// `pairs`), not computed again. Flops per pair ~110 (geometry 8, viscosity 12 with two
+/// divisions, (S_a + S_b) g 24, artificial stress 40 where either end is in tension, force and
+/// energy 20), and 2 x 4 lanes x 6 for the exact sums (the fluid pass's `add4`); bytes: 2 x 240
+/// of packed inputs read, 2 x 64 of sums read and written, 24 of geometry read. The pairs go
+/// in chunks of `PAIR_CHUNK`, in three short loops: the viscosity and f_ab^n (the divisions),
+/// then the terms (no sum between pairs: they overlap), then the exact sums in the pairs'
+/// order; each pair's operations are the same. The artificial stress R of every entry first
+/// ([`ArtificialStress::tensors`], 16 eigen-decompositions at a time).
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
@@ -130,7 +241,89 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
-    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, art, i)).collect();
+    let geom = &s.pair_geom[..];
+    assert_eq!(
+        geom.len(),
+        pairs.len(),
+        "the force pass runs over the pairs of the last gradient pass"
+    );
+    let rts = match art {
+        Some(a) => a.tensors(n, |i| (to_voigt(&stress_of(p, s, i)), p.rho[i]), s.build),
+        None => vec![[[0.0; 3]; 3]; n],
+    };
+    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, &rts[i], i)).collect();
+    // force x, y, z and energy rate of each entry, fold by fold, and its partners
+    let mut sums = vec![Sums4::default(); n];
+    let mut partners = vec![0u32; n];
+    let shifts = lane_shifts(grids);
+    let consts = PassConsts {
+        kernel: k,
+        viscosity: params.viscosity,
+        art: art.copied(),
+        shifts,
+    };
+    let work = force_pairs_built(
+        s.build,
+        pairs,
+        geom,
+        &slots,
+        &mut sums,
+        &mut partners,
+        &consts,
+        m,
+    );
+    p.sums.resize(n, PairSums::default());
+    for ((e, su), &np) in p.sums.iter_mut().zip(&sums).zip(&partners) {
+        let part = |l: usize| [su.fold[0][l], su.fold[1][l]];
+        e.f = [part(0), part(1), part(2)];
+        e.de = part(3);
+        e.partners = np as f64;
+    }
+    p.settle_forces();
+    work
+}
+
+/// Pairs whose viscosity and artificial-stress factors the force pass computes before their
+/// terms (4 kB, in L1).
+const PAIR_CHUNK: usize = 256;
+
+/// What the pair loop of the force pass needs besides the pairs and the entries.
+struct PassConsts {
+    kernel: SmoothingKernel,
+    viscosity: Option<ArtificialViscosity>,
+    art: Option<ArtificialStress>,
+    shifts: [[f64; 4]; 2],
+}
+
+super::build::builds!(
+    /// [`force_pairs`] in the build of the pass.
+    force_pairs_built,
+    force_pairs,
+    (
+        pairs: &[(u32, u32)],
+        geom: &[PairGeom],
+        slots: &[Slot],
+        sums: &mut [Sums4],
+        partners: &mut [u32],
+        c: &PassConsts,
+        m: &mut TermMax
+    ) -> PairWork
+);
+
+/// The pair loop of [`stress_force_pass`] (inlined into each build, [`super::build`]): adds
+/// every pair's force and energy-rate terms to `sums`, counts `partners`, notes the largest
+/// terms in `m`; returns the work rate.
+#[inline(always)]
+fn force_pairs(
+    pairs: &[(u32, u32)],
+    geom: &[PairGeom],
+    slots: &[Slot],
+    sums: &mut [Sums4],
+    partners: &mut [u32],
+    c: &PassConsts,
+    m: &mut TermMax,
+) -> PairWork {
+    let (k, art, shifts) = (&c.kernel, c.art.as_ref(), &c.shifts);
     // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
     // delta_p beyond the support), remade where h changes (mostly the same for every pair)
     let at = |h: f64| {
@@ -142,73 +335,152 @@ pub fn stress_force_pass(
         (sk, inv_w_dp)
     };
     let mut kern = at(f64::NAN);
-    p.sums.resize(n, PairSums::default());
-    for e in p.sums.iter_mut() {
-        e.f = [[0.0; 2]; 3];
-        e.de = [0.0; 2];
-        e.partners = 0.0;
-    }
-    let (gf, ge) = (grids.grid(q::FORCE), grids.grid(q::ENERGY));
     let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
-    for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
-        p.sums[i].partners += 1.0;
-        p.sums[j].partners += 1.0;
-        let (a, b) = (&slots[i], &slots[j]);
-        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let r = r2.sqrt();
-        if r == 0.0 {
-            continue;
-        }
-        let h = 0.5 * (a.h + b.h);
-        if kern.0.h != h {
-            kern = at(h);
-        }
-        let gr = kern.0.dw_dr(r) / r;
-        let g = [gr * d[0], gr * d[1], gr * d[2]];
-        let dv: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
-        let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-        let pi = viscosity(params, a, b, h, vr, r2);
-        // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where either
-        // particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n)
-        let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
-        if let (Some(an), true) = (art, a.tension || b.tension) {
-            if kern.1 > 0.0 {
-                let fn_ab = (kern.0.w(r) * kern.1).powi(an.n);
-                let rg = mat_vec_sum(&a.rt, &b.rt, g);
-                for c in 0..3 {
-                    tg[c] += fn_ab * rg[c];
+    // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
+    let mut visc = [[0.0; 2]; PAIR_CHUNK];
+    let mut acts = [false; PAIR_CHUNK];
+    // per pair of a chunk: the terms of its two entries (force x, y, z and energy rate)
+    let mut terms = [[[0.0; 4]; 2]; PAIR_CHUNK];
+    for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks(PAIR_CHUNK)) {
+        // the chunk's viscosity and artificial-stress factors first: a short loop whose
+        // divisions, a chain in each pair, overlap from pair to pair
+        let factors = visc.iter_mut().zip(acts.iter_mut());
+        for ((&(i, j), pg), (out, acts)) in chunk.iter().zip(geom).zip(factors) {
+            assert!(
+                (pg.i, pg.j) == (i, j),
+                "the force pass runs over the pairs of the last gradient pass"
+            );
+            let (a, b) = (&slots[i as usize], &slots[j as usize]);
+            let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let h = 0.5 * (a.h + b.h);
+            let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
+            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            out[0] = viscosity(c.viscosity, a, b, h, vr, r2);
+            *acts = false;
+            if let (Some(an), true) = (art, a.tension || b.tension) {
+                if kern.0.h != h {
+                    kern = at(h);
+                }
+                if kern.1 > 0.0 {
+                    out[1] = powi(kern.0.w(pg.r) * kern.1, an.n);
+                    *acts = true;
                 }
             }
         }
-        let mm = a.m * b.m;
-        // the viscous part -Pi I g, kept apart for the work split
-        let full: [f64; 3] = std::array::from_fn(|c| tg[c] - pi * g[c]);
-        let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-        let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
-        work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
-        work.viscosity += mm * pi * gr * vr;
-        let [si, sj] = p
-            .sums
-            .get_disjoint_mut([i, j])
-            .expect("a pair of two entries");
-        for (c, &fc) in full.iter().enumerate() {
-            let t = mm * fc;
-            gf.add(&mut si.f[c], t);
-            gf.add(&mut sj.f[c], -t);
-            note(&mut mf, t);
+        // then the chunk's terms, each pair apart (no sum in between: pairs overlap) ...
+        let pair_factors = geom.iter().zip(&visc).zip(&acts);
+        for (((pg, &[pi, fn_ab]), &acts), out) in pair_factors.zip(terms.iter_mut()) {
+            if pg.r == 0.0 {
+                continue;
+            }
+            let (a, b) = (&slots[pg.i as usize], &slots[pg.j as usize]);
+            let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
+            let gr = pg.gr;
+            let g = [gr * d[0], gr * d[1], gr * d[2]];
+            let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
+            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where
+            // either particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n;
+            // none where delta_p is beyond the support, 1/W(delta_p) = 0)
+            let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
+            if acts {
+                let rg = mat_vec_sum(&a.rt, &b.rt, g);
+                for l in 0..3 {
+                    tg[l] += fn_ab * rg[l];
+                }
+            }
+            let mm = a.m * b.m;
+            // the viscous part -Pi I g, kept apart for the work split
+            let full: [f64; 3] = std::array::from_fn(|l| tg[l] - pi * g[l]);
+            let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
+            let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
+            work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
+            work.viscosity += mm * pi * gr * vr;
+            let t: [f64; 3] = std::array::from_fn(|l| mm * full[l]);
+            for &tc in &t {
+                note(&mut mf, tc);
+            }
+            note(&mut me, de_i);
+            note(&mut me, de_j);
+            // equal and opposite forces: b's terms are the negated ones, each split on its own
+            *out = [[t[0], t[1], t[2], de_i], [-t[0], -t[1], -t[2], de_j]];
         }
-        ge.add(&mut si.de, de_i);
-        ge.add(&mut sj.de, de_j);
-        note(&mut me, de_i);
-        note(&mut me, de_j);
+        // ... and last their exact sums, in the order of the pairs
+        for (pg, out) in geom.iter().zip(&terms) {
+            let (i, j) = (pg.i as usize, pg.j as usize);
+            partners[i] += 1;
+            partners[j] += 1;
+            if pg.r == 0.0 {
+                continue;
+            }
+            add4(&mut sums[i].fold, out[0], shifts);
+            add4(&mut sums[j].fold, out[1], shifts);
+        }
     }
     m[q::FORCE] = mf;
     m[q::ENERGY] = me;
-    p.settle_forces();
     work
+}
+
+/// What the force pass adds to one entry, as exact sums, fold by fold (`fold[k]` = the parts on
+/// grid k of f_x, f_y, f_z, de: four lanes split and added together, as the fluid pass's).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Sums4 {
+    fold: [[f64; 4]; 2],
+}
+
+/// The shifts of the four lanes of [`Sums4`] on each grid: force, force, force, energy rate.
+#[inline]
+fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
+    let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
+    [0, 1].map(|k| [f[k], f[k], f[k], e[k]])
+}
+
+/// Adds the four terms `x` to `acc`, each split on its lane's grids: t = (r + C_k) - C_k,
+/// r -= t, fold k += t (`binsum::Grid2::add`: the same operations in the same order, lane by
+/// lane in vector registers).
+#[inline(always)]
+fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
+    let mut r = x;
+    for k in 0..2 {
+        for l in 0..4 {
+            let t = (r[l] + c[k][l]) - c[k][l];
+            r[l] -= t;
+            acc[k][l] += t;
+        }
+    }
+}
+
+/// x^n by binary powering, the operations of `f64::powi`'s runtime routine (compiler-builtins'
+/// `__powidf2`: r = 1, r *= x for each set bit of |n| from the lowest, x squared between;
+/// 1/r for n < 0), inlined: the same bits. n = 4 (the default) is written out, x^4 =
+/// 1 (x^2)^2 = (x^2)^2, with no loop over the bits of n per pair.
+#[inline(always)]
+fn powi(x: f64, n: i32) -> f64 {
+    if n == 4 {
+        let x2 = x * x;
+        return x2 * x2;
+    }
+    let (mut a, mut e) = (x, n.unsigned_abs());
+    let mut r = 1.0;
+    loop {
+        if e & 1 != 0 {
+            r *= a;
+        }
+        e >>= 1;
+        if e == 0 {
+            break;
+        }
+        a *= a;
+    }
+    if n < 0 {
+        1.0 / r
+    } else {
+        r
+    }
 }
 
 /// (A + B) g for two matrices stored row by row, summed entry by entry first.
@@ -236,15 +508,11 @@ struct Slot {
 }
 
 impl Slot {
-    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a.
-    fn of(p: &Particles, s: &Solids, art: Option<&ArtificialStress>, i: usize) -> Slot {
+    /// Entry `i`: sigma_a / rho_a^2 B_a (B = I for fluids) and R_a (`rt`).
+    fn of(p: &Particles, s: &Solids, rt: &Mat3, i: usize) -> Slot {
         let t = stress_of(p, s, i);
         let inv_rho2 = 1.0 / (p.rho[i] * p.rho[i]);
         let sb = mul(&t, &s.correction[i]);
-        let rt = match art {
-            Some(a) => a.tensor(&super::tensor::to_voigt(&t), p.rho[i]),
-            None => [[0.0; 3]; 3],
-        };
         Slot {
             x: p.x[i],
             h: p.h[i],
@@ -255,6 +523,76 @@ impl Slot {
             sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
             rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
             tension: rt.iter().flatten().any(|&x| x != 0.0),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A xorshift stream of numbers in [-1, 1).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    /// Stresses of every kind: random, near-degenerate, diagonal (zero pivots), compressive,
+    /// zero, and of very different sizes.
+    fn stresses(n: usize) -> Vec<([f64; 6], f64)> {
+        let mut g = Rng(0x9e37_79b9_7f4a_7c15);
+        (0..n)
+            .map(|k| {
+                let scale = [1.0, 1e6, 3e-4, 7.5e9][k % 4];
+                let mut s: [f64; 6] = std::array::from_fn(|_| scale * g.next());
+                match k % 7 {
+                    1 => s[3..].iter_mut().for_each(|x| *x = 0.0),
+                    2 => s = [s[0], s[0], s[0] + 1e-12 * scale, 1e-13 * scale, 0.0, 0.0],
+                    3 => s = [-scale, -2.0 * scale, -0.5 * scale, 0.1 * scale, 0.0, 0.0],
+                    4 => s = [0.0; 6],
+                    _ => {}
+                }
+                (s, 1000.0 + 500.0 * g.next())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tensors_in_lanes_are_the_bits_of_tensor_in_every_build() {
+        let art = ArtificialStress::new(0.004);
+        // 2 x 16 lanes and a partial batch
+        let sts = stresses(16 * 2 + 5 + 40);
+        let want: Vec<Mat3> = sts.iter().map(|(s, r)| art.tensor(s, *r)).collect();
+        assert!(want.iter().any(|m| m.iter().flatten().any(|&x| x != 0.0)));
+        for build in Build::available() {
+            let got = art.tensors(sts.len(), |i| sts[i], build);
+            for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                for k in 0..3 {
+                    for c in 0..3 {
+                        assert_eq!(
+                            g[k][c].to_bits(),
+                            w[k][c].to_bits(),
+                            "{build:?}: entry {i} R[{k}][{c}]"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn powi_is_the_bits_of_f64_powi() {
+        let mut g = Rng(7);
+        for _ in 0..1000 {
+            let x = 3.0 * g.next();
+            for n in [-3, -1, 0, 1, 2, 3, 4, 5, 8, 13] {
+                assert_eq!(powi(x, n).to_bits(), x.powi(n).to_bits(), "{x}^{n}");
+            }
         }
     }
 }

@@ -47,6 +47,27 @@ pub struct GradSums {
     pub fold: [[f64; LANES]; 2],
 }
 
+/// One pair's geometry as the gradient pass computed it, kept for the force pass over the same
+/// pairs at the same positions (`Solids::pair_geom`): the force pass reads gr and r rather than
+/// computing them again (a square root, the kernel derivative and a division per pair), the
+/// very same bits. `i`, `j`: the pair's entries (the force pass checks them against its list);
+/// `r` = |x_i - x_j|, m (0: coincident, skipped by both passes); `gr` = (dW/dr)(r, h) / r,
+/// 1/m^5, with h = (h_i + h_j)/2. 24 bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairGeom {
+    /// The pair's first entry.
+    pub i: u32,
+    /// The pair's second entry.
+    pub j: u32,
+    /// The distance, m.
+    pub r: f64,
+    /// dW/dr / r, 1/m^5 (0 where `r` = 0).
+    pub gr: f64,
+}
+
+/// Pairs whose geometry the gradient pass computes before their terms (a few kB, in L1).
+const PAIR_CHUNK: usize = 256;
+
 /// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
 const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
 
@@ -130,8 +151,13 @@ struct Slot {
 /// `passes::density_pass`, m_b (dW/dr)(r_ab . v^_ab)/r (Monaghan 1992, eq. 2.16): the same
 /// walk over the pairs, one fold-back for both. Zeroes the sums (`Solids::sums`) of every entry
 /// first, adds every term exactly on `g` (quantities [`gq`]) and notes the largest terms in
-/// `m`; coincident pairs are skipped. Flops per pair: ~50 for the geometry and the terms, 2 x
-/// 16 x 6 for the exact sums (in lanes).
+/// `m`; coincident pairs are skipped. Keeps each pair's r and dW/dr / r in
+/// `Solids::pair_geom` for the force pass. Flops per pair: ~50 for the geometry and the terms
+/// (one square root, two divisions), 2 x 16 x 6 for the exact sums (in lanes: 2 x 12 vector
+/// operations of 8 lanes in the AVX-512F build, `super::build`); bytes: 2 x 112 of packed
+/// inputs read, 2 x 256 of sums read and written, 24 of geometry written. The pairs go in
+/// chunks of `PAIR_CHUNK`: the geometry of the chunk first (its square roots and divisions
+/// overlap from pair to pair), then the terms; each pair's operations are the same.
 pub fn velocity_gradient_pass(
     pairs: &[(u32, u32)],
     p: &Particles,
@@ -154,58 +180,110 @@ pub fn velocity_gradient_pass(
         })
         .collect();
     let shifts = lane_shifts(g);
+    let (sums, geom) = (&mut s.sums[..], &mut s.pair_geom);
+    let build = s.build;
+    gradient_pairs_built(build, pairs, &slots, sums, geom, k, &shifts, m);
+}
+
+super::build::builds!(
+    /// [`gradient_pairs`] in the build of the pass.
+    gradient_pairs_built,
+    gradient_pairs,
+    (
+        pairs: &[(u32, u32)],
+        slots: &[Slot],
+        sums: &mut [GradSums],
+        geom: &mut Vec<PairGeom>,
+        k: &SmoothingKernel,
+        shifts: &[[f64; LANES]; 2],
+        m: &mut TermMax
+    ) -> ()
+);
+
+/// The pair loop of [`velocity_gradient_pass`] (inlined into each build,
+/// [`super::build`]): adds every pair's terms to `sums`, its geometry to `geom`, its
+/// largest terms to `m`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn gradient_pairs(
+    pairs: &[(u32, u32)],
+    slots: &[Slot],
+    sums: &mut [GradSums],
+    geom: &mut Vec<PairGeom>,
+    k: &SmoothingKernel,
+    shifts: &[[f64; LANES]; 2],
+    m: &mut TermMax,
+) {
     let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = k.at(f64::NAN);
-    for &(i, j) in pairs {
-        let (i, j) = (i as usize, j as usize);
-        let (a, b) = (&slots[i], &slots[j]);
-        let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
-        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if r == 0.0 {
-            continue;
-        }
-        let h = 0.5 * (a.h + b.h);
-        if kern.h != h {
-            kern = k.at(h);
-        }
-        let dw = kern.dw_dr(r);
-        let gr = dw / r;
-        let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
-        let t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
-        let mut x = [0.0; LANES];
-        let (mut bv, mut bx) = (0.0, 0.0);
-        if a.solid || b.solid {
-            let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
-            // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
-            for e in 0..9 {
-                x[e] = -dv[e / 3] * gr * d[e % 3];
+    geom.clear();
+    geom.resize(pairs.len(), PairGeom::default());
+    let mut t_rho = [0.0; PAIR_CHUNK];
+    for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks_mut(PAIR_CHUNK)) {
+        // the geometry of the chunk's pairs first: a short loop whose square roots and
+        // divisions, a chain in each pair, overlap from pair to pair
+        for ((&(i, j), g), t_rho) in chunk.iter().zip(geom.iter_mut()).zip(t_rho.iter_mut()) {
+            let (a, b) = (&slots[i as usize], &slots[j as usize]);
+            let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let h = 0.5 * (a.h + b.h);
+            if kern.h != h {
+                kern = k.at(h);
             }
-            for (c, &(k, l)) in VOIGT.iter().enumerate() {
-                x[SHAPE0 + c] = -d[k] * gr * d[l];
-            }
-            // bounds of the entries' terms (a function of the pair: |d_b| <= r)
-            let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
+            let dw = kern.dw_dr(r);
+            let gr = dw / r;
+            let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
+            *t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
+            // coincident (r = 0): gr 0, and the pair is skipped below and by the force pass
+            *g = PairGeom {
+                i,
+                j,
+                r,
+                gr: if r == 0.0 { 0.0 } else { gr },
+            };
         }
-        let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
-            let vol = if me.solid { other.vol } else { 0.0 };
-            let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
-            y[DENS] = other.m * t_rho;
-            y
-        };
-        let (yi, yj) = (terms(a, b), terms(b, a));
-        let [si, sj] = s
-            .sums
-            .get_disjoint_mut([i, j])
-            .expect("a pair of two entries");
-        si.add(&yi, &shifts);
-        sj.add(&yj, &shifts);
-        for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
-            let vol = if me.solid { other.vol } else { 0.0 };
-            note(&mut mg, vol * bv);
-            note(&mut ms, vol * bx);
-            note(&mut md, y[DENS]);
+        for (g, &t_rho) in geom.iter().zip(&t_rho) {
+            let (r, gr) = (g.r, g.gr);
+            if r == 0.0 {
+                continue;
+            }
+            let (i, j) = (g.i as usize, g.j as usize);
+            let (a, b) = (&slots[i], &slots[j]);
+            let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
+            let mut x = [0.0; LANES];
+            let (mut bv, mut bx) = (0.0, 0.0);
+            if a.solid || b.solid {
+                let dv: [f64; 3] = std::array::from_fn(|c| a.v[c] - b.v[c]);
+                // (v_b - v_a) (x) grad_a W = -(v_a - v_b) (x) gr d; (x_b - x_a) (x) grad_a W = -gr d (x) d
+                for e in 0..9 {
+                    x[e] = -dv[e / 3] * gr * d[e % 3];
+                }
+                for (c, &(k, l)) in VOIGT.iter().enumerate() {
+                    x[SHAPE0 + c] = -d[k] * gr * d[l];
+                }
+                // bounds of the entries' terms (a function of the pair: |d_b| <= r)
+                let dv_max = dv.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
+            }
+            let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
+                let vol = if me.solid { other.vol } else { 0.0 };
+                let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
+                y[DENS] = other.m * t_rho;
+                y
+            };
+            let (yi, yj) = (terms(a, b), terms(b, a));
+            let [si, sj] = sums
+                .get_disjoint_mut([i, j])
+                .expect("a pair of two entries");
+            si.add(&yi, shifts);
+            sj.add(&yj, shifts);
+            for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
+                let vol = if me.solid { other.vol } else { 0.0 };
+                note(&mut mg, vol * bv);
+                note(&mut ms, vol * bx);
+                note(&mut md, y[DENS]);
+            }
         }
     }
     m[gq::GRAD] = mg;

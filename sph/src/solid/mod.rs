@@ -12,7 +12,8 @@
 //! update_stress (owned solids: rotate, then the model with deps = D dt; p = -tr(sigma)/3,
 //!                c = sqrt(wave modulus / rho))
 //! owners -> ghosts (SolidGhost: rho, p, c, stress, B)
-//! stress_force_pass;  ghosts -> owners (PairSums: f, de); settle_forces
+//! stress_force_pass (over the same pairs: r and dW/dr / r kept from the gradient pass,
+//!                      `Solids::pair_geom`);  ghosts -> owners (PairSums: f, de); settle_forces
 //! ```
 //!
 //! and after `second_half` (which runs the EOS on every owned particle) `solid_pressure`.
@@ -21,7 +22,10 @@
 //! sums as the fluid passes'; the gradient pass on a [`crate::exact::PassGrids`] of its own,
 //! quantities [`gq`]), so every particle's gradient, force and energy rate are the same bits
 //! whatever the order of the pairs and however they are shared between ranks; each pass is run
-//! under [`crate::exact::exact_pass`].
+//! under [`crate::exact::exact_pass`]. The pair loops and the artificial stress's
+//! eigen-decompositions run in the widest build the CPUs share ([`build`]: the same operations,
+//! the same bits, in fewer vector instructions).
+pub mod build;
 mod force;
 mod gradient;
 pub mod sim;
@@ -30,7 +34,7 @@ pub mod tensor;
 pub use force::{
     stress_force_pass, ArtificialStress, ARTIFICIAL_STRESS_EPSILON, ARTIFICIAL_STRESS_EXPONENT,
 };
-pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums};
+pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums, PairGeom};
 pub use sim::SolidSim;
 
 use crate::particles::Particles;
@@ -106,6 +110,11 @@ pub struct Solids {
     /// `shape_sum` is singular), set on owners by `settle_gradients`, sent to ghosts: the force
     /// pass uses B grad W (Bonet & Lok 1999).
     pub correction: Vec<Mat3>,
+    /// The geometry of each pair of the last gradient pass, in its order (not carried): the
+    /// force pass over the same pairs reads it ([`PairGeom`]).
+    pub pair_geom: Vec<PairGeom>,
+    /// The build of the pair loops ([`build::Build`]; every build gives the same bits).
+    pub build: build::Build,
 }
 
 impl Solids {
@@ -120,6 +129,7 @@ impl Solids {
         let mut s = Self {
             models,
             stride,
+            build: build::Build::widest(),
             ..Self::default()
         };
         assert!(
@@ -139,6 +149,13 @@ impl Solids {
     #[inline]
     pub fn model(&self, mat: u16) -> Option<Arc<dyn StressModel>> {
         self.models.get(mat as usize).cloned().flatten()
+    }
+
+    /// The stress model of material `mat`, if it is a solid, borrowed (no reference count
+    /// raised and dropped per particle, as [`Solids::model`]'s clone does).
+    #[inline]
+    pub fn model_ref(&self, mat: u16) -> Option<&dyn StressModel> {
+        self.models.get(mat as usize)?.as_deref()
     }
 
     /// Whether material `mat` is a solid.
@@ -206,10 +223,11 @@ impl Solids {
     /// Keeps no entry (the models stay): owned entries are then pushed again
     /// ([`Solids::push_owned`]), in the order of the particles'.
     pub fn clear(&mut self) {
-        let (models, stride) = (std::mem::take(&mut self.models), self.stride);
+        let (models, stride, build) = (std::mem::take(&mut self.models), self.stride, self.build);
         *self = Self {
             models,
             stride,
+            build,
             ..Self::default()
         };
     }
@@ -237,14 +255,14 @@ impl Solids {
     /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for
     /// laws without thermal softening).
     pub fn temperature(&self, mat: u16, i: usize) -> Option<f64> {
-        let m = self.model(mat)?;
+        let m = self.model_ref(mat)?;
         let k = self.stride;
         m.temperature(&self.state[i * k..i * k + m.n_state()])
     }
 
     /// The equivalent plastic strain of entry `i` (0 for a fluid).
     pub fn plastic_strain(&self, mat: u16, i: usize) -> f64 {
-        match self.model(mat) {
+        match self.model_ref(mat) {
             Some(m) => {
                 let k = self.stride;
                 m.plastic_strain(&self.state[i * k..i * k + m.n_state()])
@@ -267,23 +285,31 @@ impl Solids {
 /// then p = -tr(sigma)/3, Pa, and c = sqrt(wave_modulus / rho), m/s, for the stable step and
 /// the artificial viscosity (the fluids' p and c are the EOS's: `update_eos`).
 pub fn update_stress(p: &mut Particles, s: &mut Solids, dt: f64) {
+    let Solids {
+        models,
+        stress: stresses,
+        state: states,
+        grad_v,
+        stride,
+        ..
+    } = s;
     for i in 0..p.n_owned {
-        let Some(model) = s.model(p.mat[i]) else {
+        let Some(model) = models.get(p.mat[i] as usize).and_then(|m| m.as_deref()) else {
             continue;
         };
-        let l = s.grad_v[i];
+        let l = grad_v[i];
         let w: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| 0.5 * (l[a][b] - l[b][a])));
-        let sig = from_voigt(&s.stress[i]);
+        let sig = from_voigt(&stresses[i]);
         let (ws, sw) = (mul(&w, &sig), mul(&sig, &w));
         let rate: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| ws[a][b] - sw[a][b]));
         let rot = to_voigt(&rate);
-        let mut stress: [f64; 6] = std::array::from_fn(|c| s.stress[i][c] + dt * rot[c]);
+        let mut stress: [f64; 6] = std::array::from_fn(|c| stresses[i][c] + dt * rot[c]);
         let d = to_voigt(&l);
         let deps: [f64; 6] = std::array::from_fn(|c| d[c] * dt);
-        let k = s.stride;
-        let state = &mut s.state[i * k..i * k + model.n_state()];
+        let k = *stride;
+        let state = &mut states[i * k..i * k + model.n_state()];
         model.update_stress(&mut stress, state, &deps, dt, p.rho[i]);
-        s.stress[i] = stress;
+        stresses[i] = stress;
     }
     solid_pressure(p, s);
 }
@@ -291,7 +317,7 @@ pub fn update_stress(p: &mut Particles, s: &mut Solids, dt: f64) {
 /// Sets p = -tr(sigma)/3 and c = sqrt(wave_modulus(rho, state) / rho) of every owned solid.
 pub fn solid_pressure(p: &mut Particles, s: &Solids) {
     for i in 0..p.n_owned {
-        let Some(model) = s.model(p.mat[i]) else {
+        let Some(model) = s.model_ref(p.mat[i]) else {
             continue;
         };
         let t = &s.stress[i];

@@ -107,6 +107,102 @@ pub fn symmetric_eigen(a: &Mat3) -> ([f64; 3], Mat3) {
     ([a[0][0], a[1][1], a[2][2]], q)
 }
 
+/// `L` symmetric 3 x 3 matrices side by side, entry by entry: `m[k][l][lane]`.
+pub type Mat3Lanes<const L: usize> = [[[f64; L]; 3]; 3];
+
+/// [`symmetric_eigen`] of `L` matrices at once (`a[k][l][lane]`), each lane's the same bits as
+/// `symmetric_eigen` of its matrix: every lane performs the same operations in the same order,
+/// and a lane that has converged, or whose pivot is zero, keeps its values (a select, not a
+/// jump) while the others go on (the sweeps run until every lane has converged). The lanes'
+/// divisions and square roots, a chain of five per rotation in one matrix, then overlap (and
+/// share a vector register in the wider builds, `super::build`). Returns the eigenvalues
+/// (`lam[k][lane]`) and the eigenvectors as the columns of `q` (`q[k][l][lane]`).
+#[inline(always)]
+pub fn symmetric_eigen_lanes<const L: usize>(a: &Mat3Lanes<L>) -> ([[f64; L]; 3], Mat3Lanes<L>) {
+    let mut a = *a;
+    let mut q = [[[0.0; L]; 3]; 3];
+    for (k, row) in q.iter_mut().enumerate() {
+        row[k] = [1.0; L];
+    }
+    // norm: the square root of the squares summed row by row (symmetric_eigen's sum)
+    let mut sq = [0.0; L];
+    for (e, x) in a.iter().flatten().enumerate() {
+        for l in 0..L {
+            sq[l] = if e == 0 {
+                x[l] * x[l]
+            } else {
+                sq[l] + x[l] * x[l]
+            };
+        }
+    }
+    let norm: [f64; L] = std::array::from_fn(|l| sq[l].sqrt());
+    let mut done = [false; L];
+    for _ in 0..JACOBI_MAX_SWEEPS {
+        for l in 0..L {
+            let off = a[0][1][l] * a[0][1][l] + a[1][2][l] * a[1][2][l] + a[0][2][l] * a[0][2][l];
+            done[l] |= off.sqrt() <= 1e-15 * norm[l];
+        }
+        if done.iter().all(|&d| d) {
+            break;
+        }
+        for (p, r) in [(0, 1), (0, 2), (1, 2)] {
+            let mut c = [0.0; L];
+            let mut s = [0.0; L];
+            let mut turn = [false; L];
+            for l in 0..L {
+                let apr = a[p][r][l];
+                turn[l] = !done[l] & (apr != 0.0);
+                let theta = (a[r][r][l] - a[p][p][l]) / (2.0 * apr);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                c[l] = 1.0 / (t * t + 1.0).sqrt();
+                s[l] = t * c[l];
+            }
+            // a <- J^T a J with J the rotation in the (p, r) plane, where `turn`
+            for row in a.iter_mut() {
+                for l in 0..L {
+                    let (akp, akr) = (row[p][l], row[r][l]);
+                    let np = c[l] * akp - s[l] * akr;
+                    let nr = s[l] * akp + c[l] * akr;
+                    row[p][l] = if turn[l] { np } else { akp };
+                    row[r][l] = if turn[l] { nr } else { akr };
+                }
+            }
+            let (ap, ar) = (a[p], a[r]);
+            for k in 0..3 {
+                for l in 0..L {
+                    let np = c[l] * ap[k][l] - s[l] * ar[k][l];
+                    let nr = s[l] * ap[k][l] + c[l] * ar[k][l];
+                    a[p][k][l] = if turn[l] { np } else { ap[k][l] };
+                    a[r][k][l] = if turn[l] { nr } else { ar[k][l] };
+                }
+            }
+            for row in q.iter_mut() {
+                for l in 0..L {
+                    let (qp, qr) = (row[p][l], row[r][l]);
+                    let np = c[l] * qp - s[l] * qr;
+                    let nr = s[l] * qp + c[l] * qr;
+                    row[p][l] = if turn[l] { np } else { qp };
+                    row[r][l] = if turn[l] { nr } else { qr };
+                }
+            }
+        }
+    }
+    ([a[0][0], a[1][1], a[2][2]], q)
+}
+
+/// a b of `L` matrices at once, each lane's entry the sum `(a_i0 b_0j + a_i1 b_1j) + a_i2 b_2j`
+/// of [`mul`] (the same bits).
+#[inline(always)]
+pub fn mul_lanes<const L: usize>(a: &Mat3Lanes<L>, b: &Mat3Lanes<L>) -> Mat3Lanes<L> {
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            std::array::from_fn(|l| {
+                a[i][0][l] * b[0][j][l] + a[i][1][l] * b[1][j][l] + a[i][2][l] * b[2][j][l]
+            })
+        })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -56,7 +56,12 @@ pub struct Sph {
 impl Sph {
     /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
     /// keep pair candidates between steps where the stage can (`Algorithms::sph_kept_pairs`).
-    pub fn new(world: &SimpleCommunicator, scene: &Scene, kept_pairs: bool) -> Result<Sph, String> {
+    pub fn new(
+        world: &SimpleCommunicator,
+        scene: &Scene,
+        kept_pairs: bool,
+        kernel: crate::driver::KernelChoice,
+    ) -> Result<Sph, String> {
         let (mut params, map, solid_models) = params_from_scene(scene)?;
         // Gravity at t = 0 (`gravity_curve`); `finish` sets it at each step's end.
         if let Some(c) = &scene.gravity_curve {
@@ -77,6 +82,7 @@ impl Sph {
         let mut stage = SphStage::new(world, parts, params);
         if let Some(models) = solid_models {
             stage.set_solids(models);
+            stage.choose_solid_build(world, kernel);
         }
         let p = &stage.parts;
         let mass = fe_petsc::exact::total(world, &p.m[..p.n_owned]);

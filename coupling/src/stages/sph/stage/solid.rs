@@ -16,7 +16,9 @@
 //! takes the continuity density rates along: one walk and one fold-back for both). Every
 //! sum is exact (`sph::exact`), so the particles' rates are the same bits at any rank count.
 use super::*;
+use crate::driver::KernelChoice;
 use crate::kernels::rcb::RcbItem;
+use sph::solid::build::Build;
 use sph::solid::{
     settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
     GradSums, SolidGhost, SolidRecord,
@@ -70,6 +72,33 @@ impl SphStage {
             out_stress: Vec::new(),
             out_plastic: Vec::new(),
         });
+    }
+
+    /// Sets the build of the solid pair loops every rank runs (collective; `sph::solid::build`:
+    /// every build gives the same bits, as every element kernel does): `--kernel scalar` the
+    /// baseline x86-64 build, `lanes4` AVX2, `auto` and `lanes8` the widest build every rank's
+    /// CPU runs (AVX-512F, else AVX2), each where the CPUs run it (else the widest below it).
+    pub fn choose_solid_build(&mut self, world: &SimpleCommunicator, choice: KernelChoice) {
+        let code = |b: Build| match b {
+            Build::Baseline => 1i32,
+            Build::Avx2 => 4,
+            Build::Avx512 => 8,
+        };
+        let mut all = 0i32;
+        world.all_reduce_into(&code(Build::widest()), &mut all, SystemOperation::min());
+        let common = match all {
+            8 => Build::Avx512,
+            4 => Build::Avx2,
+            _ => Build::Baseline,
+        };
+        let build = match choice {
+            KernelChoice::Auto | KernelChoice::Lanes8 => common,
+            KernelChoice::Lanes4 if all >= 4 => Build::Avx2,
+            KernelChoice::Lanes4 | KernelChoice::Scalar => Build::Baseline,
+        };
+        if let Some(sp) = &mut self.solid {
+            sp.solids.build = build;
+        }
     }
 
     /// The solid state, where the run has solid particles.
