@@ -257,13 +257,13 @@ struct Slot {
 /// aligned); the density rate is beside them (`PassBuffers::drho`).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
-struct Sums {
-    fold: [[f64; 4]; 2],
+pub(crate) struct Sums {
+    pub(crate) fold: [[f64; 4]; 2],
 }
 
 /// The shifts of the four lanes of [`Sums`] on each grid: force, force, force, energy rate.
 #[inline]
-fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
+pub(crate) fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
     let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
     [0, 1].map(|k| [f[k], f[k], f[k], e[k]])
 }
@@ -271,7 +271,7 @@ fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
 /// Adds the four terms `x` to `acc`, each split on its lane's grids (`binsum::Grid2::split`,
 /// lane by lane: the compiler keeps the lanes in vector registers).
 #[inline(always)]
-fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
+pub(crate) fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
     let mut r = x;
     for k in 0..2 {
         for l in 0..4 {

@@ -10,7 +10,7 @@ use crate::exact::{note, q, PassGrids, TermMax};
 use crate::kernel::SmoothingKernel;
 use crate::params::{ArtificialViscosity, Params};
 use crate::particles::{PairSums, Particles};
-use crate::passes::PairWork;
+use crate::passes::{add4, lane_shifts, PairWork, Sums as Sums4};
 
 /// Monaghan's artificial stress against the tensile instability of solids (Gray, Monaghan &
 /// Swift, CMAME 190 (2001) 6641, §3; Monaghan, J. Comput. Phys. 159 (2000) 290).
@@ -422,36 +422,6 @@ fn force_pairs(
     m[q::FORCE] = mf;
     m[q::ENERGY] = me;
     work
-}
-
-/// What the force pass adds to one entry, as exact sums, fold by fold (`fold[k]` = the parts on
-/// grid k of f_x, f_y, f_z, de: four lanes split and added together, as the fluid pass's).
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(C, align(32))]
-struct Sums4 {
-    fold: [[f64; 4]; 2],
-}
-
-/// The shifts of the four lanes of [`Sums4`] on each grid: force, force, force, energy rate.
-#[inline]
-fn lane_shifts(g: &PassGrids) -> [[f64; 4]; 2] {
-    let (f, e) = (g.grid(q::FORCE).shift, g.grid(q::ENERGY).shift);
-    [0, 1].map(|k| [f[k], f[k], f[k], e[k]])
-}
-
-/// Adds the four terms `x` to `acc`, each split on its lane's grids: t = (r + C_k) - C_k,
-/// r -= t, fold k += t (`binsum::Grid2::add`: the same operations in the same order, lane by
-/// lane in vector registers).
-#[inline(always)]
-fn add4(acc: &mut [[f64; 4]; 2], x: [f64; 4], c: &[[f64; 4]; 2]) {
-    let mut r = x;
-    for k in 0..2 {
-        for l in 0..4 {
-            let t = (r[l] + c[k][l]) - c[k][l];
-            r[l] -= t;
-            acc[k][l] += t;
-        }
-    }
 }
 
 /// x^n by binary powering, the operations of `f64::powi`'s runtime routine (compiler-builtins'
