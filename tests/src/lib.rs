@@ -496,6 +496,24 @@ pub fn assert_refused(name: &str, scene: &Path, out: &Path, needle: &str, names_
     );
 }
 
+/// The text of the bundled scene `scenes/NAME.toml` with its meshes' paths made absolute, so a
+/// test can change it and write it anywhere.
+pub fn bundled_scene(name: &str) -> String {
+    std::fs::read_to_string(root().join(format!("scenes/{name}.toml")))
+        .unwrap()
+        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+}
+
+/// Runs `scene` at np 1 and np 3 in `dir` (`np1`, `np3`) and asserts the same bytes
+/// ([`run_digest`]); returns the np 1 output folder.
+pub fn run_np1_np3_same_bytes(scene: &Path, dir: &Path) -> PathBuf {
+    let (a, b) = (dir.join("np1"), dir.join("np3"));
+    run_ok(1, scene, &a);
+    run_ok(3, scene, &b);
+    assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
+    a
+}
+
 /// A run's bits in one number: FNV-1a (64 bits) over history.csv without the run's own
 /// measurements (`contact_imbalance`, `contact_bytes`), then probes.csv, reactions.csv and
 /// contact_forces.csv (those the run wrote), then every frame's

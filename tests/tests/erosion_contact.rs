@@ -219,9 +219,7 @@ fn a_striker_through_a_failed_layer_stops_on_the_face_it_opened() {
 #[test]
 fn a_ball_perforates_a_free_plate_with_the_same_bytes_at_np_1_and_3() {
     let dir = mkdir(&workdir("ball_perforation"), "scene");
-    let text = std::fs::read_to_string(root().join("scenes/ball_perforation.toml"))
-        .unwrap()
-        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+    let text = bundled_scene("ball_perforation")
         .replace("end_time = 3.0e-5", "end_time = 4.0e-5")
         .replace(
             "[[boundary]]\ngroup = \"plate_sides\"\nkind = \"fixed\"\n",
@@ -230,10 +228,7 @@ fn a_ball_perforates_a_free_plate_with_the_same_bytes_at_np_1_and_3() {
     assert!(!text.contains("plate_sides"), "the clamp removed");
     let scene = dir.join("free_plate.toml");
     std::fs::write(&scene, text).unwrap();
-    let (a, b) = (dir.join("np1"), dir.join("np3"));
-    run_ok(1, &scene, &a);
-    run_ok(3, &scene, &b);
-    assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
+    let a = run_np1_np3_same_bytes(&scene, &dir);
     let (h, rows) = read_csv(&a.join("history.csv"));
     let mass = column(&h, &rows, "mass_elements");
     let pz = column(&h, &rows, "momentum_z");

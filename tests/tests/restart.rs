@@ -754,10 +754,7 @@ fn perforation_with_eroding_contact_stopped_and_restarted_ends_bit_identical_at_
     // of the perforation is the run's without a stop, bit for bit (but the contact stage's cost
     // columns: its decomposition is rebuilt at the restart).
     let dir = workdir("restart_perforation_np3");
-    let text = std::fs::read_to_string(root().join("scenes/ball_perforation.toml"))
-        .unwrap()
-        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
-        .replace("end_time = 3.0e-5", "end_time = 2.0e-5");
+    let text = bundled_scene("ball_perforation").replace("end_time = 3.0e-5", "end_time = 2.0e-5");
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("ball_perforation.toml");
     std::fs::write(&scene, text).unwrap();

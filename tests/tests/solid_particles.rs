@@ -333,9 +333,7 @@ fn rubber_rings_rebound_intact_with_their_energy() {
 #[test]
 fn a_block_of_solid_particles_bounces_off_a_meshed_plate() {
     let dir = workdir("solid_on_plate");
-    let text = std::fs::read_to_string(root().join("scenes/cloud_on_plate.toml"))
-        .unwrap()
-        .replace("\"../meshes/", &format!("\"{}/meshes/", root().display()))
+    let text = bundled_scene("cloud_on_plate")
         .replace("end_time = 2.0e-3", "end_time = 8.0e-4")
         .replace("material = \"water\"", "material = \"rubber\"")
         .replace(
@@ -345,10 +343,7 @@ fn a_block_of_solid_particles_bounces_off_a_meshed_plate() {
         );
     let scene = dir.join("block_on_plate.toml");
     std::fs::write(&scene, text).unwrap();
-    let (a, b) = (dir.join("np1"), dir.join("np3"));
-    run_ok(1, &scene, &a);
-    run_ok(3, &scene, &b);
-    assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
+    let a = run_np1_np3_same_bytes(&scene, &dir);
     let (h, rows) = read_csv(&a.join("history.csv"));
     let pz = column(&h, &rows, "momentum_z");
     let err = column(&h, &rows, "energy_error")
