@@ -272,16 +272,42 @@ pub fn sci(v: &f64) -> String {
     format!("{v:.0e}")
 }
 
-/// A tick label for sizes and times: plain from 0.01 to 10^5 ("0.05", "2", "300") and at 0,
-/// else "1e-3".
+/// A tick label for sizes and times: plain from 0.01 to 10^5 to three significant digits
+/// ("0.05", "0.0125", "2.5", "300") and at 0, else "1e-3".
 pub fn plain(v: &f64) -> String {
     let a = v.abs();
     if a == 0.0 {
         "0".to_string()
     } else if (1e-2..1e5).contains(&a) {
-        let s = format!("{v:.2}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
+        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     } else {
         sci(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Tick labels to three significant digits: 0.0125 and 0.01 must not both read "0.01".
+    #[test]
+    fn plain_labels_keep_three_significant_digits() {
+        for (v, want) in [
+            (0.0125, "0.0125"),
+            (0.01, "0.01"),
+            (0.015, "0.015"),
+            (0.05, "0.05"),
+            (2.5, "2.5"),
+            (300.0, "300"),
+            (12345.0, "12345"),
+            (0.0, "0"),
+            (-0.25, "-0.25"),
+        ] {
+            assert_eq!(super::plain(&v), want, "{v}");
+        }
     }
 }
