@@ -380,7 +380,7 @@ impl Row {
             node_on_node: true,
         };
         r.depth = r.gap_left(b, dx);
-        r
+        r.or_inert_if_massless(b)
     }
 
     /// A node-on-node row's penetration left with corrections `dx` (or none):
@@ -412,7 +412,21 @@ impl Row {
         r.inv_mass = (0..r.len)
             .map(|k| r.w[k] * r.w[k] * inverse_mass(b.nodes.mass[r.nodes[k]]))
             .sum();
-        r
+        r.or_inert_if_massless(b)
+    }
+
+    /// The row, or an inert one where a node of it has no mass (a mesh node all of whose
+    /// elements became particles: a point without inertia that neither pushes nor is pushed;
+    /// a row through it would take momentum from its partners and give the node none).
+    fn or_inert_if_massless(self, b: &ContactBox) -> Row {
+        if self.nodes[..self.len]
+            .iter()
+            .any(|&n| b.nodes.mass[n] == 0.0)
+        {
+            Row::inert()
+        } else {
+            self
+        }
     }
 
     /// The row's depth bounded by what the step explains (see the module documentation,

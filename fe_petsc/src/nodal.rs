@@ -83,6 +83,17 @@ pub(crate) struct KickInput<'a> {
     pub constrained: &'a [bool],
 }
 
+/// 1 / m of a nodal mass, and 0 where the node has none (all its elements became particles:
+/// it carries no force and keeps its velocity).
+#[inline(always)]
+pub(crate) fn inverse_mass(m: f64) -> f64 {
+    if m > 0.0 {
+        1.0 / m
+    } else {
+        0.0
+    }
+}
+
 /// The kick to the half step and the drift of every node: v += dt/2 a with the acceleration
 /// a = f / m + g of the forces `force` at the step's start (the last step's element forces;
 /// set to zero as read where `zero`: for the next element loop, when nothing reads them after
@@ -131,7 +142,7 @@ pub(crate) fn kick_drift(
         if let Some(o) = x_old.as_deref_mut() {
             o[n] = x[n];
         }
-        let im = 1.0 / input.mass[n];
+        let im = inverse_mass(input.mass[n]);
         let f = force[n];
         if zero {
             force[n] = [0.0; 3];
@@ -183,7 +194,7 @@ pub(crate) fn close_free(
     let (g, h) = (read.gravity, 0.5 * read.dt);
     for n in done..nn {
         if !constrained[n] {
-            let im = 1.0 / read.mass[n];
+            let im = inverse_mass(read.mass[n]);
             let f = read.force[n];
             let an = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
             let vn = &mut v[n];
@@ -202,6 +213,17 @@ pub(crate) fn close_free(
 mod w8 {
     use super::{Folds, KickInput, NodalSums, StepFolds};
     use std::arch::x86_64::*;
+
+    /// [`super::inverse_mass`] of eight masses `m`, given `im` = 1 / m: zero where m is not
+    /// positive (a node all of whose elements became particles).
+    #[inline(always)]
+    fn inverse_masses(m: __m512d, im: __m512d) -> __m512d {
+        // SAFETY: AVX-512F, as every caller's target feature.
+        unsafe {
+            let k = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(m, _mm512_setzero_pd());
+            _mm512_maskz_mov_pd(k, im)
+        }
+    }
 
     /// The node of each slot of register j, as an index for `vpermpd`.
     const SLOT_NODE: [[i64; 8]; 3] = [
@@ -320,7 +342,8 @@ mod w8 {
         let pm = input.mass.as_ptr();
         for n0 in (0..whole).step_by(8) {
             // SAFETY: n0 + 8 <= len masses.
-            let im = _mm512_div_pd(one, unsafe { _mm512_loadu_pd(pm.add(n0)) });
+            let m = unsafe { _mm512_loadu_pd(pm.add(n0)) };
+            let im = inverse_masses(m, _mm512_div_pd(one, m));
             let (_, counted) = chunk_masks(input.owned, input.constrained, n0);
             for j in 0..3 {
                 let s = 3 * n0 + 8 * j;
@@ -379,7 +402,7 @@ mod w8 {
         for n0 in (0..whole).step_by(8) {
             // SAFETY: n0 + 8 <= nn masses.
             let m = unsafe { _mm512_loadu_pd(r.mass.as_ptr().add(n0)) };
-            let im = _mm512_div_pd(one, m);
+            let im = inverse_masses(m, _mm512_div_pd(one, m));
             let (free, counted) = chunk_masks(r.owned, constrained, n0);
             for j in 0..3 {
                 let (kf, kc) = ((free >> (8 * j)) as u8, (counted >> (8 * j)) as u8);

@@ -139,6 +139,9 @@ pub fn write(
     if let Some(walls) = &model.walls {
         walls.save(&mut w);
     }
+    if let Some(r) = &model.releases {
+        r.save(&mut w);
+    }
     let step = meta.clock.step;
     let path = rank_file(&dir, rank, step);
     let res = std::fs::write(&path, w.into_bytes())

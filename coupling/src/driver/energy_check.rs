@@ -105,7 +105,8 @@ impl EnergyCheck {
         outputs: &mut outputs::Outputs,
     ) -> Result<f64, RunFailure> {
         let en = sum_energies(model);
-        let contact = model.contact_energy();
+        // what contact took, and what the conversions of failed elements to particles took
+        let contact = model.contact_energy() + model.conversion_energy();
         let total = en.total() + contact;
         let external = en.external_work;
         self.scale.observe(en.kinetic, en.internal + en.hourglass);

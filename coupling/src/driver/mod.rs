@@ -482,6 +482,16 @@ fn restore(
     if let (Some(w), Some(state)) = (model.walls.as_mut(), contact_state) {
         res = res.and(w.restore(state));
     }
+    // And the FE -> SPH transfer's; the masses after the restored releases.
+    if let (Some(r), Some(state)) = (model.releases.as_mut(), contact_state) {
+        res = res.and(r.restore(state));
+        if let Some(fe) = model.fe.as_mut() {
+            fe.restore_release_counts(world);
+        }
+    }
+    if model.erosion_masses.is_some() {
+        model.sum_erosion_masses(world);
+    }
     res
 }
 

@@ -20,6 +20,10 @@ pub const HISTORY_INTEGER_COLUMNS: [&str; 3] = ["step", "contacts", "eroded_elem
 pub const EROSION_HISTORY_COLUMNS: [&str; 3] =
     ["eroded_elements", "mass_elements", "mass_particles"];
 
+/// The column history.csv adds after [`EROSION_HISTORY_COLUMNS`] where failed elements
+/// become particles: the kinetic energy the conversions took, J (docs/output.md).
+pub const CONVERSION_HISTORY_COLUMN: &str = "conversion_energy";
+
 /// Columns of history.csv, in order (docs/scene.md).
 pub const HISTORY_COLUMNS: [&str; 13] = [
     "step",
@@ -136,6 +140,9 @@ impl Outputs {
         }
         if model.erosion_masses.is_some() {
             cols.extend(EROSION_HISTORY_COLUMNS.iter().map(|c| c.to_string()));
+            if model.releases.is_some() {
+                cols.push(CONVERSION_HISTORY_COLUMN.to_string());
+            }
         }
         if model.fe.is_some() {
             cols.extend(block_history_columns(scene));
@@ -295,6 +302,9 @@ impl Outputs {
             .sph
             .as_ref()
             .map(|s| s.frame(&mut self.particle_ranks, &mut self.particle_labels, rank));
+        if let Some(s) = &model.sph {
+            self.writer.set_particle_count(s.n_total);
+        }
         self.writer
             .write_frame(time, nodes.as_ref(), elems.as_ref(), parts.as_ref())
             .map_err(|e| format!("writing fields.h5: {e}"))?;

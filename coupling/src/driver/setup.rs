@@ -35,15 +35,44 @@ pub struct Model {
     /// With element failure, the masses history.csv reports: the mesh's (on its nodes, where a
     /// deleted element leaves its mass) and the particles', kg (global).
     pub erosion_masses: Option<[f64; 2]>,
+    /// Where failed elements become particles, the FE -> SPH transfer's state.
+    pub releases: Option<crate::transfer::fe_sph::Releases>,
 }
 
 impl Model {
     /// history.csv's erosion columns (`eroded_elements`, `mass_elements`, `mass_particles`),
     /// where a material fails.
-    pub fn erosion_columns(&self) -> Option<[f64; 3]> {
+    /// and where failed elements become particles `conversion_energy`.
+    pub fn erosion_columns(&self) -> Option<Vec<f64>> {
         let [me, mp] = self.erosion_masses?;
         let eroded = self.fe.as_ref().map_or(0, |f| f.state().eroded());
-        Some([eroded as f64, me, mp])
+        let mut v = vec![eroded as f64, me, mp];
+        v.extend(self.releases.as_ref().map(|r| r.conversion_energy));
+        Some(v)
+    }
+
+    /// The kinetic energy the conversions of failed elements into particles took, J.
+    pub fn conversion_energy(&self) -> f64 {
+        self.releases.as_ref().map_or(0.0, |r| r.conversion_energy)
+    }
+
+    /// The masses of `erosion_masses` summed again (collective): the mesh's nodes' and the
+    /// particles', each an exact sum over ranks.
+    pub fn sum_erosion_masses(&mut self, world: &SimpleCommunicator) {
+        let total = |m: &[f64]| fe_petsc::exact::total(world, m);
+        let fe_mass = self.fe.as_ref().map_or(0.0, |f| {
+            let s = f.state();
+            let owned: Vec<f64> = (0..s.mass.len())
+                .filter(|&n| s.owned[n])
+                .map(|n| s.mass[n])
+                .collect();
+            total(&owned)
+        });
+        let sph_mass = self.sph.as_ref().map_or(0.0, |s| {
+            let p = &s.stage.parts;
+            total(&p.m[..p.n_owned])
+        });
+        self.erosion_masses = Some([fe_mass, sph_mass]);
     }
 }
 
@@ -194,7 +223,13 @@ pub fn build(
             .map_err(RunFailure::from)?;
         super::overlap::check(world, scene, fe.state()).map_err(RunFailure::from)?;
     }
-    let sph = if scene.particles.is_empty() {
+    // A scene whose failed elements become particles has an SPH stage from the start, empty
+    // until the first one fails.
+    let births = match (&fe, scene.releases_any()) {
+        (Some(fe), true) => Some(crate::transfer::fe_sph::births(world, scene, fe.state())),
+        _ => None,
+    };
+    let sph = if scene.particles.is_empty() && births.is_none() {
         None
     } else {
         Some(Sph::new(
@@ -202,6 +237,7 @@ pub fn build(
             scene,
             algorithms.sph_kept_pairs,
             algorithms.kernel,
+            births,
         )?)
     };
     let probes = Probes::locate(
@@ -215,6 +251,10 @@ pub fn build(
     let particle_names: Vec<String> = scene.particles.iter().map(|p| p.name.clone()).collect();
     let contact = match (&scene.contact, &mut fe) {
         (Some(def), Some(fe)) => {
+            let def = &crate::input::scene::ContactDef {
+                particles: Some(def.particles_on(scene)),
+                ..def.clone()
+            };
             // The FE stage lends the contact stage the nodes and faces of the named surfaces.
             let mesh_ids = fe.mesh.local.global_nodes;
             let surfaces = fe.set_contact_surfaces(world, def, &block_names, &groups);
@@ -239,31 +279,22 @@ pub fn build(
         // the kick (`ExplicitFe::apply_contact`'s work).
         fe.state_mut().set_contact_stage(false);
     }
-    let erosion_masses = scene.failures.iter().any(Option::is_some).then(|| {
-        let total = |m: &[f64]| fe_petsc::exact::total(world, m);
-        let fe_mass = fe.as_ref().map_or(0.0, |f| {
-            let s = f.state();
-            let owned: Vec<f64> = (0..s.mass.len())
-                .filter(|&n| s.owned[n])
-                .map(|n| s.mass[n])
-                .collect();
-            total(&owned)
-        });
-        let sph_mass = sph.as_ref().map_or(0.0, |s| {
-            let p = &s.stage.parts;
-            total(&p.m[..p.n_owned])
-        });
-        [fe_mass, sph_mass]
-    });
-    Ok(Model {
+    let mut model = Model {
         fe,
         sph,
         contact,
         walls,
         probes,
         mesh_split,
-        erosion_masses,
-    })
+        erosion_masses: None,
+        releases: scene
+            .releases_any()
+            .then(|| crate::transfer::fe_sph::Releases::new(scene)),
+    };
+    if scene.failures.iter().any(Option::is_some) {
+        model.sum_erosion_masses(world);
+    }
+    Ok(model)
 }
 
 /// Meshes the scene's `.geo` files on rank 0 (gmsh, cached; several meshes merged, each moved

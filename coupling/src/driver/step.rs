@@ -38,6 +38,18 @@ pub fn step(
     for stage in model.stages_mut() {
         next = next.min(stage.forces(world, dt)?);
     }
+    // Failed elements become particles (FE -> SPH), in the SPH stage's rates from now on.
+    if let (Some(rel), Some(fe), Some(sph)) = (&mut model.releases, &mut model.fe, &mut model.sph) {
+        let born = crate::transfer::fe_sph::transfer(world, (fe, sph), rel).map_err(|message| {
+            StageError {
+                unstable: false,
+                message,
+            }
+        })?;
+        if born {
+            model.sum_erosion_masses(world);
+        }
+    }
     // An implicit step held nodes on the walls inside Newton: their impulses and energy.
     if let Some(walls) = &mut model.walls {
         walls.after_implicit(model.fe.as_ref());

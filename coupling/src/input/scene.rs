@@ -316,9 +316,16 @@ pub struct Block {
     #[serde(deserialize_with = "vec3::exact")]
     pub velocity: [f64; 3],
     /// What a failed element becomes (`"delete"`; `"particles"`, the default where the material
-    /// has `failure`, is refused: not built yet), checked by `failure::check_failed`.
+    /// has `failure`), checked by `failure::check_failed`.
     #[serde(default)]
     pub failed: Option<toml::Value>,
+}
+
+impl Block {
+    /// Whether the block says `failed = "delete"` (else its failed elements become particles).
+    pub fn deletes(&self) -> bool {
+        matches!(&self.failed, Some(toml::Value::String(s)) if s == "delete")
+    }
 }
 
 /// Boundary condition kinds.
@@ -648,8 +655,10 @@ pub struct ContactDef {
     pub surfaces: Vec<String>,
     #[serde(default)]
     pub self_contact: bool,
+    /// Whether particle centres are contact nodes; omitted: only where failed elements become
+    /// particles (`ContactDef::particles_on`).
     #[serde(default)]
-    pub particles: bool,
+    pub particles: Option<bool>,
     /// Coulomb's coefficient between all contact pairs (static and kinetic), default 0.
     #[serde(default)]
     pub friction: f64,
@@ -772,6 +781,32 @@ pub struct Scene {
     pub compare: Option<CompareDef>,
     /// `[sweep]` (beyond docs/scene.md).
     pub sweep: Option<SweepDef>,
+}
+
+impl ContactDef {
+    /// `particles`, or where omitted whether failed elements of `scene` become particles (they
+    /// must meet the mesh they broke from).
+    pub fn particles_on(&self, scene: &Scene) -> bool {
+        self.particles.unwrap_or_else(|| scene.releases_any())
+    }
+}
+
+impl Scene {
+    /// Whether material `m` (index into `materials`) fails and its failed elements become
+    /// particles (its blocks do not say `failed = "delete"`).
+    pub fn releases(&self, m: usize) -> bool {
+        let name = &self.materials[m].name;
+        self.failures[m].is_some()
+            && self
+                .blocks
+                .iter()
+                .any(|b| &b.material == name && !b.deletes())
+    }
+
+    /// Whether any failed element becomes particles.
+    pub fn releases_any(&self) -> bool {
+        (0..self.materials.len()).any(|m| self.releases(m))
+    }
 }
 
 /// Reads and checks a scene file.

@@ -157,6 +157,10 @@ struct FrameIndex {
     node_items: Vec<Item>,
     elem_items: Vec<Item>,
     particle_items: Vec<Item>,
+    /// Particles in the frame (0 in an index written before particles could be born: then
+    /// the writer's count).
+    #[serde(default)]
+    particles: u64,
 }
 
 /// Writes field frames to `fields.h5` and keeps `fields.xmf` up to date.
@@ -309,6 +313,12 @@ impl FieldWriter {
         Ok(items)
     }
 
+    /// The particles' count over all ranks from the next frame on (failed elements became
+    /// particles).
+    pub fn set_particle_count(&mut self, n: u64) {
+        self.counts.particles = n;
+    }
+
     /// Every rank's verdict on a dataset written (collective), so that a failure on one rank
     /// stops all of them before the next dataset's exchanges.
     fn agree(
@@ -458,6 +468,7 @@ impl FieldWriter {
             node_items,
             elem_items,
             particle_items,
+            particles: self.counts.particles,
         });
         // Rank 0 writes the index; every rank returns its verdict, so none goes on alone.
         let xdmf = if self.comm.rank() == 0 {
@@ -490,7 +501,8 @@ impl FieldWriter {
         let mut x = String::from(
             "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n",
         );
-        for (kind, has) in [("mesh", c.elements > 0), ("particles", c.particles > 0)] {
+        let any_particles = c.particles > 0 || self.frames.iter().any(|f| f.particles > 0);
+        for (kind, has) in [("mesh", c.elements > 0), ("particles", any_particles)] {
             if !has {
                 continue;
             }
@@ -629,7 +641,13 @@ fn mesh_grid(f: &FrameIndex, c: GlobalCounts) -> Option<String> {
 }
 
 /// The body of frame `f`'s particle grid (one vertex per particle), if it has particles.
-fn particle_grid(f: &FrameIndex, c: GlobalCounts) -> Option<String> {
+fn particle_grid(f: &FrameIndex, mut c: GlobalCounts) -> Option<String> {
+    if f.particles > 0 {
+        c.particles = f.particles;
+    }
+    if c.particles == 0 {
+        return None;
+    }
     let pos = f.particle_items.iter().find(|i| i.name == "position")?;
     let mut x = format!(
         "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>\n",

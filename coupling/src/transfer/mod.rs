@@ -10,7 +10,7 @@
 //!   owners after a rebuild (mesh nodes and particles in one exchange);
 //! - [`contact_fe`]: the mesh nodes' forces back along a kept decomposition's plan;
 //! - [`contact_sph`]: the particles' forces back along their plan of a kept decomposition;
-//! - `fe_sph` (to come): the particles of failed elements, from the FE owners to the SPH
+//! - [`fe_sph`]: the particles of failed elements, from the FE owners to the SPH
 //!   decomposition.
 use crate::kernels::rcb::RcbItem;
 use bytemuck::{Pod, Zeroable};
@@ -21,6 +21,7 @@ pub mod contact_bodies;
 pub mod contact_fe;
 pub mod contact_sph;
 pub mod fe_contact;
+pub mod fe_sph;
 pub mod sph_contact;
 
 /// A contact node travelling between the decompositions: its record and where its owner (its

@@ -68,11 +68,7 @@ impl ExplicitFe {
     /// Node `n`'s velocity correction for contact force `f` over `dt`, its constraints applied,
     /// `dv = F dt / m`, m/s: what [`ExplicitFe::apply_contact`] adds to the half-step velocity.
     pub fn contact_dv(&self, n: usize, f: [f64; 3], dt: f64) -> [f64; 3] {
-        let mut dv = [
-            f[0] * dt / self.mass[n],
-            f[1] * dt / self.mass[n],
-            f[2] * dt / self.mass[n],
-        ];
+        let mut dv = impulse_dv(f, dt, self.mass[n]);
         if self.constrained[n] {
             for (m, c) in &self.constraints {
                 if *m as usize == n {
@@ -107,11 +103,7 @@ impl ExplicitFe {
             if f == [0.0; 3] {
                 continue;
             }
-            let mut dv = [
-                f[0] * dt / self.mass[n],
-                f[1] * dt / self.mass[n],
-                f[2] * dt / self.mass[n],
-            ];
+            let mut dv = impulse_dv(f, dt, self.mass[n]);
             if let Some(i) = cons[n] {
                 // The constraint removes what it does not allow of the correction: it applies
                 // m (dv_constrained - dv_free) / dt to the node over the step (-F for a fixed
@@ -172,7 +164,21 @@ impl ExplicitFe {
         if self.constrained[n] {
             return self.a[n];
         }
-        let (f, im, g) = (self.force[n], 1.0 / self.mass[n], self.gravity);
+        let (f, im, g) = (
+            self.force[n],
+            crate::nodal::inverse_mass(self.mass[n]),
+            self.gravity,
+        );
         [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]]
+    }
+}
+
+/// `F dt / m`, m/s; zero for a node without mass (all its elements became particles).
+#[inline]
+fn impulse_dv(f: [f64; 3], dt: f64, m: f64) -> [f64; 3] {
+    if m > 0.0 {
+        [f[0] * dt / m, f[1] * dt / m, f[2] * dt / m]
+    } else {
+        [0.0; 3]
     }
 }

@@ -78,6 +78,41 @@ pub(crate) struct Erosion {
     pub any: bool,
     /// Failed elements over all ranks after the last step ([`ExplicitFe::count_failed`]).
     pub global: u64,
+    /// Per material: whether its failed elements become particles (their mass leaves their
+    /// nodes: [`ExplicitFe::release_failed`]); else they are deleted (their mass stays).
+    pub release: Vec<bool>,
+    /// Whether each element has been released (its mass taken off its nodes).
+    pub released: Vec<bool>,
+    /// Whether each failed element's nodes have had a step without its force: it is
+    /// released at the next [`ExplicitFe::release_failed`].
+    pub ready: Vec<bool>,
+}
+
+/// A failed element as it leaves the mesh to become a particle ([`ExplicitFe::release_failed`]):
+/// what it carries, at the end of the step it failed in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Released {
+    /// The element's global id.
+    pub elem_id: u64,
+    /// Its material index (`ExplicitFe::materials`).
+    pub material: usize,
+    /// Its mass rho0 V0, kg: what its corners took off their nodes (rho0 V0 / 8 each).
+    pub mass: f64,
+    /// Its centroid (the mean of its corners), m.
+    pub x: [f64; 3],
+    /// Its corners' momentum over its mass: the mean of its nodes' velocities, m/s (the
+    /// momentum sum (m/8) v_n the nodes lost, exactly as a particle of mass m carries it, to
+    /// round-off).
+    pub v: [f64; 3],
+    /// Its corners' kinetic energy sum (m/8) |v_n|^2 / 2 less the particle's m |v|^2 / 2, J
+    /// (>= 0: the motion within the element that one particle cannot carry).
+    pub kinetic_loss: f64,
+    /// Its present volume, m^3.
+    pub volume: f64,
+    /// Its Cauchy stress at failure (Voigt), Pa.
+    pub stress: [f64; 6],
+    /// Its material's history values (`Material::n_state` of them).
+    pub state: Vec<f64>,
 }
 
 impl ExplicitFe {
@@ -96,7 +131,159 @@ impl ExplicitFe {
             ep_last: vec![0.0; ne],
             any: false,
             global: 0,
+            release: Vec::new(),
+            released: vec![false; ne],
+            ready: vec![false; ne],
         }));
+    }
+
+    /// Per material (as `set_failure`'s criteria): whether its failed elements become
+    /// particles ([`ExplicitFe::release_failed`]) rather than being deleted.
+    pub fn set_release(&mut self, release: Vec<bool>) {
+        if let Some(r) = self.erosion.as_mut() {
+            r.release = release;
+        }
+    }
+
+    /// Whether a material's failed elements become particles.
+    pub fn releases(&self) -> bool {
+        self.erosion
+            .as_ref()
+            .is_some_and(|r| r.release.iter().any(|&b| b))
+    }
+
+    /// The failed elements whose material turns them into particles and whose nodes have had
+    /// a step without their force, released (collective: call it after each step on every
+    /// rank at once while [`ExplicitFe::released`] is short of [`ExplicitFe::eroded`]). An
+    /// element that failed in this step is released after the next: the forces of the step it
+    /// failed in hold its last forces, which the next step's first half-kick gives its nodes
+    /// with their masses; released at once, a node it alone held would drop its share of them
+    /// (no mass, no acceleration) and the momentum with it. Each leaves its record ([`Released`]) and its mass: the
+    /// lumped masses are summed again over the live and deleted elements, in the canonical
+    /// order of the forces ([`crate::assembly`]: the same bits at any rank count). A node all
+    /// of whose elements were released keeps no mass; the nodal update gives it no
+    /// acceleration. Each node keeps its velocity, so the momentum the nodes lose is
+    /// (m/8) sum v_n per released element, what its particle carries.
+    pub fn release_failed(
+        &mut self,
+        exchange: &mut NodeExchange,
+    ) -> Result<Vec<Released>, StepError> {
+        let Some(r) = self.erosion.as_mut() else {
+            return Ok(Vec::new());
+        };
+        let mut out = Vec::new();
+        for e in 0..self.elems.len() {
+            if !r.failed[e] || r.released[e] || !r.release[self.elem_material[e]] {
+                continue;
+            }
+            if !r.ready[e] {
+                r.ready[e] = true;
+                continue;
+            }
+            r.released[e] = true;
+            let mat = &self.materials[self.elem_material[e]];
+            let m = mat.density() * self.vol0[e];
+            let conn = &self.elems[e];
+            let xe = gather(&self.x, conn);
+            let ve = gather(&self.v, conn);
+            let v = centroid(&ve);
+            let mut ke_nodes = 0.0;
+            for vn in &ve {
+                ke_nodes += 0.5 * (m / 8.0) * (vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2]);
+            }
+            let ke_particle = 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            let stride = self.mat_stride;
+            out.push(Released {
+                elem_id: self.elem_id[e],
+                material: self.elem_material[e],
+                mass: m,
+                x: centroid(&xe),
+                v,
+                kinetic_loss: (ke_nodes - ke_particle).max(0.0),
+                volume: crate::hex::volume(&xe),
+                stress: self.state.stress(e),
+                state: self.mat_state[e * stride..e * stride + mat.n_state()].to_vec(),
+            });
+        }
+        self.resum_masses(exchange)?;
+        Ok(out)
+    }
+
+    /// Elements released to particles over all ranks, and those failed but not yet released
+    /// (collective).
+    pub fn count_released(&self, comm: &SimpleCommunicator) -> (u64, u64) {
+        let mine = self.erosion.as_ref().map_or([0u64; 2], |r| {
+            let mut c = [0u64; 2];
+            for e in 0..r.failed.len() {
+                if r.released[e] {
+                    c[0] += 1;
+                } else if r.failed[e] && r.release[self.elem_material[e]] {
+                    c[1] += 1;
+                }
+            }
+            c
+        });
+        let mut all = [0u64; 2];
+        comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
+        (all[0], all[1])
+    }
+
+    /// The kinetic energy and momentum of the nodes now, after a release took mass off them
+    /// (collective): the same exact sums as the closing kick's, with the new masses.
+    pub fn refresh_kinetic(&mut self, comm: &SimpleCommunicator) {
+        let (ge, gp) = (self.grids.energy, self.grids.momentum);
+        let mut s = [[0.0; 3]; 4];
+        for n in 0..self.x.len() {
+            if self.owned[n] {
+                let (m, v) = (self.mass[n], self.v[n]);
+                for c in 0..3 {
+                    ge.add(&mut s[0], m * (v[c] * v[c]));
+                    gp.add(&mut s[1 + c], m * v[c]);
+                }
+            }
+        }
+        let flat = crate::exact::flatten(&s);
+        let mut g = vec![0.0; flat.len()];
+        comm.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+        let g = crate::exact::values(&g);
+        self.energies.kinetic = 0.5 * g[0];
+        self.energies.momentum = [g[1], g[2], g[3]];
+    }
+
+    /// After a restart whose checkpoint had released elements: their mass off their nodes
+    /// again (collective; nothing where none was released on any rank).
+    pub fn restore_released_masses(
+        &mut self,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), StepError> {
+        if self.releases() {
+            self.resum_masses(exchange)?;
+        }
+        Ok(())
+    }
+
+    /// The lumped masses of the elements not released, summed as at the set-up (collective).
+    fn resum_masses(&mut self, exchange: &mut NodeExchange) -> Result<(), StepError> {
+        let released = self.erosion.as_ref().map(|r| &r.released);
+        let mut mass3 = vec![[0.0; 3]; self.x.len()];
+        for (e, conn) in self.elems.iter().enumerate() {
+            if released.is_some_and(|r| r[e]) {
+                self.assembly.record(e, |_| [0.0; 3]);
+                continue;
+            }
+            let me = self.materials[self.elem_material[e]].density() * self.vol0[e] / 8.0;
+            for &n in conn {
+                for c in 0..3 {
+                    mass3[n as usize][c] += me;
+                }
+            }
+            self.assembly.record(e, |_| [me; 3]);
+        }
+        self.assembly.finish(&mut mass3, exchange)?;
+        for (m, m3) in self.mass.iter_mut().zip(&mass3) {
+            *m = m3[0];
+        }
+        Ok(())
     }
 
     /// Whether a material of this run fails.
@@ -172,7 +359,15 @@ impl ExplicitFe {
                 r.failed[e] = true;
                 r.any = true;
                 let mut s = self.state.get(e);
-                s.stress = [0.0; 6];
+                // a failed element that becomes a particle keeps its stress for it
+                if !r
+                    .release
+                    .get(self.elem_material[e])
+                    .copied()
+                    .unwrap_or(false)
+                {
+                    s.stress = [0.0; 6];
+                }
                 s.hg = Default::default();
                 self.state.set(e, &s);
             }

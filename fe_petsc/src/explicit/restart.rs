@@ -111,9 +111,13 @@ impl ExplicitFe {
             out.push(("fe.tet_block_forces", tet_block_forces));
         }
         if let Some(r) = &self.erosion {
-            // Per element: failed (0 or 1), damage, plastic strain after the last step.
+            // Per element: failed (0, 1; 2: released to a particle), damage, plastic strain
+            // after the last step.
             let v = (0..self.elems.len())
-                .flat_map(|e| [r.failed[e] as u8 as f64, r.damage[e], r.ep_last[e]])
+                .flat_map(|e| {
+                    let f = r.failed[e] as u8 + r.released[e] as u8;
+                    [f as f64, r.damage[e], r.ep_last[e]]
+                })
                 .collect();
             out.push(("fe.erosion", v));
         }
@@ -204,6 +208,7 @@ impl ExplicitFe {
             let v = take("fe.erosion", 3 * r.failed.len())?;
             for (e, c) in v.chunks_exact(3).enumerate() {
                 (r.failed[e], r.damage[e], r.ep_last[e]) = (c[0] != 0.0, c[1], c[2]);
+                r.released[e] = c[0] == 2.0;
             }
             r.any = r.failed.iter().any(|&f| f);
         }

@@ -10,7 +10,7 @@
 //! that a pair's terms are split and added lane by lane (the operations of `Grid2::add` on
 //! each, in vector registers).
 use super::tensor::{self, inverse, mul, Mat3};
-use super::{Solids, CORRECTION_SINGULAR};
+use super::{Solids, CORRECTION_MAX, CORRECTION_SINGULAR};
 use crate::exact::{note, PassGrids, TermMax};
 use crate::kernel::SmoothingKernel;
 use crate::particles::Particles;
@@ -300,7 +300,8 @@ fn gradient_pairs(
 ///
 /// For a linear field v = G x, v_b - v_a = G (x_b - x_a), so grad_sum_a = G shape_sum_a and
 /// L_a = G exactly, at the free surface too (where the uncorrected sum is short of neighbours).
-/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]) leaves the uncorrected sum. Also sets
+/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]), or one whose inverse has an entry
+/// past [`CORRECTION_MAX`], leaves the uncorrected sum. Also sets
 /// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
 /// B grad_a W is the corrected kernel gradient.
 pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
@@ -313,7 +314,9 @@ pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
         }
         s.grad_sum[i] = grad;
         s.shape_sum[i] = shape;
-        match inverse(&shape, CORRECTION_SINGULAR) {
+        let inv = inverse(&shape, CORRECTION_SINGULAR)
+            .filter(|inv| inv.iter().flatten().all(|x| x.abs() <= CORRECTION_MAX));
+        match inv {
             Some(inv) => {
                 s.grad_v[i] = mul(&grad, &inv);
                 s.correction[i] = tensor::transpose(&inv);

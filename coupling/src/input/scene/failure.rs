@@ -117,8 +117,8 @@ fn johnson_cook(cx: &Ctx, key: &str, v: &toml::Value) -> Result<[f64; 4], SceneE
     Ok(d)
 }
 
-/// `[[block]] failed`: `"delete"` for a block whose material fails; `"particles"` (the default
-/// there) is refused until failed elements can become particles.
+/// `[[block]] failed`: `"delete"`, or `"particles"` (the default where the material fails).
+/// The blocks of one material must agree (a material's failed elements become one thing).
 pub(super) fn check_failed(
     cx: &Ctx,
     blocks: &[Block],
@@ -138,26 +138,28 @@ pub(super) fn check_failed(
                 return Err(cx.err(&key, "expected \"delete\" or \"particles\"".into()));
             }
         };
-        match (fails, mode) {
-            (false, Some(_)) => {
-                return Err(cx.err(
-                    &key,
-                    format!(
-                        "material \"{}\" has no failure: give it failure = {{ plastic_strain = ... }} or remove failed",
-                        b.material
-                    ),
-                ))
-            }
-            (true, None | Some("particles")) => {
-                return Err(cx.err(
-                    &key,
-                    format!(
-                        "failed elements of material \"{}\" become particles by default (failed = \"particles\"), which is not built yet in this version (docs/status.md): set failed = \"delete\"",
-                        b.material
-                    ),
-                ))
-            }
-            _ => {}
+        if let (false, Some(_)) = (fails, mode) {
+            return Err(cx.err(
+                &key,
+                format!(
+                    "material \"{}\" has no failure: give it failure = {{ plastic_strain = ... }} or remove failed",
+                    b.material
+                ),
+            ));
+        }
+        let deletes = mode == Some("delete");
+        if let Some(j) = blocks[..i]
+            .iter()
+            .position(|o| o.material == b.material && o.deletes() != deletes)
+        {
+            return Err(cx.err(
+                &key,
+                format!(
+                    "block[{j}] of the same material \"{}\" says failed = \"{}\": the blocks of one material must agree",
+                    b.material,
+                    if blocks[j].deletes() { "delete" } else { "particles" }
+                ),
+            ));
         }
     }
     Ok(())

@@ -259,35 +259,56 @@ fn johnson_cook_thermal_keys_by_key_and_temperature_by_default() {
     );
 }
 
-/// SCENE.md's keys for what is not built yet (failed elements turned into particles) are
-/// refused by name with what is missing, not as unknown keys (docs/status.md).
+/// `[[block]] failed` (docs/scene.md): a failing material's elements become particles when
+/// the key is omitted or says "particles", are deleted with "delete"; the blocks of one
+/// material must agree, and a block whose material does not fail cannot say it (each refusal
+/// one line naming the key).
 #[test]
-fn keys_of_what_is_not_built_yet_are_refused_by_name() {
+fn failed_elements_become_particles_by_default_and_blocks_of_a_material_agree() {
     let b = base();
-    // A J2 material that fails: its elements become particles by default, not built yet.
     let j2_failing = b.replace(
         "model = \"elastic\"\n",
         "model = \"j2_plastic\"\nyield_stress = 3.5e8\nhardening_modulus = 1.0e9\n\
          failure = { plastic_strain = 0.5 }\n",
     );
-    let cases: Vec<(String, &str, &str)> = vec![
-        (j2_failing.clone(), "block[0].failed", "particles"),
+    let with_failed = |t: &str, mode: &str| {
+        t.replace(
+            "velocity = [1.0, 0.0, 0.0]\n",
+            &format!("velocity = [1.0, 0.0, 0.0]\nfailed = \"{mode}\"\n"),
+        )
+    };
+    let at = Path::new("scene.toml");
+    for (text, releases) in [
+        (j2_failing.clone(), true),
+        (with_failed(&j2_failing, "particles"), true),
+        (with_failed(&j2_failing, "delete"), false),
+    ] {
+        let sc = parse(&text, at).expect("accepted");
+        assert_eq!(sc.releases_any(), releases, "{text}");
+    }
+    // a second block of the same material that deletes
+    let two = format!(
+        "{j2_failing}\n[[block]]\ngroup = \"left\"\nmaterial = \"steel\"\nfailed = \"delete\"\n"
+    );
+    for (text, key, needle) in [
+        (two, "block[1].failed", "must agree"),
         (
-            j2_failing.replace(
-                "velocity = [1.0, 0.0, 0.0]\n",
-                "velocity = [1.0, 0.0, 0.0]\nfailed = \"particles\"\n",
-            ),
+            with_failed(&b, "particles"),
             "block[0].failed",
-            "particles",
+            "has no failure",
         ),
-    ];
-    for (text, key, needle) in cases {
+        (
+            with_failed(&j2_failing, "dust"),
+            "block[0].failed",
+            "expected",
+        ),
+    ] {
         let e = refused(&text);
         let line = e.to_string();
         assert!(e.key.starts_with(key), "{key}: {line}");
         assert!(
-            line.contains(needle) && line.contains("not built yet"),
-            "{key}: expected {needle:?} and \"not built yet\" in {line:?}"
+            line.contains(needle),
+            "{key}: expected {needle:?} in {line:?}"
         );
         assert!(!line.contains('\n'), "one line: {line:?}");
     }

@@ -268,7 +268,8 @@ impl Contact {
     ) -> Result<Contact, String> {
         // contact_forces.csv: every pair of blocks with contact faces, in scene order, then
         // each block with the particle sets, where particles take part.
-        let particles = def.particles && with_particles && !choice.static_decomposition;
+        let particles =
+            def.particles == Some(true) && with_particles && !choice.static_decomposition;
         let sets = if particles { particle_sets } else { &[] };
         let pair_forces = pairs::PairForces::new(
             blocks,

@@ -48,6 +48,12 @@ pub struct Fe {
     /// The contact surfaces a `[contact]` table names (`Fe::set_contact_surfaces`): the
     /// nodes and faces the FE stage lends the contact stage.
     contact_surfaces: Option<crate::transfer::fe_contact::FeContact>,
+    /// Failed elements released to particles since the driver last took them
+    /// ([`Fe::take_released`]), the global count of released elements, and of failed
+    /// elements waiting for their release (`ExplicitFe::release_failed`).
+    released: (Vec<fe_petsc::explicit::failure::Released>, u64, u64),
+    /// The global count of failed elements at the last release.
+    eroded_seen: u64,
 }
 
 impl Fe {
@@ -120,6 +126,16 @@ impl Fe {
                 .map(|(_, f)| *f)
                 .collect();
             fe.set_failure(criteria);
+            let release = (0..scene.materials.len())
+                .filter(|&m| {
+                    scene
+                        .blocks
+                        .iter()
+                        .any(|b| b.material == scene.materials[m].name)
+                })
+                .map(|m| scene.releases(m))
+                .collect();
+            fe.set_release(release);
         }
         match &mut integrator {
             Integrator::Explicit(fe) => fe.initial_energies(world),
@@ -132,6 +148,8 @@ impl Fe {
             wall_s: 0.0,
             reaction_groups,
             contact_surfaces: None,
+            released: (Vec::new(), 0, 0),
+            eroded_seen: 0,
         })
     }
 
@@ -191,6 +209,29 @@ impl Fe {
         Ok(())
     }
 
+    /// The failed elements released to particles since the last call (this rank's), in
+    /// element order.
+    pub fn take_released(&mut self) -> Vec<fe_petsc::explicit::failure::Released> {
+        std::mem::take(&mut self.released.0)
+    }
+
+    /// The global count of failed elements released to particles.
+    pub fn released_count(&self) -> u64 {
+        self.released.1
+    }
+
+    /// After a restart (collective): the counts of released and waiting elements, and of
+    /// failed ones.
+    pub fn restore_release_counts(&mut self, world: &SimpleCommunicator) {
+        if let Integrator::Explicit(fe) = &mut self.integrator {
+            if fe.releases() {
+                fe.count_failed(world);
+                self.eroded_seen = fe.eroded();
+                (self.released.1, self.released.2) = fe.count_released(world);
+            }
+        }
+    }
+
     /// The state (nodes, elements, energies).
     pub fn state(&self) -> &ExplicitFe {
         match &self.integrator {
@@ -212,7 +253,11 @@ impl Fe {
     fn refresh_after_restart(&mut self) -> Result<(), String> {
         let ex = &mut self.mesh.exchange;
         match &mut self.integrator {
-            Integrator::Explicit(fe) => fe.refresh_after_restart(ex),
+            Integrator::Explicit(fe) => {
+                // the released elements' mass off their nodes again
+                fe.refresh_after_restart(ex)
+                    .and_then(|_| fe.restore_released_masses(ex))
+            }
             Integrator::Implicit(imp) => imp.refresh_after_restart(ex),
         }
         .map_err(|e| format!("checkpoint: {e}"))
@@ -298,7 +343,21 @@ impl Stage for Fe {
         let t0 = Instant::now();
         let next = match &mut self.integrator {
             Integrator::Explicit(fe) => {
-                Self::explicit_forces(world, &self.file, fe, &mut self.mesh, dt)?
+                let next = Self::explicit_forces(world, &self.file, fe, &mut self.mesh, dt)?;
+                // The same counts on every rank: every rank releases (a collective nodal sum).
+                if fe.releases() && (fe.eroded() != self.eroded_seen || self.released.2 > 0) {
+                    self.eroded_seen = fe.eroded();
+                    let born =
+                        fe.release_failed(&mut self.mesh.exchange)
+                            .map_err(|e| StageError {
+                                unstable: false,
+                                message: format!("{}: {e}", self.file),
+                            })?;
+                    self.released.0.extend(born);
+                    (self.released.1, self.released.2) = fe.count_released(world);
+                    fe.refresh_kinetic(world);
+                }
+                next
             }
             Integrator::Implicit(imp) => {
                 Self::implicit_step(world, &self.file, imp, &mut self.mesh)?;

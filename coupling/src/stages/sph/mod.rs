@@ -51,7 +51,27 @@ pub struct Sph {
     gravity_curve: Option<crate::input::curve::Curve>,
     /// The time at the start of the present step (the driver's clock), s.
     time: f64,
+    /// Per scene material, its EOS index and initial specific energy (`setup::MaterialMap`).
+    map: setup::MaterialMap,
+    /// The particles the scene seeded, over all ranks (the failed elements' particles come
+    /// after them, in the order they failed, at each step in the order of element ids).
+    pub seeded: u64,
 }
+
+/// What the SPH stage of a scene whose failed elements become particles knows of them
+/// before the first one fails.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Births {
+    /// Their mean element size (V0^(1/3)), m: the spacing of the artificial stress where no
+    /// `[[particles]]` entry is solid.
+    pub spacing: f64,
+    /// The mass of the elements that may fail, kg (the sums' grids bound it).
+    pub mass: f64,
+}
+
+/// The smoothing length of a failed element's particle over its size V^(1/3) (the
+/// `[[particles]] h_factor` default).
+pub const BORN_H_FACTOR: f64 = 1.2;
 
 impl Sph {
     /// Particles of the scene on their decomposition, set up at t = 0 (collective); `kept_pairs`:
@@ -61,8 +81,9 @@ impl Sph {
         scene: &Scene,
         kept_pairs: bool,
         kernel: crate::driver::KernelChoice,
+        births: Option<Births>,
     ) -> Result<Sph, String> {
-        let (mut params, map, solid_models) = params_from_scene(scene)?;
+        let (mut params, map, solid_models) = params_from_scene(scene, births.map(|b| b.spacing))?;
         // Gravity at t = 0 (`gravity_curve`); `finish` sets it at each step's end.
         if let Some(c) = &scene.gravity_curve {
             let s = c.value(0.0);
@@ -86,6 +107,7 @@ impl Sph {
         }
         let p = &stage.parts;
         let mass = fe_petsc::exact::total(world, &p.m[..p.n_owned]);
+        let mass = mass + births.map_or(0.0, |b| b.mass);
         stage.grids = fe_petsc::exact::SumGrids::for_mass(if mass > 0.0 { mass } else { 1.0 });
         stage.set_contact_density(contact_rho);
         stage.set_kept_pairs(kept_pairs);
@@ -108,7 +130,61 @@ impl Sph {
             gravity0: scene.gravity,
             gravity_curve: scene.gravity_curve.clone(),
             time: 0.0,
+            map,
+            seeded: n_total,
         })
+    }
+
+    /// Failed elements become particles (collective: every rank calls it when any element
+    /// was released on any rank; `born` is this rank's, each with its scene material; dense
+    /// indices `n_total` on, in element id order): each
+    /// a particle of its material at the element's centroid, with its mass, momentum
+    /// (the mean of its nodes' velocities), density m / V, size V^(1/3) (h =
+    /// [`BORN_H_FACTOR`] times it), stress and history, and zero specific internal energy
+    /// (the work the element took stays in the mesh's internal energy). The stage then
+    /// rebuilds its decomposition and its rates with them (`SphStage::after_births`).
+    pub fn add_born(
+        &mut self,
+        world: &SimpleCommunicator,
+        born: &[(fe_petsc::explicit::failure::Released, usize)],
+    ) -> Result<(), String> {
+        // Dense indices in the order of the element ids over all ranks, after every particle
+        // so far: the same at any rank count, and 0..N over the particles stays whole.
+        let mine: Vec<u64> = born.iter().map(|(r, _)| r.elem_id).collect();
+        let mut all = crate::kernels::collective::all_gather_varcount(world, &mine);
+        all.sort_unstable();
+        let mut recs = Vec::with_capacity(born.len());
+        for (r, mat) in born {
+            let k = all.binary_search(&r.elem_id).expect("gathered") as u64;
+            let (eos, e0) = self.map[*mat].ok_or("a failed element's material has no SPH model")?;
+            let rho = r.mass / r.volume;
+            let h = BORN_H_FACTOR * r.volume.cbrt();
+            let rec = sph::ParticleRecord {
+                id: self.n_total + k,
+                x: r.x,
+                v: r.v,
+                vhat: r.v,
+                m: r.mass,
+                rho,
+                e: e0,
+                h,
+                rho_half: rho,
+                e_half: e0,
+                mat: eos as u32,
+                ..sph::ParticleRecord::default()
+            };
+            let mut solid = sph::solid::SolidRecord {
+                stress: r.stress,
+                ..Default::default()
+            };
+            solid.state[..r.state.len()].copy_from_slice(&r.state);
+            recs.push((rec, solid));
+        }
+        self.stage.add_born(&recs);
+        self.stage.after_births()?;
+        self.n_total += all.len() as u64;
+        self.globals = globals(world, &self.stage);
+        Ok(())
     }
 
     /// The rest of the step after the drift and the contact correction (collective): the

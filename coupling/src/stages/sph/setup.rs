@@ -36,8 +36,13 @@ pub struct SolidModels {
 /// table, a linear Tait entry (gamma 1: p = rho0 c0^2 (rho/rho0 - 1), c = c0 with c0 =
 /// sqrt(wave modulus / rho0)) that only the integrator's EOS calls read: the stage sets a
 /// solid's p and c from its stress after each of them (`sph::solid::solid_pressure`).
+///
+/// A material whose failed elements become particles (`Scene::releases`) is a solid of the
+/// table too; `born_spacing` (m) is then the spacing of its particles' artificial stress where
+/// no `[[particles]]` entry is solid.
 pub fn params_from_scene(
     scene: &Scene,
+    born_spacing: Option<f64>,
 ) -> Result<(Params, MaterialMap, Option<SolidModels>), String> {
     let file = scene.file.display();
     let mut eos = Vec::new();
@@ -45,7 +50,7 @@ pub fn params_from_scene(
     let mut models: Vec<Option<Arc<dyn StressModel>>> = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {
         let Some(spec) = &m.eos else {
-            let used = scene.particles.iter().any(|p| p.material == m.name);
+            let used = scene.particles.iter().any(|p| p.material == m.name) || scene.releases(i);
             if !used {
                 map.push(None);
                 continue;
@@ -90,7 +95,7 @@ pub fn params_from_scene(
         models.resize(eos.len(), None);
         Some(SolidModels {
             models,
-            art: artificial_stress(scene),
+            art: artificial_stress(scene, born_spacing),
         })
     };
     let mut params = Params::new(eos);
@@ -166,15 +171,17 @@ pub const SOLID_VISCOSITY_BETA: f64 = 0.0;
 
 /// The artificial stress of a scene with solid particles: `[sph] artificial_stress`, or Gray et
 /// al.'s epsilon 0.3, n 4 where omitted (None where epsilon = 0), at the initial spacing of the
-/// first solid `[[particles]]` entry (delta_p, where f_ab = 1).
-fn artificial_stress(scene: &Scene) -> Option<ArtificialStress> {
+/// first solid `[[particles]]` entry (delta_p, where f_ab = 1), or without one at
+/// `born_spacing` (the failed elements' particles': their mean element size).
+fn artificial_stress(scene: &Scene, born_spacing: Option<f64>) -> Option<ArtificialStress> {
     let solid = scene.particles.iter().find(|p| {
         scene
             .materials
             .iter()
             .any(|m| m.name == p.material && m.eos.is_none())
-    })?;
-    let mut a = ArtificialStress::new(solid.spacing);
+    });
+    let spacing = solid.map(|p| p.spacing).or(born_spacing)?;
+    let mut a = ArtificialStress::new(spacing);
     if let Some(d) = scene.sph.as_ref().and_then(|s| s.artificial_stress) {
         a.epsilon = d.epsilon;
         a.n = d.n as i32;

@@ -308,3 +308,35 @@ impl SphStage {
         Ok(recs)
     }
 }
+
+impl SphStage {
+    /// Adds particles of failed elements to this rank's owned particles (each with its solid
+    /// state; the FE -> SPH transfer, `transfer::fe_sph`). Call [`SphStage::after_births`]
+    /// next, on every rank.
+    pub fn add_born(&mut self, born: &[(ParticleRecord, SolidRecord)]) {
+        self.parts.truncate_ghosts();
+        let sp = self
+            .solid
+            .as_mut()
+            .expect("particles of failed elements are solids");
+        sp.solids.truncate(self.parts.n_owned);
+        for (rec, solid) in born {
+            self.parts.push_owned(rec);
+            sp.solids.push_owned(solid);
+        }
+    }
+
+    /// After particles were born on any rank (collective): a fresh decomposition (RCB moves
+    /// the new particles to their boxes), its ghosts, and the rates at the present state with
+    /// every particle, as at the set-up (the stress stays; p and c follow from it).
+    pub fn after_births(&mut self) -> Result<(), String> {
+        self.verlet = None;
+        self.kept_box = None;
+        self.pair_count.clear();
+        self.rebuild()?;
+        self.make_ghosts();
+        self.evaluate_solid(None);
+        self.refresh_output();
+        self.check_partners()
+    }
+}
