@@ -766,3 +766,26 @@ fn perforation_with_eroding_contact_stopped_and_restarted_ends_bit_identical_at_
         &["contact_imbalance", "contact_bytes"],
     );
 }
+
+#[test]
+fn perforation_into_particles_stopped_and_restarted_ends_bit_identical_at_np_3() {
+    // scenes/ball_perforation.toml with its failed elements becoming particles (`failed`
+    // omitted), stopped at step 300 with particles born: the released flags, the nodal masses
+    // summed again without them, the particles with their solid state, the counts and the
+    // conversion energy come back, so the rest of the run is the run's without a stop, bit for
+    // bit (but the contact stage's cost columns).
+    let dir = workdir("restart_perforation_particles_np3");
+    let text = bundled_scene("ball_perforation")
+        .replace("end_time = 3.0e-5", "end_time = 2.0e-5")
+        .replace("failed = \"delete\"\n", "");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("ball_perforation_particles.toml");
+    std::fs::write(&scene, text).unwrap();
+    stop_and_restart_in(
+        &dir,
+        &scene,
+        3,
+        300,
+        &["contact_imbalance", "contact_bytes"],
+    );
+}

@@ -241,6 +241,14 @@ impl Sph {
         };
         self.external_work = g[6];
         self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
+        // the particles over all ranks, failed elements' included (absent: the seeded ones)
+        if let Some(n) = r
+            .get::<u64>("sph.n_total")
+            .ok()
+            .and_then(|v| v.first().copied())
+        {
+            self.n_total = n;
+        }
         Ok(())
     }
 }
@@ -293,6 +301,7 @@ impl Stage for Sph {
 
     fn save(&self, w: &mut StateWriter) {
         self.stage.save(w);
+        w.put("sph.n_total", &[self.n_total]);
         let g = &self.globals;
         w.put(
             "sph.globals",
