@@ -300,8 +300,8 @@ fn gradient_pairs(
 ///
 /// For a linear field v = G x, v_b - v_a = G (x_b - x_a), so grad_sum_a = G shape_sum_a and
 /// L_a = G exactly, at the free surface too (where the uncorrected sum is short of neighbours).
-/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]), or one whose inverse has an entry
-/// past [`CORRECTION_MAX`], leaves the uncorrected sum. Also sets
+/// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]), or a moving particle's whose inverse
+/// has an entry past [`CORRECTION_MAX`], leaves the uncorrected sum. Also sets
 /// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
 /// B grad_a W is the corrected kernel gradient.
 pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
@@ -314,8 +314,10 @@ pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
         }
         s.grad_sum[i] = grad;
         s.shape_sum[i] = shape;
+        // (a fixed particle's B stays as it is: a clamp's last layers have entries past 1,000
+        // and are part of the clamp's stiffness; they never move)
         let inv = inverse(&shape, CORRECTION_SINGULAR)
-            .filter(|inv| inv.iter().flatten().all(|x| x.abs() <= CORRECTION_MAX));
+            .filter(|inv| p.fixed[i] || inv.iter().flatten().all(|x| x.abs() <= CORRECTION_MAX));
         match inv {
             Some(inv) => {
                 s.grad_v[i] = mul(&grad, &inv);

@@ -82,13 +82,15 @@ pub struct SolidGhost {
 /// neighbours in fewer than three independent directions).
 pub const CORRECTION_SINGULAR: f64 = 1e-6;
 
-/// The largest entry of the kernel-gradient correction B = shape_sum^-T that is used; past it
-/// the uncorrected gradient is. In a lattice B stays near the identity (about 2 at a corner,
+/// The largest entry of the kernel-gradient correction B = shape_sum^-T that a moving particle
+/// uses; past it the uncorrected gradient is. In a lattice B stays near the identity (about 2 at a corner,
 /// where shape_sum's eigenvalues are about 1/2); a particle with a few partners, nearly in a
 /// plane or a line (a failed element's particle among a handful of others), has a
 /// near-singular shape_sum whose inverse amplifies its velocity gradient and its forces
 /// a hundredfold (measured: entries 100-400 with 4-7 partners, the stress changing sign from
-/// step to step and the particles' internal energy growing without bound).
+/// step to step and the particles' internal energy growing without bound). Fixed particles
+/// keep theirs: the outer layers of a clamp of fixed particles have entries past 1,000 (the
+/// oscillating plate's), part of the clamp's stiffness, and they never move.
 pub const CORRECTION_MAX: f64 = 10.0;
 
 /// The solid state of every entry (owned first, ghosts after, as `Particles`), beside the
