@@ -86,6 +86,9 @@ pub(crate) struct Erosion {
     /// Whether each failed element's nodes have had a step without its force: it is
     /// released at the next [`ExplicitFe::release_failed`].
     pub ready: Vec<bool>,
+    /// Each failed element's volume in the step it failed (the last its loop accepted), m^3:
+    /// its particle's volume (out of the loop, its corners may fold it before the release).
+    pub vol_fail: Vec<f64>,
 }
 
 /// A failed element as it leaves the mesh to become a particle ([`ExplicitFe::release_failed`]):
@@ -107,7 +110,7 @@ pub struct Released {
     /// Its corners' kinetic energy sum (m/8) |v_n|^2 / 2 less the particle's m |v|^2 / 2, J
     /// (>= 0: the motion within the element that one particle cannot carry).
     pub kinetic_loss: f64,
-    /// Its present volume, m^3.
+    /// Its volume in the step it failed, m^3 (its particle's density is mass / volume).
     pub volume: f64,
     /// Its Cauchy stress at failure (Voigt), Pa.
     pub stress: [f64; 6],
@@ -134,6 +137,7 @@ impl ExplicitFe {
             release: Vec::new(),
             released: vec![false; ne],
             ready: vec![false; ne],
+            vol_fail: vec![0.0; ne],
         }));
     }
 
@@ -200,7 +204,12 @@ impl ExplicitFe {
                 x: centroid(&xe),
                 v,
                 kinetic_loss: (ke_nodes - ke_particle).max(0.0),
-                volume: crate::hex::volume(&xe),
+                // the volume it failed at; its reference volume where that was not positive
+                volume: if r.vol_fail[e] > 0.0 && r.vol_fail[e].is_finite() {
+                    r.vol_fail[e]
+                } else {
+                    self.vol0[e]
+                },
                 stress: self.state.stress(e),
                 state: self.mat_state[e * stride..e * stride + mat.n_state()].to_vec(),
             });

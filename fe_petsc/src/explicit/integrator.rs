@@ -118,7 +118,7 @@ impl ExplicitFe {
         // m a(free), the force the constraint adds; then their kick and sums.
         for (node, _) in &self.constraints {
             let n = *node as usize;
-            let (f, im) = (read.force[n], 1.0 / read.mass[n]);
+            let (f, im) = (read.force[n], crate::nodal::inverse_mass(read.mass[n]));
             a[n] = [f[0] * im + g[0], f[1] * im + g[1], f[2] * im + g[2]];
         }
         std::mem::swap(&mut self.reaction, &mut self.reaction_old);

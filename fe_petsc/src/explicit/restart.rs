@@ -39,7 +39,8 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "implicit.wall_active"
         | "implicit.wall_slip"
         | "implicit.wall_force_n" => Node,
-        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" | "fe.erosion" => Element,
+        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" | "fe.erosion"
+        | "fe.erosion_volume" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
         "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
         _ => return None,
@@ -120,6 +121,7 @@ impl ExplicitFe {
                 })
                 .collect();
             out.push(("fe.erosion", v));
+            out.push(("fe.erosion_volume", r.vol_fail.clone()));
         }
         out
     }
@@ -209,6 +211,12 @@ impl ExplicitFe {
             for (e, c) in v.chunks_exact(3).enumerate() {
                 (r.failed[e], r.damage[e], r.ep_last[e]) = (c[0] != 0.0, c[1], c[2]);
                 r.released[e] = c[0] == 2.0;
+            }
+            // the failure volumes (absent from a checkpoint of a version without them)
+            match take("fe.erosion_volume", r.failed.len()) {
+                Ok(v) => r.vol_fail = v,
+                Err(e) if e.ends_with("missing") => {}
+                Err(e) => return Err(e),
             }
             r.any = r.failed.iter().any(|&f| f);
         }

@@ -2,7 +2,9 @@
 //! the plane y = 0, the frames of a run's fields.h5 side by side, each element whose initial
 //! centroid lies within `SLAB` of that plane drawn as its outline in the x-z plane (its six
 //! faces projected), filled by its equivalent plastic strain; failed elements (field `failed`
-//! = 1) left out. An SVG (no plotting library: polygons and text).
+//! = 1) left out; the particles within `SLAB` of the plane (a failed element's, where its
+//! block turns them into particles) drawn as discs of their size, filled likewise and outlined
+//! in black. An SVG (no plotting library: polygons, circles and text).
 //!
 //! `cargo run --release -p tdyn-tests --bin section_picture -- OUT_DIR SLAB_M XHALF_M docs/img/ball_perforation.svg`
 //!
@@ -103,6 +105,32 @@ fn main() {
                 .unwrap();
             }
         }
+        if let (Ok(xp), Ok(hp)) = (
+            g.dataset("particles/position")
+                .and_then(|d| d.read_raw::<f64>()),
+            g.dataset("particles/h").and_then(|d| d.read_raw::<f64>()),
+        ) {
+            let epp: Vec<f64> = g
+                .dataset("particles/plastic_strain")
+                .and_then(|d| d.read_raw())
+                .unwrap_or_else(|_| vec![0.0; hp.len()]);
+            for (i, h) in hp.iter().enumerate() {
+                let p = &xp[3 * i..3 * i + 3];
+                if p[1].abs() >= slab || p[0].abs() >= xhalf {
+                    continue;
+                }
+                // the particle's size is h / 1.2 (its element's V^(1/3)); the disc its half
+                let r = 0.5 * h / 1.2 * px;
+                writeln!(
+                    svg,
+                    r#"<circle cx="{:.2}" cy="{:.2}" r="{r:.2}" fill="{}" stroke="black" stroke-width="0.4"/>"#,
+                    left + (p[0] - xmin) * px,
+                    20.0 + (zmax - p[2]) * px,
+                    colour(if epp[i].is_nan() { 0.0 } else { epp[i] })
+                )
+                .unwrap();
+            }
+        }
         writeln!(
             svg,
             r#"<text x="{:.1}" y="14">t = {:.0} us</text>"#,
@@ -113,7 +141,7 @@ fn main() {
     }
     writeln!(
         svg,
-        r#"<text x="10" y="{:.1}">section y = 0 (elements within {:.2} mm); grey: elastic; yellow to red: plastic strain 0 to {SCALE_MAX}; failed elements removed</text>"#,
+        r#"<text x="10" y="{:.1}">section y = 0 (elements within {:.2} mm); grey: elastic; yellow to red: plastic strain 0 to {SCALE_MAX}; failed elements removed (outlined discs: their particles, where they become particles)</text>"#,
         height + 45.0,
         slab * 1e3
     )
