@@ -61,12 +61,7 @@ fn a_hanging_bar_fails_at_its_top_and_falls_freely() {
         // The energy balance holds through the failure (the failed elements' work stays in
         // internal_energy): within 1e-3 after the first 0.2 ms, whose error is large against
         // an energy scale starting from zero (1.1e-3 at 0.1 ms; 4.1e-4 at the second failure).
-        let err = column(&hh, &rows, "energy_error");
-        let worst = t
-            .iter()
-            .zip(&err)
-            .filter(|(t, _)| **t > 2e-4)
-            .fold(0.0f64, |m, (_, e)| m.max(e.abs()));
+        let worst = worst_energy_error_after(&hh, &rows, 2e-4);
         assert!(worst < 1e-3, "np {np}: energy error {worst:e} (1e-3)");
         for k in 1..t.len() {
             if t[k - 1] < 2.0e-3 + 1e-12 {
@@ -98,15 +93,7 @@ fn a_hanging_bar_fails_at_its_top_and_falls_freely() {
             *eroded.last().unwrap(),
             "np {np}: fields.h5's failed elements against history.csv's eroded_elements"
         );
-        match &first {
-            None => first = Some(out),
-            Some(a) => {
-                for f in ["history.csv", "probes.csv"] {
-                    let d = csv_columns_differ(a, &out, f, &[]);
-                    assert!(d.is_empty(), "np 3 against np 1: {f} columns differ: {d:?}");
-                }
-            }
-        }
+        same_columns_as_first(&mut first, out);
     }
 }
 
@@ -227,12 +214,7 @@ fn a_hanging_bar_whose_failed_top_becomes_a_particle_falls_whole() {
             *mp.last().unwrap() > 0.0,
             "np {np}: the failed top became a particle"
         );
-        let err = column(&hh, &rows, "energy_error");
-        let worst = t
-            .iter()
-            .zip(&err)
-            .filter(|(t, _)| **t > 2e-4)
-            .fold(0.0f64, |m, (_, e)| m.max(e.abs()));
+        let worst = worst_energy_error_after(&hh, &rows, 2e-4);
         assert!(worst < 1e-3, "np {np}: energy error {worst:e} (1e-3)");
         let mut checked = 0;
         for k in 2..t.len() {
@@ -251,13 +233,29 @@ fn a_hanging_bar_whose_failed_top_becomes_a_particle_falls_whole() {
             checked += 1;
         }
         assert!(checked > 10, "np {np}: {checked} rows of free fall");
-        match &first {
-            None => first = Some(out),
-            Some(a) => {
-                for f in ["history.csv", "probes.csv"] {
-                    let d = csv_columns_differ(a, &out, f, &[]);
-                    assert!(d.is_empty(), "np 3 against np 1: {f} columns differ: {d:?}");
-                }
+        same_columns_as_first(&mut first, out);
+    }
+}
+
+/// The largest |energy_error| of a history.csv (`hh`, `rows`) after time `t0`, s.
+fn worst_energy_error_after(hh: &[String], rows: &[Vec<f64>], t0: f64) -> f64 {
+    let t = column(hh, rows, "time");
+    let err = column(hh, rows, "energy_error");
+    t.iter()
+        .zip(&err)
+        .filter(|(t, _)| **t > t0)
+        .fold(0.0f64, |m, (_, e)| m.max(e.abs()))
+}
+
+/// Keeps the first run's folder, or checks that history.csv and probes.csv of `out` have the
+/// same columns as its.
+fn same_columns_as_first(first: &mut Option<PathBuf>, out: PathBuf) {
+    match first {
+        None => *first = Some(out),
+        Some(a) => {
+            for f in ["history.csv", "probes.csv"] {
+                let d = csv_columns_differ(a, &out, f, &[]);
+                assert!(d.is_empty(), "np 3 against np 1: {f} columns differ: {d:?}");
             }
         }
     }
