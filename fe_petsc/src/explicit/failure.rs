@@ -1,6 +1,7 @@
-//! Element failure and erosion (`[[material]] failure`, `[[block]] failed = "delete"`,
-//! docs/scene.md): an element whose material fails is taken out of the element loop and
-//! carries no force from then on; its mass stays on its nodes.
+//! Element failure and erosion (`[[material]] failure`, `[[block]] failed`, docs/scene.md): an
+//! element whose material fails is taken out of the element loop and carries no force from
+//! then on; deleted, its mass stays on its nodes; turned into a particle, it is released a
+//! step later with its mass ([`ExplicitFe::release_failed`]).
 //!
 //! **Criteria** (checked after each step's element update, on the accepted state):
 //! - `plastic_strain`: the element fails when its equivalent plastic strain reaches `eps_f`;
@@ -15,8 +16,10 @@
 //! set to zero, it adds zero to its nodes, and the element loop leaves it out of its group's
 //! lanes (a group with failed elements goes through the lane-by-lane path with live elements
 //! only), so it neither limits the stable step nor stops the run when it inverts. Its mass
-//! stays on its nodes: mass and momentum are untouched by the erosion, and the work the element
-//! took stays in `internal_energy` (energy it no longer gives back), so the balance holds.
+//! stays on its nodes (where it is deleted): mass and momentum are untouched by the erosion,
+//! and the work the element took stays in `internal_energy` (energy it no longer gives back),
+//! so the balance holds. An element that becomes a particle keeps its stress and its volume
+//! at failure for it.
 //! Every copy of the decision is the same bits at any rank count: it reads the element's own
 //! state, which is rank-independent.
 use super::*;
@@ -158,16 +161,18 @@ impl ExplicitFe {
 
     /// The failed elements whose material turns them into particles and whose nodes have had
     /// a step without their force, released (collective: call it after each step on every
-    /// rank at once while [`ExplicitFe::released`] is short of [`ExplicitFe::eroded`]). An
-    /// element that failed in this step is released after the next: the forces of the step it
-    /// failed in hold its last forces, which the next step's first half-kick gives its nodes
-    /// with their masses; released at once, a node it alone held would drop its share of them
-    /// (no mass, no acceleration) and the momentum with it. Each leaves its record ([`Released`]) and its mass: the
-    /// lumped masses are summed again over the live and deleted elements, in the canonical
-    /// order of the forces ([`crate::assembly`]: the same bits at any rank count). A node all
-    /// of whose elements were released keeps no mass; the nodal update gives it no
-    /// acceleration. Each node keeps its velocity, so the momentum the nodes lose is
-    /// (m/8) sum v_n per released element, what its particle carries.
+    /// rank at once where [`ExplicitFe::eroded`] grew or [`ExplicitFe::count_released`] counts
+    /// elements waiting). An element that failed in this step is released after the next: the
+    /// forces of the step it failed in hold its last forces, which the next step's first
+    /// half-kick gives its nodes with their masses; released at once, a node it alone held
+    /// would drop its share of them (no mass, no acceleration) and the momentum with it.
+    ///
+    /// Each leaves its record ([`Released`]) and its mass: the lumped masses are summed again
+    /// over the live and deleted elements, in the canonical order of the forces
+    /// ([`crate::assembly`]: the same bits at any rank count). A node all of whose elements
+    /// were released keeps no mass; the nodal update gives it no acceleration. Each node keeps
+    /// its velocity, so the momentum the nodes lose is (m/8) sum v_n per released element, what
+    /// its particle carries.
     pub fn release_failed(
         &mut self,
         exchange: &mut NodeExchange,
