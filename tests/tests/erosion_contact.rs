@@ -321,6 +321,13 @@ fn a_ball_perforates_a_free_plate_its_failed_elements_becoming_particles() {
         eroded > 0.0 && *mp.last().unwrap() > 0.0,
         "elements fail and become particles"
     );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(a.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["erosion"]["particles_from_elements"].as_u64(),
+        Some(particles as u64),
+        "report.json's particles from elements against the last frame's particles"
+    );
     assert!(
         (particles as f64 - eroded).abs() <= 2.0,
         "one particle per released element: {particles} for {eroded} failed (the last step's failures wait a step)"

@@ -139,6 +139,20 @@ pub fn write(
             serde_json::json!({ "tetrahedra": l.global_tets, "hexahedra": l.global_hexes }),
         );
     }
+    // Where a material fails: the failed elements, the particles they became and the kinetic
+    // energy their conversions took (history.csv's last values).
+    if let Some(c) = model.erosion_columns() {
+        let mut e = serde_json::json!({
+            "eroded_elements": c[0] as u64,
+            "mass_elements": c[1],
+            "mass_particles": c[2],
+        });
+        if let (Some(r), Some(fe)) = (&model.releases, &model.fe) {
+            e["particles_from_elements"] = fe.released_count().into();
+            e["conversion_energy"] = r.conversion_energy.into();
+        }
+        ex.insert("erosion".into(), e);
+    }
     if let Some(fe) = &model.fe {
         ex.insert("blocks".into(), f.hourglass.report(fe.state()));
         // How many ranks put their elements and nodes in a new order (a poor file order).
