@@ -11,26 +11,34 @@ use plotters::coord::Shift;
 use plotters::prelude::{DrawingArea, DrawingBackend};
 use std::path::{Path, PathBuf};
 
-/// The history.csv columns drawn, with their legend text, in drawing order. The contact and
-/// external-work columns are absent from runs without contact or without supports; a column
-/// that is zero throughout is not drawn.
-const CURVES: [(&str, &str); 5] = [
+/// The history.csv columns drawn, with their legend text, in drawing order. The contact,
+/// conversion and external-work columns are absent from runs without contact, without failed
+/// elements that become particles, or without supports; a column that is zero throughout is
+/// not drawn.
+const CURVES: [(&str, &str); 6] = [
     ("kinetic_energy", "kinetic"),
     ("internal_energy", "internal (stress work)"),
     ("hourglass_energy", "hourglass"),
     ("contact_energy", "contact (taken by push-back)"),
+    (
+        "conversion_energy",
+        "conversion (taken by failed elements turned into particles)",
+    ),
     ("external_work", "external work (gravity, supports)"),
 ];
 
 /// The index of the internal energy in [`CURVES`].
 const INTERNAL: usize = 1;
 
-/// The columns the balance adds up (E = K + I + H + C) and the one it subtracts (W).
-const BALANCE_TERMS: [&str; 4] = [
+/// The columns the balance adds up (E = K + I + H + C, C what contact and the conversions of
+/// failed elements to particles took, as history.csv's `energy_error` counts them) and the one
+/// it subtracts (W).
+const BALANCE_TERMS: [&str; 5] = [
     "kinetic_energy",
     "internal_energy",
     "hourglass_energy",
     "contact_energy",
+    "conversion_energy",
 ];
 
 /// Dash and gap of the balance's line and of the blocks' lines, pixels.
