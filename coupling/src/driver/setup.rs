@@ -172,12 +172,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     if let Some(i) = scene.failures.iter().position(Option::is_some) {
         let why = if implicit {
             Some("implicit mode (its tangent has no erosion)")
-        } else if scene
-            .particles
-            .iter()
-            .any(|p| p.material == scene.materials[i].name)
-        {
-            Some("particles of that material (particles do not fail yet)")
         } else if scene.run.tetrahedra == crate::input::scene::Tetrahedra::NodalPressure {
             Some("tetrahedra = \"nodal_pressure\" (the native tetrahedra do not fail yet)")
         } else {

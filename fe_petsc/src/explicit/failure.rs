@@ -52,6 +52,26 @@ impl Failure {
     }
 }
 
+impl Failure {
+    /// Whether a material point fails after a step of `dt` (s) whose update left the
+    /// equivalent plastic strain `ep` (grown by `dep` over the step) and the Cauchy stress
+    /// `stress` (Voigt, Pa): the plastic-strain criterion at `ep >= eps_f`; Johnson-Cook's
+    /// adds `dep / eps_f(sigma*, dep / dt)` to the `damage` D and fails at D >= 1 (module
+    /// doc). The one decision of the elements ([`ExplicitFe`]'s check after each step) and of
+    /// the solid particles (coupling's stress model of a `[[particles]]` material).
+    pub fn fails(&self, damage: &mut f64, ep: f64, dep: f64, stress: &[f64; 6], dt: f64) -> bool {
+        match *self {
+            Failure::PlasticStrain(eps_f) => ep >= eps_f,
+            Failure::JohnsonCook { .. } => {
+                if dep > 0.0 {
+                    *damage += dep / self.strain_to_failure(triaxiality(stress), dep / dt);
+                }
+                *damage >= 1.0
+            }
+        }
+    }
+}
+
 /// The stress triaxiality `-p / q` of a Voigt stress `[xx, yy, zz, xy, yz, zx]`: the mean
 /// stress over the von Mises stress (0 where the latter is 0).
 pub fn triaxiality(s: &[f64; 6]) -> f64 {
@@ -119,6 +139,9 @@ pub struct Released {
     pub stress: [f64; 6],
     /// Its material's history values (`Material::n_state` of them).
     pub state: Vec<f64>,
+    /// Its damage at failure (>= 1: Johnson-Cook's D, or 1 for the plastic-strain
+    /// criterion): its particle is born failed.
+    pub damage: f64,
 }
 
 impl ExplicitFe {
@@ -217,6 +240,8 @@ impl ExplicitFe {
                 },
                 stress: self.state.stress(e),
                 state: self.mat_state[e * stride..e * stride + mat.n_state()].to_vec(),
+                // failed: Johnson-Cook's D (>= 1), 1 for the plastic-strain criterion
+                damage: r.damage[e].max(1.0),
             });
         }
         self.resum_masses(exchange)?;
@@ -359,17 +384,7 @@ impl ExplicitFe {
             let ep = model.plastic_strain(&self.mat_state[e * stride..(e + 1) * stride]);
             let dep = ep - r.ep_last[e];
             r.ep_last[e] = ep;
-            let fails = match crit {
-                Failure::PlasticStrain(eps_f) => ep >= eps_f,
-                Failure::JohnsonCook { .. } => {
-                    if dep > 0.0 {
-                        let triax = triaxiality(&self.state.stress(e));
-                        r.damage[e] += dep / crit.strain_to_failure(triax, dep / dt);
-                    }
-                    r.damage[e] >= 1.0
-                }
-            };
-            if fails {
+            if crit.fails(&mut r.damage[e], ep, dep, &self.state.stress(e), dt) {
                 r.failed[e] = true;
                 r.any = true;
                 let mut s = self.state.get(e);

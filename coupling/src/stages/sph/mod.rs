@@ -140,8 +140,10 @@ impl Sph {
     /// indices `n_total` on, in element id order): each
     /// a particle of its material at the element's centroid, with its mass, momentum
     /// (the mean of its nodes' velocities), density m / V, size V^(1/3) (h =
-    /// [`BORN_H_FACTOR`] times it), stress and history, and zero specific internal energy
-    /// (the work the element took stays in the mesh's internal energy). The stage then
+    /// [`BORN_H_FACTOR`] times it), stress and history, its damage (born failed: no
+    /// deviatoric stress and no tension from its first update on, `strength::MaterialStress`)
+    /// and zero specific internal energy (the work the element took stays in the mesh's
+    /// internal energy). The stage then
     /// rebuilds its decomposition and its rates with them (`SphStage::after_births`).
     pub fn add_born(
         &mut self,
@@ -178,6 +180,8 @@ impl Sph {
                 ..Default::default()
             };
             solid.state[..r.state.len()].copy_from_slice(&r.state);
+            // born failed: the damage slot past the law's history (`strength::MaterialStress`)
+            solid.state[r.state.len()] = r.damage;
             recs.push((rec, solid));
         }
         self.stage.add_born(&recs);

@@ -57,8 +57,10 @@ pub fn params_from_scene(
             }
             let law = fe_petsc::material::build_material(m)
                 .map_err(|e| format!("{file}: material[{i}]: {e}"))?;
-            let model: Arc<dyn StressModel> =
-                Arc::new(super::strength::MaterialStress(Arc::from(law)));
+            let model: Arc<dyn StressModel> = Arc::new(super::strength::MaterialStress::new(
+                Arc::from(law),
+                scene.failures.get(i).copied().flatten(),
+            ));
             let mut state = vec![0.0; model.n_state()];
             model.init_state(&mut state);
             let c0 = (model.wave_modulus(m.density, &state) / m.density).sqrt();

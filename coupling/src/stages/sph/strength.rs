@@ -1,24 +1,59 @@
 //! fe_petsc's materials as the SPH stage's stress models (`sph::StressModel`): an element and a
 //! particle of the same `[[material]]` share one stress update (the elastic, J2 and
-//! Johnson-Cook laws of `fe_petsc::material`, their radial returns included). The SPH stage
-//! does not use it in runs yet: solid particles wait for the parallel step (docs/status.md).
+//! Johnson-Cook laws of `fe_petsc::material`, their radial returns included).
 //! The `sph` crate holds no material law and does not depend on fe_petsc; this adapter, in the
 //! crate that depends on both, joins them. Both traits take the same conventions: Voigt xx, yy,
 //! zz, xy, yz, zx, Pa, tension positive; strain increments with tensor shear components.
+use fe_petsc::explicit::failure::Failure;
 use fe_petsc::material::Material;
 use std::sync::Arc;
 
-/// A `[[material]]` of the elements as a particle's stress model.
+/// A `[[material]]` of the elements as a particle's stress model, with the material's
+/// `failure` criterion where it has one.
+///
+/// **Failed particles** (`[[material]] failure` on a `[[particles]]` material, and every
+/// particle a failed element becomes). The criterion is the elements' own
+/// ([`Failure::fails`]: the plastic strain reached, or Johnson-Cook's damage D at 1), checked
+/// after each stress update; its state is one history value past the law's, D (Johnson-Cook's
+/// damage; for the plastic-strain criterion 0, then 1 once failed). A failed particle is
+/// material broken into fragments: it carries no deviatoric stress and no tension, as fully
+/// damaged material in Benz & Asphaug's SPH fracture model (Icarus 107 (1994) 98) and in
+/// Libersky et al.'s (J. Comput. Phys. 109 (1993) 67). Its stress is the mean stress of the law's update alone (the bulk modulus, or the
+/// law's equation of state), capped at zero: sigma = min(tr(sigma_law) / 3, 0) I; the law's
+/// history (plastic strain, temperature) stays as it was at failure. The work the deviatoric
+/// stress took stays in the particle's internal energy.
 #[derive(Debug, Clone)]
-pub struct MaterialStress(pub Arc<dyn Material>);
+pub struct MaterialStress {
+    /// The law (fe_petsc's elastic, J2 or Johnson-Cook).
+    pub law: Arc<dyn Material>,
+    /// The material's failure criterion (`None`: it does not fail).
+    pub failure: Option<Failure>,
+}
+
+impl MaterialStress {
+    /// The law `law` with the criterion `failure`.
+    pub fn new(law: Arc<dyn Material>, failure: Option<Failure>) -> Self {
+        Self { law, failure }
+    }
+}
+
+/// The mean stress of `stress`, capped at zero, as a hydrostatic stress (a failed particle's).
+fn without_strength(stress: &mut [f64; 6]) {
+    let mean = ((stress[0] + stress[1] + stress[2]) / 3.0).min(0.0);
+    *stress = [mean, mean, mean, 0.0, 0.0, 0.0];
+}
 
 impl sph::StressModel for MaterialStress {
     fn n_state(&self) -> usize {
-        self.0.n_state()
+        self.law.n_state() + usize::from(self.failure.is_some())
     }
 
     fn init_state(&self, state: &mut [f64]) {
-        self.0.init_state(state)
+        let n = self.law.n_state();
+        self.law.init_state(&mut state[..n]);
+        if self.failure.is_some() {
+            state[n] = 0.0;
+        }
     }
 
     fn update_stress(
@@ -29,23 +64,44 @@ impl sph::StressModel for MaterialStress {
         dt: f64,
         density: f64,
     ) {
-        self.0.update_stress(stress, state, deps, dt, density)
+        let n = self.law.n_state();
+        let Some(failure) = self.failure else {
+            self.law.update_stress(stress, state, deps, dt, density);
+            return;
+        };
+        let (law_state, damage) = state.split_at_mut(n);
+        if damage[0] >= 1.0 {
+            // failed: the law's mean stress alone, its history left as it was
+            let mut scratch = [0.0; sph::solid::MAX_STATE];
+            scratch[..n].copy_from_slice(law_state);
+            self.law
+                .update_stress(stress, &mut scratch[..n], deps, dt, density);
+            without_strength(stress);
+            return;
+        }
+        let ep0 = self.law.plastic_strain(law_state);
+        self.law.update_stress(stress, law_state, deps, dt, density);
+        let ep = self.law.plastic_strain(law_state);
+        if failure.fails(&mut damage[0], ep, ep - ep0, stress, dt) {
+            damage[0] = damage[0].max(1.0);
+            without_strength(stress);
+        }
     }
 
     fn shear_modulus(&self) -> f64 {
-        self.0.shear_modulus()
+        self.law.shear_modulus()
     }
 
     fn wave_modulus(&self, density: f64, state: &[f64]) -> f64 {
-        self.0.wave_modulus(density, state)
+        self.law.wave_modulus(density, &state[..self.law.n_state()])
     }
 
     fn plastic_strain(&self, state: &[f64]) -> f64 {
-        self.0.plastic_strain(state)
+        self.law.plastic_strain(&state[..self.law.n_state()])
     }
 
     fn temperature(&self, state: &[f64]) -> Option<f64> {
-        self.0.temperature(state)
+        self.law.temperature(&state[..self.law.n_state()])
     }
 }
 
@@ -91,7 +147,7 @@ mod tests {
             mat: 0,
             fixed: false,
         });
-        let model: Arc<dyn StressModel> = Arc::new(MaterialStress(mat));
+        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(mat, None));
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         s.grad_v[0] = l;
         update_stress(&mut p, &mut s, dt);
@@ -160,6 +216,93 @@ mod tests {
             "3 mu dep = {} Pa, q_trial - q = {} Pa (1e-10)",
             3.0 * mu * ep,
             q_trial - q
+        );
+    }
+
+    #[test]
+    fn a_failing_j2_particle_follows_uniaxial_strain_then_keeps_only_compression() {
+        // Uniaxial strain (L = diag(r, 0, 0)), J2 with linear hardening H and failure at the
+        // plastic strain eps_f, in steps of the strain increment d. The closed form (radial
+        // return, exact for linear hardening on this proportional path): the mean stress is
+        // K eps (J2 flow keeps the volume); past 2 mu |eps| = sigma_y the plastic strain is
+        // ep = (2 mu |eps| - sigma_y) / (3 mu + H) and sigma_xx - sigma_yy = -(sigma_y + H ep).
+        // The particle fails at the first step whose ep reaches eps_f, i.e. past
+        // |eps_f_strain| = (sigma_y + (3 mu + H) eps_f) / (2 mu); from then on its stress is
+        // K eps I in compression (Benz & Asphaug 1994's fully damaged material) and zero once
+        // the strain turns to tension, its plastic strain frozen. Tolerance 1e-9 relative.
+        let (sy, h, eps_f) = (250e6, 2e9, 0.02);
+        let law = material(
+            "j2_plastic",
+            &[("yield_stress", sy), ("hardening_modulus", h)],
+        );
+        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(
+            law,
+            Some(Failure::PlasticStrain(eps_f)),
+        ));
+        let mut p = Particles::new();
+        p.push(NewParticle {
+            id: 1,
+            x: [0.0; 3],
+            v: [0.0; 3],
+            m: 7850e-9,
+            rho: 7850.0,
+            e: 0.0,
+            h: 1.2e-3,
+            mat: 0,
+            fixed: false,
+        });
+        let mut s = Solids::new(vec![Some(model.clone())], &p);
+        let n = model.n_state();
+        assert_eq!(n, 2, "J2's plastic strain and the damage");
+        let mu = E / (2.0 * (1.0 + NU));
+        let k = E / (3.0 * (1.0 - 2.0 * NU));
+        let (dt, d) = (1e-6, -1.0e-4);
+        let strain_f = (sy + (3.0 * mu + h) * eps_f) / (2.0 * mu);
+        let close = |a: f64, b: f64, what: &str| {
+            assert!(
+                (a - b).abs() <= 1e-9 * b.abs().max(1e6),
+                "{what}: {a:e}, closed form {b:e} (1e-9)"
+            );
+        };
+        let mut eps = 0.0;
+        let mut failed_at = None;
+        // 400 steps in compression (to -0.04), then 800 back (to +0.04)
+        for step in 0..1200 {
+            let inc = if step < 400 { d } else { -d };
+            s.grad_v[0] = [[inc / dt, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+            update_stress(&mut p, &mut s, dt);
+            eps += inc;
+            let sig = s.stress[0];
+            let ep = model.plastic_strain(&s.state[..n]);
+            let mean = (sig[0] + sig[1] + sig[2]) / 3.0;
+            if failed_at.is_none() && s.state[n - 1] >= 1.0 {
+                failed_at = Some(eps);
+            }
+            match failed_at {
+                None => {
+                    close(mean, k * eps, "mean stress before failure");
+                    let want_ep = ((2.0 * mu * eps.abs() - sy) / (3.0 * mu + h)).max(0.0);
+                    close(ep * 1e9, want_ep * 1e9, "plastic strain (x 1e9)");
+                    if want_ep > 0.0 {
+                        close(sig[0] - sig[1], -(sy + h * ep), "sigma_xx - sigma_yy");
+                    }
+                }
+                Some(_) => {
+                    let want = (k * eps).min(0.0);
+                    for (c, &v) in sig.iter().enumerate() {
+                        close(v, if c < 3 { want } else { 0.0 }, "failed stress");
+                    }
+                    assert!(
+                        ep < eps_f + (-d) * 2.0 * mu / (3.0 * mu + h),
+                        "plastic strain {ep} frozen at failure"
+                    );
+                }
+            }
+        }
+        let at = failed_at.expect("the particle fails");
+        assert!(
+            at.abs() >= strain_f && at.abs() < strain_f + d.abs(),
+            "failed at strain {at}, closed form: the first step past {strain_f}"
         );
     }
 }
