@@ -46,6 +46,12 @@ pub trait StressModel: Send + Sync + std::fmt::Debug {
         0.0
     }
 
+    /// Whether `state` holds a failed particle's (a law with a failure criterion: no
+    /// deviatoric stress and no tension from then on; output). Default false.
+    fn failed(&self, _state: &[f64]) -> bool {
+        false
+    }
+
     /// Temperature held in `state`, K, where the law keeps one (thermal softening; output).
     /// Default `None`.
     fn temperature(&self, _state: &[f64]) -> Option<f64> {

@@ -613,7 +613,7 @@ fn copper_taylor_bar_of_particles_on_a_meshed_wall() {
 /// whose plastic strain reached 0.5 carries what fully damaged material carries in Benz &
 /// Asphaug's SPH fracture model (Icarus 107, 1994): no deviatoric stress and no tension
 /// (sigma = min(mean, 0) I, exactly), its plastic strain frozen within one step's increment of
-/// 0.5; the particles that did not fail keep their strength (von Mises stress up to about the
+/// 0.5, and marked by the field `failed`; the particles that did not fail keep their strength (von Mises stress up to about the
 /// yield stress, 400 MPa). The energy balance holds (error below 1 %, measured 0.13 %: the
 /// deviatoric work stays in the particles' internal energy), and the strengthless foot spreads
 /// wider than the same bar's without failure.
@@ -621,10 +621,12 @@ fn copper_taylor_bar_of_particles_on_a_meshed_wall() {
 fn particles_of_a_failing_material_lose_their_strength_where_they_fail() {
     let dir = workdir("taylor_sph_failure");
     let base = bundled_scene("taylor_copper_sph").replace("end_time = 8.0e-5", "end_time = 4.0e-5");
-    let failing = base.replace(
-        "hardening_modulus = 100.0e6",
-        "hardening_modulus = 100.0e6\nfailure = { plastic_strain = 0.5 }",
-    );
+    let failing = base
+        .replace(
+            "hardening_modulus = 100.0e6",
+            "hardening_modulus = 100.0e6\nfailure = { plastic_strain = 0.5 }",
+        )
+        .replace("\"rank\"]", "\"rank\", \"failed\"]");
     assert_ne!(base, failing, "the scene's copper gains a failure");
     let (scene, plain) = (dir.join("failing.toml"), dir.join("plain.toml"));
     std::fs::write(&scene, failing).unwrap();
@@ -643,9 +645,15 @@ fn particles_of_a_failing_material_lose_their_strength_where_they_fail() {
         .read_raw()
         .unwrap();
     let s: Vec<f64> = g.dataset("particles/stress").unwrap().read_raw().unwrap();
+    let flag: Vec<f64> = g.dataset("particles/failed").unwrap().read_raw().unwrap();
     let (mut failed, mut strongest) = (0, 0.0f64);
     for (i, &e) in ep.iter().enumerate() {
         let t = &s[6 * i..6 * i + 6];
+        assert_eq!(
+            flag[i],
+            if e >= 0.5 { 1.0 } else { 0.0 },
+            "particle {i}: the field `failed` marks a plastic strain {e} past 0.5"
+        );
         if e >= 0.5 {
             failed += 1;
             assert!(

@@ -122,6 +122,8 @@ pub struct ParticleFrame<'a> {
     pub stress: Option<&'a [[f64; 6]]>,
     /// Equivalent plastic strain (runs with solid particles; 0 for a fluid).
     pub plastic_strain: Option<&'a [f64]>,
+    /// 1 for a failed particle, else 0 (runs with solid particles).
+    pub failed: Option<&'a [f64]>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -409,6 +411,9 @@ impl FieldWriter {
         }
         if let (true, Some(v)) = (self.wants("plastic_strain"), pf.plastic_strain) {
             cols.push(("plastic_strain", 1, scalar(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("failed"), pf.failed) {
+            cols.push(("failed", 1, scalar(move |i| v[i]), false));
         }
         if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
             cols.push(("rank", 1, scalar(move |i| f64::from(v[i])), true));

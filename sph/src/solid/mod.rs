@@ -271,6 +271,14 @@ impl Solids {
         m.temperature(&self.state[i * k..i * k + m.n_state()])
     }
 
+    /// Whether entry `i` has failed (its model's [`StressModel::failed`]; false for a fluid).
+    pub fn failed(&self, mat: u16, i: usize) -> bool {
+        self.model_ref(mat).is_some_and(|m| {
+            let k = self.stride;
+            m.failed(&self.state[i * k..i * k + m.n_state()])
+        })
+    }
+
     /// The equivalent plastic strain of entry `i` (0 for a fluid).
     pub fn plastic_strain(&self, mat: u16, i: usize) -> f64 {
         match self.model_ref(mat) {

@@ -224,9 +224,10 @@ impl Sph {
         rank: i32,
     ) -> ParticleFrame<'a> {
         let mut f = particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank);
-        if let Some((stress, eps)) = self.stage.solid_output() {
+        if let Some((stress, eps, failed)) = self.stage.solid_output() {
             f.stress = Some(stress);
             f.plastic_strain = Some(eps);
+            f.failed = Some(failed);
         }
         f
     }
@@ -405,6 +406,7 @@ pub fn particle_frame<'a>(
         h: Some(&p.h[..n]),
         stress: None,
         plastic_strain: None,
+        failed: None,
         rank: Some(ranks),
     }
 }

@@ -100,6 +100,10 @@ impl sph::StressModel for MaterialStress {
         self.law.plastic_strain(&state[..self.law.n_state()])
     }
 
+    fn failed(&self, state: &[f64]) -> bool {
+        self.failure.is_some() && state[self.law.n_state()] >= 1.0
+    }
+
     fn temperature(&self, state: &[f64]) -> Option<f64> {
         self.law.temperature(&state[..self.law.n_state()])
     }

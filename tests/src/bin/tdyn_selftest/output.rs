@@ -254,6 +254,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             h: Some(&h),
             stress: None,
             plastic_strain: None,
+            failed: None,
             rank: Some(&part_rank),
         };
         writer.write_frame(time, Some(&nodes), Some(&elements), Some(&particles))?;

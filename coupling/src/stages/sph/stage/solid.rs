@@ -38,6 +38,8 @@ pub struct SolidPart {
     pub out_stress: Vec<[f64; 6]>,
     /// See `out_stress`.
     pub out_plastic: Vec<f64>,
+    /// See `out_stress`: 1 for a failed particle, else 0.
+    pub out_failed: Vec<f64>,
 }
 
 /// A particle with its solid state as RCB moves it (the fluid runs' `Item` and 80 bytes).
@@ -71,6 +73,7 @@ impl SphStage {
             grad_grids: PassGrids::default(),
             out_stress: Vec::new(),
             out_plastic: Vec::new(),
+            out_failed: Vec::new(),
         });
     }
 
@@ -255,13 +258,17 @@ impl SphStage {
         sp.out_plastic.clear();
         sp.out_plastic
             .extend((0..n).map(|i| s.plastic_strain(p.mat[i], i)));
+        sp.out_failed.clear();
+        sp.out_failed
+            .extend((0..n).map(|i| f64::from(u8::from(s.failed(p.mat[i], i)))));
     }
 
-    /// The owned particles' stress and plastic strain for a field frame (runs with solids).
-    pub fn solid_output(&self) -> Option<(&[[f64; 6]], &[f64])> {
+    /// The owned particles' stress, plastic strain and failed flags for a field frame (runs
+    /// with solids).
+    pub fn solid_output(&self) -> Option<(&[[f64; 6]], &[f64], &[f64])> {
         self.solid
             .as_ref()
-            .map(|sp| (&sp.out_stress[..], &sp.out_plastic[..]))
+            .map(|sp| (&sp.out_stress[..], &sp.out_plastic[..], &sp.out_failed[..]))
     }
 
     /// The solid state of the owned particles for a checkpoint.
