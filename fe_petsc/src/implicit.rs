@@ -685,7 +685,8 @@ impl ImplicitFe {
         self.fe.assembly.finish(&mut self.force, exchange)?;
         let t_end = self.fe.time + dt;
         if let Some(l) = self.fe.loads_mut() {
-            l.evaluate(&self.x_trial, t_end, exchange)?;
+            // (implicit mode has no erosion)
+            l.evaluate(&self.x_trial, t_end, None, exchange)?;
             l.add_to(&mut self.force);
         }
         let t2 = Instant::now();

@@ -437,6 +437,11 @@ impl FeContact {
         }
     }
 
+    /// The global id of each face's element, aligned with `faces`.
+    pub fn face_element_ids(&self) -> Vec<u64> {
+        self.openings.elems.iter().map(|&(e, _)| e).collect()
+    }
+
     /// This step's records of the owned contact nodes, after `kick_drift`. `node_gid`: global
     /// id of each local node.
     pub fn node_records(&self, fe: &ExplicitFe, node_gid: &[u64]) -> Vec<NodeRecord> {

@@ -43,6 +43,10 @@ pub struct PressureLoad {
     /// This rank's faces: global face id (the same at any rank count) and the local nodes of
     /// its corners, ordered so that the right-hand rule gives the outward normal.
     pub faces: Vec<(u64, [u32; 4])>,
+    /// The local index of each face's element (aligned with `faces`; `u32::MAX`: an element
+    /// that cannot fail, such as a native tetrahedron). A failed element's face carries no
+    /// load: the material it bounded is gone.
+    pub elements: Vec<u32>,
 }
 
 /// The loads of one rank: the faces in key order, their ordered nodal sum and the loaded
@@ -52,6 +56,8 @@ pub struct Loads {
     sets: Vec<(f64, Option<Curve>)>,
     /// The faces in key order (load, face gid): their load and corners.
     faces: Vec<(u32, [u32; 4])>,
+    /// Each face's element (local index; `u32::MAX`: none that fails), in key order.
+    elements: Vec<u32>,
     /// The ordered nodal sum of the faces' forces.
     assembly: Assembly,
     /// Local nodes with a load on some rank's face (every copy of them), ascending.
@@ -97,15 +103,17 @@ impl Loads {
         nn: usize,
         ex: &mut NodeExchange,
     ) -> Result<Loads, PetscError> {
-        let mut keyed: Vec<([u64; 3], u32, [u32; 4])> = Vec::new();
+        let mut keyed: Vec<([u64; 3], u32, [u32; 4], u32)> = Vec::new();
         for (i, s) in sets.iter().enumerate() {
-            for &(gid, corners) in &s.faces {
-                keyed.push(([i as u64, gid, 0], i as u32, corners));
+            for (k, &(gid, corners)) in s.faces.iter().enumerate() {
+                let elem = s.elements.get(k).copied().unwrap_or(u32::MAX);
+                keyed.push(([i as u64, gid, 0], i as u32, corners, elem));
             }
         }
         keyed.sort_unstable_by_key(|k| k.0);
         let keys: Vec<[u64; 3]> = keyed.iter().map(|k| k.0).collect();
         let faces: Vec<(u32, [u32; 4])> = keyed.iter().map(|k| (k.1, k.2)).collect();
+        let elements: Vec<u32> = keyed.iter().map(|k| k.3).collect();
         let corners: Vec<[u32; 4]> = faces.iter().map(|f| f.1).collect();
         let assembly = Assembly::new(&corners, &keys, ex)?;
         // The loaded nodes on every copy: a mark per face corner, summed over the ranks.
@@ -123,6 +131,7 @@ impl Loads {
         Ok(Loads {
             sets: sets.into_iter().map(|s| (s.pressure, s.curve)).collect(),
             faces,
+            elements,
             assembly,
             nodes,
             now: vec![[0.0; 3]; nn],
@@ -132,11 +141,14 @@ impl Loads {
 
     /// Sets `now` to the loads at positions `x` and time `t` (collective): each face's
     /// forces added to its corners in key order, the shared nodes' sums taken by their
-    /// owners in the same order ([`Assembly::finish`]).
+    /// owners in the same order ([`Assembly::finish`]). `failed` (where elements fail: each
+    /// local element's flag) gives a failed element's faces no load (zero forces, in their
+    /// place in the order: the same bits at any rank count, as the flags are).
     pub fn evaluate(
         &mut self,
         x: &[[f64; 3]],
         t: f64,
+        failed: Option<&[bool]>,
         ex: &mut NodeExchange,
     ) -> Result<(), PetscError> {
         for &n in &self.nodes {
@@ -148,8 +160,13 @@ impl Loads {
             .map(|(p, c)| p * c.as_ref().map_or(1.0, |c| c.value(t)))
             .collect();
         for (k, &(set, corners)) in self.faces.iter().enumerate() {
-            let xf = corners.map(|n| x[n as usize]);
-            let f = face_forces(&xf, &corners, scale[set as usize]);
+            let gone = failed.is_some_and(|fl| fl.get(self.elements[k] as usize) == Some(&true));
+            let f = if gone {
+                [[0.0; 3]; 4]
+            } else {
+                let xf = corners.map(|n| x[n as usize]);
+                face_forces(&xf, &corners, scale[set as usize])
+            };
             for (j, &n) in corners.iter().enumerate() {
                 for c in 0..3 {
                     self.now[n as usize][c] += f[j][c];
@@ -228,7 +245,8 @@ impl ExplicitFe {
             return Ok(());
         }
         let mut l = Loads::new(sets, self.x.len(), exchange)?;
-        l.evaluate(&self.x, self.time, exchange)?;
+        let failed = self.erosion.as_ref().map(|r| &r.failed[..]);
+        l.evaluate(&self.x, self.time, failed, exchange)?;
         for &n in &l.nodes {
             let n = n as usize;
             for c in 0..3 {
@@ -245,7 +263,8 @@ impl ExplicitFe {
     pub fn refresh_after_restart(&mut self, exchange: &mut NodeExchange) -> Result<(), StepError> {
         self.gravity = self.gravity_at(self.time);
         if let Some(l) = &mut self.loads {
-            l.evaluate(&self.x, self.time, exchange)?;
+            let failed = self.erosion.as_ref().map(|r| &r.failed[..]);
+            l.evaluate(&self.x, self.time, failed, exchange)?;
         }
         Ok(())
     }
@@ -261,7 +280,8 @@ impl ExplicitFe {
             return Ok(());
         };
         l.keep();
-        l.evaluate(&self.x, t, exchange)?;
+        let failed = self.erosion.as_ref().map(|r| &r.failed[..]);
+        l.evaluate(&self.x, t, failed, exchange)?;
         for &n in &l.nodes {
             let n = n as usize;
             for c in 0..3 {

@@ -135,10 +135,8 @@ mod tests {
         )
     }
 
-    /// One particle of `mat` at rest and unstressed, given the velocity gradient `l`, after one
-    /// stress update over `dt` through `sph::solid::update_stress`: its stress, its pressure
-    /// and the model's plastic strain.
-    fn one_update(mat: Arc<dyn Material>, l: Mat3, dt: f64) -> ([f64; 6], f64, f64) {
+    /// One steel particle at rest (1 mm^3, material index 0).
+    fn one_particle() -> Particles {
         let mut p = Particles::new();
         p.push(NewParticle {
             id: 1,
@@ -151,6 +149,14 @@ mod tests {
             mat: 0,
             fixed: false,
         });
+        p
+    }
+
+    /// One particle of `mat` at rest and unstressed, given the velocity gradient `l`, after one
+    /// stress update over `dt` through `sph::solid::update_stress`: its stress, its pressure
+    /// and the model's plastic strain.
+    fn one_update(mat: Arc<dyn Material>, l: Mat3, dt: f64) -> ([f64; 6], f64, f64) {
+        let mut p = one_particle();
         let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(mat, None));
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         s.grad_v[0] = l;
@@ -243,18 +249,7 @@ mod tests {
             law,
             Some(Failure::PlasticStrain(eps_f)),
         ));
-        let mut p = Particles::new();
-        p.push(NewParticle {
-            id: 1,
-            x: [0.0; 3],
-            v: [0.0; 3],
-            m: 7850e-9,
-            rho: 7850.0,
-            e: 0.0,
-            h: 1.2e-3,
-            mat: 0,
-            fixed: false,
-        });
+        let mut p = one_particle();
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         let n = model.n_state();
         assert_eq!(n, 2, "J2's plastic strain and the damage");
