@@ -224,10 +224,10 @@ impl Sph {
         rank: i32,
     ) -> ParticleFrame<'a> {
         let mut f = particle_frame(&self.stage.parts, &self.ids, ranks, labels, rank);
-        if let Some((stress, eps, failed)) = self.stage.solid_output() {
-            f.stress = Some(stress);
-            f.plastic_strain = Some(eps);
-            f.failed = Some(failed);
+        if let Some(o) = self.stage.solid_output() {
+            f.stress = Some(o.stress);
+            f.plastic_strain = Some(o.plastic_strain);
+            f.failed = Some(o.failed);
         }
         f
     }

@@ -42,6 +42,16 @@ pub struct SolidPart {
     pub out_failed: Vec<f64>,
 }
 
+/// The owned solid particles' output fields (`SphStage::solid_output`).
+pub struct SolidOutput<'a> {
+    /// Cauchy stress (a fluid's -p I), Pa.
+    pub stress: &'a [[f64; 6]],
+    /// Equivalent plastic strain (0 for a fluid).
+    pub plastic_strain: &'a [f64],
+    /// 1 for a failed particle, else 0.
+    pub failed: &'a [f64],
+}
+
 /// A particle with its solid state as RCB moves it (the fluid runs' `Item` and 80 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -265,10 +275,12 @@ impl SphStage {
 
     /// The owned particles' stress, plastic strain and failed flags for a field frame (runs
     /// with solids).
-    pub fn solid_output(&self) -> Option<(&[[f64; 6]], &[f64], &[f64])> {
-        self.solid
-            .as_ref()
-            .map(|sp| (&sp.out_stress[..], &sp.out_plastic[..], &sp.out_failed[..]))
+    pub fn solid_output(&self) -> Option<SolidOutput<'_>> {
+        self.solid.as_ref().map(|sp| SolidOutput {
+            stress: &sp.out_stress,
+            plastic_strain: &sp.out_plastic,
+            failed: &sp.out_failed,
+        })
     }
 
     /// The solid state of the owned particles for a checkpoint.
