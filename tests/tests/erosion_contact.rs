@@ -273,7 +273,10 @@ fn a_ball_perforates_a_free_plate_with_the_same_bytes_at_np_1_and_3() {
 ///   (measured 0.013 %);
 /// - elements fail and their particles carry their mass (born failed: no deviatoric stress
 ///   and no tension) (`mass_particles` > 0, one particle
-///   per eroded element in the last field frame), and the ball comes out of the far side.
+///   per eroded element in the last field frame), and the ball comes out of the far side;
+/// - contact_forces.csv's columns of the failed particles (`<block>-failed_particles`) are
+///   zero until the first particle is born, and the debris ahead of the ball pushes it back
+///   (a positive impulse along z on the ball, which moves along -z).
 #[test]
 fn a_ball_perforates_a_free_plate_its_failed_elements_becoming_particles() {
     let dir = mkdir(&workdir("ball_perforation_particles"), "scene");
@@ -336,6 +339,31 @@ fn a_ball_perforates_a_free_plate_its_failed_elements_becoming_particles() {
     assert!(
         z < -0.002 - 0.005,
         "the ball is through: its centre at z = {z} m"
+    );
+    // contact_forces.csv: the failed particles' columns, zero until the first particle is
+    // born; the debris ahead of the ball pushes it back (+z on the ball, which moves -z)
+    let (ch, crow) = read_csv(&a.join("contact_forces.csv"));
+    let t = column(&ch, &crow, "time");
+    let on_ball = column(&ch, &crow, "ball-failed_particles.force_z");
+    let on_plate = column(&ch, &crow, "plate-failed_particles.force_z");
+    assert_eq!(
+        t.len(),
+        mp.len(),
+        "contact_forces.csv has history.csv's rows"
+    );
+    let born = mp.iter().position(|&m| m > 0.0).unwrap();
+    assert!(
+        on_ball[..born]
+            .iter()
+            .chain(&on_plate[..born])
+            .all(|&f| f == 0.0),
+        "no failed particle, no force before row {born}"
+    );
+    let impulse: f64 = (1..t.len()).map(|k| on_ball[k] * (t[k] - t[k - 1])).sum();
+    eprintln!("impulse of the failed particles on the ball: {impulse:e} N s (z)");
+    assert!(
+        impulse > 0.0,
+        "the debris ahead of the ball pushes it back: impulse {impulse:e} N s along z"
     );
 }
 

@@ -257,7 +257,7 @@ pub fn build(
                 &file,
                 (def, &block_names, &particle_names),
                 (&surfaces.lent(), mesh_ids),
-                sph.is_some(),
+                (sph.is_some(), scene.releases_any()),
                 SearchChoice {
                     static_decomposition: algorithms.contact_static,
                     kept: algorithms.contact_kept,

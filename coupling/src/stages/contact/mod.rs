@@ -257,13 +257,14 @@ pub struct Contact {
 impl Contact {
     /// The stage for the scene's `[contact]` table over the contact surfaces the bodies lend
     /// (`surfaces`; collective). `mesh_ids`: the mesh's node count (the particles' ids start
-    /// there).
+    /// there). `with_particles`: the run has an SPH stage; `releases`: failed elements become
+    /// particles (contact_forces.csv's `<block>-failed_particles` columns).
     pub fn new(
         world: &SimpleCommunicator,
         file: &str,
         (def, blocks, particle_sets): (&ContactDef, &[String], &[String]),
         (surfaces, mesh_ids): (&LentSurfaces, u64),
-        with_particles: bool,
+        (with_particles, releases): (bool, bool),
         choice: SearchChoice,
     ) -> Result<Contact, String> {
         // contact_forces.csv: every pair of blocks with contact faces, in scene order, then
@@ -275,7 +276,7 @@ impl Contact {
             blocks,
             &surfaces.block_in_contact,
             &surfaces.body_block,
-            sets,
+            (sets, particles && releases),
         );
         if surfaces.figures.global_faces == 0 {
             return Err(format!(

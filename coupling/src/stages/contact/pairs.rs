@@ -22,8 +22,9 @@
 
 /// contact_forces.csv's bookkeeping. Its bodies ("vertices") are the scene's blocks, then its
 /// `[[particles]]` entries (where particles take part in contact), then one for particles of
-/// failed elements (no column); its columns the pairs (block, block) of blocks with contact
-/// faces, then (block, particles entry), each in scene order.
+/// failed elements; its columns the pairs (block, block) of blocks with contact faces, then
+/// (block, particles entry), then (where failed elements become particles that take part)
+/// (block, failed particles) named `<block>-failed_particles`, each in scene order.
 #[derive(Debug, Clone, Default)]
 pub struct PairForces {
     /// The columns' pairs of vertices, and their names.
@@ -52,7 +53,7 @@ impl PairForces {
         blocks: &[String],
         in_contact: &[bool],
         body_block: &[u32],
-        particle_sets: &[String],
+        (particle_sets, failed_particles): (&[String], bool),
     ) -> PairForces {
         let nb = blocks.len();
         let mut pairs = Vec::new();
@@ -66,10 +67,16 @@ impl PairForces {
                 }
             }
         }
-        for a in with_faces {
+        for a in with_faces.clone() {
             for (k, set) in particle_sets.iter().enumerate() {
                 pairs.push((a, nb + k));
                 names.push(format!("{}-{set}", blocks[a]));
+            }
+        }
+        if failed_particles {
+            for a in with_faces {
+                pairs.push((a, nb + particle_sets.len()));
+                names.push(format!("{}-failed_particles", blocks[a]));
             }
         }
         PairForces {
