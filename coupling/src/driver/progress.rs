@@ -67,7 +67,7 @@ impl Progress {
         }
         if active {
             eprintln!(
-                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s at this step (the step shrinks as elements deform; the progress lines update the count)",
+                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s at this step (the step shrinks as bodies deform; the progress lines update the count)",
                 info.scene,
                 info.elements,
                 info.nodes,
