@@ -231,6 +231,23 @@ mod tests {
 
     #[test]
     fn a_failing_j2_particle_follows_uniaxial_strain_then_keeps_only_compression() {
+        uniaxial_strain_to_failure(Failure::PlasticStrain(0.02));
+    }
+
+    #[test]
+    fn johnson_cook_damage_with_a_constant_strain_to_failure_fails_a_particle_alike() {
+        // d2 = d3 = d4 = 0: the strain to failure is d1 at every triaxiality and rate, so
+        // D = ep / d1 and the particle fails at the same closed-form strain as with
+        // `plastic_strain = d1` (the damage summed step by step, the threshold mid-step).
+        uniaxial_strain_to_failure(Failure::JohnsonCook {
+            d: [0.02, 0.0, 0.0, 0.0],
+            eps_dot0: 1.0,
+        });
+    }
+
+    /// One J2 particle under uniaxial strain failing by `failure`, whose strain to failure is
+    /// 0.02 at every state.
+    fn uniaxial_strain_to_failure(failure: Failure) {
         // Uniaxial strain (L = diag(r, 0, 0)), J2 with linear hardening H and failure at the
         // plastic strain eps_f, in steps of the strain increment d. The closed form (radial
         // return, exact for linear hardening on this proportional path): the mean stress is
@@ -245,10 +262,7 @@ mod tests {
             "j2_plastic",
             &[("yield_stress", sy), ("hardening_modulus", h)],
         );
-        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(
-            law,
-            Some(Failure::PlasticStrain(eps_f)),
-        ));
+        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(law, Some(failure)));
         let mut p = one_particle();
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         let n = model.n_state();
