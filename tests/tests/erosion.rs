@@ -63,18 +63,7 @@ fn a_hanging_bar_fails_at_its_top_and_falls_freely() {
         // an energy scale starting from zero (1.1e-3 at 0.1 ms; 4.1e-4 at the second failure).
         let worst = worst_energy_error_after(&hh, &rows, 2e-4);
         assert!(worst < 1e-3, "np {np}: energy error {worst:e} (1e-3)");
-        for k in 1..t.len() {
-            if t[k - 1] < 2.0e-3 + 1e-12 {
-                continue;
-            }
-            let rate = (p[k] - p[k - 1]) / (t[k] - t[k - 1]);
-            let want = -g * m_free;
-            assert!(
-                (rate - want).abs() < 1e-9 * want.abs(),
-                "np {np}: at t = {:e} s the momentum changes at {rate:e} N, g M_free = {want:e} N (1e-9)",
-                t[k]
-            );
-        }
+        falls_at(np, (&t, &p), -g * m_free, |_| false);
         // fields.h5 marks the failed elements (`failed`, 1) in its last frame: as many as
         // history.csv's last row counts.
         let f = hdf5::File::open(out.join("fields.h5")).unwrap();
@@ -216,28 +205,37 @@ fn a_hanging_bar_whose_failed_top_becomes_a_particle_falls_whole() {
         );
         let worst = worst_energy_error_after(&hh, &rows, 2e-4);
         assert!(worst < 1e-3, "np {np}: energy error {worst:e} (1e-3)");
-        let mut checked = 0;
-        for k in 2..t.len() {
-            // rows after the gravity ramp with no failure in or just before them (a release
-            // comes a step after the failure)
-            if t[k - 1] < 2.0e-3 + 1e-12 || eroded[k] != eroded[k - 2] || mp[k] == 0.0 {
-                continue;
-            }
-            let rate = (p[k] - p[k - 1]) / (t[k] - t[k - 1]);
-            let want = -g * m_bar;
-            assert!(
-                (rate - want).abs() < 1e-9 * want.abs(),
-                "np {np}: at t = {:e} s the momentum changes at {rate:e} N, g M = {want:e} N (1e-9)",
-                t[k]
-            );
-            checked += 1;
-        }
+        // rows with no failure in or just before them (a release comes a step after the
+        // failure), once the top is a particle
+        let checked = falls_at(np, (&t, &p), -g * m_bar, |k| {
+            eroded[k] != eroded[k - 2] || mp[k] == 0.0
+        });
         assert!(checked > 10, "np {np}: {checked} rows of free fall");
         same_columns_as_first(&mut first, out);
     }
 }
 
 /// The largest |energy_error| of a history.csv (`hh`, `rows`) after time `t0`, s.
+/// Asserts that after the gravity ramp (t > 2 ms) the momentum `p` (kg m/s at times `t`, s)
+/// changes at `want` N to 1e-9 over every row k >= 2 that `skip` does not leave out (Newton:
+/// gravity the only external force on the falling mass); returns the rows checked.
+fn falls_at(np: usize, (t, p): (&[f64], &[f64]), want: f64, skip: impl Fn(usize) -> bool) -> usize {
+    let mut checked = 0;
+    for k in 2..t.len() {
+        if t[k - 1] < 2.0e-3 + 1e-12 || skip(k) {
+            continue;
+        }
+        let rate = (p[k] - p[k - 1]) / (t[k] - t[k - 1]);
+        assert!(
+            (rate - want).abs() < 1e-9 * want.abs(),
+            "np {np}: at t = {:e} s the momentum changes at {rate:e} N, g M = {want:e} N (1e-9)",
+            t[k]
+        );
+        checked += 1;
+    }
+    checked
+}
+
 fn worst_energy_error_after(hh: &[String], rows: &[Vec<f64>], t0: f64) -> f64 {
     let t = column(hh, rows, "time");
     let err = column(hh, rows, "energy_error");
