@@ -158,22 +158,24 @@ fn period_of(crossings: &[f64]) -> f64 {
 }
 
 /// Measured (this file's set-up: V_f = 0.002, artificial viscosity alpha = 0.5, artificial
-/// stress epsilon = 0.3, n = 4), relative excess of the period over the thin-plate value:
-/// n_y = 3: +49.6 %, 4: +25.7 %, 6: +13.2 %, 8: +8.8 %, 10: +6.8 % (6-10 from the first
-/// crossing, T/2). Without the kernel-gradient correction B in the force pass: 4: +34 %,
-/// 6: +22 % (the plate as stiff as one (n_y - 1) spacings thick). The excess
-/// falls as ~n_y^-2 (the finite thickness resolution: a surface particle's truncated kernel
-/// carries its stress less well, and the SPH clamp is soft), so these coarse runs check the
-/// convergence towards the analytic period, not the analytic period itself.
+/// stress epsilon = 0.3, n = 4), relative excess of the period over the thin-plate value, with
+/// the surface particles' quadratic fit (`sph::solid::quadratic`): n_y = 3: +11.4 %, 4: +7.8 %
+/// (extrapolated +3.2 %). With the linear correction alone (B, Randles & Libersky 1996) at the
+/// surface too: 3: +49.6 %, 4: +25.7 %, 6: +13.2 %, 8: +8.8 %, 10: +6.8 %; there a surface
+/// particle's strain is that of a point a third of h inside it, and the plate bends as one
+/// about 0.6 spacings thinner. The excess falls as ~n_y^-2 (the finite thickness resolution
+/// and the SPH clamp), towards the thin-plate period lengthened by shear and rotary inertia
+/// (about 1 % at L/H = 10).
 const NY_COARSE: usize = 3;
 /// The finer resolution of the test (one period).
 const NY: usize = 4;
-/// The bound on the period excess at `NY` (measured +25.7 %, see above): a regression bound.
-const EXCESS_BOUND: f64 = 0.30;
-/// The bound on |T_extrapolated / T_thin - 1| (the brief's 5-10 %): T_extrapolated is the
+/// The bound on the period excess at `NY` (measured +7.8 %, see above; +25.7 % without the
+/// quadratic fit).
+const EXCESS_BOUND: f64 = 0.10;
+/// The bound on |T_extrapolated / T_thin - 1| (the 5 %): T_extrapolated is the
 /// Richardson extrapolation of the `NY_COARSE` and `NY` periods with order 2,
-/// (ny^2 T_ny - ny_c^2 T_ny_c)/(ny^2 - ny_c^2) (measured -4.9 %).
-const EXTRAPOLATED_TOLERANCE: f64 = 0.10;
+/// (ny^2 T_ny - ny_c^2 T_ny_c)/(ny^2 - ny_c^2) (measured +3.2 %).
+const EXTRAPOLATED_TOLERANCE: f64 = 0.05;
 
 /// n_y = 3 over two periods (the plate intact: no tensile clumping, no two particles closer
 /// than half the spacing; energy conserved), n_y = 4 over one; the periods' extrapolation to
@@ -198,7 +200,7 @@ fn plate_period_converges_to_thin_plate_theory() {
     let excess = t4 / period - 1.0;
     assert!(
         excess > 0.0 && excess < EXCESS_BOUND,
-        "n_y = {NY}: period {t4} vs thin plate {period}: excess {excess} (measured +25.7 %)"
+        "n_y = {NY}: period {t4} vs thin plate {period}: excess {excess} (measured +7.8 %)"
     );
     assert!(t3 > t4, "the period converges from above: {t3} then {t4}");
     let (a, b) = ((NY * NY) as f64, (NY_COARSE * NY_COARSE) as f64);
@@ -211,9 +213,11 @@ fn plate_period_converges_to_thin_plate_theory() {
     );
 }
 
-/// The brief's resolution, 10 particles through the thickness, one period (~5 min release on
-/// one core: run with `--ignored`): the period within 10 % of the thin-plate value (measured
-/// +6.8 % from T/2, closest pair 0.90 dp).
+/// The resolution, 10 particles through the thickness, one period (~8 min release on
+/// one core: run with `--ignored`): the period within 5 % of the thin-plate value (the issue's
+/// criterion; measured +4.0 % from T/2, closest pair 0.999 dp; +6.8 % with the linear
+/// correction alone at the surface). The bundled scene scenes/oscillating_plate.toml is the
+/// same plate with the default viscosity, measured over two periods (validation/oscillating_plate).
 #[test]
 #[ignore]
 fn plate_period_at_ten_particles_through_thickness() {
@@ -221,7 +225,7 @@ fn plate_period_at_ten_particles_through_thickness() {
     let t = period_of(&crossings[..2]);
     let err = t / period - 1.0;
     assert!(
-        err.abs() < 0.10,
+        err.abs() < 0.05,
         "n_y = 10: period {t} vs thin plate {period}: {err}"
     );
     assert!(

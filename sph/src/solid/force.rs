@@ -1,5 +1,6 @@
 //! The momentum and energy pass with the full stress tensor, and Monaghan's artificial stress.
 use super::build::Build;
+use super::quadratic::quad_basis;
 use super::tensor::{
     from_voigt, mul, mul_lanes, symmetric_eigen, symmetric_eigen_lanes, to_voigt, transpose, Mat3,
     Mat3Lanes,
@@ -385,6 +386,18 @@ fn force_pairs(
             // either particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n;
             // none where delta_p is beyond the support, 1/W(delta_p) = 0)
             let mut tg = mat_vec_sum(&a.sr, &b.sr, g);
+            // the quadratic fit's part of the pair weights (surface particles,
+            // `super::quadratic`): (Q_a - Q_b) |gr| q(d), q even in d
+            if a.quad || b.quad {
+                let qd = quad_basis(&d);
+                for (l, t) in tg.iter_mut().enumerate() {
+                    let mut x = 0.0;
+                    for (m, &qm) in qd.iter().enumerate() {
+                        x += (a.q[6 * l + m] - b.q[6 * l + m]) * qm;
+                    }
+                    *t += -gr * x;
+                }
+            }
             if acts {
                 let rg = mat_vec_sum(&a.rt, &b.rt, g);
                 for l in 0..3 {
@@ -475,6 +488,10 @@ struct Slot {
     sr: [f64; 9],
     rt: [f64; 9],
     tension: bool,
+    /// sigma C_quad / rho^2 (3 x 6, `q[6 k + m]`; zero off the surface).
+    q: [f64; 18],
+    /// Whether `q` is not zero.
+    quad: bool,
 }
 
 impl Slot {
@@ -493,6 +510,12 @@ impl Slot {
             sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
             rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
             tension: rt.iter().flatten().any(|&x| x != 0.0),
+            q: std::array::from_fn(|e| {
+                let (k, m) = (e / 6, e % 6);
+                let cq = &s.quad[i];
+                (t[k][0] * cq[m] + t[k][1] * cq[6 + m] + t[k][2] * cq[12 + m]) * inv_rho2
+            }),
+            quad: s.quad[i].iter().any(|&x| x != 0.0),
         }
     }
 }

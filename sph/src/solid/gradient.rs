@@ -10,7 +10,7 @@
 //! that a pair's terms are split and added lane by lane (the operations of `Grid2::add` on
 //! each, in vector registers).
 use super::tensor::{self, inverse, mul, Mat3};
-use super::{Solids, CORRECTION_MAX, CORRECTION_SINGULAR};
+use super::{Solids, CORRECTION_MAX, CORRECTION_SINGULAR, SURFACE_SHAPE_TOL};
 use crate::exact::{note, PassGrids, TermMax};
 use crate::kernel::SmoothingKernel;
 use crate::particles::Particles;
@@ -303,7 +303,9 @@ fn gradient_pairs(
 /// A singular `shape_sum` (see [`CORRECTION_SINGULAR`]), or a moving particle's whose inverse
 /// has an entry past [`CORRECTION_MAX`], leaves the uncorrected sum. Also sets
 /// `correction` = shape_sum^-T: L_kl = sum_b V_b (v_b - v_a)_k (shape_sum^-T grad_a W)_l, so
-/// B grad_a W is the corrected kernel gradient.
+/// B grad_a W is the corrected kernel gradient. Flags (`Solids::quad_flag`) the moving solids
+/// whose shape sum is more than [`SURFACE_SHAPE_TOL`] from the identity for the quadratic fit
+/// ([`super::quadratic`]) and zeroes every owned entry's C_quad.
 pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
     s.resize(p.len());
     for i in 0..p.n_owned {
@@ -318,10 +320,19 @@ pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
         // and are part of the clamp's stiffness; they never move)
         let inv = inverse(&shape, CORRECTION_SINGULAR)
             .filter(|inv| p.fixed[i] || inv.iter().flatten().all(|x| x.abs() <= CORRECTION_MAX));
+        s.quad[i] = [0.0; 18];
+        s.quad_flag[i] = false;
         match inv {
             Some(inv) => {
                 s.grad_v[i] = mul(&grad, &inv);
                 s.correction[i] = tensor::transpose(&inv);
+                // a moving particle whose neighbourhood is one-sided: the quadratic fit
+                // (`super::quadratic`) replaces the linear correction
+                let off = (0..3)
+                    .flat_map(|k| (0..3).map(move |l| (k, l)))
+                    .map(|(k, l)| (shape[k][l] - tensor::IDENTITY[k][l]).abs())
+                    .fold(0.0f64, f64::max);
+                s.quad_flag[i] = !p.fixed[i] && off > SURFACE_SHAPE_TOL;
             }
             None => {
                 s.grad_v[i] = grad;

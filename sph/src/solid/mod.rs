@@ -28,6 +28,7 @@
 pub mod build;
 mod force;
 mod gradient;
+pub mod quadratic;
 pub mod sim;
 pub mod tensor;
 
@@ -35,6 +36,9 @@ pub use force::{
     stress_force_pass, ArtificialStress, ARTIFICIAL_STRESS_EPSILON, ARTIFICIAL_STRESS_EXPONENT,
 };
 pub use gradient::{gq, settle_gradients, velocity_gradient_pass, GradSums, PairGeom};
+pub use quadratic::{
+    fold_quad_ghost, quad_sums_of, quadratic_pass, settle_quadratic, QuadSums, SURFACE_SHAPE_TOL,
+};
 pub use sim::SolidSim;
 
 use crate::particles::Particles;
@@ -60,8 +64,9 @@ pub struct SolidRecord {
 }
 
 /// What a ghost needs of its owner for the stress force pass, sent owner -> copies after the
-/// stress update: density, pressure and sound speed (as `EosState`), stress and the
-/// kernel-gradient correction B (row by row). Plain old data, 144 bytes.
+/// stress update: density, pressure and sound speed (as `EosState`), stress, the
+/// kernel-gradient correction B (row by row) and C_quad (zero but at a surface,
+/// [`quadratic`]). Plain old data, 288 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SolidGhost {
@@ -75,6 +80,8 @@ pub struct SolidGhost {
     pub stress: [f64; 6],
     /// B, `b[3 k + l]` = B_kl.
     pub b: [f64; 9],
+    /// C_quad, `q[6 k + m]`, 1/m (`Solids::quad`).
+    pub q: [f64; 18],
 }
 
 /// Relative size below which the kernel-gradient correction matrix counts as singular
@@ -126,6 +133,16 @@ pub struct Solids {
     pub pair_geom: Vec<PairGeom>,
     /// The build of the pair loops ([`build::Build`]; every build gives the same bits).
     pub build: build::Build,
+    /// Whether an entry's gradient is the quadratic fit's ([`quadratic`]): set on owners by
+    /// `settle_gradients`, sent to ghosts before the quadratic pass (not carried).
+    pub quad_flag: Vec<bool>,
+    /// Each entry's index into `quad_sums` (`u32::MAX`: not flagged).
+    pub quad_slot: Vec<u32>,
+    /// The quadratic pass's exact sums, one per flagged entry (ghosts' go to their owners).
+    pub quad_sums: Vec<quadratic::QuadSums>,
+    /// C_quad of each entry (rows of A^-1 past the linear block, 1/m, `q[6 k + m]`; zero but
+    /// where the quadratic fit settled), set on owners, sent to ghosts with the stress.
+    pub quad: Vec<[f64; 18]>,
 }
 
 impl Solids {
@@ -184,6 +201,8 @@ impl Solids {
         self.shape_sum.resize(n, [[0.0; 3]; 3]);
         self.grad_v.resize(n, [[0.0; 3]; 3]);
         self.correction.resize(n, tensor::IDENTITY);
+        self.quad_flag.resize(n, false);
+        self.quad.resize(n, [0.0; 18]);
     }
 
     /// Copies owner `o`'s ghost state to entry `g` (a ghost copy of it; serial images).
@@ -207,6 +226,7 @@ impl Solids {
             c: p.c[i],
             stress: self.stress[i],
             b: std::array::from_fn(|k| b[k / 3][k % 3]),
+            q: self.quad[i],
         }
     }
 
@@ -218,6 +238,7 @@ impl Solids {
         p.c[i] = g.c;
         self.stress[i] = g.stress;
         self.correction[i] = std::array::from_fn(|k| std::array::from_fn(|l| g.b[3 * k + l]));
+        self.quad[i] = g.q;
     }
 
     /// Owned entry `i` packed for migration or a checkpoint.
@@ -261,6 +282,8 @@ impl Solids {
         self.shape_sum.truncate(n);
         self.grad_v.truncate(n);
         self.correction.truncate(n);
+        self.quad_flag.truncate(n);
+        self.quad.truncate(n);
     }
 
     /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for

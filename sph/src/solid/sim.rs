@@ -2,8 +2,8 @@
 //! with the solid passes (see the parent module), over `SerialSim`'s particles and periodic
 //! images.
 use super::{
-    settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
-    ArtificialStress, Solids,
+    fold_quad_ghost, quadratic_pass, settle_gradients, settle_quadratic, solid_pressure,
+    stress_force_pass, update_stress, velocity_gradient_pass, ArtificialStress, Solids,
 };
 use crate::exact::{exact_pass, PassGrids};
 use crate::integrate::{first_half, second_half, setup_state};
@@ -29,6 +29,8 @@ pub struct SolidSim {
     pub art: Option<ArtificialStress>,
     /// The grids of the gradient pass's exact sums.
     pub grad_grids: PassGrids,
+    /// The grids of the quadratic pass's exact sums (`super::quadratic`).
+    pub quad_grids: PassGrids,
 }
 
 impl SolidSim {
@@ -52,6 +54,7 @@ impl SolidSim {
             solids,
             art,
             grad_grids: PassGrids::default(),
+            quad_grids: PassGrids::default(),
         }
     }
 
@@ -96,6 +99,19 @@ impl SolidSim {
             s.fold_ghost(p.n_owned + g, o);
         }
         settle_gradients(p, s);
+        // the surface particles' quadratic fit: flags to the images, the pass, fold, settle
+        for (g, &o) in owners.iter().enumerate() {
+            s.quad_flag[p.n_owned + g] = s.quad_flag[o];
+        }
+        exact_pass(
+            &mut self.quad_grids,
+            |m| *m,
+            |g, m| quadratic_pass(p, s, g, m),
+        );
+        for (g, &o) in owners.iter().enumerate() {
+            fold_quad_ghost(s, p.n_owned + g, o);
+        }
+        settle_quadratic(p, s);
         match dt {
             Some(dt) => update_stress(p, s, dt),
             None => solid_pressure(p, s),

@@ -5,9 +5,13 @@
 //! ```text
 //! update_eos (owned fluids)
 //! velocity_gradient_pass (with every entry's continuity density rate);
-//!                          ghosts -> owners (GradSums, 256 B); settle_gradients (drho, L, B)
+//!                          ghosts -> owners (GradSums, 256 B); settle_gradients (drho, L, B,
+//!                          the surface flags)
+//!                          owners -> ghosts (the flags, 1 B)
+//! quadratic_pass (pairs with a flagged end); ghosts -> owners (QuadSums, 768 B);
+//!                          settle_quadratic (the surface particles' L, B, C_quad)
 //! update_stress (owned; set-up: solid_pressure)
-//!                          owners -> ghosts (SolidGhost: rho, p, c, stress, B; 144 B)
+//!                          owners -> ghosts (SolidGhost: rho, p, c, stress, B, C_quad; 288 B)
 //! stress_force_pass;       ghosts -> owners (PairSums: f, de); settle_forces; add_gravity
 //! ```
 //!
@@ -20,8 +24,9 @@ use crate::driver::KernelChoice;
 use crate::kernels::rcb::RcbItem;
 use sph::solid::build::Build;
 use sph::solid::{
-    settle_gradients, solid_pressure, stress_force_pass, update_stress, velocity_gradient_pass,
-    GradSums, SolidGhost, SolidRecord,
+    quad_sums_of, quadratic_pass, settle_gradients, settle_quadratic, solid_pressure,
+    stress_force_pass, update_stress, velocity_gradient_pass, GradSums, QuadSums, SolidGhost,
+    SolidRecord,
 };
 use sph::{ArtificialStress, Solids};
 
@@ -33,6 +38,9 @@ pub struct SolidPart {
     pub art: Option<ArtificialStress>,
     /// The grids of the gradient pass's exact sums (the same on every rank).
     pub grad_grids: PassGrids,
+    /// The grids of the quadratic pass's exact sums (`sph::solid::quadratic`; the same on
+    /// every rank).
+    pub quad_grids: PassGrids,
     /// The owned particles' stress for output (a solid's, a fluid's -p I), Pa, and equivalent
     /// plastic strain (0 for a fluid), as of the end of the last step (`refresh_output`).
     pub out_stress: Vec<[f64; 6]>,
@@ -81,6 +89,7 @@ impl SphStage {
             solids,
             art: models.art,
             grad_grids: PassGrids::default(),
+            quad_grids: PassGrids::default(),
             out_stress: Vec::new(),
             out_plastic: Vec::new(),
             out_failed: Vec::new(),
@@ -219,6 +228,49 @@ impl SphStage {
             sp.solids.sums[self.ghost_src[k]].merge(s);
         }
         settle_gradients(&mut self.parts, &mut sp.solids);
+        self.quadratic_fit();
+    }
+
+    /// The surface particles' quadratic fit (`sph::solid::quadratic`): the owners' flags out
+    /// to their ghosts, the quadratic pass (exact, on its own grids, redone until its terms
+    /// fit), the ghosts' sums merged into their owners, the flagged owners' gradients settled.
+    fn quadratic_fit(&mut self) {
+        let comm = self.comm.clone();
+        let reduce = |m: &TermMax| {
+            let mut g = [0.0; 3];
+            comm.all_reduce_into(&m[..], &mut g[..], SystemOperation::max());
+            g
+        };
+        let sp = self.solid.as_mut().expect("solids");
+        let n0 = self.parts.n_owned;
+        let flags: Vec<u8> = self
+            .ghost_src
+            .iter()
+            .map(|&i| u8::from(sp.solids.quad_flag[i]))
+            .collect();
+        let plan = self.plan.as_mut().expect("ghosts made");
+        let got = plan.exchange(&flags);
+        for (g, &f) in got.iter().enumerate() {
+            sp.solids.quad_flag[n0 + g] = f != 0;
+        }
+        let p = &self.parts;
+        let (_, redone) = exact_pass(&mut sp.quad_grids, reduce, |g, m| {
+            quadratic_pass(p, &mut sp.solids, g, m)
+        });
+        self.passes_redone += redone as u64;
+        let sums: Vec<QuadSums> = (0..p.n_ghosts())
+            .map(|g| quad_sums_of(&sp.solids, n0 + g))
+            .collect();
+        let back = plan.reverse(&sums);
+        self.bytes += plan.bytes_sent;
+        plan.bytes_sent = 0;
+        for (k, s) in back.iter().enumerate() {
+            let slot = sp.solids.quad_slot[self.ghost_src[k]];
+            if slot != u32::MAX {
+                sp.solids.quad_sums[slot as usize].merge(s);
+            }
+        }
+        settle_quadratic(&self.parts, &mut sp.solids);
     }
 
     /// The owners' new density, pressure, sound speed, stress and correction out to their
@@ -291,6 +343,7 @@ impl SphStage {
                 .collect();
             w.put("sph.solid", &recs);
             w.put("sph.grad_grids", &sp.grad_grids.fitted());
+            w.put("sph.quad_grids", &sp.quad_grids.fitted());
         }
     }
 
@@ -302,6 +355,15 @@ impl SphStage {
                 let m: TermMax = m
                     .try_into()
                     .map_err(|_| "checkpoint: sph.grad_grids".to_string())?;
+                PassGrids::fitted_to(m)
+            } else {
+                PassGrids::default()
+            };
+            sp.quad_grids = if r.has("sph.quad_grids") {
+                let m: Vec<f64> = r.get("sph.quad_grids")?;
+                let m: TermMax = m
+                    .try_into()
+                    .map_err(|_| "checkpoint: sph.quad_grids".to_string())?;
                 PassGrids::fitted_to(m)
             } else {
                 PassGrids::default()
