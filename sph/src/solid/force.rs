@@ -206,7 +206,10 @@ fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f6
 /// de_a += -1/2 m_b v^_ab . (T_ab g),  de_b += -1/2 m_a (same)  W/kg
 /// ```
 ///
-/// (T in m^5/(kg s^2)). The pair term is the same tensor applied to g for a and to -g for b,
+/// (T in m^5/(kg s^2)); where either end has the surface's quadratic fit
+/// ([`super::quadratic`]) T g gains (Q_a - Q_b) |gr| q(d), Q = sigma C_quad / rho^2 and q(d)
+/// the quadratic basis (even in d): the rest of each end's pair weight, so the forces stay
+/// the transpose of the fitted gradient. The pair term is the same tensor applied to g for a and to -g for b,
 /// so the forces are equal and opposite (momentum conserved) whatever B. B makes a linear
 /// stress field's divergence exact at the free surface too; without it (B = I, Gray et al.'s
 /// form) a surface particle's truncated kernel carries only part of its stress, and a bent

@@ -8,10 +8,14 @@
 //! ```text
 //! update_eos (owned; the fluids' p and c)
 //! velocity_gradient_pass (and every entry's continuity density rate);
-//!                          ghosts -> owners (GradSums); settle_gradients (drho, L, B)
+//!                          ghosts -> owners (GradSums); settle_gradients (drho, L, B, the
+//!                          surface flags)
+//! owners -> ghosts (the flags); quadratic_pass (pairs with a flagged end);
+//!                          ghosts -> owners (QuadSums); settle_quadratic (the surface
+//!                          particles' L, B and C_quad: [`quadratic`])
 //! update_stress (owned solids: rotate, then the model with deps = D dt; p = -tr(sigma)/3,
 //!                c = sqrt(wave modulus / rho))
-//! owners -> ghosts (SolidGhost: rho, p, c, stress, B)
+//! owners -> ghosts (SolidGhost: rho, p, c, stress, B, C_quad)
 //! stress_force_pass (over the same pairs: r and dW/dr / r kept from the gradient pass,
 //!                      `Solids::pair_geom`);  ghosts -> owners (PairSums: f, de); settle_forces
 //! ```
