@@ -394,6 +394,20 @@ fields = ["velocity_y"]
     (scene, period)
 }
 
+/// The times the plate's tip velocity (probe `tip.velocity_y` of the run in `out`) crosses
+/// zero, interpolated linearly between rows.
+fn tip_crossings(out: &Path) -> Vec<f64> {
+    let (h, rows) = read_csv(&out.join("probes.csv"));
+    let (t, v) = (
+        column(&h, &rows, "time"),
+        column(&h, &rows, "tip.velocity_y"),
+    );
+    (1..v.len())
+        .filter(|&k| (v[k] > 0.0) != (v[k - 1] > 0.0))
+        .map(|k| t[k - 1] + (t[k] - t[k - 1]) * v[k - 1] / (v[k - 1] - v[k]))
+        .collect()
+}
+
 /// The plate at n_y = 4 over most of one period, at np 1 and 3: the same bytes (fixed solid
 /// particles, periodic images and solids together); the tip's velocity (a particle probe at the
 /// tip) crosses zero at T/4 and 3T/4, so T = 2 (t_2 - t_1), within 10 % above the thin-plate
@@ -409,17 +423,7 @@ fn oscillating_plate_through_the_parallel_stage() {
     run_ok(1, &scene, &a);
     run_ok(3, &scene, &b);
     assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
-    let (h, rows) = read_csv(&a.join("probes.csv"));
-    let (t, v) = (
-        column(&h, &rows, "time"),
-        column(&h, &rows, "tip.velocity_y"),
-    );
-    let mut crossings = Vec::new();
-    for k in 1..v.len() {
-        if (v[k] > 0.0) != (v[k - 1] > 0.0) {
-            crossings.push(t[k - 1] + (t[k] - t[k - 1]) * v[k - 1] / (v[k - 1] - v[k]));
-        }
-    }
+    let crossings = tip_crossings(&a);
     assert!(
         crossings.len() >= 2,
         "two zero crossings of the tip velocity: {crossings:?}"
@@ -469,17 +473,7 @@ fn oscillating_plate_at_ten_particles_over_two_periods() {
     run_ok(1, &scene, &a);
     run_ok(3, &scene, &b);
     assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
-    let (h, rows) = read_csv(&a.join("probes.csv"));
-    let (t, v) = (
-        column(&h, &rows, "time"),
-        column(&h, &rows, "tip.velocity_y"),
-    );
-    let mut crossings = Vec::new();
-    for k in 1..v.len() {
-        if (v[k] > 0.0) != (v[k - 1] > 0.0) {
-            crossings.push(t[k - 1] + (t[k] - t[k - 1]) * v[k - 1] / (v[k - 1] - v[k]));
-        }
-    }
+    let crossings = tip_crossings(&a);
     assert!(crossings.len() >= 4, "two periods: {crossings:?}");
     let thin = 0.25412926296427146;
     let measured = 0.5 * ((crossings[2] - crossings[0]) + (crossings[3] - crossings[1]));

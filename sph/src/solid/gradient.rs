@@ -321,6 +321,7 @@ pub fn settle_gradients(p: &mut Particles, s: &mut Solids) {
         let inv = inverse(&shape, CORRECTION_SINGULAR)
             .filter(|inv| p.fixed[i] || inv.iter().flatten().all(|x| x.abs() <= CORRECTION_MAX));
         s.quad[i] = [0.0; 18];
+        s.quad_share[i] = 0.0;
         s.quad_flag[i] = false;
         match inv {
             Some(inv) => {

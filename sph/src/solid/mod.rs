@@ -147,6 +147,10 @@ pub struct Solids {
     /// C_quad of each entry (rows of A^-1 past the linear block, 1/m, `q[6 k + m]`; zero but
     /// where the quadratic fit settled), set on owners, sent to ghosts with the stress.
     pub quad: Vec<[f64; 18]>,
+    /// The share of the quadratic fit each owned entry's gradient took (0: the linear
+    /// correction alone; 1: the fit whole; [`quadratic::surface_blend`] times
+    /// [`quadratic::amplification_blend`]), as of the last evaluation (not carried).
+    pub quad_share: Vec<f64>,
 }
 
 impl Solids {
@@ -207,6 +211,7 @@ impl Solids {
         self.correction.resize(n, tensor::IDENTITY);
         self.quad_flag.resize(n, false);
         self.quad.resize(n, [0.0; 18]);
+        self.quad_share.resize(n, 0.0);
     }
 
     /// Copies owner `o`'s ghost state to entry `g` (a ghost copy of it; serial images).
@@ -288,6 +293,7 @@ impl Solids {
         self.correction.truncate(n);
         self.quad_flag.truncate(n);
         self.quad.truncate(n);
+        self.quad_share.truncate(n);
     }
 
     /// The temperature of entry `i`, K, where its law keeps one (`None` for a fluid and for

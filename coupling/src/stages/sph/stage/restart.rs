@@ -151,15 +151,7 @@ impl SphStage {
 
     /// The pair sums' grids a checkpoint holds (fitted afresh where it holds none).
     pub(super) fn restore_pass_grids(&mut self, r: &StateReader) -> Result<(), String> {
-        self.pass_grids = if r.has("sph.pass_grids") {
-            let m: Vec<f64> = r.get("sph.pass_grids")?;
-            let m: TermMax = m
-                .try_into()
-                .map_err(|_| "checkpoint: sph.pass_grids".to_string())?;
-            PassGrids::fitted_to(m)
-        } else {
-            PassGrids::default()
-        };
+        self.pass_grids = saved_grids(r, "sph.pass_grids")?;
         Ok(())
     }
 
@@ -209,4 +201,15 @@ impl SphStage {
         self.pair_searches = if me == 0 { searches } else { 0 };
         Ok(())
     }
+}
+
+/// The exact sums' grids a checkpoint holds under `key` (fitted afresh where it holds none: a
+/// checkpoint written before the grids were saved).
+pub(super) fn saved_grids(r: &StateReader, key: &str) -> Result<PassGrids, String> {
+    if !r.has(key) {
+        return Ok(PassGrids::default());
+    }
+    let m: Vec<f64> = r.get(key)?;
+    let m: TermMax = m.try_into().map_err(|_| format!("checkpoint: {key}"))?;
+    Ok(PassGrids::fitted_to(m))
 }

@@ -347,27 +347,12 @@ impl SphStage {
         }
     }
 
-    /// The gradient grids a checkpoint holds (fitted afresh where it holds none).
+    /// The gradient and quadratic-fit grids a checkpoint holds (fitted afresh where it holds
+    /// none).
     pub(super) fn restore_grad_grids(&mut self, r: &StateReader) -> Result<(), String> {
         if let Some(sp) = &mut self.solid {
-            sp.grad_grids = if r.has("sph.grad_grids") {
-                let m: Vec<f64> = r.get("sph.grad_grids")?;
-                let m: TermMax = m
-                    .try_into()
-                    .map_err(|_| "checkpoint: sph.grad_grids".to_string())?;
-                PassGrids::fitted_to(m)
-            } else {
-                PassGrids::default()
-            };
-            sp.quad_grids = if r.has("sph.quad_grids") {
-                let m: Vec<f64> = r.get("sph.quad_grids")?;
-                let m: TermMax = m
-                    .try_into()
-                    .map_err(|_| "checkpoint: sph.quad_grids".to_string())?;
-                PassGrids::fitted_to(m)
-            } else {
-                PassGrids::default()
-            };
+            sp.grad_grids = super::restart::saved_grids(r, "sph.grad_grids")?;
+            sp.quad_grids = super::restart::saved_grids(r, "sph.quad_grids")?;
         }
         Ok(())
     }
