@@ -15,9 +15,9 @@
 //! in this folder, on a lane type `F`, its mask `M` and the group size `LANES` taken from the
 //! parent module) and compiled once per width:
 //! - [`w1`]: one lane (`fixed.rs`), one element at a time;
-//! - [`w4`]: four lanes on fixed-size arrays the compiler vectorises (`fixed.rs`, the same text
-//!   as one lane), built for AVX2 when the CPU has it (chosen at run time) and for the
-//!   baseline x86-64 (SSE2) otherwise;
+//! - [`w4`]: four lanes, on x86-64 in one AVX2 register (`lanes4.rs`, intrinsics), used when the
+//!   CPU has AVX2 (an x86-64 CPU without it runs one lane); elsewhere on fixed-size arrays the
+//!   compiler vectorises (`fixed.rs`, the same text as one lane);
 //! - [`w8`] (x86-64): eight lanes in one AVX-512 register (`lanes8.rs`, intrinsics), used when
 //!   the CPU has AVX-512F. Eight lanes halve the instructions per element, the 32 vector
 //!   registers of AVX-512 spill less than AVX2's 16.
@@ -191,11 +191,17 @@ pub enum Width {
     W8,
 }
 
-/// The widest group this CPU runs: eight lanes with AVX-512F, four otherwise.
+/// The widest group this CPU runs: on x86-64 eight lanes with AVX-512F, four with AVX2, one
+/// otherwise; four elsewhere.
 pub fn widest() -> Width {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        return Width::W8;
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            return Width::W8;
+        }
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return Width::W1;
+        }
     }
     Width::W4
 }
@@ -203,11 +209,12 @@ pub fn widest() -> Width {
 /// The widths this CPU can run, narrowest first (the tests compare each with the node-by-node
 /// kernel).
 pub fn available() -> Vec<Width> {
-    let mut w = vec![Width::W1, Width::W4];
-    if widest() != Width::W4 {
-        w.push(widest());
+    match widest() {
+        Width::W1 => vec![Width::W1],
+        Width::W4 => vec![Width::W1, Width::W4],
+        #[cfg(target_arch = "x86_64")]
+        Width::W8 => vec![Width::W1, Width::W4, Width::W8],
     }
-    w
 }
 
 /// A material the batched kernel can update, with the constants the scalar kernel asks the
@@ -293,8 +300,12 @@ pub struct GroupInverted {
 pub mod arrays;
 mod fixed;
 #[cfg(target_arch = "x86_64")]
+mod lanes4;
+#[cfg(target_arch = "x86_64")]
 mod lanes8;
-use fixed::{lanes1, lanes4};
+use fixed::lanes1;
+#[cfg(not(target_arch = "x86_64"))]
+use fixed::lanes4;
 
 /// Makes the calling kernel entry keep its stack frame aligned to 64 bytes, so that its spills
 /// of 512-bit registers (several hundred per group) never straddle two cache lines.
@@ -342,7 +353,7 @@ macro_rules! kernel_files {
 
 /// The entries of a width's kernel that [`Batch`] and [`TetBatch`] call (`entry`,
 /// `entry_lanes`, `tet_rates_entry`, `tet_entry`), each its kernel function built by `$build`:
-/// [`plain`] (one lane: the baseline build), [`avx2_or_baseline`] (four lanes) or
+/// [`plain`] (one lane: the baseline build; four lanes off x86-64), `avx2_only` (four lanes) or
 /// [`avx512_only`] (eight lanes).
 macro_rules! entries {
     ($build:ident) => {
@@ -391,28 +402,29 @@ macro_rules! plain {
     };
 }
 
-/// An entry that calls the AVX2 build of its kernel function when the CPU has AVX2, the
-/// baseline build otherwise (chosen at run time).
-macro_rules! avx2_or_baseline {
+/// An entry that calls the AVX2 build of its kernel function; panics on a CPU without AVX2
+/// (the loops take four lanes on x86-64 only where [`available`] lists them).
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx2_only {
     ($(#[$doc:meta])* $name:ident, $built:ident, $inner:path, ($($a:ident: $t:ty),*) -> $r:ty) => {
         $(#[$doc])*
         #[inline]
         fn $name($($a: $t),*) -> $r {
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
-                return unsafe { $built($($a),*) };
-            }
-            $inner($($a),*)
+            assert!(
+                std::arch::is_x86_feature_detected!("avx2"),
+                "the four-lane element kernel needs AVX2, which this CPU lacks"
+            );
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { $built($($a),*) }
         }
 
-        /// The kernel function compiled for AVX2: one instruction per lane operation, and
-        /// three-operand forms that spare the register copies of SSE2's two-operand ones. The
-        /// same IEEE operations in the same order (no FMA), so the same bits as the baseline
-        /// build.
-        #[cfg(target_arch = "x86_64")]
+        /// The kernel function compiled for AVX2: every lane operation one instruction on a
+        /// 256-bit register (`lanes4`), inlined here, in a frame aligned for its spills
+        /// ([`super::aligned_frame`]). The same IEEE operations in the same order (no FMA), so
+        /// the same bits as every width.
         #[target_feature(enable = "avx2")]
         fn $built($($a: $t),*) -> $r {
+            super::aligned_frame();
             $inner($($a),*)
         }
     };
@@ -458,17 +470,27 @@ pub mod w1 {
     entries!(plain);
 }
 
-/// The kernel on four lanes of fixed-size arrays (`fixed.rs`).
+/// The kernel on four lanes: in AVX2 registers on x86-64 (`lanes4.rs`; its update needs AVX2,
+/// [`available`] says whether this CPU has it), on fixed-size arrays the compiler vectorises
+/// elsewhere (`fixed.rs`).
 #[path = "."]
 pub mod w4 {
+    #[cfg(target_arch = "x86_64")]
+    pub use super::lanes4::LANES;
+    #[cfg(not(target_arch = "x86_64"))]
     pub use super::lanes4::{F4 as F, LANES, M4 as M};
+    #[cfg(target_arch = "x86_64")]
+    pub(crate) use super::lanes4::{F4 as F, M4 as M};
     use super::{GroupInverted, LaneMaterial};
     use crate::hex::HexControls;
     use crate::material::Material;
 
     kernel_files!();
 
-    entries!(avx2_or_baseline);
+    #[cfg(target_arch = "x86_64")]
+    entries!(avx2_only);
+    #[cfg(not(target_arch = "x86_64"))]
+    entries!(plain);
 }
 
 /// The kernel on eight lanes in AVX-512 registers (`lanes8.rs`); its update needs AVX-512F

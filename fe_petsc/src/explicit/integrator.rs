@@ -3,13 +3,10 @@
 use super::*;
 
 impl ExplicitFe {
-    /// Whether the nodal passes go eight nodes at a time (`nodal`): where the element kernel
-    /// runs eight lanes (the CPU has AVX-512F).
-    pub(super) fn wide_nodes(&self) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return self.width == Width::W8;
-        #[cfg(not(target_arch = "x86_64"))]
-        return false;
+    /// How many nodes the nodal passes take at a time (`nodal`): as many as the element
+    /// kernel's lanes (eight with AVX-512F, four with AVX2; one off x86-64).
+    pub(super) fn wide_nodes(&self) -> nodal::Nodes {
+        nodal::Nodes::of(self.width)
     }
 
     /// First half of the step: kick to the half step, apply constraints, drift the positions.

@@ -176,8 +176,9 @@ impl Fe {
     }
 
     /// Sets the element kernel every rank runs (collective). `Auto` takes the widest group
-    /// every rank's CPU offers (a rank without AVX-512F makes all run four lanes: one answer,
-    /// one arithmetic); `Lanes8` on a rank without AVX-512F is an error on every rank.
+    /// every rank's CPU offers (a rank without AVX-512F makes all run four lanes, one without
+    /// AVX2 one lane: one answer, one arithmetic); `Lanes8` on a rank without AVX-512F, or
+    /// `Lanes4` on an x86-64 rank without AVX2, is an error on every rank.
     pub fn choose_kernel(
         &mut self,
         world: &SimpleCommunicator,
@@ -200,7 +201,18 @@ impl Fe {
                     .into(),
             );
         }
-        let wide = if all >= 8 { widest() } else { Width::W4 };
+        if choice == KernelChoice::Lanes4 && all < 4 {
+            return Err(
+                "--kernel lanes4 needs AVX2, which this CPU (or another rank's) does not \
+                        have: use --kernel auto or scalar"
+                    .into(),
+            );
+        }
+        let wide = match all {
+            8.. => widest(),
+            4..8 => Width::W4,
+            _ => Width::W1,
+        };
         self.state_mut().width = match choice {
             KernelChoice::Auto | KernelChoice::Lanes8 => wide,
             KernelChoice::Lanes4 => Width::W4,
@@ -497,8 +509,8 @@ fn implicit_report(world: &SimpleCommunicator, imp: &ImplicitFe, report: &mut Re
 }
 
 /// The element kernel an explicit run took (report.json `fe_kernel`), with the instructions it
-/// was built for: `scalar`, `lanes4 (AVX2)` (`lanes4 (SSE2)` on a CPU without AVX2) or `lanes8
-/// (AVX-512F)`; every rank runs the same one (`Fe::choose_kernel`).
+/// was built for: `scalar`, `lanes4 (AVX2)` (`lanes4` off x86-64) or `lanes8 (AVX-512F)`; every
+/// rank runs the same one (`Fe::choose_kernel`).
 fn kernel_name(fe: &ExplicitFe) -> &'static str {
     use fe_petsc::batch::Width;
     match fe.width {
@@ -506,7 +518,8 @@ fn kernel_name(fe: &ExplicitFe) -> &'static str {
         #[cfg(target_arch = "x86_64")]
         Width::W8 => "lanes8 (AVX-512F)",
         #[cfg(target_arch = "x86_64")]
-        Width::W4 if std::arch::is_x86_feature_detected!("avx2") => "lanes4 (AVX2)",
-        Width::W4 => "lanes4 (SSE2)",
+        Width::W4 => "lanes4 (AVX2)",
+        #[cfg(not(target_arch = "x86_64"))]
+        Width::W4 => "lanes4",
     }
 }

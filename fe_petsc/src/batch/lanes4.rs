@@ -1,0 +1,356 @@
+//! Four f64 lanes in one AVX2 register for the batched element kernel (`batch::w4` on x86-64):
+//! the interface of [`super::lanes8`]'s eight lanes, each operation one or two AVX
+//! instructions written with `std::arch` intrinsics.
+//!
+//! Why intrinsics and not four-lane arrays the compiler vectorises (what `fixed.rs` gives the
+//! other architectures): on arrays, the masks are four bytes that each selection and each
+//! `any`/`all` converts to and from a vector, the minimum and maximum are written lane by lane,
+//! and the gathers are scalar inserts; with them the update took 139 ns per element in cache on
+//! a Zen 4 (`examples/hex_bench`), more than twice the eight lanes' 61 ns on the same core,
+//! whose 256-bit units give four lanes the same operations per cycle. Here a mask is a vector
+//! of all-ones or all-zeros lanes (what the comparisons give and the blend takes), and a corner's
+//! values come by one AVX2 gather.
+//!
+//! Every operation is the IEEE operation of `f64` lane by lane, and the comparisons, `min`,
+//! `max`, `clamp`, `abs` and negation treat NaN, infinities and signed zeros as `f64`'s do (the
+//! operand orders are the eight lanes'). `mul_add`, `mul_sub` and `neg_mul_add` round twice (no
+//! FMA), `recip` and `rsqrt` are the IEEE quotient and square root: the same operations, in the
+//! same order, as every other width, so the same bits (docs/scene.md, "One answer").
+//!
+//! Soundness: the operations execute AVX2 instructions. `F4` is operated on only inside
+//! `batch::w4`'s kernel, whose entries run after `is_x86_feature_detected!("avx2")` (see
+//! `batch::avx2_only`); the operations are inlined into those entries, which are compiled with
+//! the feature.
+use std::arch::x86_64::{
+    __m128i, __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd,
+    _mm256_cmp_pd, _mm256_div_pd, _mm256_i32gather_pd, _mm256_max_pd, _mm256_min_pd,
+    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_sqrt_pd, _mm256_sub_pd,
+    _mm256_xor_pd, _mm_add_epi32, _mm_and_si128, _mm_cmpgt_epi32, _mm_i32gather_epi32,
+    _mm_movemask_epi8, _mm_set1_epi32, _mm_setr_epi32, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ,
+    _CMP_LE_OQ, _CMP_LT_OQ, _CMP_TRUE_UQ, _CMP_UNORD_Q,
+};
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
+
+/// Elements per group.
+pub const LANES: usize = 4;
+
+/// The points of one corner of a group's elements ([`F4::corner`]), as 32-bit offsets into a
+/// flattened array of `len` points.
+#[derive(Clone, Copy)]
+pub struct Corner4 {
+    offsets: __m128i,
+    len: usize,
+}
+
+/// Four f64 lanes (the layout of one AVX register).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub struct F4(pub [f64; LANES]);
+
+/// A per-lane condition: all ones in a lane that holds, zeros in one that does not (what the
+/// comparisons give and the blend reads).
+#[derive(Clone, Copy, Debug)]
+pub struct M4(__m256d);
+
+/// One AVX or AVX2 instruction on registers (see the module's soundness note).
+macro_rules! avx2 {
+    ($e:expr) => {
+        // SAFETY: executed only inside `batch::w4`'s kernel, after the CPU was found to have
+        // AVX2 (module comment).
+        unsafe { $e }
+    };
+}
+
+impl M4 {
+    /// The lanes' bits, bit l for lane l.
+    #[inline(always)]
+    fn bits(self) -> i32 {
+        avx2!(_mm256_movemask_pd(self.0))
+    }
+
+    /// Whether any lane holds.
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.bits() != 0
+    }
+
+    /// Whether every lane holds.
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        self.bits() == 0b1111
+    }
+
+    /// Lane-wise or.
+    #[inline(always)]
+    pub fn or(self, o: M4) -> M4 {
+        M4(avx2!(_mm256_or_pd(self.0, o.0)))
+    }
+
+    /// Lane-wise and.
+    #[inline(always)]
+    pub fn and(self, o: M4) -> M4 {
+        M4(avx2!(_mm256_and_pd(self.0, o.0)))
+    }
+}
+
+impl Not for M4 {
+    type Output = M4;
+    /// Lane-wise not.
+    #[inline(always)]
+    fn not(self) -> M4 {
+        let ones = avx2!(_mm256_cmp_pd::<_CMP_TRUE_UQ>(self.0, self.0));
+        M4(avx2!(_mm256_xor_pd(self.0, ones)))
+    }
+}
+
+#[inline(always)]
+fn reg(a: F4) -> __m256d {
+    // SAFETY: F4 is 32 aligned bytes of four f64, the layout of __m256d.
+    unsafe { std::mem::transmute::<F4, __m256d>(a) }
+}
+
+#[inline(always)]
+fn val(a: __m256d) -> F4 {
+    // SAFETY: as in `reg`.
+    unsafe { std::mem::transmute::<__m256d, F4>(a) }
+}
+
+impl F4 {
+    /// Zero in every lane.
+    pub const ZERO: F4 = F4([0.0; LANES]);
+
+    /// `v` in every lane.
+    #[inline(always)]
+    pub const fn splat(v: f64) -> F4 {
+        F4([v; LANES])
+    }
+
+    /// The first `LANES` doubles of `s`, lane `l` from `s[l]` (one unaligned vector load in
+    /// the kernel's build). Panics when `s` is shorter.
+    #[inline(always)]
+    pub fn load(s: &[f64]) -> F4 {
+        let mut a = [0.0; LANES];
+        a.copy_from_slice(&s[..LANES]);
+        F4(a)
+    }
+
+    /// The offsets 3 n of the points n = `conn[l][c]` of corner `c` of the elements `conn[..4]`
+    /// in a flattened array of `len` points: the four node numbers by one 32-bit gather (the
+    /// connectivity rows are 32 bytes apart). Panics when `conn` has fewer than four elements,
+    /// `c` is not a corner, a node is not below `len`, or `len` is 2^31 / 3 or more (32-bit
+    /// offsets).
+    #[inline(always)]
+    pub fn corner(conn: &[[u32; 8]], c: usize, len: usize) -> Corner4 {
+        assert!(conn.len() >= LANES && c < 8, "four elements, corner 0..8");
+        assert!(
+            len <= i32::MAX as usize / 3,
+            "fewer than 2^31 / 3 points (32-bit offsets)"
+        );
+        // SAFETY: AVX2 as in `avx2!`. The index gather reads conn[l][c], l < 4, inside `conn`
+        // (checked above: rows of eight u32, 32 bytes apart).
+        unsafe {
+            let rows = _mm_setr_epi32(0, 8, 16, 24);
+            let nodes = _mm_i32gather_epi32::<4>(conn.as_ptr().cast::<i32>().add(c), rows);
+            let below = _mm_cmpgt_epi32(_mm_set1_epi32(len as i32), nodes);
+            let nonneg = _mm_cmpgt_epi32(nodes, _mm_set1_epi32(-1));
+            let ok = _mm_movemask_epi8(_mm_and_si128(below, nonneg));
+            assert!(ok == 0xFFFF, "a node index beyond the points");
+            Corner4 {
+                offsets: _mm_add_epi32(nodes, _mm_add_epi32(nodes, nodes)),
+                len,
+            }
+        }
+    }
+
+    /// The vectors of `ys` at the points of `at`, component by component: three AVX2 gathers.
+    /// Panics when `ys` is not as long as the `len` `at` was checked against.
+    #[inline(always)]
+    pub fn gather(ys: &[[f64; 3]], at: Corner4) -> [F4; 3] {
+        assert_eq!(
+            ys.len(),
+            at.len,
+            "the points the corner was checked against"
+        );
+        let y = ys.as_flattened().as_ptr();
+        // SAFETY: AVX2 as in `avx2!`; every offset is 3 n with n < len = ys.len() (checked in
+        // `corner` and above), so the doubles 3 n + k (k < 3) lie inside `ys`.
+        unsafe {
+            [
+                val(_mm256_i32gather_pd::<8>(y, at.offsets)),
+                val(_mm256_i32gather_pd::<8>(y.add(1), at.offsets)),
+                val(_mm256_i32gather_pd::<8>(y.add(2), at.offsets)),
+            ]
+        }
+    }
+
+    /// Writes lane `l` to `s[l]` for the first `LANES` doubles of `s`. Panics when `s` is
+    /// shorter.
+    #[inline(always)]
+    pub fn store(self, s: &mut [f64]) {
+        s[..LANES].copy_from_slice(&self.0);
+    }
+
+    #[inline(always)]
+    fn cmp<const P: i32>(self, o: F4) -> M4 {
+        M4(avx2!(_mm256_cmp_pd::<P>(reg(self), reg(o))))
+    }
+
+    /// Lanes that are NaN.
+    #[inline(always)]
+    fn is_nan(self) -> M4 {
+        self.cmp::<_CMP_UNORD_Q>(self)
+    }
+
+    /// Lane-wise square root.
+    #[inline(always)]
+    pub fn sqrt(self) -> F4 {
+        val(avx2!(_mm256_sqrt_pd(reg(self))))
+    }
+
+    /// 1 / self, the IEEE quotient.
+    #[inline(always)]
+    pub fn recip(self) -> F4 {
+        F4::splat(1.0) / self
+    }
+
+    /// 1 / sqrt(self) from the IEEE square root and quotient.
+    #[inline(always)]
+    pub fn rsqrt(self) -> F4 {
+        F4::splat(1.0) / self.sqrt()
+    }
+
+    /// Lane-wise absolute value (the sign bit cleared).
+    #[inline(always)]
+    pub fn abs(self) -> F4 {
+        val(avx2!(_mm256_andnot_pd(_mm256_set1_pd(-0.0), reg(self))))
+    }
+
+    /// Lane-wise `f64::min`: a NaN lane takes the other operand. (The instruction returns its
+    /// second operand when either is NaN: `o` first makes a NaN `o` give `self`, and the blend
+    /// makes a NaN `self` give `o`.)
+    #[inline(always)]
+    pub fn min(self, o: F4) -> F4 {
+        let m = val(avx2!(_mm256_min_pd(reg(o), reg(self))));
+        F4::select(self.is_nan(), o, m)
+    }
+
+    /// Lane-wise `f64::max`: a NaN lane takes the other operand (as `min`).
+    #[inline(always)]
+    pub fn max(self, o: F4) -> F4 {
+        let m = val(avx2!(_mm256_max_pd(reg(o), reg(self))));
+        F4::select(self.is_nan(), o, m)
+    }
+
+    /// Lane-wise `f64::clamp` to [lo, hi] (NaN stays NaN).
+    #[inline(always)]
+    pub fn clamp(self, lo: f64, hi: f64) -> F4 {
+        let c = self.max(F4::splat(lo)).min(F4::splat(hi));
+        F4::select(self.is_nan(), self, c)
+    }
+
+    /// Lanes where `self < o`.
+    #[inline(always)]
+    pub fn lt(self, o: F4) -> M4 {
+        self.cmp::<_CMP_LT_OQ>(o)
+    }
+
+    /// Lanes where `self <= o`.
+    #[inline(always)]
+    pub fn le(self, o: F4) -> M4 {
+        self.cmp::<_CMP_LE_OQ>(o)
+    }
+
+    /// Lanes where `self > o`.
+    #[inline(always)]
+    pub fn gt(self, o: F4) -> M4 {
+        self.cmp::<_CMP_GT_OQ>(o)
+    }
+
+    /// Lanes where `self >= o`.
+    #[inline(always)]
+    pub fn ge(self, o: F4) -> M4 {
+        self.cmp::<_CMP_GE_OQ>(o)
+    }
+
+    /// Lanes where `self == o`.
+    #[inline(always)]
+    pub fn eq(self, o: F4) -> M4 {
+        self.cmp::<_CMP_EQ_OQ>(o)
+    }
+
+    /// Lanes that are finite (|x| < infinity is false for NaN and infinities).
+    #[inline(always)]
+    pub fn is_finite(self) -> M4 {
+        self.abs().lt(F4::splat(f64::INFINITY))
+    }
+
+    /// `self * b + c`, rounded twice (as every width's).
+    #[inline(always)]
+    pub fn mul_add(self, b: F4, c: F4) -> F4 {
+        self * b + c
+    }
+
+    /// `self * b - c`, rounded twice.
+    #[inline(always)]
+    pub fn mul_sub(self, b: F4, c: F4) -> F4 {
+        self * b - c
+    }
+
+    /// `c - self * b`, rounded twice.
+    #[inline(always)]
+    pub fn neg_mul_add(self, b: F4, c: F4) -> F4 {
+        c - self * b
+    }
+
+    /// `a` in the lanes where `m` holds, `b` in the others.
+    #[inline(always)]
+    pub fn select(m: M4, a: F4, b: F4) -> F4 {
+        val(avx2!(_mm256_blendv_pd(reg(b), reg(a), m.0)))
+    }
+}
+
+macro_rules! lane_op {
+    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $intr:ident) => {
+        impl $tr for F4 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: F4) -> F4 {
+                val(avx2!($intr(reg(self), reg(o))))
+            }
+        }
+        impl $tr<f64> for F4 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: f64) -> F4 {
+                val(avx2!($intr(reg(self), _mm256_set1_pd(o))))
+            }
+        }
+        impl $tr<F4> for f64 {
+            type Output = F4;
+            #[inline(always)]
+            fn $f(self, o: F4) -> F4 {
+                val(avx2!($intr(_mm256_set1_pd(self), reg(o))))
+            }
+        }
+        impl $tra for F4 {
+            #[inline(always)]
+            fn $fa(&mut self, o: F4) {
+                *self = $tr::$f(*self, o);
+            }
+        }
+    };
+}
+
+lane_op!(Add, add, AddAssign, add_assign, _mm256_add_pd);
+lane_op!(Sub, sub, SubAssign, sub_assign, _mm256_sub_pd);
+lane_op!(Mul, mul, MulAssign, mul_assign, _mm256_mul_pd);
+lane_op!(Div, div, DivAssign, div_assign, _mm256_div_pd);
+
+impl Neg for F4 {
+    type Output = F4;
+    /// Lane-wise negation: the sign bit flipped, as `-x` on an f64 (so -0.0 from 0.0).
+    #[inline(always)]
+    fn neg(self) -> F4 {
+        val(avx2!(_mm256_xor_pd(reg(self), _mm256_set1_pd(-0.0))))
+    }
+}
