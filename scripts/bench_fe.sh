@@ -9,6 +9,9 @@
 # and the same tetrahedra run natively (scenes/bench_block_tet_nodal.toml, `[run] tetrahedra =
 # "nodal_pressure"`): ns per tetrahedron-cycle of the native element, its stable step against
 # the split's, and the cost per simulated microsecond of both.
+# On a CPU with AVX-512F the hexahedral block runs also with `--kernel lanes4` (the AVX2 path
+# every CPU without AVX-512 takes), its runs interleaved with the eight lanes' (LANES4=0 leaves
+# it out), so both paths' figures come from one run.
 # NPS (default "1 2") lists the rank counts. One run on tetrahedra takes minutes: its set-up
 # (the split, PETSc's partition and distribution of 2.5 million cells) about 3 on 2 cores.
 set -euo pipefail
@@ -19,17 +22,23 @@ NPS=${NPS:-1 2}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 target/release/tdyn mesh meshes/bar.geo -p L=1 -p A=1 -p N=47 -p M=47 >/dev/null
 kinds="hex"
+if [ "${LANES4:-1}" = 1 ] && grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
+  kinds="hex hex4"
+fi
 if [ "$TETS" = 1 ]; then
   target/release/tdyn mesh meshes/block_tet.geo -p L=1 -p A=1 -p H=0.0195 >/dev/null
-  kinds="hex tet tetn"
+  kinds="$kinds tet tetn"
 fi
 for np in $NPS; do
   for r in $(seq "$REPEATS"); do
     for kind in $kinds; do
       scene=scenes/bench_block.toml
+      kernel=auto
+      [ "$kind" = hex4 ] && kernel=lanes4
       [ "$kind" = tet ] && scene=scenes/bench_block_tet.toml
       [ "$kind" = tetn ] && scene=scenes/bench_block_tet_nodal.toml
-      mpirun -np "$np" target/release/tdyn run "$scene" --quiet --overwrite --out "out/bench_${kind}_np${np}_r${r}"
+      mpirun -np "$np" target/release/tdyn run "$scene" --kernel "$kernel" --quiet --overwrite \
+        --out "out/bench_${kind}_np${np}_r${r}"
     done
   done
   python3 - "$np" "$REPEATS" $kinds <<'PY'
@@ -53,6 +62,10 @@ for kind, rs in runs.items():
     for k in ("fe_element_kernel_s", "fe_ghost_exchange_s", "fe_nodal_s"):
         print(f"   {k[3:-2]:<16} {med(k):7.3f} s  ({100 * med(k) / loop:4.1f} % of the loop)")
     print(f"   memory: {med('bytes_per_element'):.0f} bytes per element (nodal + element arrays)")
+if "hex4" in runs:
+    ratio = [f["ns_per_element_cycle"] / h["ns_per_element_cycle"] for h, f in zip(runs["hex"], runs["hex4"])]
+    print(f"np {np_}: four lanes (AVX2) / eight lanes (AVX-512F), pair by pair: median "
+          f"{statistics.median(ratio):.3f} (" + ", ".join(f"{x:.3f}" for x in ratio) + ")")
 if "tet" in runs:
     ratio = [t["ns_per_element_cycle"] / h["ns_per_element_cycle"] for h, t in zip(runs["hex"], runs["tet"])]
     print(f"np {np_}: split hexahedron-cycle / hexahedron-cycle, pair by pair: median "

@@ -51,11 +51,12 @@ enum ContactDecomposition {
 /// `--kernel`.
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum Kernel {
-    /// The widest every rank's CPU offers (eight lanes with AVX-512F, else four).
+    /// The widest every rank's CPU offers (eight lanes with AVX-512F, four with AVX2, else
+    /// one).
     Auto,
     /// One element at a time.
     Scalar,
-    /// Four elements per group.
+    /// Four elements per group (AVX2 on x86-64).
     Lanes4,
     /// Eight elements per group (AVX-512F only).
     Lanes8,
@@ -191,7 +192,8 @@ struct RunArgs {
     #[arg(long = "sph-pairs", value_enum, default_value = "kept")]
     sph_pairs: Rebuild,
     /// The element kernel: `auto` (default: the widest every rank's CPU offers), `scalar`,
-    /// `lanes4`, or `lanes8` (refused on a CPU without AVX-512F).
+    /// `lanes4` (refused on an x86-64 CPU without AVX2), or `lanes8` (refused on a CPU without
+    /// AVX-512F).
     #[arg(long, value_enum, default_value = "auto")]
     kernel: Kernel,
     /// Replace an earlier run's results in the output folder (without it they are kept:

@@ -22,24 +22,23 @@
 //! `batch::avx2_only`); the operations are inlined into those entries, which are compiled with
 //! the feature.
 use std::arch::x86_64::{
-    __m128i, __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd,
+    __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd,
     _mm256_castpd128_pd256, _mm256_cmp_pd, _mm256_div_pd, _mm256_insertf128_pd, _mm256_max_pd,
     _mm256_min_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_sqrt_pd,
-    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd, _mm_add_epi32,
-    _mm_and_si128, _mm_cmpgt_epi32, _mm_extract_epi32, _mm_i32gather_epi32, _mm_load_sd,
-    _mm_loadh_pd, _mm_loadu_pd, _mm_movemask_epi8, _mm_set1_epi32, _mm_setr_epi32, _CMP_EQ_OQ,
-    _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_TRUE_UQ, _CMP_UNORD_Q,
+    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd, _mm_load_sd,
+    _mm_loadh_pd, _mm_loadu_pd, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ,
+    _CMP_TRUE_UQ, _CMP_UNORD_Q,
 };
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
 /// Elements per group.
 pub const LANES: usize = 4;
 
-/// The points of one corner of a group's elements ([`F4::corner`]), as 32-bit offsets into a
+/// The points of one corner of a group's elements ([`F4::corner`]), as offsets into a
 /// flattened array of `len` points.
 #[derive(Clone, Copy)]
 pub struct Corner4 {
-    offsets: __m128i,
+    offsets: [usize; LANES],
     len: usize,
 }
 
@@ -136,30 +135,19 @@ impl F4 {
     }
 
     /// The offsets 3 n of the points n = `conn[l][c]` of corner `c` of the elements `conn[..4]`
-    /// in a flattened array of `len` points: the four node numbers by one 32-bit gather (the
-    /// connectivity rows are 32 bytes apart). Panics when `conn` has fewer than four elements,
-    /// `c` is not a corner, a node is not below `len`, or `len` is 2^31 / 3 or more (32-bit
-    /// offsets).
+    /// in a flattened array of `len` points (four scalar loads: on Zen 3 and 4 an AVX2 gather
+    /// of four indices costs more). Panics when `conn` has fewer than four elements, `c` is not
+    /// a corner, or a node is not below `len`.
     #[inline(always)]
     pub fn corner(conn: &[[u32; 8]], c: usize, len: usize) -> Corner4 {
-        assert!(conn.len() >= LANES && c < 8, "four elements, corner 0..8");
+        let n = [conn[0][c], conn[1][c], conn[2][c], conn[3][c]].map(|n| n as usize);
         assert!(
-            len <= i32::MAX as usize / 3,
-            "fewer than 2^31 / 3 points (32-bit offsets)"
+            n[0] < len && n[1] < len && n[2] < len && n[3] < len,
+            "a node index beyond the points"
         );
-        // SAFETY: AVX2 as in `avx2!`. The index gather reads conn[l][c], l < 4, inside `conn`
-        // (checked above: rows of eight u32, 32 bytes apart).
-        unsafe {
-            let rows = _mm_setr_epi32(0, 8, 16, 24);
-            let nodes = _mm_i32gather_epi32::<4>(conn.as_ptr().cast::<i32>().add(c), rows);
-            let below = _mm_cmpgt_epi32(_mm_set1_epi32(len as i32), nodes);
-            let nonneg = _mm_cmpgt_epi32(nodes, _mm_set1_epi32(-1));
-            let ok = _mm_movemask_epi8(_mm_and_si128(below, nonneg));
-            assert!(ok == 0xFFFF, "a node index beyond the points");
-            Corner4 {
-                offsets: _mm_add_epi32(nodes, _mm_add_epi32(nodes, nodes)),
-                len,
-            }
+        Corner4 {
+            offsets: n.map(|n| 3 * n),
+            len,
         }
     }
 
@@ -178,13 +166,8 @@ impl F4 {
         // SAFETY: AVX2 as in `avx2!`; every offset is 3 n with n < len = ys.len() (checked in
         // `corner` and above), so the doubles 3 n + k (k < 3) lie inside `ys`.
         unsafe {
-            let o = |l: i32| match l {
-                0 => _mm_extract_epi32::<0>(at.offsets),
-                1 => _mm_extract_epi32::<1>(at.offsets),
-                2 => _mm_extract_epi32::<2>(at.offsets),
-                _ => _mm_extract_epi32::<3>(at.offsets),
-            } as usize;
-            let (p0, p1, p2, p3) = (y.add(o(0)), y.add(o(1)), y.add(o(2)), y.add(o(3)));
+            let o = at.offsets;
+            let (p0, p1, p2, p3) = (y.add(o[0]), y.add(o[1]), y.add(o[2]), y.add(o[3]));
             // (x0, y0, x2, y2) and (x1, y1, x3, y3).
             let a02 = _mm256_insertf128_pd::<1>(
                 _mm256_castpd128_pd256(_mm_loadu_pd(p0)),
