@@ -527,7 +527,11 @@ fn every_element_kernel_gives_the_same_bits() {
     // Four lanes are AVX2 registers on x86-64: without AVX2, `lanes4` is refused and `auto`
     // runs one lane.
     let avx2 = std::arch::is_x86_feature_detected!("avx2");
-    let mut kernels = if avx2 { vec!["lanes4", "auto"] } else { vec!["auto"] };
+    let mut kernels = if avx2 {
+        vec!["lanes4", "auto"]
+    } else {
+        vec!["auto"]
+    };
     if avx512 {
         kernels.push("lanes8");
     } else {

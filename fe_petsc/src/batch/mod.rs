@@ -493,6 +493,21 @@ pub mod w4 {
     entries!(plain);
 }
 
+/// The kernel on four lanes of fixed-size arrays (`fixed.rs`), what a CPU other than x86-64
+/// runs as [`w4`]: built on x86-64 for the tests only (`tests::four_lanes_on_arrays_...`).
+#[cfg(all(test, target_arch = "x86_64"))]
+#[path = "."]
+pub mod w4_arrays {
+    pub use super::fixed::lanes4::{F4 as F, LANES, M4 as M};
+    use super::{GroupInverted, LaneMaterial};
+    use crate::hex::HexControls;
+    use crate::material::Material;
+
+    kernel_files!();
+
+    entries!(plain);
+}
+
 /// The kernel on eight lanes in AVX-512 registers (`lanes8.rs`); its update needs AVX-512F
 /// ([`widest`] says whether this CPU has it).
 #[cfg(target_arch = "x86_64")]
@@ -507,4 +522,150 @@ pub mod w8 {
     kernel_files!();
 
     entries!(avx512_only);
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::hex::HexState;
+    use crate::material::{build_material, MaterialSpec};
+
+    /// The four-lane kernel on fixed-size arrays (what aarch64 and every CPU other than x86-64
+    /// run) against the AVX2 four lanes, and each against one lane: groups of distorted,
+    /// compressed and sheared elements of a J2 steel through 20 steps (into plastic flow), the
+    /// stresses, history, forces and scalars bit for bit (the rule of docs/running.md, "One
+    /// answer": every width the same IEEE operations in the same order).
+    #[test]
+    fn four_lanes_on_arrays_give_the_avx2_and_one_lane_bits() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            println!("no AVX2 on this CPU: the four lanes in registers do not run here");
+            return;
+        }
+        let spec = MaterialSpec {
+            name: "steel".into(),
+            model: "j2_plastic".into(),
+            density: 7850.0,
+            params: [
+                ("youngs_modulus", 200e9),
+                ("poisson_ratio", 0.3),
+                ("yield_stress", 350e6),
+                ("hardening_modulus", 1e9),
+            ]
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect(),
+            eos: None,
+        };
+        let mat = build_material(&spec).unwrap();
+        let ctl = HexControls::default();
+        let lm = LaneMaterial::new(&*mat, &ctl);
+        // Four unit-cube elements side by side along x (h = 1 cm), corners moved off the grid
+        // and given varied velocities: a compression along x with shear.
+        let h = 0.01;
+        let mut xs = Vec::new();
+        for k in 0..2 {
+            for j in 0..2 {
+                for i in 0..5 {
+                    let p = xs.len() as f64;
+                    xs.push([
+                        h * i as f64 + 1e-4 * (p * 0.37).sin(),
+                        h * j as f64 + 1e-4 * (p * 0.71).cos(),
+                        h * k as f64 + 1e-4 * (p * 1.13).sin(),
+                    ]);
+                }
+            }
+        }
+        let vs: Vec<[f64; 3]> = xs
+            .iter()
+            .enumerate()
+            .map(|(n, p)| {
+                let r = (n as f64 * 0.91).sin();
+                [-3e4 * p[0] + 5.0 * r, 1e4 * p[2] - 3.0 * r, 2e3 * p[1] + r]
+            })
+            .collect();
+        let node = |i: usize, j: usize, k: usize| (i + 5 * (j + 2 * k)) as u32;
+        let conn: Vec<[u32; 8]> = (0..4)
+            .map(|e| {
+                crate::hex::NODE_XI.map(|xi| {
+                    let b = xi.map(|c| usize::from(c > 0.0));
+                    node(e + b[0], b[1], b[2])
+                })
+            })
+            .collect();
+        let vol0: Vec<f64> = conn
+            .iter()
+            .map(|c| crate::hex::volume(&c.map(|n| xs[n as usize])))
+            .collect();
+        // Each width's run: every lane's state, history and output after each step, as text
+        // (Debug of an f64 is its shortest round trip: other bits, other text).
+        fn run<B: Batch>(
+            xs: &[[f64; 3]],
+            vs: &[[f64; 3]],
+            conn: &[[u32; 8]],
+            vol0: &[f64],
+            lm: &LaneMaterial,
+            mat: &dyn Material,
+            ctl: &HexControls,
+        ) -> (Vec<String>, Vec<[f64; MAX_STATE]>) {
+            let mut xs = xs.to_vec();
+            let mut states = vec![HexState::default(); 4];
+            let mut hist = vec![[0.0; MAX_STATE]; 4];
+            let mut out = Vec::new();
+            let dt = 2e-7;
+            for _ in 0..20 {
+                for (p, v) in xs.iter_mut().zip(vs) {
+                    for c in 0..3 {
+                        p[c] += dt * v[c];
+                    }
+                }
+                for g in (0..4).step_by(B::LANES) {
+                    let e = g..g + B::LANES;
+                    let mut group = B::default();
+                    let hs = &hist[e.clone()];
+                    group.load(
+                        &xs,
+                        vs,
+                        &conn[e.clone()],
+                        &vol0[e.clone()],
+                        &states[e.clone()],
+                        |l| hs[l],
+                    );
+                    group.update(dt, lm, mat, ctl).unwrap();
+                    for l in 0..B::LANES {
+                        let (s, hl) = group.lane_state(l);
+                        states[g + l] = s;
+                        hist[g + l] = hl;
+                        out.push(format!("{:?} {:?} {:?}", s, hl, group.lane_output(l)));
+                    }
+                }
+            }
+            (out, hist)
+        }
+        let (avx2, plastic) = run::<w4::LaneGroup>(&xs, &vs, &conn, &vol0, &lm, &*mat, &ctl);
+        let (arrays, _) = run::<w4_arrays::LaneGroup>(&xs, &vs, &conn, &vol0, &lm, &*mat, &ctl);
+        let (one, _) = run::<w1::LaneGroup>(&xs, &vs, &conn, &vol0, &lm, &*mat, &ctl);
+        // The J2 law's first history value is the equivalent plastic strain: the steps reach
+        // the plastic branch (about 0.12 strain at 3e4 1/s over 4 us; yield at 1.75e-3).
+        assert!(
+            plastic.iter().all(|h| h[0] > 1e-3),
+            "every element flowed: {:?}",
+            plastic.iter().map(|h| h[0]).collect::<Vec<_>>()
+        );
+        for (k, ((a, b), c)) in avx2.iter().zip(&arrays).zip(&one).enumerate() {
+            assert_eq!(
+                a,
+                b,
+                "step {} element {}: AVX2 lanes against arrays",
+                k / 4,
+                k % 4
+            );
+            assert_eq!(
+                a,
+                c,
+                "step {} element {}: AVX2 lanes against one lane",
+                k / 4,
+                k % 4
+            );
+        }
+    }
 }
