@@ -207,6 +207,8 @@ fn run_child(mesh: &Path, np: usize) -> Vec<RankPart> {
     for r in 0..np {
         let _ = std::fs::remove_file(format!("{}.{r}", out.display()));
     }
+    let session = mesh.with_extension(format!("mpi{np}"));
+    std::fs::create_dir_all(&session).expect("a session directory for mpirun");
     let o = Command::new("timeout")
         .args(["300", "mpirun", "-np", &np.to_string()])
         .args(["-x", "TET_MESH_CHILD", "-x", "TET_MESH_OUT"])
@@ -214,6 +216,9 @@ fn run_child(mesh: &Path, np: usize) -> Vec<RankPart> {
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        // a session directory base of this run's own (concurrent mpiruns sharing
+        // /tmp/ompi.<host>.<uid> can fail to start: tests/src/lib.rs, `session_base`)
+        .env("OMPI_MCA_orte_tmpdir_base", &session)
         .env("TET_MESH_CHILD", mesh)
         .env("TET_MESH_OUT", &out)
         .output()

@@ -59,11 +59,27 @@ pub fn mpirun(np: usize, limit_s: u32) -> Command {
     c
 }
 
-/// Sets the environment mpirun needs here on `c` (as root, more ranks than cores).
+/// Sets the environment mpirun needs here on `c` (as root, more ranks than cores), and a
+/// session directory base of its own ([`session_base`]).
 pub fn mpi_env(c: &mut Command) -> &mut Command {
     c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("OMPI_MCA_orte_tmpdir_base", session_base())
+}
+
+/// A new, empty directory for one mpirun's session files (Open MPI's `orte_tmpdir_base`).
+/// Why: the suite starts several mpiruns at once, and by default they share
+/// /tmp/ompi.<host>.<uid>; one job's clean-up removing it while another job creates its own
+/// session directory under it made that job fail to start ("A call to mkdir was unable to
+/// create the desired directory ... File exists", seen once in a run of the suite).
+pub fn session_base() -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("tdyn-tests-mpi/{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a session directory for mpirun");
+    dir
 }
 
 /// `mpirun -np N tdyn run scene EXTRA --out out --quiet` (10 min limit).

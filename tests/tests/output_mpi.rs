@@ -19,6 +19,7 @@ fn output_round_trip_is_exact_at_1_2_3_ranks() {
             .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
             .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
             .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+            .env("OMPI_MCA_orte_tmpdir_base", tdyn_tests::session_base())
             .output()
             .expect("mpirun could not be started");
         let out = String::from_utf8_lossy(&o.stdout);
