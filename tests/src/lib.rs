@@ -70,7 +70,7 @@ pub fn mpi_env(c: &mut Command) -> &mut Command {
 
 /// A new, empty directory for one mpirun's session files (Open MPI's `orte_tmpdir_base`).
 /// Why: the suite starts several mpiruns at once, and by default they share
-/// /tmp/ompi.<host>.<uid>; one job's clean-up removing it while another job creates its own
+/// `/tmp/ompi.<host>.<uid>`; one job's clean-up removing it while another job creates its own
 /// session directory under it made that job fail to start ("A call to mkdir was unable to
 /// create the desired directory ... File exists", seen once in a run of the suite).
 pub fn session_base() -> PathBuf {
