@@ -199,28 +199,10 @@ impl F4 {
         M4(avx2!(_mm256_cmp_pd::<P>(reg(self), reg(o))))
     }
 
-    /// Lanes that are NaN.
-    #[inline(always)]
-    fn is_nan(self) -> M4 {
-        self.cmp::<_CMP_UNORD_Q>(self)
-    }
-
     /// Lane-wise square root.
     #[inline(always)]
     pub fn sqrt(self) -> F4 {
         val(avx2!(_mm256_sqrt_pd(reg(self))))
-    }
-
-    /// 1 / self, the IEEE quotient.
-    #[inline(always)]
-    pub fn recip(self) -> F4 {
-        F4::splat(1.0) / self
-    }
-
-    /// 1 / sqrt(self) from the IEEE square root and quotient.
-    #[inline(always)]
-    pub fn rsqrt(self) -> F4 {
-        F4::splat(1.0) / self.sqrt()
     }
 
     /// Lane-wise absolute value (the sign bit cleared).
@@ -229,81 +211,16 @@ impl F4 {
         val(avx2!(_mm256_andnot_pd(_mm256_set1_pd(-0.0), reg(self))))
     }
 
-    /// Lane-wise `f64::min`: a NaN lane takes the other operand. (The instruction returns its
-    /// second operand when either is NaN: `o` first makes a NaN `o` give `self`, and the blend
-    /// makes a NaN `self` give `o`.)
+    /// The minimum instruction, `self` first (its second operand where either is NaN).
     #[inline(always)]
-    pub fn min(self, o: F4) -> F4 {
-        let m = val(avx2!(_mm256_min_pd(reg(o), reg(self))));
-        F4::select(self.is_nan(), o, m)
+    fn min_instr(self, o: F4) -> F4 {
+        val(avx2!(_mm256_min_pd(reg(self), reg(o))))
     }
 
-    /// Lane-wise `f64::max`: a NaN lane takes the other operand (as `min`).
+    /// The maximum instruction, `self` first (its second operand where either is NaN).
     #[inline(always)]
-    pub fn max(self, o: F4) -> F4 {
-        let m = val(avx2!(_mm256_max_pd(reg(o), reg(self))));
-        F4::select(self.is_nan(), o, m)
-    }
-
-    /// Lane-wise `f64::clamp` to [lo, hi] (NaN stays NaN).
-    #[inline(always)]
-    pub fn clamp(self, lo: f64, hi: f64) -> F4 {
-        let c = self.max(F4::splat(lo)).min(F4::splat(hi));
-        F4::select(self.is_nan(), self, c)
-    }
-
-    /// Lanes where `self < o`.
-    #[inline(always)]
-    pub fn lt(self, o: F4) -> M4 {
-        self.cmp::<_CMP_LT_OQ>(o)
-    }
-
-    /// Lanes where `self <= o`.
-    #[inline(always)]
-    pub fn le(self, o: F4) -> M4 {
-        self.cmp::<_CMP_LE_OQ>(o)
-    }
-
-    /// Lanes where `self > o`.
-    #[inline(always)]
-    pub fn gt(self, o: F4) -> M4 {
-        self.cmp::<_CMP_GT_OQ>(o)
-    }
-
-    /// Lanes where `self >= o`.
-    #[inline(always)]
-    pub fn ge(self, o: F4) -> M4 {
-        self.cmp::<_CMP_GE_OQ>(o)
-    }
-
-    /// Lanes where `self == o`.
-    #[inline(always)]
-    pub fn eq(self, o: F4) -> M4 {
-        self.cmp::<_CMP_EQ_OQ>(o)
-    }
-
-    /// Lanes that are finite (|x| < infinity is false for NaN and infinities).
-    #[inline(always)]
-    pub fn is_finite(self) -> M4 {
-        self.abs().lt(F4::splat(f64::INFINITY))
-    }
-
-    /// `self * b + c`, rounded twice (as every width's).
-    #[inline(always)]
-    pub fn mul_add(self, b: F4, c: F4) -> F4 {
-        self * b + c
-    }
-
-    /// `self * b - c`, rounded twice.
-    #[inline(always)]
-    pub fn mul_sub(self, b: F4, c: F4) -> F4 {
-        self * b - c
-    }
-
-    /// `c - self * b`, rounded twice.
-    #[inline(always)]
-    pub fn neg_mul_add(self, b: F4, c: F4) -> F4 {
-        c - self * b
+    fn max_instr(self, o: F4) -> F4 {
+        val(avx2!(_mm256_max_pd(reg(self), reg(o))))
     }
 
     /// `a` in the lanes where `m` holds, `b` in the others.
@@ -313,42 +230,15 @@ impl F4 {
     }
 }
 
-macro_rules! lane_op {
-    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $intr:ident) => {
-        impl $tr for F4 {
-            type Output = F4;
-            #[inline(always)]
-            fn $f(self, o: F4) -> F4 {
-                val(avx2!($intr(reg(self), reg(o))))
-            }
-        }
-        impl $tr<f64> for F4 {
-            type Output = F4;
-            #[inline(always)]
-            fn $f(self, o: f64) -> F4 {
-                val(avx2!($intr(reg(self), _mm256_set1_pd(o))))
-            }
-        }
-        impl $tr<F4> for f64 {
-            type Output = F4;
-            #[inline(always)]
-            fn $f(self, o: F4) -> F4 {
-                val(avx2!($intr(_mm256_set1_pd(self), reg(o))))
-            }
-        }
-        impl $tra for F4 {
-            #[inline(always)]
-            fn $fa(&mut self, o: F4) {
-                *self = $tr::$f(*self, o);
-            }
-        }
-    };
-}
-
-lane_op!(Add, add, AddAssign, add_assign, _mm256_add_pd);
-lane_op!(Sub, sub, SubAssign, sub_assign, _mm256_sub_pd);
-lane_op!(Mul, mul, MulAssign, mul_assign, _mm256_mul_pd);
-lane_op!(Div, div, DivAssign, div_assign, _mm256_div_pd);
+arithmetic_ops!(
+    F4,
+    _mm256_set1_pd,
+    _mm256_add_pd,
+    _mm256_sub_pd,
+    _mm256_mul_pd,
+    _mm256_div_pd
+);
+derived_ops!(F4, M4);
 
 impl Neg for F4 {
     type Output = F4;

@@ -188,28 +188,10 @@ impl F8 {
         M8(avx512!(_mm512_cmp_pd_mask::<P>(reg(self), reg(o))))
     }
 
-    /// Lanes that are NaN.
-    #[inline(always)]
-    fn is_nan(self) -> M8 {
-        self.cmp::<_CMP_UNORD_Q>(self)
-    }
-
     /// Lane-wise square root.
     #[inline(always)]
     pub fn sqrt(self) -> F8 {
         val(avx512!(_mm512_sqrt_pd(reg(self))))
-    }
-
-    /// 1 / self, the IEEE quotient (as the four lanes').
-    #[inline(always)]
-    pub fn recip(self) -> F8 {
-        F8::splat(1.0) / self
-    }
-
-    /// 1 / sqrt(self) from the IEEE square root and quotient (as the four lanes').
-    #[inline(always)]
-    pub fn rsqrt(self) -> F8 {
-        F8::splat(1.0) / self.sqrt()
     }
 
     /// Lane-wise absolute value.
@@ -218,81 +200,16 @@ impl F8 {
         val(avx512!(_mm512_abs_pd(reg(self))))
     }
 
-    /// Lane-wise `f64::min`: a NaN lane takes the other operand. (The instruction returns its
-    /// second operand when either is NaN: `o` first makes a NaN `o` give `self`, and the blend
-    /// makes a NaN `self` give `o`.)
+    /// The minimum instruction, `self` first (its second operand where either is NaN).
     #[inline(always)]
-    pub fn min(self, o: F8) -> F8 {
-        let m = val(avx512!(_mm512_min_pd(reg(o), reg(self))));
-        F8::select(self.is_nan(), o, m)
+    fn min_instr(self, o: F8) -> F8 {
+        val(avx512!(_mm512_min_pd(reg(self), reg(o))))
     }
 
-    /// Lane-wise `f64::max`: a NaN lane takes the other operand (as `min`).
+    /// The maximum instruction, `self` first (its second operand where either is NaN).
     #[inline(always)]
-    pub fn max(self, o: F8) -> F8 {
-        let m = val(avx512!(_mm512_max_pd(reg(o), reg(self))));
-        F8::select(self.is_nan(), o, m)
-    }
-
-    /// Lane-wise `f64::clamp` to [lo, hi] (NaN stays NaN).
-    #[inline(always)]
-    pub fn clamp(self, lo: f64, hi: f64) -> F8 {
-        let c = self.max(F8::splat(lo)).min(F8::splat(hi));
-        F8::select(self.is_nan(), self, c)
-    }
-
-    /// Lanes where `self < o`.
-    #[inline(always)]
-    pub fn lt(self, o: F8) -> M8 {
-        self.cmp::<_CMP_LT_OQ>(o)
-    }
-
-    /// Lanes where `self <= o`.
-    #[inline(always)]
-    pub fn le(self, o: F8) -> M8 {
-        self.cmp::<_CMP_LE_OQ>(o)
-    }
-
-    /// Lanes where `self > o`.
-    #[inline(always)]
-    pub fn gt(self, o: F8) -> M8 {
-        self.cmp::<_CMP_GT_OQ>(o)
-    }
-
-    /// Lanes where `self >= o`.
-    #[inline(always)]
-    pub fn ge(self, o: F8) -> M8 {
-        self.cmp::<_CMP_GE_OQ>(o)
-    }
-
-    /// Lanes where `self == o`.
-    #[inline(always)]
-    pub fn eq(self, o: F8) -> M8 {
-        self.cmp::<_CMP_EQ_OQ>(o)
-    }
-
-    /// Lanes that are finite (|x| < infinity is false for NaN and infinities).
-    #[inline(always)]
-    pub fn is_finite(self) -> M8 {
-        self.abs().lt(F8::splat(f64::INFINITY))
-    }
-
-    /// `self * b + c`, rounded twice (as the four lanes').
-    #[inline(always)]
-    pub fn mul_add(self, b: F8, c: F8) -> F8 {
-        self * b + c
-    }
-
-    /// `self * b - c`, rounded twice.
-    #[inline(always)]
-    pub fn mul_sub(self, b: F8, c: F8) -> F8 {
-        self * b - c
-    }
-
-    /// `c - self * b`, rounded twice.
-    #[inline(always)]
-    pub fn neg_mul_add(self, b: F8, c: F8) -> F8 {
-        c - self * b
+    fn max_instr(self, o: F8) -> F8 {
+        val(avx512!(_mm512_max_pd(reg(self), reg(o))))
     }
 
     /// `a` in the lanes where `m` holds, `b` in the others.
@@ -302,42 +219,15 @@ impl F8 {
     }
 }
 
-macro_rules! lane_op {
-    ($tr:ident, $f:ident, $tra:ident, $fa:ident, $intr:ident) => {
-        impl $tr for F8 {
-            type Output = F8;
-            #[inline(always)]
-            fn $f(self, o: F8) -> F8 {
-                val(avx512!($intr(reg(self), reg(o))))
-            }
-        }
-        impl $tr<f64> for F8 {
-            type Output = F8;
-            #[inline(always)]
-            fn $f(self, o: f64) -> F8 {
-                val(avx512!($intr(reg(self), _mm512_set1_pd(o))))
-            }
-        }
-        impl $tr<F8> for f64 {
-            type Output = F8;
-            #[inline(always)]
-            fn $f(self, o: F8) -> F8 {
-                val(avx512!($intr(_mm512_set1_pd(self), reg(o))))
-            }
-        }
-        impl $tra for F8 {
-            #[inline(always)]
-            fn $fa(&mut self, o: F8) {
-                *self = $tr::$f(*self, o);
-            }
-        }
-    };
-}
-
-lane_op!(Add, add, AddAssign, add_assign, _mm512_add_pd);
-lane_op!(Sub, sub, SubAssign, sub_assign, _mm512_sub_pd);
-lane_op!(Mul, mul, MulAssign, mul_assign, _mm512_mul_pd);
-lane_op!(Div, div, DivAssign, div_assign, _mm512_div_pd);
+arithmetic_ops!(
+    F8,
+    _mm512_set1_pd,
+    _mm512_add_pd,
+    _mm512_sub_pd,
+    _mm512_mul_pd,
+    _mm512_div_pd
+);
+derived_ops!(F8, M8);
 
 impl Neg for F8 {
     type Output = F8;

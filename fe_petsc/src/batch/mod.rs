@@ -300,6 +300,9 @@ pub struct GroupInverted {
 pub mod arrays;
 mod fixed;
 #[cfg(target_arch = "x86_64")]
+#[macro_use]
+mod vector_ops;
+#[cfg(target_arch = "x86_64")]
 mod lanes4;
 #[cfg(target_arch = "x86_64")]
 mod lanes8;
