@@ -2,11 +2,13 @@
 //! same interface as the four lanes of [`super::lanes4`], each operation one AVX-512
 //! instruction written with `std::arch` intrinsics.
 //!
-//! Why intrinsics and not arrays the compiler vectorises (as the four lanes are): on eight-lane
-//! arrays the compiler's loop vectoriser turned some node loops into gathers and scatters
-//! across the lanes' arrays (measured 410 ns per element in `examples/hex_bench`, against
-//! 245 ns with these intrinsics and 320 ns with four AVX2 lanes). The storage stays a plain
-//! array, so lanes are read and written by index outside the kernel.
+//! Why intrinsics and not arrays the compiler vectorises (what `fixed.rs` gives one lane, and
+//! four off x86-64): on eight-lane arrays the compiler's loop vectoriser turned some node loops
+//! into gathers and scatters across the lanes' arrays (measured 410 ns per element in
+//! `examples/hex_bench`, against 245 ns with these intrinsics at the time). The storage stays a
+//! plain array, so lanes are read and written by index outside the kernel. The operators,
+//! comparisons, `min`, `max`, `clamp` and multiply-adds are derived as the four lanes' are
+//! (`vector_ops.rs`).
 //!
 //! Every operation is the IEEE operation of `f64` lane by lane, and the comparisons, `min`,
 //! `max`, `clamp`, `abs` and negation treat NaN, infinities and signed zeros as `f64`'s do.
