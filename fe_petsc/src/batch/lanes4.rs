@@ -140,13 +140,20 @@ impl F4 {
     /// a corner, or a node is not below `len`.
     #[inline(always)]
     pub fn corner(conn: &[[u32; 8]], c: usize, len: usize) -> Corner4 {
-        let n = [conn[0][c], conn[1][c], conn[2][c], conn[3][c]].map(|n| n as usize);
+        // (written out, no `map`: a library generic taking a closure is not inlined into the
+        // target-feature build, module `batch`)
+        let n = [
+            conn[0][c] as usize,
+            conn[1][c] as usize,
+            conn[2][c] as usize,
+            conn[3][c] as usize,
+        ];
         assert!(
             n[0] < len && n[1] < len && n[2] < len && n[3] < len,
             "a node index beyond the points"
         );
         Corner4 {
-            offsets: n.map(|n| 3 * n),
+            offsets: [3 * n[0], 3 * n[1], 3 * n[2], 3 * n[3]],
             len,
         }
     }
