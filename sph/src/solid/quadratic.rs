@@ -249,62 +249,168 @@ fn lane_shifts(g: &PassGrids) -> [[f64; QLANES]; 2] {
     })
 }
 
-/// The third and fourth moments of `d` in lane order ([`CUBIC`], [`QUARTIC`]), m^3 and m^4.
+/// The factors of a pair's products ([`products`]), indices into this list: d_x, d_y, d_z,
+/// d_x^2, d_y^2, d_z^2, d_x d_y, d_y d_z, d_z d_x, d_x^3, d_y^3, d_z^3, (v_b - v_a)_{x,y,z},
+/// and a zero.
+const FACTORS: usize = 16;
+const X: u8 = 0;
+const Y: u8 = 1;
+const Z: u8 = 2;
+const XX: u8 = 3;
+const YY: u8 = 4;
+const ZZ: u8 = 5;
+const XY: u8 = 6;
+const YZ: u8 = 7;
+const ZX: u8 = 8;
+const XXX: u8 = 9;
+const YYY: u8 = 10;
+const ZZZ: u8 = 11;
+const DV: u8 = 12;
+const NIL: u8 = 15;
+
+/// Lane l of a pair's products is `factor[PRODUCT[l].0] * factor[PRODUCT[l].1]`: the
+/// velocity lanes q_m(d) (v_b - v_a)_k (at 3 m + k, [`QUAD`] order), the third moments
+/// ([`CUBIC`] order), the fourth ([`QUARTIC`] order; d_x^3 d_y as (d_x^2 d_x) d_y, d_x^2 d_y d_z
+/// as d_x^2 (d_y d_z)), zero in the unused lanes (checked by a test).
+const PRODUCT: [(u8, u8); QLANES] = [
+    (XX, DV),
+    (XX, DV + 1),
+    (XX, DV + 2),
+    (YY, DV),
+    (YY, DV + 1),
+    (YY, DV + 2),
+    (ZZ, DV),
+    (ZZ, DV + 1),
+    (ZZ, DV + 2),
+    (XY, DV),
+    (XY, DV + 1),
+    (XY, DV + 2),
+    (YZ, DV),
+    (YZ, DV + 1),
+    (YZ, DV + 2),
+    (ZX, DV),
+    (ZX, DV + 1),
+    (ZX, DV + 2),
+    (XX, X),
+    (YY, Y),
+    (ZZ, Z),
+    (XX, Y),
+    (XX, Z),
+    (YY, X),
+    (YY, Z),
+    (ZZ, X),
+    (ZZ, Y),
+    (XY, Z),
+    (XX, XX),
+    (YY, YY),
+    (ZZ, ZZ),
+    (XXX, Y),
+    (XXX, Z),
+    (YYY, X),
+    (YYY, Z),
+    (ZZZ, X),
+    (ZZZ, Y),
+    (XX, YY),
+    (YY, ZZ),
+    (XX, ZZ),
+    (XX, YZ),
+    (YY, ZX),
+    (ZZ, XY),
+    (NIL, NIL),
+    (NIL, NIL),
+    (NIL, NIL),
+    (NIL, NIL),
+    (NIL, NIL),
+];
+
+/// The sign of each lane's product at the pair's other end (d and v_b - v_a negated): odd in
+/// d and v (velocity lanes, third moments) -1, even (fourth moments) +1. Round to nearest is
+/// symmetric, so the other end's products are these signs times this end's, to the bit.
+const OTHER_END: [f64; QLANES] = {
+    let mut s = [1.0; QLANES];
+    let mut l = 0;
+    while l < FOURTH0 {
+        s[l] = -1.0;
+        l += 1;
+    }
+    s
+};
+
+/// The products of one pair end ([`PRODUCT`]): `d` = x_other - x_me, `dv` = v_other - v_me.
+/// Its terms are w = V_other |gr| times these.
 #[inline(always)]
-fn moments(d: &[f64; 3]) -> ([f64; N3], [f64; N4]) {
+fn products(d: &[f64; 3], dv: &[f64; 3]) -> [f64; QLANES] {
     let [x, y, z] = *d;
     let (xx, yy, zz) = (x * x, y * y, z * z);
-    let cubic = [
+    let f: [f64; FACTORS] = [
+        x,
+        y,
+        z,
+        xx,
+        yy,
+        zz,
+        x * y,
+        y * z,
+        z * x,
         xx * x,
         yy * y,
         zz * z,
-        xx * y,
-        xx * z,
-        yy * x,
-        yy * z,
-        zz * x,
-        zz * y,
-        (x * y) * z,
+        dv[0],
+        dv[1],
+        dv[2],
+        0.0,
     ];
-    let quartic = [
-        xx * xx,
-        yy * yy,
-        zz * zz,
-        (xx * x) * y,
-        (xx * x) * z,
-        (yy * y) * x,
-        (yy * y) * z,
-        (zz * z) * x,
-        (zz * z) * y,
-        xx * yy,
-        yy * zz,
-        xx * zz,
-        xx * (y * z),
-        yy * (x * z),
-        zz * (x * y),
-    ];
-    (cubic, quartic)
-}
-
-/// The terms one entry gets from a pair: `w` = V_other |gr|, `d` = x_other - x_me,
-/// `dv` = v_other - v_me.
-#[inline(always)]
-fn terms(w: f64, d: &[f64; 3], dv: &[f64; 3]) -> [f64; QLANES] {
-    let mut x = [0.0; QLANES];
-    let q = quad_basis(d);
-    for m in 0..6 {
-        for k in 0..3 {
-            x[3 * m + k] = w * (q[m] * dv[k]);
-        }
-    }
-    let (c3, c4) = moments(d);
-    for l in 0..N3 {
-        x[THIRD0 + l] = w * c3[l];
-    }
-    for l in 0..N4 {
-        x[FOURTH0 + l] = w * c4[l];
-    }
-    x
+    let p = |l: usize| f[PRODUCT[l].0 as usize] * f[PRODUCT[l].1 as usize];
+    [
+        p(0),
+        p(1),
+        p(2),
+        p(3),
+        p(4),
+        p(5),
+        p(6),
+        p(7),
+        p(8),
+        p(9),
+        p(10),
+        p(11),
+        p(12),
+        p(13),
+        p(14),
+        p(15),
+        p(16),
+        p(17),
+        p(18),
+        p(19),
+        p(20),
+        p(21),
+        p(22),
+        p(23),
+        p(24),
+        p(25),
+        p(26),
+        p(27),
+        p(28),
+        p(29),
+        p(30),
+        p(31),
+        p(32),
+        p(33),
+        p(34),
+        p(35),
+        p(36),
+        p(37),
+        p(38),
+        p(39),
+        p(40),
+        p(41),
+        p(42),
+        p(43),
+        p(44),
+        p(45),
+        p(46),
+        p(47),
+    ]
 }
 
 /// What the quadratic pass reads of one entry: position, velocity, volume, its slot.
@@ -370,6 +476,23 @@ super::build::builds!(
     ) -> ()
 );
 
+/// Adds one pair end's terms `term(l)` to its sums and their sizes to the lanes' largest `mx`
+/// (NaN terms left out, as `f64::max` would, in one instruction).
+#[inline(always)]
+fn add_end(
+    sums: &mut QuadSums,
+    mx: &mut [f64; QLANES],
+    shifts: &[[f64; QLANES]; 2],
+    term: impl Fn(usize) -> f64,
+) {
+    let x: [f64; QLANES] = std::array::from_fn(term);
+    for l in 0..QLANES {
+        let t = x[l].abs();
+        mx[l] = if t > mx[l] { t } else { mx[l] };
+    }
+    sums.add(&x, shifts);
+}
+
 /// The pair loop of [`quadratic_pass`] (inlined into each build).
 #[inline(always)]
 fn quad_pairs(
@@ -389,18 +512,16 @@ fn quad_pairs(
         let ag = -pg.gr;
         let d: [f64; 3] = std::array::from_fn(|c| b.x[c] - a.x[c]);
         let dv: [f64; 3] = std::array::from_fn(|c| b.v[c] - a.v[c]);
-        for (slot, w, d, dv) in [
-            (a.slot, b.vol * ag, d, dv),
-            (b.slot, a.vol * ag, d.map(|x| -x), dv.map(|x| -x)),
-        ] {
-            if slot == u32::MAX {
-                continue;
-            }
-            let x = terms(w, &d, &dv);
-            for l in 0..QLANES {
-                mx[l] = mx[l].max(x[l].abs());
-            }
-            sums[slot as usize].add(&x, shifts);
+        let pa = products(&d, &dv);
+        if a.slot != u32::MAX {
+            let w = b.vol * ag;
+            add_end(&mut sums[a.slot as usize], &mut mx, shifts, |l| w * pa[l]);
+        }
+        if b.slot != u32::MAX {
+            let w = a.vol * ag;
+            add_end(&mut sums[b.slot as usize], &mut mx, shifts, |l| {
+                w * (OTHER_END[l] * pa[l])
+            });
         }
     }
     let group = |r: std::ops::Range<usize>| mx[r].iter().fold(0.0f64, |a, &x| a.max(x));
@@ -426,134 +547,243 @@ pub fn quad_sums_of(s: &Solids, i: usize) -> QuadSums {
     }
 }
 
+/// Flagged entries settled together ([`settle_lanes`]): one per f64 lane of an AVX-512
+/// register.
+pub const SETTLE_LANES: usize = 8;
+
+/// One value per lane of a [`settle_lanes`] batch.
+type Lanes<const N: usize> = [f64; N];
+
+/// What [`settle_lanes`] reads of each entry of a batch (the folds' values), lane by lane.
+#[derive(Clone, Copy)]
+struct SettleIn<const N: usize> {
+    /// The shape sum S_a (the linear block of A).
+    shape: [[Lanes<N>; 3]; 3],
+    /// The third moments of d_k q_m(d) ([`LQ`]), m^3 / m^2 (w in 1/m^2).
+    third: [[Lanes<N>; 6]; 3],
+    /// The fourth moments of q_m(d) q_n(d) ([`QQ`]).
+    fourth: [[Lanes<N>; 6]; 6],
+    /// The gradient pass's sum grad_sum[k][n] (the linear rows of R).
+    grad: [[Lanes<N>; 3]; 3],
+    /// The velocity lanes q_m(d) (v_b - v_a)_k, `vel[m][k]`.
+    vel: [[Lanes<N>; 3]; 6],
+    /// The smoothing length, m.
+    h: Lanes<N>,
+}
+
+/// What [`settle_lanes`] gives each entry: the first three rows of A'^-1, the fitted gradient,
+/// the rows' largest entry, and whether the fit stands (A' regular, its rows finite and below
+/// [`QUAD_CORRECTION_MAX`]).
+#[derive(Clone, Copy)]
+struct SettleOut<const N: usize> {
+    inv: [[Lanes<N>; 9]; 3],
+    l: [[Lanes<N>; 3]; 3],
+    amp: Lanes<N>,
+    ok: [bool; N],
+}
+
 /// Solves the 9 x 9 system of every flagged owned entry (scaled by its h: the quadratic basis
 /// over h, so that A is dimensionless) and sets its velocity gradient, its correction C_lin
 /// (`Solids::correction`, in the place of B) and C_quad (`Solids::quad`, 1/m). An entry whose A
 /// is singular or whose C has an entry past [`QUAD_CORRECTION_MAX`] keeps the linear correction.
-#[allow(clippy::needless_range_loop)] // index algebra: rows and columns of A and R
+/// The solves run [`SETTLE_LANES`] entries at a time ([`settle_lanes`], in the widest build:
+/// each lane's operations are one entry's, in its order, so the bits do not depend on the
+/// batch or the build).
 pub fn settle_quadratic(p: &Particles, s: &mut Solids) {
-    for i in 0..p.n_owned {
-        if !s.quad_flag[i] {
-            continue;
-        }
-        let sums = s.quad_sums[s.quad_slot[i] as usize];
-        let h = p.h[i];
-        // A' = D A D, D = diag(1, 1, 1, 1/h x 6); R' = D R
-        let mut a = [[0.0f64; 9]; 9];
-        let shape = &s.shape_sum[i];
-        for k in 0..3 {
-            for l in 0..3 {
-                a[k][l] = shape[k][l];
+    let flagged: Vec<usize> = (0..p.n_owned).filter(|&i| s.quad_flag[i]).collect();
+    for batch in flagged.chunks(SETTLE_LANES) {
+        let inp = gather_settle(p, s, batch);
+        let out = settle_lanes_built(s.build, &inp);
+        for (lane, &i) in batch.iter().enumerate() {
+            if out.ok[lane] {
+                apply_fit(s, i, &out, lane);
             }
         }
+    }
+}
+
+/// The inputs of the entries `batch` (at most [`SETTLE_LANES`]; the lanes past its end repeat
+/// its first entry and are not used).
+#[allow(clippy::needless_range_loop)] // index algebra: the lanes of A and R
+fn gather_settle(p: &Particles, s: &Solids, batch: &[usize]) -> SettleIn<SETTLE_LANES> {
+    let z = [0.0; SETTLE_LANES];
+    let mut inp = SettleIn {
+        shape: [[z; 3]; 3],
+        third: [[z; 6]; 3],
+        fourth: [[z; 6]; 6],
+        grad: [[z; 3]; 3],
+        vel: [[z; 3]; 6],
+        h: z,
+    };
+    for lane in 0..SETTLE_LANES {
+        let i = batch.get(lane).copied().unwrap_or(batch[0]);
+        let sums = &s.quad_sums[s.quad_slot[i] as usize];
+        inp.h[lane] = p.h[i];
         for k in 0..3 {
+            for c in 0..3 {
+                inp.shape[k][c][lane] = s.shape_sum[i][k][c];
+                inp.grad[k][c][lane] = s.grad_sum[i][k][c];
+            }
             for m in 0..6 {
-                let v = sums.value(THIRD0 + LQ[k][m]) / h;
-                a[k][3 + m] = v;
-                a[3 + m][k] = v;
+                inp.third[k][m][lane] = sums.value(THIRD0 + LQ[k][m]);
+                inp.vel[m][k][lane] = sums.value(3 * m + k);
             }
         }
         for m in 0..6 {
             for n in 0..6 {
-                a[3 + m][3 + n] = sums.value(FOURTH0 + QQ[m][n]) / (h * h);
+                inp.fourth[m][n][lane] = sums.value(FOURTH0 + QQ[m][n]);
             }
         }
-        let Some(inv) = inverse_rows(&a) else {
-            continue;
-        };
-        let amp = inv.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-        if !(amp.is_finite() && amp < QUAD_CORRECTION_MAX) {
-            continue;
+    }
+    inp
+}
+
+/// Sets entry `i`'s gradient, correction and C_quad from lane `lane` of `out`, blended with the
+/// linear correction by beta (0 at [`SURFACE_SHAPE_TOL`], 1 from [`SURFACE_SHAPE_TOL`] +
+/// [`SURFACE_BLEND`] on, faded by [`amplification_blend`]): the pair weight
+/// omega = (1 - beta) B g + beta (C_lin |gr| d + C_quad |gr| q(d)), g = grad_a W = |gr| d, so
+/// `correction` is (1 - beta) B + beta C_lin and `quad` beta C_quad.
+fn apply_fit(s: &mut Solids, i: usize, out: &SettleOut<SETTLE_LANES>, lane: usize) {
+    let beta = surface_blend(&s.shape_sum[i]) * amplification_blend(out.amp[lane]);
+    let (l1, b1) = (s.grad_v[i], s.correction[i]);
+    s.grad_v[i] = std::array::from_fn(|k| {
+        std::array::from_fn(|c| l1[k][c] + beta * (out.l[k][c][lane] - l1[k][c]))
+    });
+    s.correction[i] = std::array::from_fn(|k| {
+        std::array::from_fn(|c| b1[k][c] + beta * (out.inv[k][c][lane] - b1[k][c]))
+    });
+    s.quad[i] = std::array::from_fn(|e| beta * out.inv[e / 6][3 + e % 6][lane]);
+    s.quad_share[i] = beta;
+}
+
+super::build::builds!(
+    /// [`settle_lanes`] in the build of the pass.
+    settle_lanes_built,
+    settle_lanes::<SETTLE_LANES>,
+    (inp: &SettleIn<SETTLE_LANES>) -> SettleOut<SETTLE_LANES>
+);
+
+/// `f` of every lane.
+#[inline(always)]
+fn each<const N: usize>(f: impl Fn(usize) -> f64) -> Lanes<N> {
+    std::array::from_fn(f)
+}
+
+/// The fit of `N` entries, lane by lane: A' = D A D and R' = D R with D = diag(1, 1, 1, 1/h x
+/// 6), the first three rows of A'^-1 ([`inverse_rows`]), L[k][c] = sum_n A'^-1[c][n] R'[n][k],
+/// and the rows scaled back (C_quad = A'^-1[k][3 + m] / h, 1/m).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index algebra: rows and columns of A and R
+fn settle_lanes<const N: usize>(inp: &SettleIn<N>) -> SettleOut<N> {
+    let h = &inp.h;
+    let hh: Lanes<N> = each(|l| h[l] * h[l]);
+    let mut a = [[[0.0f64; N]; 9]; 9];
+    for k in 0..3 {
+        for c in 0..3 {
+            a[k][c] = inp.shape[k][c];
         }
-        // R' rows: linear (grad_sum transposed), quadratic (velocity lanes / h)
-        let grad = &s.grad_sum[i];
-        let r = |n: usize, k: usize| -> f64 {
-            if n < 3 {
-                grad[k][n]
-            } else {
-                sums.value(3 * (n - 3) + k) / h
-            }
-        };
-        let mut l = [[0.0; 3]; 3];
-        for (k, row) in l.iter_mut().enumerate() {
-            for (c, x) in row.iter_mut().enumerate() {
-                let mut t = 0.0;
-                for n in 0..9 {
-                    t += inv[c][n] * r(n, k);
-                }
-                *x = t;
-            }
+        for m in 0..6 {
+            let v: Lanes<N> = each(|l| inp.third[k][m][l] / h[l]);
+            a[k][3 + m] = v;
+            a[3 + m][k] = v;
         }
-        // blended with the linear correction by beta (0 at SURFACE_SHAPE_TOL, 1 from
-        // SURFACE_SHAPE_TOL + SURFACE_BLEND on): the pair weight
-        // omega = (1 - beta) B g + beta (C_lin |gr| d + C_quad |gr| q(d)), g = grad_a W = |gr| d,
-        // so `correction` is (1 - beta) B + beta C_lin and `quad` beta C_quad
-        let beta = surface_blend(&s.shape_sum[i]) * amplification_blend(amp);
-        let (l1, b1) = (s.grad_v[i], s.correction[i]);
-        s.grad_v[i] = std::array::from_fn(|k| {
-            std::array::from_fn(|c| l1[k][c] + beta * (l[k][c] - l1[k][c]))
-        });
-        s.correction[i] = std::array::from_fn(|k| {
-            std::array::from_fn(|c| b1[k][c] + beta * (inv[k][c] - b1[k][c]))
-        });
-        s.quad[i] = std::array::from_fn(|e| beta * (inv[e / 6][3 + e % 6] / h));
-        s.quad_share[i] = beta;
+    }
+    for m in 0..6 {
+        for n in 0..6 {
+            a[3 + m][3 + n] = each(|l| inp.fourth[m][n][l] / hh[l]);
+        }
+    }
+    let (mut inv, mut ok) = inverse_rows(&a);
+    let amp: Lanes<N> = each(|l| inv.iter().flatten().fold(0.0f64, |m, x| m.max(x[l].abs())));
+    for l in 0..N {
+        ok[l] &= amp[l].is_finite() && amp[l] < QUAD_CORRECTION_MAX;
+    }
+    // R' rows: linear (grad_sum transposed), quadratic (velocity lanes / h)
+    let mut r = [[[0.0f64; N]; 3]; 9];
+    for k in 0..3 {
+        for n in 0..3 {
+            r[n][k] = inp.grad[k][n];
+        }
+        for m in 0..6 {
+            r[3 + m][k] = each(|l| inp.vel[m][k][l] / h[l]);
+        }
+    }
+    let mut lg = [[[0.0f64; N]; 3]; 3];
+    for k in 0..3 {
+        for c in 0..3 {
+            let mut t = [0.0f64; N];
+            for n in 0..9 {
+                t = each(|l| t[l] + inv[c][n][l] * r[n][k][l]);
+            }
+            lg[k][c] = t;
+        }
+    }
+    for row in inv.iter_mut() {
+        for x in row[3..].iter_mut() {
+            *x = each(|l| x[l] / h[l]);
+        }
+    }
+    SettleOut {
+        inv,
+        l: lg,
+        amp,
+        ok,
     }
 }
 
 /// The first three rows of the inverse of the symmetric positive definite 9 x 9 matrix `a`
-/// (A = sum w P P^T with w > 0), by Cholesky's factorisation A = G G^T (Golub & Van Loan,
-/// Matrix Computations, 4th ed., §4.2) and three solves against the unit vectors e_0, e_1,
-/// e_2 (A symmetric: the columns are the rows); `None` where a pivot G_jj^2 falls below 1e-10
-/// of the largest entry (singular to the fit's accuracy: too few partners for nine unknowns).
+/// (A = sum w P P^T with w > 0) of each lane, by Cholesky's factorisation A = G G^T (Golub &
+/// Van Loan, Matrix Computations, 4th ed., §4.2) and three solves against the unit vectors
+/// e_0, e_1, e_2 (A symmetric: the columns are the rows); a lane is not `ok` where a pivot
+/// G_jj^2 falls below 1e-10 of its largest entry (singular to the fit's accuracy: too few
+/// partners for nine unknowns), and its rows are then meaningless.
+#[inline(always)]
 #[allow(clippy::needless_range_loop)] // index algebra of the factorisation
-fn inverse_rows(a: &[[f64; 9]; 9]) -> Option<[[f64; 9]; 3]> {
-    let scale = a.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
-    if !(scale.is_finite() && scale > 0.0) {
-        return None;
-    }
+fn inverse_rows<const N: usize>(a: &[[Lanes<N>; 9]; 9]) -> ([[Lanes<N>; 9]; 3], [bool; N]) {
+    let scale: Lanes<N> = each(|l| a.iter().flatten().fold(0.0f64, |s, x| s.max(x[l].abs())));
+    let mut ok: [bool; N] = std::array::from_fn(|l| scale[l].is_finite() && scale[l] > 0.0);
     // G row by row, and the reciprocals of its diagonal (one division per pivot)
-    let mut g = [[0.0f64; 9]; 9];
-    let mut inv_d = [0.0f64; 9];
+    let mut g = [[[0.0f64; N]; 9]; 9];
+    let mut inv_d = [[0.0f64; N]; 9];
     for j in 0..9 {
         let mut d = a[j][j];
         for k in 0..j {
-            d -= g[j][k] * g[j][k];
+            d = each(|l| d[l] - g[j][k][l] * g[j][k][l]);
         }
-        if d.is_nan() || d <= 1e-10 * scale {
-            return None;
+        for l in 0..N {
+            ok[l] &= !(d[l].is_nan() || d[l] <= 1e-10 * scale[l]);
         }
-        let gjj = d.sqrt();
+        let gjj: Lanes<N> = each(|l| d[l].sqrt());
         g[j][j] = gjj;
-        inv_d[j] = 1.0 / gjj;
+        inv_d[j] = each(|l| 1.0 / gjj[l]);
         for i in j + 1..9 {
             let mut x = a[i][j];
             for k in 0..j {
-                x -= g[i][k] * g[j][k];
+                x = each(|l| x[l] - g[i][k][l] * g[j][k][l]);
             }
-            g[i][j] = x * inv_d[j];
+            g[i][j] = each(|l| x[l] * inv_d[j][l]);
         }
     }
-    let mut rows = [[0.0f64; 9]; 3];
+    let mut rows = [[[0.0f64; N]; 9]; 3];
     for (c, row) in rows.iter_mut().enumerate() {
         // G y = e_c, then G^T x = y
-        let mut y = [0.0f64; 9];
+        let mut y = [[0.0f64; N]; 9];
         for i in c..9 {
-            let mut x = if i == c { 1.0 } else { 0.0 };
+            let mut x = [if i == c { 1.0 } else { 0.0 }; N];
             for k in c..i {
-                x -= g[i][k] * y[k];
+                x = each(|l| x[l] - g[i][k][l] * y[k][l]);
             }
-            y[i] = x * inv_d[i];
+            y[i] = each(|l| x[l] * inv_d[i][l]);
         }
         for i in (0..9).rev() {
             let mut x = y[i];
             for k in i + 1..9 {
-                x -= g[k][i] * row[k];
+                x = each(|l| x[l] - g[k][i][l] * row[k][l]);
             }
-            row[i] = x * inv_d[i];
+            row[i] = each(|l| x[l] * inv_d[i][l]);
         }
     }
-    Some(rows)
+    (rows, ok)
 }
 
 #[cfg(test)]
@@ -580,19 +810,53 @@ mod tests {
                 assert_eq!(QQ[m][n], lane_of(&QUARTIC, e), "q_{m} q_{n}");
             }
         }
-        // the monomials in `moments` are those the lists name, in their order
-        let d = [2.0, 3.0, 5.0];
-        let (c3, c4) = moments(&d);
+        // the products are the monomials the lists name, in their order (exact on small
+        // integers), times the velocity components in the velocity lanes
+        let (d, dv) = ([2.0, 3.0, 5.0], [7.0, 11.0, 13.0]);
+        let p = products(&d, &dv);
         let mono = |e: &[u8; 3]| (0..3).map(|c| d[c].powi(e[c] as i32)).product::<f64>();
+        for (m, e) in QUAD.iter().enumerate() {
+            for k in 0..3 {
+                assert_eq!(p[3 * m + k], mono(e) * dv[k], "velocity lane q_{m} dv_{k}");
+            }
+        }
         for (l, e) in CUBIC.iter().enumerate() {
-            assert_eq!(c3[l], mono(e), "cubic lane {l}");
+            assert_eq!(p[THIRD0 + l], mono(e), "cubic lane {l}");
         }
         for (l, e) in QUARTIC.iter().enumerate() {
-            assert_eq!(c4[l], mono(e), "quartic lane {l}");
+            assert_eq!(p[FOURTH0 + l], mono(e), "quartic lane {l}");
         }
+        assert!(p[FOURTH0 + N4..].iter().all(|&x| x == 0.0), "unused lanes");
         let q = quad_basis(&d);
         for (m, e) in QUAD.iter().enumerate() {
             assert_eq!(q[m], mono(e), "quadratic basis {m}");
+        }
+    }
+
+    /// The other end's products are the signs [`OTHER_END`] times this end's, to the bit (d and
+    /// v_b - v_a negated), on random values.
+    #[test]
+    fn the_other_ends_products_are_the_signed_products() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..1000 {
+            let d = [rnd(), rnd(), rnd()].map(|x| x * 1e-3);
+            let dv = [rnd(), rnd(), rnd()].map(|x| x * 40.0);
+            let (pa, pb) = (products(&d, &dv), products(&d.map(|x| -x), &dv.map(|x| -x)));
+            for l in 0..QLANES {
+                assert_eq!(
+                    (OTHER_END[l] * pa[l]).to_bits(),
+                    pb[l].to_bits(),
+                    "lane {l}: {} against {}",
+                    OTHER_END[l] * pa[l],
+                    pb[l]
+                );
+            }
         }
     }
 }
@@ -600,6 +864,85 @@ mod tests {
 #[cfg(test)]
 mod inverse_tests {
     use super::*;
+
+    /// A batch of random fits (40 random partners each, one lane with too few) settled eight
+    /// at a time gives, in every build this CPU runs, each lane the bits of that entry settled
+    /// alone: the batch and the build do not change a particle's gradient.
+    #[test]
+    #[allow(clippy::needless_range_loop)]
+    fn settled_lanes_are_the_bits_of_one_entry_in_every_build() {
+        use crate::solid::build::Build;
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let z = [0.0; SETTLE_LANES];
+        let mut inp = SettleIn {
+            shape: [[z; 3]; 3],
+            third: [[z; 6]; 3],
+            fourth: [[z; 6]; 6],
+            grad: [[z; 3]; 3],
+            vel: [[z; 3]; 6],
+            h: z,
+        };
+        for l in 0..SETTLE_LANES {
+            let h = 1e-3 * (1.0 + 0.1 * rnd());
+            inp.h[l] = h;
+            let partners = if l == 3 { 5 } else { 40 };
+            for _ in 0..partners {
+                let d = [rnd(), rnd(), rnd()].map(|x| 4.0 * h * x);
+                let dv = [rnd(), rnd(), rnd()];
+                let w = 1e6 * (1.0 + rnd());
+                let p = products(&d, &dv);
+                for k in 0..3 {
+                    for c in 0..3 {
+                        inp.shape[k][c][l] += w * d[k] * d[c] / (h * h);
+                        inp.grad[k][c][l] += w * dv[k] * d[c];
+                    }
+                    for m in 0..6 {
+                        inp.third[k][m][l] += w * p[THIRD0 + LQ[k][m]];
+                        inp.vel[m][k][l] += w * p[3 * m + k];
+                    }
+                }
+                for m in 0..6 {
+                    for n in 0..6 {
+                        inp.fourth[m][n][l] += w * p[FOURTH0 + QQ[m][n]];
+                    }
+                }
+            }
+        }
+        let lane = |l: usize| SettleIn::<1> {
+            shape: inp.shape.map(|r| r.map(|x| [x[l]])),
+            third: inp.third.map(|r| r.map(|x| [x[l]])),
+            fourth: inp.fourth.map(|r| r.map(|x| [x[l]])),
+            grad: inp.grad.map(|r| r.map(|x| [x[l]])),
+            vel: inp.vel.map(|r| r.map(|x| [x[l]])),
+            h: [inp.h[l]],
+        };
+        for build in Build::available() {
+            let out = settle_lanes_built(build, &inp);
+            for l in 0..SETTLE_LANES {
+                let one = settle_lanes(&lane(l));
+                assert_eq!(out.ok[l], one.ok[0], "{build:?} lane {l}: ok");
+                assert_eq!(out.ok[l], l != 3, "lane {l}: five partners are too few");
+                let bits = |o: &SettleOut<SETTLE_LANES>| {
+                    let mut v: Vec<u64> = o.inv.iter().flatten().map(|x| x[l].to_bits()).collect();
+                    v.extend(o.l.iter().flatten().map(|x| x[l].to_bits()));
+                    v.push(o.amp[l].to_bits());
+                    v
+                };
+                let mut want: Vec<u64> = one.inv.iter().flatten().map(|x| x[0].to_bits()).collect();
+                want.extend(one.l.iter().flatten().map(|x| x[0].to_bits()));
+                want.push(one.amp[0].to_bits());
+                if one.ok[0] {
+                    assert_eq!(bits(&out), want, "{build:?} lane {l}");
+                }
+            }
+        }
+    }
 
     /// The rows solve A x_c = e_c (to 1e-9, the random A's conditioning) for an SPD A of 40 points,
     /// and a rank-deficient A (fewer than nine points) refused.
@@ -627,8 +970,13 @@ mod inverse_tests {
             }
             a
         };
+        let one = |a: &[[f64; 9]; 9]| {
+            let lanes: [[Lanes<1>; 9]; 9] = a.map(|row| row.map(|x| [x]));
+            let (rows, ok) = inverse_rows(&lanes);
+            ok[0].then(|| rows.map(|row| row.map(|x| x[0])))
+        };
         let a = points(40, &mut rnd);
-        let rows = inverse_rows(&a).expect("regular");
+        let rows = one(&a).expect("regular");
         for (c, row) in rows.iter().enumerate() {
             for i in 0..9 {
                 let x: f64 = (0..9).map(|k| a[i][k] * row[k]).sum();
@@ -637,7 +985,7 @@ mod inverse_tests {
             }
         }
         assert!(
-            inverse_rows(&points(6, &mut rnd)).is_none(),
+            one(&points(6, &mut rnd)).is_none(),
             "six points, nine unknowns"
         );
     }
