@@ -47,3 +47,16 @@ fn johnson_cook_strain_to_failure_follows_its_three_factors() {
     }
     assert_eq!(Failure::PlasticStrain(0.3).strain_to_failure(0.7, 1e3), 0.3);
 }
+
+#[test]
+fn a_failed_elements_particle_volume_is_its_volume_within_half_and_twice_its_reference() {
+    // docs/scene.md, `failed = "particles"`: the volume at failure, bounded to [V0/2, 2 V0];
+    // none recorded (0) or not a number: V0.
+    use fe_petsc::explicit::failure::particle_volume;
+    let v0 = 1e-9;
+    assert_eq!(particle_volume(1.01e-9, v0), 1.01e-9);
+    assert_eq!(particle_volume(1e-18, v0), 0.5e-9);
+    assert_eq!(particle_volume(5e-9, v0), 2e-9);
+    assert_eq!(particle_volume(0.0, v0), v0);
+    assert_eq!(particle_volume(f64::NAN, v0), v0);
+}

@@ -112,9 +112,10 @@ impl ExplicitFe {
     /// order (no fused multiply-adds), so an element's result does not depend on its group, its
     /// lane or its rank's share (docs/scene.md, "One answer").
     ///
-    /// A group with an inverted element is left as it was and the first such element recorded
-    /// in `sums` (the step fails; the ghost exchange after the loop is collective, and a rank
-    /// that left before it would hang the others in it).
+    /// A group with an inverted element is left as it was. Where the element's material fails
+    /// ([`ExplicitFe::fail_inverted`]) it fails and the group goes again without it; otherwise
+    /// the first such element is recorded in `sums` (the step fails; the ghost exchange after
+    /// the loop is collective, and a rank that left before it would hang the others in it).
     fn element_loop<B: Batch>(&mut self, dt: f64, sums: &mut LoopSums) {
         // The models are read while the elements' arrays are written.
         let materials = std::mem::take(&mut self.materials);
@@ -125,14 +126,21 @@ impl ExplicitFe {
             let mi = self.elem_material[e];
             let m = self.lane_materials[mi];
             let model = &*materials[mi];
-            let eroded = self.erosion.as_ref().is_some_and(|r| r.any)
-                && (e..e + n).any(|k| self.is_failed(k));
-            let res = match eroded {
+            let mut res = match self.has_failed_in(e, n) {
                 false => self.group_update(e, n, &m, model, dt, &mut *group, sums),
                 true => self.live_group_update(e, n, (&m, model), dt, &mut *group, sums),
             };
-            if let Err(bad) = res {
-                self.record_inverted(e + bad.lane, bad.volume, dt, sums);
+            // An element of a material that fails fails where it would invert (instead of
+            // stopping the run), and its group goes again without it (nothing of the group
+            // was changed): the decision reads the element alone, so the same bits at any
+            // width and rank count.
+            while let Err(bad) = res {
+                if !self.can_fail(e + bad.lane) {
+                    self.record_inverted(e + bad.lane, bad.volume, dt, sums);
+                    break;
+                }
+                self.fail_inverted(e + bad.lane, dt);
+                res = self.live_group_update(e, n, (&m, model), dt, &mut *group, sums);
             }
             e += n;
         }

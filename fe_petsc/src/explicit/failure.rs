@@ -3,6 +3,10 @@
 //! then on; deleted, its mass stays on its nodes; turned into a particle, it is released a
 //! step later with its mass ([`ExplicitFe::release_failed`]).
 //!
+//! **Inversion.** An element whose material has a criterion also fails in the step in which
+//! it would invert (`ExplicitFe::fail_inverted`, from the element loop): its group is
+//! updated again without it, and it keeps the state of its last update.
+//!
 //! **Criteria** (checked after each step's element update, on the accepted state):
 //! - `plastic_strain`: the element fails when its equivalent plastic strain reaches `eps_f`;
 //! - `johnson_cook` (Johnson & Cook, Eng. Fract. Mech. 21, 1985, 31-48, eq. 2-3; isothermal):
@@ -112,6 +116,21 @@ pub(crate) struct Erosion {
     /// Each failed element's volume in the step it failed (the last its loop accepted), m^3:
     /// its particle's volume (out of the loop, its corners may fold it before the release).
     pub vol_fail: Vec<f64>,
+}
+
+/// The volume a failed element's particle takes, m^3: the element's volume `v` when it failed,
+/// bounded to [`v0` / 2, 2 `v0`] (its reference volume `v0`). A solid's volume changes by its
+/// elastic strain only (plastic flow keeps it), a few per cent; an element whose corners
+/// folded it nearly flat (its volume 1e-7 of `v0` in a crushed soft plate) or that would
+/// invert has none to give, and its particle's density would be that many times its
+/// material's. No volume recorded (0, a checkpoint from before the volume was kept) gives
+/// `v0`.
+pub fn particle_volume(v: f64, v0: f64) -> f64 {
+    if v > 0.0 {
+        v.clamp(0.5 * v0, 2.0 * v0)
+    } else {
+        v0
+    }
 }
 
 /// A failed element as it leaves the mesh to become a particle ([`ExplicitFe::release_failed`]):
@@ -232,12 +251,9 @@ impl ExplicitFe {
                 x: centroid(&xe),
                 v,
                 kinetic_loss: (ke_nodes - ke_particle).max(0.0),
-                // the volume it failed at; its reference volume where that was not positive
-                volume: if r.vol_fail[e] > 0.0 && r.vol_fail[e].is_finite() {
-                    r.vol_fail[e]
-                } else {
-                    self.vol0[e]
-                },
+                // the volume it failed at, within [V0 / 2, 2 V0]: an element crushed flat by
+                // its corners (or failed where it would invert) has no meaningful volume left
+                volume: particle_volume(r.vol_fail[e], self.vol0[e]),
                 stress: self.state.stress(e),
                 state: self.mat_state[e * stride..e * stride + mat.n_state()].to_vec(),
                 // failed: Johnson-Cook's D (>= 1), 1 for the plastic-strain criterion
@@ -373,6 +389,7 @@ impl ExplicitFe {
             return;
         };
         let stride = self.mat_stride;
+        let mut failing = Vec::new();
         for e in 0..self.elems.len() {
             let Some(crit) = r.criteria[self.elem_material[e]] else {
                 continue;
@@ -385,21 +402,59 @@ impl ExplicitFe {
             let dep = ep - r.ep_last[e];
             r.ep_last[e] = ep;
             if crit.fails(&mut r.damage[e], ep, dep, &self.state.stress(e), dt) {
-                r.failed[e] = true;
-                r.any = true;
-                let mut s = self.state.get(e);
-                // a failed element that becomes a particle keeps its stress for it
-                if !r
-                    .release
-                    .get(self.elem_material[e])
-                    .copied()
-                    .unwrap_or(false)
-                {
-                    s.stress = [0.0; 6];
-                }
-                s.hg = Default::default();
-                self.state.set(e, &s);
+                failing.push(e);
             }
         }
+        for e in failing {
+            // its volume at the end of the step the loop accepted: its particle's
+            let volume = hex::volume(&gather(&self.x, &self.elems[e]));
+            self.mark_failed(e, volume);
+        }
+    }
+
+    /// Element `e` fails in the step of `dt` in which it would invert (its material has a
+    /// failure criterion; [`ExplicitFe::element_forces`]): marked failed before its update, it
+    /// keeps the state of the last step it was updated in; its particle's volume is its
+    /// volume then, at the start of the step (x(n) = x(n+1) - dt v(n+1/2)).
+    pub(super) fn fail_inverted(&mut self, e: usize, dt: f64) {
+        let xn: [[f64; 3]; 8] = std::array::from_fn(|k| {
+            let node = self.elems[e][k] as usize;
+            std::array::from_fn(|c| self.x[node][c] - dt * self.v[node][c])
+        });
+        let volume = hex::volume(&xn);
+        if let Some(r) = self.erosion.as_mut() {
+            r.damage[e] = r.damage[e].max(1.0);
+        }
+        self.mark_failed(e, volume);
+    }
+
+    /// Marks element `e` failed with its particle's `volume` (m^3): its stress and hourglass
+    /// forces become zero (its stress kept where it becomes a particle).
+    fn mark_failed(&mut self, e: usize, volume: f64) {
+        let Some(r) = self.erosion.as_mut() else {
+            return;
+        };
+        r.failed[e] = true;
+        r.any = true;
+        r.vol_fail[e] = volume;
+        let mut s = self.state.get(e);
+        // a failed element that becomes a particle keeps its stress for it
+        if !r
+            .release
+            .get(self.elem_material[e])
+            .copied()
+            .unwrap_or(false)
+        {
+            s.stress = [0.0; 6];
+        }
+        s.hg = Default::default();
+        self.state.set(e, &s);
+    }
+
+    /// Whether one of the elements `e..e + n` has failed.
+    pub(super) fn has_failed_in(&self, e: usize, n: usize) -> bool {
+        self.erosion
+            .as_ref()
+            .is_some_and(|r| r.any && (e..e + n).any(|k| r.failed[k]))
     }
 }
