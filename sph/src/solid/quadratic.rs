@@ -547,7 +547,7 @@ pub fn quad_sums_of(s: &Solids, i: usize) -> QuadSums {
     }
 }
 
-/// Flagged entries settled together ([`settle_lanes`]): one per f64 lane of an AVX-512
+/// Flagged entries settled together (`settle_lanes`): one per f64 lane of an AVX-512
 /// register.
 pub const SETTLE_LANES: usize = 8;
 
@@ -586,7 +586,7 @@ struct SettleOut<const N: usize> {
 /// over h, so that A is dimensionless) and sets its velocity gradient, its correction C_lin
 /// (`Solids::correction`, in the place of B) and C_quad (`Solids::quad`, 1/m). An entry whose A
 /// is singular or whose C has an entry past [`QUAD_CORRECTION_MAX`] keeps the linear correction.
-/// The solves run [`SETTLE_LANES`] entries at a time ([`settle_lanes`], in the widest build:
+/// The solves run [`SETTLE_LANES`] entries at a time (`settle_lanes`, in the widest build:
 /// each lane's operations are one entry's, in its order, so the bits do not depend on the
 /// batch or the build).
 pub fn settle_quadratic(p: &Particles, s: &mut Solids) {
