@@ -237,23 +237,7 @@ macro_rules! fixed_lanes {
                 $M(self.0.map(f64::is_finite))
             }
 
-            /// `self * b + c`, rounded twice as `a * b + c` is (and as the eight lanes' is).
-            #[inline(always)]
-            pub fn mul_add(self, b: $F, c: $F) -> $F {
-                self * b + c
-            }
-
-            /// `self * b - c`, rounded twice.
-            #[inline(always)]
-            pub fn mul_sub(self, b: $F, c: $F) -> $F {
-                self * b - c
-            }
-
-            /// `c - self * b`, rounded twice.
-            #[inline(always)]
-            pub fn neg_mul_add(self, b: $F, c: $F) -> $F {
-                c - self * b
-            }
+            twice_rounded_ops!($F);
 
             /// `a` in the lanes where `m` holds, `b` in the others.
             #[inline(always)]

@@ -297,6 +297,32 @@ pub struct GroupInverted {
     pub volume: f64,
 }
 
+/// The multiply-adds of a lane type `$F`, each rounded twice (`a * b` rounded, then the add):
+/// every width's, so that the kernel's `mul_add`s give the same bits at every width (no fused
+/// instruction; "One answer"). Expanded inside each lane type's `impl` (`fixed.rs`,
+/// `vector_ops.rs`).
+macro_rules! twice_rounded_ops {
+    ($F:ident) => {
+        /// `self * b + c`, rounded twice.
+        #[inline(always)]
+        pub fn mul_add(self, b: $F, c: $F) -> $F {
+            self * b + c
+        }
+
+        /// `self * b - c`, rounded twice.
+        #[inline(always)]
+        pub fn mul_sub(self, b: $F, c: $F) -> $F {
+            self * b - c
+        }
+
+        /// `c - self * b`, rounded twice.
+        #[inline(always)]
+        pub fn neg_mul_add(self, b: $F, c: $F) -> $F {
+            c - self * b
+        }
+    };
+}
+
 pub mod arrays;
 mod fixed;
 #[cfg(target_arch = "x86_64")]

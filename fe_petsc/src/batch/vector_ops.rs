@@ -129,23 +129,7 @@ macro_rules! derived_ops {
                 self.abs().lt($F::splat(f64::INFINITY))
             }
 
-            /// `self * b + c`, rounded twice (as every width's).
-            #[inline(always)]
-            pub fn mul_add(self, b: $F, c: $F) -> $F {
-                self * b + c
-            }
-
-            /// `self * b - c`, rounded twice.
-            #[inline(always)]
-            pub fn mul_sub(self, b: $F, c: $F) -> $F {
-                self * b - c
-            }
-
-            /// `c - self * b`, rounded twice.
-            #[inline(always)]
-            pub fn neg_mul_add(self, b: $F, c: $F) -> $F {
-                c - self * b
-            }
+            twice_rounded_ops!($F);
         }
     };
 }
