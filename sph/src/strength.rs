@@ -52,6 +52,16 @@ pub trait StressModel: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// The least density a particle whose history is `state` may take, kg/m^3 (default 0: no
+    /// floor). A failed particle's material carries no tension: where its pairs pull apart it
+    /// is opening cracks between fragments, not stretching, so its density stays at the
+    /// material's (continuity or summation alone would take it towards m W(0), about a fifth
+    /// of it for a particle left alone, and with it the sound speed sqrt(modulus / rho) and
+    /// the pair forces' sigma / rho^2 up, the stable step down without bound).
+    fn density_floor(&self, _state: &[f64]) -> f64 {
+        0.0
+    }
+
     /// Temperature held in `state`, K, where the law keeps one (thermal softening; output).
     /// Default `None`.
     fn temperature(&self, _state: &[f64]) -> Option<f64> {

@@ -746,3 +746,107 @@ fn particles_of_a_failing_material_lose_their_strength_where_they_fail() {
         "the failed foot spreads wider: {foot} m against {foot_plain} m"
     );
 }
+
+/// A block of 6 x 6 x 6 steel-like particles (1 mm spacing, h = 1.2 mm) of a material that
+/// fails at once (J2, yield 1 MPa, `failure = { plastic_strain = 1e-4 }`), given the velocity
+/// field v = s (x + y, y, z), s = 1e4 / s (expansion with shear: every pair separates, the
+/// deviatoric rate yields it within about 1e-8 s), to 2e-4 s, when the spacing has grown
+/// about threefold, past the kernel's support. Fragments separate rather than stretch:
+/// - every particle fails, and at the end every one's density is the material's, 7850 kg/m^3,
+///   exactly (continuity alone would take a particle left alone towards m W(0), about a fifth
+///   of it);
+/// - every step (but the last, which ends on end_time) is the stable step of the material's
+///   sound speed at that density,
+///   dt = 0.9 * 0.3 h / (c0 + max |v|), c0 = sqrt((K + 4G/3) / rho0) from E and nu, |v| from
+///   the last frame, to 1e-9 (without the floor the sound speed sqrt(M / rho) grew as the
+///   density fell and the step with it shrank without bound: a tetrahedral plate perforated by
+///   a ball stopped on non-finite SPH values once its debris flew apart);
+/// - momentum conserved (1e-12 of m max |v|), the same bytes at np 1 and 3.
+#[test]
+fn failed_particles_flying_apart_keep_the_materials_density() {
+    let dir = workdir("failed_debris");
+    let (n, dp, s) = (6usize, 1.0e-3, 1.0e4);
+    let mut csv = String::from("id,x,y,z,vx,vy,vz\n");
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let c = |a: usize| (a as f64 - (n as f64 - 1.0) / 2.0) * dp;
+                let (x, y, z) = (c(i), c(j), c(k));
+                let id = i + n * (j + n * k) + 1;
+                csv += &format!("{id},{x},{y},{z},{},{},{}\n", s * (x + y), s * y, s * z);
+            }
+        }
+    }
+    std::fs::write(dir.join("debris.csv"), csv).unwrap();
+    let scene = dir.join("debris.toml");
+    std::fs::write(
+        &scene,
+        r#"title = "A failed block flying apart"
+[run]
+end_time = 2.0e-4
+[[material]]
+name = "steel"
+model = "j2_plastic"
+density = 7850.0
+youngs_modulus = 200.0e9
+poisson_ratio = 0.3
+yield_stress = 1.0e6
+hardening_modulus = 0.0
+failure = { plastic_strain = 1.0e-4 }
+[[particles]]
+name = "block"
+material = "steel"
+region = { file = "debris.csv" }
+spacing = 0.001
+[output]
+fields = ["velocity", "density", "failed"]
+"#,
+    )
+    .unwrap();
+    let (a, b) = (dir.join("np1"), dir.join("np3"));
+    run_ok(1, &scene, &a);
+    run_ok(3, &scene, &b);
+    assert_eq!(run_digest(&a), run_digest(&b), "np 3 against np 1");
+    let g = tdyn_tests::frames::last_frame(&a);
+    let read = |set: &str| -> Vec<f64> {
+        g.dataset(&format!("particles/{set}"))
+            .unwrap()
+            .read_raw()
+            .unwrap()
+    };
+    let (rho, failed, v) = (read("density"), read("failed"), read("velocity"));
+    assert_eq!(rho.len(), n * n * n);
+    for i in 0..rho.len() {
+        assert_eq!(failed[i], 1.0, "particle {i} failed");
+        assert_eq!(rho[i], 7850.0, "particle {i}: the material's density");
+    }
+    let vmax = (0..rho.len())
+        .map(|i| (v[3 * i].powi(2) + v[3 * i + 1].powi(2) + v[3 * i + 2].powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    let (e, nu) = (200.0e9, 0.3);
+    let modulus = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let c0 = (modulus / 7850.0f64).sqrt();
+    let want = 0.9 * 0.3 * 1.2 * dp / (c0 + vmax);
+    let (h, rows) = read_csv(&a.join("history.csv"));
+    let dts = column(&h, &rows, "dt");
+    // every step but the last, which ends on end_time
+    let (fewest, most) = dts[..dts.len() - 1]
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+    eprintln!(
+        "debris: steps {fewest:e} to {most:e}, stable step at rho0 {want:e}, max |v| {vmax} m/s"
+    );
+    assert!(
+        (fewest - want).abs() <= 1e-9 * want && (most - want).abs() <= 1e-9 * want,
+        "steps {fewest:e} to {most:e} against 0.9 * 0.3 h / (c0 + max |v|) = {want:e} (1e-9)"
+    );
+    let mass = 7850.0 * dp.powi(3) * (n * n * n) as f64;
+    for axis in ["momentum_x", "momentum_y", "momentum_z"] {
+        let p = column(&h, &rows, axis);
+        let drift = (p.last().unwrap() - p[0]).abs();
+        assert!(
+            drift <= 1e-12 * mass * vmax,
+            "{axis} drifts by {drift:e} (1e-12 of m max |v|)"
+        );
+    }
+}

@@ -366,7 +366,9 @@ pub fn update_stress(p: &mut Particles, s: &mut Solids, dt: f64) {
     solid_pressure(p, s);
 }
 
-/// Sets p = -tr(sigma)/3 and c = sqrt(wave_modulus(rho, state) / rho) of every owned solid.
+/// Sets p = -tr(sigma)/3 and c = sqrt(wave_modulus(rho, state) / rho) of every owned solid,
+/// its density first raised to the model's floor where it fell below
+/// ([`StressModel::density_floor`]: a failed particle's stays at its material's).
 pub fn solid_pressure(p: &mut Particles, s: &Solids) {
     for i in 0..p.n_owned {
         let Some(model) = s.model_ref(p.mat[i]) else {
@@ -375,7 +377,9 @@ pub fn solid_pressure(p: &mut Particles, s: &Solids) {
         let t = &s.stress[i];
         p.p[i] = -(t[0] + t[1] + t[2]) / 3.0;
         let k = s.stride;
-        let modulus = model.wave_modulus(p.rho[i], &s.state[i * k..i * k + model.n_state()]);
+        let state = &s.state[i * k..i * k + model.n_state()];
+        p.rho[i] = p.rho[i].max(model.density_floor(state));
+        let modulus = model.wave_modulus(p.rho[i], state);
         p.c[i] = (modulus / p.rho[i]).sqrt();
     }
 }

@@ -60,6 +60,7 @@ pub fn params_from_scene(
             let model: Arc<dyn StressModel> = Arc::new(super::strength::MaterialStress::new(
                 Arc::from(law),
                 scene.failures.get(i).copied().flatten(),
+                m.density,
             ));
             let mut state = vec![0.0; model.n_state()];
             model.init_state(&mut state);

@@ -28,12 +28,18 @@ pub struct MaterialStress {
     pub law: Arc<dyn Material>,
     /// The material's failure criterion (`None`: it does not fail).
     pub failure: Option<Failure>,
+    /// The material's density, kg/m^3: a failed particle's density floor.
+    pub density: f64,
 }
 
 impl MaterialStress {
-    /// The law `law` with the criterion `failure`.
-    pub fn new(law: Arc<dyn Material>, failure: Option<Failure>) -> Self {
-        Self { law, failure }
+    /// The law `law` of a material of density `density` (kg/m^3) with the criterion `failure`.
+    pub fn new(law: Arc<dyn Material>, failure: Option<Failure>, density: f64) -> Self {
+        Self {
+            law,
+            failure,
+            density,
+        }
     }
 }
 
@@ -104,6 +110,14 @@ impl sph::StressModel for MaterialStress {
         self.failure.is_some() && state[self.law.n_state()] >= 1.0
     }
 
+    fn density_floor(&self, state: &[f64]) -> f64 {
+        if sph::StressModel::failed(self, state) {
+            self.density
+        } else {
+            0.0
+        }
+    }
+
     fn temperature(&self, state: &[f64]) -> Option<f64> {
         self.law.temperature(&state[..self.law.n_state()])
     }
@@ -157,7 +171,7 @@ mod tests {
     /// and the model's plastic strain.
     fn one_update(mat: Arc<dyn Material>, l: Mat3, dt: f64) -> ([f64; 6], f64, f64) {
         let mut p = one_particle();
-        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(mat, None));
+        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(mat, None, 7850.0));
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         s.grad_v[0] = l;
         update_stress(&mut p, &mut s, dt);
@@ -262,7 +276,7 @@ mod tests {
             "j2_plastic",
             &[("yield_stress", sy), ("hardening_modulus", h)],
         );
-        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(law, Some(failure)));
+        let model: Arc<dyn StressModel> = Arc::new(MaterialStress::new(law, Some(failure), 7850.0));
         let mut p = one_particle();
         let mut s = Solids::new(vec![Some(model.clone())], &p);
         let n = model.n_state();
@@ -283,6 +297,9 @@ mod tests {
         for step in 0..1200 {
             let inc = if step < 400 { d } else { -d };
             s.grad_v[0] = [[inc / dt, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+            // the density continuity gives under this uniaxial strain: rho0 / (1 + eps)
+            let rho_strained = 7850.0 / (1.0 + eps + inc);
+            p.rho[0] = rho_strained;
             update_stress(&mut p, &mut s, dt);
             eps += inc;
             let sig = s.stress[0];
@@ -293,6 +310,7 @@ mod tests {
             }
             match failed_at {
                 None => {
+                    close(p.rho[0], rho_strained, "density before failure");
                     close(mean, k * eps, "mean stress before failure");
                     let want_ep = ((2.0 * mu * eps.abs() - sy) / (3.0 * mu + h)).max(0.0);
                     close(ep * 1e9, want_ep * 1e9, "plastic strain (x 1e9)");
@@ -301,6 +319,11 @@ mod tests {
                     }
                 }
                 Some(_) => {
+                    // Fragments separate rather than stretch: the density stays at the
+                    // material's in tension (the floor), follows the strain in compression.
+                    close(p.rho[0], rho_strained.max(7850.0), "failed density");
+                    let c = ((k + 4.0 * mu / 3.0) / rho_strained.max(7850.0)).sqrt();
+                    close(p.c[0] * 1e6, c * 1e6, "failed sound speed (x 1e6)");
                     let want = (k * eps).min(0.0);
                     for (c, &v) in sig.iter().enumerate() {
                         close(v, if c < 3 { want } else { 0.0 }, "failed stress");
