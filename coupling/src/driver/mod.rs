@@ -111,7 +111,10 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     opts.overrides.apply(&mut scene)?;
     setup::check_scene(&scene)?;
     if world.rank() == 0 {
-        for w in scene::unit_warnings(&scene) {
+        let warnings = scene::unit_warnings(&scene)
+            .into_iter()
+            .chain(scene::interaction_warnings(&scene));
+        for w in warnings {
             eprintln!("tdyn: warning: {w}");
         }
     }

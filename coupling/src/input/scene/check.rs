@@ -707,6 +707,47 @@ pub fn unit_warnings(scene: &Scene) -> Vec<String> {
     out
 }
 
+/// Particles that will never meet the mesh, one warning line each (docs/scene.md, `[contact]`):
+/// a scene with a mesh whose `[[particles]]` are not contact nodes because `[contact]` is missing
+/// or leaves `particles` out, or whose failed elements become particles without a `[contact]`
+/// table. Either may be meant (bodies that never come near each other); it is far more often a
+/// forgotten key, and the particles then pass through the mesh's faces without a word.
+pub fn interaction_warnings(scene: &Scene) -> Vec<String> {
+    let file = scene.file.display();
+    let mut out = Vec::new();
+    if scene.meshes.is_empty() {
+        return out;
+    }
+    if !scene.particles.is_empty() {
+        let names: Vec<String> = scene
+            .particles
+            .iter()
+            .map(|p| format!("{:?}", p.name))
+            .collect();
+        let names = names.join(", ");
+        match &scene.contact {
+            None => out.push(format!(
+                "{file}: the particles ({names}) and the mesh do not touch: the scene has no [contact] table; add [contact] with surfaces = [\"exterior\"] and particles = true"
+            )),
+            Some(c) if c.particles.is_none() && !c.particles_on(scene) => out.push(format!(
+                "{file}: contact.particles is not set, so the particles ({names}) are not contact nodes and pass through the mesh's faces; set contact.particles = true (or false to silence this)"
+            )),
+            _ => {}
+        }
+    }
+    if scene.contact.is_none() {
+        for (i, m) in scene.materials.iter().enumerate() {
+            if scene.releases(i) {
+                out.push(format!(
+                    "{file}: material[{i}] ({:?}) fails and its failed elements become particles, but the scene has no [contact] table: those particles will pass through the mesh; add [contact] with surfaces = [\"exterior\"] (or [[block]] failed = \"delete\")",
+                    m.name
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// `[[load]]`: a finite pressure and an optional curve (the group is checked against the
 /// mesh in `validate_groups`).
 fn check_loads(cx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>, SceneError> {

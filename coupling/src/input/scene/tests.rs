@@ -163,6 +163,58 @@ fn unit_slips_warn_by_key_and_si_values_do_not() {
     );
 }
 
+/// Particles that would pass through the mesh without a word warn (a forgotten `[contact]` or
+/// `contact.particles`); a scene whose particles touch the mesh, says they do not, or has no
+/// mesh, does not warn.
+#[test]
+fn particles_that_never_meet_the_mesh_warn() {
+    let water = "[[material]]\nname = \"water\"\nmodel = \"fluid\"\ndensity = 1000.0\n\
+                 eos = { kind = \"tait\", rho0 = 1000.0, sound_speed = 1480.0, gamma = 7.0 }\n\
+                 [[particles]]\nname = \"drop\"\nmaterial = \"water\"\nspacing = 0.01\n\
+                 region = { box = { min = [0.0, 0.0, 0.2], max = [0.1, 0.1, 0.3] } }\n";
+    let scene = |extra: &str| {
+        parse(
+            &format!("{}{water}{extra}", base()),
+            Path::new("scene.toml"),
+        )
+        .unwrap()
+    };
+    let w = interaction_warnings(&scene(""));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("\"drop\"") && w[0].contains("no [contact] table"),
+        "{w:?}"
+    );
+    let w = interaction_warnings(&scene("[contact]\nsurfaces = [\"exterior\"]\n"));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("contact.particles is not set"), "{w:?}");
+    for quiet in ["true", "false"] {
+        let c = format!("[contact]\nsurfaces = [\"exterior\"]\nparticles = {quiet}\n");
+        assert!(
+            interaction_warnings(&scene(&c)).is_empty(),
+            "particles = {quiet}"
+        );
+    }
+    // failed elements that become particles, with no [contact]: a warning naming the material
+    let failing = base().replace(
+        "poisson_ratio = 0.3\n",
+        "poisson_ratio = 0.3\nyield_stress = 3.5e8\nhardening_modulus = 1.0e9\nfailure = { plastic_strain = 0.5 }\n",
+    ).replace(
+        "model = \"elastic\"",
+        "model = \"j2_plastic\"",
+    );
+    let f = parse(&failing, Path::new("scene.toml")).unwrap();
+    let w = interaction_warnings(&f);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("material[0] (\"steel\") fails"), "{w:?}");
+    let deleting = failing.replace(
+        "material = \"steel\"\n",
+        "material = \"steel\"\nfailed = \"delete\"\n",
+    );
+    assert!(interaction_warnings(&parse(&deleting, Path::new("scene.toml")).unwrap()).is_empty());
+    assert!(interaction_warnings(&parse(&base(), Path::new("scene.toml")).unwrap()).is_empty());
+}
+
 /// `[[rigid_wall]]`: the normal normalised on input, the defaults (at rest, no friction), and
 /// each mistake refused at its key in one line.
 #[test]
