@@ -138,6 +138,15 @@ fn documented_mistakes_give_clear_messages() {
     let contact = |keys: &'static str| {
         move |s: String| s + "[contact]\nsurfaces = [\"left\", \"right\"]\n" + keys
     };
+    // a wall through the middle of the bar (x = 0 to 1 m, held at x = 0): the free nodes
+    // past x = 0.5 start behind it
+    expect_error(
+        "bodies_behind_a_wall",
+        |s| {
+            s + "[[rigid_wall]]\nname = \"cut\"\npoint = [0.5, 0.0, 0.0]\nnormal = [-1.0, 0.0, 0.0]\n"
+        },
+        "rigid_wall[0] (\"cut\"): 8 mesh nodes and 0 particles start behind the wall, the deepest 5.000e-1 m",
+    );
     expect_error("contact_passes", contact("passes = 3\n"), "contact.passes");
     expect_error(
         "contact_one_pass_without_master",
@@ -579,5 +588,23 @@ fn every_case_of_issue_16_exits_with_its_message_at_np_1_2_3() {
         std::fs::read_to_string(dir.join("a_file")).unwrap(),
         "an earlier result\n",
         "--out naming a file leaves the file as it was"
+    );
+}
+
+/// The water block of scenes/water_on_floor.toml with its floor raised through the water: every
+/// particle below the raised plane is named as starting behind it, in one line, at np 2.
+#[test]
+fn particles_behind_a_rigid_wall_are_refused() {
+    let dir = workdir("bad_particles_behind_wall");
+    let scene = dir.join("scene.toml");
+    let text = bundled_scene("water_on_floor");
+    let raised = text.replacen("point = [0.0, 0.0, 0.0]", "point = [0.0, 0.0, 1.0]", 1);
+    assert_ne!(text, raised, "the floor's point is in the scene");
+    std::fs::write(&scene, raised).unwrap();
+    assert_scene_refused(
+        "particles behind a wall",
+        &scene,
+        &dir.join("out"),
+        "rigid_wall[0] (\"floor\"): 0 mesh nodes and",
     );
 }

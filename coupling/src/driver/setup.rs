@@ -285,6 +285,9 @@ pub fn build(
             .releases_any()
             .then(|| crate::transfer::fe_sph::Releases::new(scene)),
     };
+    if let Some(w) = &model.walls {
+        w.check_start(world, model.fe.as_ref(), model.sph.as_ref(), &file)?;
+    }
     if scene.failures.iter().any(Option::is_some) {
         model.sum_erosion_masses(world);
     }

@@ -43,6 +43,7 @@ use super::fe::Integrator;
 use super::sph::Sph;
 use crate::input::curve::Curve;
 use crate::input::scene::RigidWallDef;
+use crate::kernels::collective;
 use crate::output::state::{StateReader, StateWriter};
 use contact::Wall;
 use fe_petsc::exact::{self as exact_sum, Folds};
@@ -124,6 +125,62 @@ impl Walls {
             wall_s: 0.0,
             step_velocities: Vec::new(),
         })
+    }
+
+    /// Refuses a scene whose bodies start behind a wall (collective: every rank returns the
+    /// same): each owned mesh node that is not `fixed` or velocity-prescribed and each moving
+    /// particle at t = 0 more than 1e-9 of the model's size behind its plane. The wall would
+    /// put them all back on the plane in the first step, its impulse the bodies' whole
+    /// overlap over one step, and the run would stop on the energy check with nothing said of
+    /// the wall.
+    pub fn check_start(
+        &self,
+        world: &SimpleCommunicator,
+        fe: Option<&Fe>,
+        sph: Option<&Sph>,
+        file: &str,
+    ) -> Result<(), String> {
+        // (point, 0 for a mesh node, 1 for a particle)
+        let mut points: Vec<([f64; 3], usize)> = Vec::new();
+        if let Some(fe) = fe {
+            let st = fe.state();
+            let held = st.fully_constrained();
+            let free = (0..st.x.len()).filter(|&n| st.owned[n] && !held[n]);
+            points.extend(free.map(|n| (st.x[n], 0)));
+        }
+        if let Some(sph) = sph {
+            let p = &sph.stage.parts;
+            points.extend(
+                (0..p.n_owned)
+                    .filter(|&i| !p.fixed[i])
+                    .map(|i| (p.x_real[i], 1)),
+            );
+        }
+        let size = points
+            .iter()
+            .flat_map(|(x, _)| x.iter().map(|c| c.abs()))
+            .fold(0.0f64, f64::max);
+        let tol = 1e-9 * collective::max(world, size);
+        for (k, wall) in self.walls.iter().enumerate() {
+            let (mut behind, mut deepest) = ([0.0f64; 2], 0.0f64);
+            for &(x, kind) in &points {
+                let d = wall.distance(x, 0.0);
+                if d < -tol {
+                    behind[kind] += 1.0;
+                    deepest = deepest.min(d);
+                }
+            }
+            let behind = behind.map(|b| collective::sum(world, b));
+            let deepest = collective::min(world, deepest);
+            if behind[0] + behind[1] > 0.0 {
+                let n = wall.normal;
+                return Err(format!(
+                    "{file}: rigid_wall[{k}] (\"{}\"): {} mesh nodes and {} particles start behind the wall, the deepest {:.3e} m behind its plane; the bodies must start on the side its normal [{:.4}, {:.4}, {:.4}] points to: move its point or turn its normal",
+                    self.names[k], behind[0], behind[1], -deepest, n[0], n[1], n[2]
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// After the drift to `t1 = t + dt` (and the contact push-back): every FE node (all local
