@@ -632,7 +632,7 @@ fn bar_of_particles(out: &Path, dp: f64) -> (f64, f64) {
 /// (measured +2.7 %: the coarse bar is too stiff, as a 4-element hex mesh is) and foot radius
 /// within 8 % (measured -4.2 %) at this resolution.
 #[test]
-fn copper_taylor_bar_of_particles_on_a_meshed_wall() {
+fn copper_taylor_bar_of_particles_on_a_meshed_and_a_rigid_wall() {
     let scene = root().join("scenes/taylor_copper_sph.toml");
     let dp = 0.0008;
     let spacing = format!("particles.spacing={dp}");
@@ -653,6 +653,41 @@ fn copper_taylor_bar_of_particles_on_a_meshed_wall() {
     assert!(
         er.abs() < 0.08,
         "foot radius {foot} vs {r_ref}: {er:+.4} (8 %)"
+    );
+    // The same bar on a [[rigid_wall]] at the meshed wall's top face (z = 0), at np 2: a
+    // particle keeps its contact radius from a rigid wall as from a mesh face, so the two walls
+    // give the same bar (the steel plate is nearly rigid: measured 0.003 % apart in length,
+    // 0.004 % in the foot); 0.1 %. The wall's impulse is the bar's momentum change (1e-3).
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let copper = &text[text.find("[[material]]\nname = \"copper\"").unwrap()..];
+    let copper = &copper[..copper.find("\n\n").unwrap()];
+    let bar = &text[text.find("[[particles]]").unwrap()..];
+    let bar = &bar[..bar.find("\n\n").unwrap()];
+    let walled = dir.join("rigid_wall.toml");
+    std::fs::write(
+        &walled,
+        format!(
+            "title = \"the bar on a rigid wall\"\n[run]\nend_time = 8.0e-5\n\n{copper}\n\n{bar}\n\n\
+             [[rigid_wall]]\nname = \"wall\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n"
+        ),
+    )
+    .unwrap();
+    let c = dir.join("rigid_wall");
+    run_ok_args(2, &walled, &c, &["--param", &spacing]);
+    let (l_wall, r_wall) = bar_of_particles(&c, dp);
+    eprintln!("on a rigid wall: length {l_wall} m, foot {r_wall} m");
+    assert!(
+        (l_wall / length - 1.0).abs() < 1e-3 && (r_wall / foot - 1.0).abs() < 1e-3,
+        "rigid wall: length {l_wall}, foot {r_wall} against the meshed wall's {length}, {foot} (0.1 %)"
+    );
+    let (h, rows) = read_csv(&c.join("history.csv"));
+    let pz = column(&h, &rows, "momentum_z");
+    let change = pz.last().unwrap() - pz[0];
+    let j = impulse(&c, "wall.force_z");
+    assert!(
+        (j - change).abs() < 1e-3 * pz[0].abs(),
+        "the wall's impulse {j:e} N s against the bar's momentum change {change:e} (1e-3 of {:e})",
+        pz[0]
     );
 }
 

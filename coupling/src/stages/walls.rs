@@ -1,5 +1,6 @@
 //! The rigid walls of a scene (`[[rigid_wall]]`, docs/scene.md): infinite planes that no mesh
-//! node and no particle passes, applied after the drift (and after the contact stage's
+//! node and no particle passes (a particle's centre stays its contact radius from the plane,
+//! as from a mesh face: `SphStage::contact_radius`), applied after the drift (and after the contact stage's
 //! push-back, so that nothing the push-back moves ends behind a wall).
 //!
 //! Its own constraint, not the contact machinery: a wall is one plane known to every rank, and a
@@ -129,7 +130,8 @@ impl Walls {
 
     /// Refuses a scene whose bodies start behind a wall (collective: every rank returns the
     /// same): each owned mesh node that is not `fixed` or velocity-prescribed and each moving
-    /// particle at t = 0 more than 1e-9 of the model's size behind its plane. The wall would
+    /// particle (its contact radius from its centre) at t = 0 more than 1e-9 of the model's
+    /// size behind its plane. The wall would
     /// put them all back on the plane in the first step, its impulse the bodies' whole
     /// overlap over one step, and the run would stop on the energy check with nothing said of
     /// the wall.
@@ -140,31 +142,28 @@ impl Walls {
         sph: Option<&Sph>,
         file: &str,
     ) -> Result<(), String> {
-        // (point, 0 for a mesh node, 1 for a particle)
-        let mut points: Vec<([f64; 3], usize)> = Vec::new();
+        // (point, its contact radius, 0 for a mesh node or 1 for a particle)
+        let mut points: Vec<([f64; 3], f64, usize)> = Vec::new();
         if let Some(fe) = fe {
             let st = fe.state();
             let held = st.fully_constrained();
             let free = (0..st.x.len()).filter(|&n| st.owned[n] && !held[n]);
-            points.extend(free.map(|n| (st.x[n], 0)));
+            points.extend(free.map(|n| (st.x[n], 0.0, 0)));
         }
         if let Some(sph) = sph {
-            let p = &sph.stage.parts;
-            points.extend(
-                (0..p.n_owned)
-                    .filter(|&i| !p.fixed[i])
-                    .map(|i| (p.x_real[i], 1)),
-            );
+            let (stage, p) = (&sph.stage, &sph.stage.parts);
+            let moving = (0..p.n_owned).filter(|&i| !p.fixed[i]);
+            points.extend(moving.map(|i| (p.x_real[i], stage.contact_radius(i), 1)));
         }
         let size = points
             .iter()
-            .flat_map(|(x, _)| x.iter().map(|c| c.abs()))
+            .flat_map(|(x, _, _)| x.iter().map(|c| c.abs()))
             .fold(0.0f64, f64::max);
         let tol = 1e-9 * collective::max(world, size);
         for (k, wall) in self.walls.iter().enumerate() {
             let (mut behind, mut deepest) = ([0.0f64; 2], 0.0f64);
-            for &(x, kind) in &points {
-                let d = wall.distance(x, 0.0);
+            for &(x, r, kind) in &points {
+                let d = wall.distance(x, 0.0) - r;
                 if d < -tol {
                     behind[kind] += 1.0;
                     deepest = deepest.min(d);
@@ -374,9 +373,13 @@ fn sph_step(walls: &[(Wall, f64)], sph: &mut Sph, dt: f64, folds: &mut [Folds]) 
     let grid = stage.grids.momentum;
     for (k, &(wall, t)) in walls.iter().enumerate() {
         let p = &stage.parts;
-        let nodes = (0..p.n_owned)
-            .filter(|&i| !p.fixed[i])
-            .map(|i| (i, p.x_real[i], p.v[i], p.m[i]));
+        // a particle's point nearest the plane, its contact radius from its centre
+        let n = wall.normal;
+        let nodes = (0..p.n_owned).filter(|&i| !p.fixed[i]).map(|i| {
+            let r = stage.contact_radius(i);
+            let x: [f64; 3] = std::array::from_fn(|c| p.x_real[i][c] - r * n[c]);
+            (i, x, p.v[i], p.m[i])
+        });
         let Some(f) = forces_of(&wall, (t, dt), nodes, p.n_owned) else {
             continue;
         };

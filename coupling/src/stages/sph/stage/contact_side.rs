@@ -21,6 +21,14 @@ impl SphStage {
             .unwrap_or(p.rho[i])
     }
 
+    /// Owned particle `i`'s contact radius, m: half its size at its material's initial
+    /// density, `(m / rho_init)^(1/3) / 2` (half the spacing it was seeded at; see
+    /// [`SphStage::contact_records`] for why it does not follow the density). The rigid walls
+    /// keep a particle this far from their planes, as a mesh face does.
+    pub fn contact_radius(&self, i: usize) -> f64 {
+        0.5 * libm::cbrt(self.parts.m[i] / self.contact_density(i))
+    }
+
     /// Contact-node records of the owned particles after `drift` (start and predicted end
     /// position, start-of-step velocity), ids `gid_offset + id`. Fixed particles have infinite
     /// mass (they take reactions but do not move). The contact radius is half the particle's
@@ -47,7 +55,7 @@ impl SphStage {
                 body: u32::MAX,
                 flags: ::contact::FLAG_PARTICLE,
                 mass: if p.fixed[i] { f64::INFINITY } else { p.m[i] },
-                radius: 0.5 * libm::cbrt(p.m[i] / self.contact_density(i)),
+                radius: self.contact_radius(i),
                 x0: self.x_start[i],
                 x1: p.x_real[i],
                 v: start(i),
