@@ -72,6 +72,7 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+mod coarse;
 mod elements;
 mod exact_cg;
 mod restart;
@@ -405,8 +406,10 @@ impl ImplicitFe {
                 sol,
             }
         } else {
+            let mut cg = Box::new(ExactCg::new(fe.elems.len(), nn));
+            cg.coarse = Some(coarse::Coarse::new(comm, &fe.x0, &fe.owned, &fe.elems));
             Linear::Exact {
-                cg: Box::new(ExactCg::new(fe.elems.len(), nn)),
+                cg,
                 delta: vec![[0.0; 3]; nn],
                 rtol: solver::option_real("-ksp_rtol")?.unwrap_or(solver::KSP_RTOL),
             }
@@ -738,6 +741,7 @@ impl ImplicitFe {
                 elems: &self.fe.elems,
                 owned: &self.fe.owned,
                 mass_term: &self.mass_term,
+                dofs: &self.dofs,
             };
             let its = cg.solve(
                 comm,

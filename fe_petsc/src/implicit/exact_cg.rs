@@ -1,5 +1,6 @@
 //! The implicit step's linear solve with the same bits at any rank count: conjugate gradients
-//! preconditioned by the diagonal (Jacobi), on the element matrices themselves.
+//! preconditioned by the diagonal (Jacobi) and a coarse grid ([`super::coarse`]), on the
+//! element matrices themselves.
 //!
 //! Why not KSP by default. A PETSc solve is rank-independent only to round-off: its dot
 //! products add one partial sum per rank, its matrix rows are summed in the order of a global
@@ -14,18 +15,19 @@
 //!   (`K_e` kept from the tangent's assembly, 24 x 24) and summed per node in the canonical
 //!   element order ([`crate::assembly::Assembly`], as the element forces are), the mass term
 //!   added after;
-//! - the diagonal (the preconditioner) is summed the same way;
+//! - the diagonal (the preconditioner) is summed the same way, and the coarse grid's matrix and
+//!   restrictions exactly ([`super::coarse`]);
 //! - every dot product is an exact sum over the owned nodes and the ranks
 //!   ([`crate::exact::totals`]);
 //! - the vector updates are per node, the same on every copy of a shared node.
 //!
-//! The cost: about 6 reductions per iteration, and Jacobi's iteration count, which grows with
-//! the mesh's size where GAMG's stays flat (measured on `bar_vibration` in implicit mode:
-//! see docs/running.md). A user who prefers speed to the guarantee chooses a PETSc solver
+//! The cost: about 7 reductions per iteration (the coarse restriction one of them), and an
+//! iteration count a few times GAMG's (docs/running.md: 93.5 against 35.5 on a plate of 12,800
+//! elements; the diagonal alone took 1,609). A user who prefers speed to the guarantee chooses a PETSc solver
 //! with `-ksp_type` / `-pc_type` (docs/cli.md); its answers then agree to round-off only.
 //!
 //! CG (Hestenes & Stiefel 1952; Saad, *Iterative Methods for Sparse Linear Systems*, 2003,
-//! Alg. 9.1) for the symmetric positive definite `A`: `x0 = 0`, `r0 = b`, `z = D^-1 r`,
+//! Alg. 9.1) for the symmetric positive definite `A`: `x0 = 0`, `r0 = b`, `z = M^-1 r` (the diagonal and the coarse correction),
 //! `p0 = z0`; `alpha = (r.z) / (p.A p)`, `x += alpha p`, `r -= alpha A p`, `beta = (r'.z') /
 //! (r.z)`, `p = z' + beta p`; stopped when `||r||_2 <= rtol ||b||_2` (the unpreconditioned
 //! residual, PETSc's `KSP_NORM_UNPRECONDITIONED` test with KSP's default rtol here).
@@ -46,6 +48,8 @@ pub(super) struct ExactCg {
     z: Vec<[f64; 3]>,
     p: Vec<[f64; 3]>,
     q: Vec<[f64; 3]>,
+    /// The coarse-grid correction of the preconditioner ([`super::coarse`]).
+    pub(super) coarse: Option<super::coarse::Coarse>,
 }
 
 /// The vectors and operators a solve reads.
@@ -54,6 +58,8 @@ pub(super) struct CgSystem<'a> {
     pub owned: &'a [bool],
     /// `4 m / dt^2` per local node.
     pub mass_term: &'a [f64],
+    /// Each local node's constraint projection.
+    pub dofs: &'a [NodeDof],
 }
 
 impl ExactCg {
@@ -66,6 +72,7 @@ impl ExactCg {
             z: v.clone(),
             p: v.clone(),
             q: v,
+            coarse: None,
         }
     }
 
@@ -98,6 +105,9 @@ impl ExactCg {
             for x in d.iter_mut() {
                 *x += m;
             }
+        }
+        if let Some(c) = &mut self.coarse {
+            c.assemble(sys, &self.ke);
         }
         Ok(())
     }
@@ -147,7 +157,7 @@ impl ExactCg {
     ) -> Result<usize, SolveError> {
         x.fill([0.0; 3]);
         self.r.copy_from_slice(b);
-        self.precondition();
+        self.precondition(sys);
         self.p.copy_from_slice(&self.z);
         let [bb, mut rz] = dots(comm, sys.owned, [(&self.r, &self.r), (&self.r, &self.z)]);
         let target = rtol * bb.sqrt();
@@ -170,7 +180,7 @@ impl ExactCg {
                     self.r[n][c] -= alpha * self.q[n][c];
                 }
             }
-            self.precondition();
+            self.precondition(sys);
             let [rr, rz_new] = dots(comm, sys.owned, [(&self.r, &self.r), (&self.r, &self.z)]);
             if rr.sqrt() <= target {
                 return Ok(it);
@@ -189,12 +199,15 @@ impl ExactCg {
         })
     }
 
-    /// `z = D^-1 r`.
-    fn precondition(&mut self) {
+    /// `z = D^-1 r`, plus the coarse grid's correction where there is one (collective).
+    fn precondition(&mut self, sys: &CgSystem) {
         for ((z, r), d) in self.z.iter_mut().zip(&self.r).zip(&self.diag) {
             for c in 0..3 {
                 z[c] = r[c] / d[c];
             }
+        }
+        if let Some(c) = &self.coarse {
+            c.correct(sys, &self.r, &mut self.z);
         }
     }
 }

@@ -103,6 +103,7 @@ impl ImplicitFe {
                     elems: &self.fe.elems,
                     owned: &self.fe.owned,
                     mass_term: &self.mass_term,
+                    dofs: &self.dofs,
                 };
                 cg.set_diagonal(&sys, &mut self.fe.assembly, exchange)?;
             }

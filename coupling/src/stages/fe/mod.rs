@@ -59,10 +59,8 @@ pub struct Fe {
 }
 
 /// CG iterations per Newton solve past which an implicit run with the default solver says once
-/// that a PETSc preconditioner would be faster. Jacobi's count grows with the mesh where GAMG's
-/// stays flat: measured on a quarter plate of 12,800 split-tetrahedral elements in bending,
-/// 1,609 iterations per solve against GAMG's 35.5 (6 times the solver's time at np 2;
-/// docs/running.md).
+/// that a PETSc preconditioner would be faster: the coarse grid has at most 600 nodes, so on
+/// far finer meshes the count grows again where GAMG's stays flat (docs/running.md).
 pub const SLOW_SOLVE_ITERATIONS: f64 = 500.0;
 
 impl Fe {
@@ -393,7 +391,7 @@ impl Stage for Fe {
                     self.slow_solve_noted = true;
                     if world.rank() == 0 {
                         eprintln!(
-                            "tdyn: note: the default implicit solver (CG with a diagonal preconditioner, the same bytes at any rank count) takes {per_solve:.0} iterations per Newton solve on this mesh; add -pc_type gamg to the command line for PETSc's multigrid, usually many times faster on large meshes, its answers the same to round-off only (docs/cli.md)"
+                            "tdyn: note: the default implicit solver (CG preconditioned by the diagonal and a coarse grid, the same bytes at any rank count) takes {per_solve:.0} iterations per Newton solve on this mesh; add -pc_type gamg to the command line for PETSc's multigrid, usually many times faster on large meshes, its answers the same to round-off only (docs/cli.md)"
                         );
                     }
                 }
