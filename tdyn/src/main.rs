@@ -201,7 +201,8 @@ struct RunArgs {
     /// name> goes on to out/<scene name>-2, -3, ...).
     #[arg(long)]
     overwrite: bool,
-    /// Continue the run whose checkpoint is in DIR (its output folder; written with
+    /// Continue the run whose checkpoint is in DIR (its output folder, or that folder's
+    /// `checkpoint/`; written with
     /// `[output] checkpoint_every`, at its end, or when it was stopped with Ctrl-C or
     /// SIGTERM) to the scene's end time, appending to its history, probes and frames. The
     /// scene and its --param values must be those of the run; the rank count too.
@@ -425,6 +426,24 @@ fn main() -> ExitCode {
     }
 }
 
+/// The run folder `--restart DIR` names: DIR itself, or, when DIR is that folder's
+/// `checkpoint/` (it holds `meta.json` and has no `checkpoint/` of its own), the folder above.
+fn run_folder_of(dir: PathBuf) -> PathBuf {
+    let is_checkpoint = dir.join("meta.json").is_file()
+        && !dir.join("checkpoint").join("meta.json").is_file()
+        && dir.file_name().is_some_and(|n| n == "checkpoint");
+    match dir.parent() {
+        Some(p) if is_checkpoint => {
+            if p.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                p.to_path_buf()
+            }
+        }
+        _ => dir,
+    }
+}
+
 /// `tdyn run`: the scene on MPI's world; unless --quiet, rank 0 then draws the energies and
 /// prints the closing block.
 fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
@@ -436,9 +455,19 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
         }
     };
     let quiet = a.quiet;
+    let restart = a.restart.map(run_folder_of);
+    // `--out` naming the run's own folder says what --restart says already.
+    let same = |o: &PathBuf, r: &PathBuf| match (o.canonicalize(), r.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => o == r,
+    };
+    let out = match (&a.out, &restart) {
+        (Some(o), Some(r)) if same(o, r) => None,
+        _ => a.out,
+    };
     let opts = RunOptions {
         scene: a.scene,
-        out: a.out,
+        out,
         quiet,
         overrides,
         algorithms: driver::Algorithms {
@@ -454,7 +483,7 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
             },
         },
         overwrite: a.overwrite,
-        restart: a.restart,
+        restart,
         stop: Some(stop_flag()),
         ..Default::default()
     };

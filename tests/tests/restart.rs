@@ -147,12 +147,31 @@ fn stop_and_restart(rel: &str, np: usize, rows: usize, except: &[&str]) {
 
 /// [`stop_and_restart`] of the scene file `scene`, the runs in `dir`.
 fn stop_and_restart_in(dir: &Path, scene: &Path, np: usize, rows: usize, except: &[&str]) {
+    stop_and_restart_as(dir, scene, np, rows, except, false);
+}
+
+/// [`stop_and_restart_in`]; with `via_checkpoint` the restart names the stopped run's
+/// `checkpoint/` folder and gives `--out` the run's own folder (docs/cli.md: both name the
+/// same run).
+fn stop_and_restart_as(
+    dir: &Path,
+    scene: &Path,
+    np: usize,
+    rows: usize,
+    except: &[&str],
+    via_checkpoint: bool,
+) {
     let rel = scene.display().to_string();
     let scene = scene.to_path_buf();
     let (a, b) = (dir.join("A"), dir.join("B"));
     run_ok(np, &scene, &a);
     stop_after_rows(np, &scene, &b, rows, &[]);
-    restart_ok(np, &scene, &b, &[]);
+    if via_checkpoint {
+        let out = b.display().to_string();
+        restart_ok(np, &scene, &b.join("checkpoint"), &["--out", &out]);
+    } else {
+        restart_ok(np, &scene, &b, &[]);
+    }
     // The force histories too, where the run writes them (docs/output.md).
     let forces = ["reactions.csv", "contact_forces.csv"];
     let present = forces.into_iter().filter(|f| a.join(f).exists());
@@ -213,6 +232,16 @@ fn solid_particle_run_stopped_and_restarted_ends_bit_identical_at_np_1_and_3() {
     for np in [1, 3] {
         stop_and_restart("scenes/rubber_blocks.toml", np, 60, &[]);
     }
+}
+
+#[test]
+fn a_restart_naming_the_checkpoint_folder_and_the_runs_own_out_continues_that_run() {
+    // `--restart DIR/checkpoint --out DIR` names the same run as `--restart DIR` (docs/cli.md):
+    // water on a rigid floor (scenes/water_on_floor.toml) at np 2, continued that way, ends
+    // with the run's without a stop, bit for bit.
+    let dir = workdir("restart_checkpoint_folder_np2");
+    let scene = scene_copy("scenes/water_on_floor.toml", &dir);
+    stop_and_restart_as(&dir, &scene, 2, 64, &[], true);
 }
 
 #[test]
