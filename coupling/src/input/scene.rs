@@ -522,7 +522,8 @@ pub enum Region {
         radius: f64,
     },
     Sphere {
-        #[serde(deserialize_with = "vec3::exact")]
+        // (the British spelling the manual uses elsewhere is taken too)
+        #[serde(deserialize_with = "vec3::exact", alias = "centre")]
         center: [f64; 3],
         radius: f64,
     },

@@ -424,3 +424,30 @@ fn solid_particles_and_artificial_stress_are_read_and_bad_values_refused() {
         assert!(!line.contains('\n'), "one line: {line:?}");
     }
 }
+
+/// A sphere region's centre under either spelling is the same region (docs/scene.md).
+#[test]
+fn a_sphere_region_takes_center_or_centre() {
+    let with = |key: &str| {
+        base()
+            + &format!(
+                "[[particles]]\nname = \"p\"\nmaterial = \"steel\"\nspacing = 0.01\n\
+                 region = {{ sphere = {{ {key} = [0.5, 0.25, 0.125], radius = 0.05 }} }}\n"
+            )
+    };
+    let region = |key: &str| {
+        parse(&with(key), Path::new("scene.toml"))
+            .expect("accepted")
+            .particles[0]
+            .region
+            .clone()
+    };
+    let expected = Region::Sphere {
+        center: [0.5, 0.25, 0.125],
+        radius: 0.05,
+    };
+    assert_eq!(region("center"), expected);
+    assert_eq!(region("centre"), expected);
+    let e = refused(&with("middle")).to_string();
+    assert!(e.contains("middle") && e.contains("center"), "{e}");
+}
