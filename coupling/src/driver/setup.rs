@@ -82,7 +82,8 @@ impl Model {
     /// what the rigid walls took.
     pub fn contact_energy(&self) -> f64 {
         let walls = self.walls.as_ref().map_or(0.0, |w| w.energy);
-        self.contact.as_ref().map_or(0.0, |c| c.energy) + walls
+        let holds = self.sph.as_ref().map_or(0.0, |s| s.hold_taken);
+        self.contact.as_ref().map_or(0.0, |c| c.energy) + walls + holds
     }
 
     /// reactions.csv's entries for the row at `time`: each rigid wall's name and its force on
@@ -287,6 +288,9 @@ pub fn build(
     };
     if let Some(w) = &model.walls {
         w.check_start(world, model.fe.as_ref(), model.sph.as_ref(), &file)?;
+        if let Some(sph) = model.sph.as_mut() {
+            w.size_holds(sph);
+        }
     }
     if scene.failures.iter().any(Option::is_some) {
         model.sum_erosion_masses(world);

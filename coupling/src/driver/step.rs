@@ -38,6 +38,10 @@ pub fn step(
     for stage in model.stages_mut() {
         next = next.min(stage.forces(world, dt)?);
     }
+    // The walls' holds of particles through the closing kick: their impulses.
+    if let Some(walls) = &mut model.walls {
+        walls.after_holds(model.sph.as_ref());
+    }
     // Failed elements become particles (FE -> SPH), in the SPH stage's rates from now on.
     if let (Some(rel), Some(fe), Some(sph)) = (&mut model.releases, &mut model.fe, &mut model.sph) {
         let born = crate::transfer::fe_sph::transfer(world, (fe, sph), rel).map_err(|message| {

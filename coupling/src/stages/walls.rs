@@ -231,7 +231,30 @@ impl Walls {
         let velocities: Vec<[f64; 3]> = walls.iter().map(|(w, _)| w.velocity).collect();
         let work = self.book(&impulses, &velocities);
         self.energy += work - (g[0] + g[1]);
+        self.step_velocities = velocities;
         self.wall_s += t0.elapsed().as_secs_f64();
+    }
+
+    /// Sizes the SPH stage's per-wall hold impulses (`SphStage::hold_impulse`) to the walls.
+    pub fn size_holds(&self, sph: &mut Sph) {
+        sph.stage.hold_impulse = vec![[[0.0; 3]; 3]; self.impulse.len()];
+    }
+
+    /// After the step's closing kicks: the impulses the walls' holds gave the particles
+    /// (`SphStage::hold_on_faces`, summed over ranks), added to the walls' and their work
+    /// `W . J` to the walls' energy; the holds' change of the kinetic energy is the SPH
+    /// stage's (`Sph::hold_taken`), so the two together are what the walls took.
+    pub fn after_holds(&mut self, sph: Option<&Sph>) {
+        let Some(sph) = sph else {
+            return;
+        };
+        let impulses = &sph.globals.hold_impulses;
+        if impulses.len() != self.impulse.len() || self.step_velocities.len() != impulses.len() {
+            return;
+        }
+        let velocities = self.step_velocities.clone();
+        let work = self.book(impulses, &velocities);
+        self.energy += work;
     }
 
     /// After an implicit step: its walls' impulses and the energy they took, from the
@@ -387,7 +410,15 @@ fn sph_step(walls: &[(Wall, f64)], sph: &mut Sph, dt: f64, folds: &mut [Folds]) 
             .filter(|&i| f[i] != [0.0; 3])
             .map(|i| (i, p.v[i]))
             .collect();
-        let w = stage.apply_contact(&f, &[], dt);
+        // The wall cannot give way: a particle it touched is held on it through the step's
+        // closing half-kick too (`SphStage::hold_on_faces`), as on an immovable face; that
+        // hold's impulse comes back to the wall after the kick (`Walls::after_holds`).
+        let tag = u8::try_from(2 + k).expect("at most 253 rigid walls");
+        let held: Vec<u8> = f
+            .iter()
+            .map(|v| if *v != [0.0; 3] { tag } else { 0 })
+            .collect();
+        let w = stage.apply_contact(&f, &held, dt);
         exact_sum::merge(&mut folds[1], &w);
         let p = &stage.parts;
         for (i, v0) in touched {

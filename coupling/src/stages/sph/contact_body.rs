@@ -36,7 +36,8 @@ impl ContactBody for Sph {
     /// `held`: the particles immovable faces alone hold, kept for the closing kick
     /// (`SphStage::hold_on_faces`).
     fn apply_impulses(&mut self, force: &[[f64; 3]], held: &[bool], dt: f64) -> Folds {
-        self.stage.apply_contact(force, held, dt)
+        let tags: Vec<u8> = held.iter().map(|&h| u8::from(h)).collect();
+        self.stage.apply_contact(force, &tags, dt)
     }
 
     /// The particle file's entry of particle `id` (`ParticleIds::entry`).

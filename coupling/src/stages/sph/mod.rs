@@ -27,6 +27,9 @@ pub struct Sph {
     pub ids: ParticleIds,
     /// Global energies, momentum and gravity power after the last step.
     pub globals: SphGlobals,
+    /// The energy the holds on faces and walls took from the solid particles so far, J
+    /// (global; `SphStage::hold_on_faces`): part of history.csv's `contact_energy`.
+    pub hold_taken: f64,
     /// Work of gravity on the particles so far (trapezoid of its power), J.
     pub external_work: f64,
     /// Wall time of the stage (max over ranks per step, summed), s.
@@ -119,6 +122,7 @@ impl Sph {
             ids,
             globals: g,
             external_work: 0.0,
+            hold_taken: 0.0,
             wall_s: 0.0,
             bytes: 0.0,
             pairs_local: 0.0,
@@ -210,6 +214,7 @@ impl Sph {
         self.rcb_imbalance_sum += r.imbalance;
         let g = globals(world, &self.stage);
         self.external_work += 0.5 * (self.globals.gravity_power + g.gravity_power) * dt;
+        self.hold_taken -= g.hold_work;
         self.globals = g;
         self.steps += 1;
         Ok(())
@@ -235,7 +240,8 @@ impl Sph {
     /// Sets the global energies, the gravity work and the step count `save` wrote.
     fn restore_globals(&mut self, r: &StateReader) -> Result<(), String> {
         let g: Vec<f64> = r.get("sph.globals")?;
-        if g.len() != 7 {
+        // (8 since the holds' energy; a checkpoint of 7 had none)
+        if g.len() != 7 && g.len() != 8 {
             return Err("checkpoint: sph.globals".into());
         }
         self.globals = SphGlobals {
@@ -243,8 +249,11 @@ impl Sph {
             internal: g[1],
             momentum: [g[2], g[3], g[4]],
             gravity_power: g[5],
+            hold_work: 0.0,
+            hold_impulses: Vec::new(),
         };
         self.external_work = g[6];
+        self.hold_taken = g.get(7).copied().unwrap_or(0.0);
         self.steps = r.get::<u64>("sph.steps")?.first().copied().unwrap_or(0);
         // the particles over all ranks, failed elements' included (absent: the seeded ones)
         if let Some(n) = r
@@ -318,6 +327,7 @@ impl Stage for Sph {
                 g.momentum[2],
                 g.gravity_power,
                 self.external_work,
+                self.hold_taken,
             ],
         );
         w.put("sph.steps", &[self.steps]);

@@ -289,7 +289,7 @@ pub fn shepard(comm: &SimpleCommunicator, st: &SphStage, probes: &[&Probe]) -> V
 }
 
 /// The particles' global sums (collective).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct SphGlobals {
     /// Kinetic energy, J.
     pub kinetic: f64,
@@ -299,6 +299,11 @@ pub struct SphGlobals {
     pub momentum: [f64; 3],
     /// Power of gravity on the particles, W.
     pub gravity_power: f64,
+    /// What the step's holds changed of the kinetic energy beyond the pair work, J
+    /// (`SphStage::hold_work`).
+    pub hold_work: f64,
+    /// The step's impulses of the rigid walls' holds, per wall, N s (`SphStage::hold_impulse`).
+    pub hold_impulses: Vec<[f64; 3]>,
 }
 
 impl SphGlobals {
@@ -317,8 +322,11 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
     let p = &st.parts;
     let (ge, gm) = (st.grids.energy, st.grids.momentum);
     let g = st.params.gravity;
-    // [sum m v.v, sum m (e + work), px, py, pz, sum m g.v (moving particles)]
-    let mut f = [[0.0; 3]; 6];
+    // [sum m v.v, sum m (e + work), px, py, pz, sum m g.v (moving particles), the holds'
+    // energy, then each wall's hold impulse x, y, z]
+    let mut f = vec![[0.0; 3]; 7];
+    f[6] = st.hold_work;
+    f.extend(st.hold_impulse.iter().flatten().copied());
     for i in 0..p.n_owned {
         let (m, v) = (p.m[i], p.v[i]);
         ge.add(&mut f[1], m * (p.e[i] + p.work[i]));
@@ -339,5 +347,7 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
         internal: t[1],
         momentum: [t[2], t[3], t[4]],
         gravity_power: t[5],
+        hold_work: t[6],
+        hold_impulses: t[7..].chunks(3).map(|j| [j[0], j[1], j[2]]).collect(),
     }
 }

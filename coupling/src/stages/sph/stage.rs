@@ -21,6 +21,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::exact::{exact_pass, PassGrids, TermMax};
+use sph::solid::book_work_at_step_velocity;
 use sph::{
     add_gravity, continuity_and_force_pass_with, density_pass, first_half, force_pass,
     pairs_in_box, periodic_images, second_half, setup_state, update_eos, DensityMode, EosState,
@@ -141,6 +142,12 @@ pub struct SphStage {
     pub passes_redone: u64,
     /// The solid particles' state and passes (`stage::solid`); `None` in a run of fluids.
     solid: Option<SolidPart>,
+    /// What this step's holds on faces and walls changed of the solids' kinetic energy beyond
+    /// their pair work (`hold_on_faces`), on the energy grid, J; reset at each drift.
+    pub hold_work: Folds,
+    /// This step's impulses of the rigid walls' holds (`hold_on_faces`), per wall and
+    /// component, on the momentum grid, N s; reset at each drift.
+    pub hold_impulse: Vec<[Folds; 3]>,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -193,6 +200,8 @@ impl SphStage {
             pass_grids: PassGrids::default(),
             passes_redone: 0,
             solid: None,
+            hold_work: [0.0; 3],
+            hold_impulse: Vec::new(),
         }
     }
 
@@ -332,6 +341,10 @@ impl SphStage {
         let t0 = Instant::now();
         self.bytes = 0;
         self.parts.truncate_ghosts();
+        self.hold_work = [0.0; 3];
+        for w in &mut self.hold_impulse {
+            *w = [[0.0; 3]; 3];
+        }
         self.x_start.clear();
         self.x_start
             .extend_from_slice(&self.parts.x_real[..self.parts.n_owned]);
@@ -387,6 +400,9 @@ impl SphStage {
         second_half(&mut self.parts, dt, &self.params);
         self.solid_pressure_after_step();
         self.hold_on_faces(dt);
+        if let Some(sp) = &self.solid {
+            book_work_at_step_velocity(&mut self.parts, &sp.solids, self.params.gravity, dt);
+        }
         self.finish_stats(t0, self.drift_s);
         self.check_partners()
     }

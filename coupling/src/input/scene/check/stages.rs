@@ -278,7 +278,10 @@ pub(super) fn check_contact(cx: &Ctx, c: &ContactDef) -> Result<(), SceneError> 
     Ok(())
 }
 
-/// `[[rigid_wall]]`: a name that no other wall and no boundary group has (they share
+/// The most `[[rigid_wall]]` entries a scene may have.
+pub const MAX_RIGID_WALLS: usize = 200;
+
+/// `[[rigid_wall]]`: at most [`MAX_RIGID_WALLS`]; a name that no other wall and no boundary group has (they share
 /// reactions.csv's columns), a normal that is not zero (returned normalised), Coulomb's
 /// coefficient >= 0.
 pub(super) fn check_rigid_walls(
@@ -287,6 +290,16 @@ pub(super) fn check_rigid_walls(
     boundaries: &[Boundary],
 ) -> Result<Vec<RigidWallDef>, SceneError> {
     let mut out: Vec<RigidWallDef> = Vec::new();
+    // (a particle holds its holder's index in a byte: `SphStage::apply_contact`)
+    if walls.len() > MAX_RIGID_WALLS {
+        return Err(cx.err(
+            "rigid_wall",
+            format!(
+                "{} rigid walls, at most {MAX_RIGID_WALLS}: an infinite plane each",
+                walls.len()
+            ),
+        ));
+    }
     for (i, w) in walls.iter().enumerate() {
         let key = |k: &str| format!("rigid_wall[{i}].{k}");
         if w.name.trim().is_empty() || w.name.contains(',') {

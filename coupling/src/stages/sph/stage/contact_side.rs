@@ -91,8 +91,10 @@ impl SphStage {
     /// with an impulse between the kicks: m dv.(v + dv/2) - (dt/2) m a_n.dv, a_n = f_n/m, the
     /// contact stage's bookkeeping [`::contact::energy::booked_work`]), summed over this rank's
     /// particles.
-    /// `held`: the particles immovable faces alone hold in this step (see `hold_on_faces`).
-    pub fn apply_contact(&mut self, force: &[[f64; 3]], held: &[bool], dt: f64) -> Folds {
+    /// `held`: who holds each particle through the closing kick (see `hold_on_faces`): 0 none,
+    /// 1 the immovable faces alone, 2 + k rigid wall k.
+    pub fn apply_contact(&mut self, force: &[[f64; 3]], held: &[u8], dt: f64) -> Folds {
+        let solids = self.solid.as_ref().map(|s| &s.solids);
         let p = &mut self.parts;
         let grid = self.grids.energy;
         let mut work = [0.0; 3];
@@ -110,9 +112,23 @@ impl SphStage {
             let kick_n = (0..3)
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
-            // Booked against the start velocity and the share of the start kick
-            // `contact::energy::booked_kick` gives.
-            let kick = ::contact::energy::booked_kick(p.pushed[i]);
+            // A fluid's correction is booked against the start velocity and the share of the
+            // start kick `contact::energy::booked_kick` gives. A solid's pair work is booked
+            // at its full-step velocities (`sph::solid::book_work_at_step_velocity`); its
+            // correction books its own change of the kinetic energy, m dv . (v + dv/2), and,
+            // the first in a step of a particle also corrected in the last, m (p . n)^2 / 2 of
+            // the start kick p = (dt/2) a(n) into the face: the share of the integrator's
+            // telescoping m (|p|^2 - |q|^2) / 2 that `hold_on_faces` takes back with the
+            // closing kick q's, so that a particle resting on a face books nothing.
+            let solid = solids.is_some_and(|s| s.is_solid(p.mat[i]));
+            let kick = if solid {
+                if p.pushed[i] & 3 == 1 && kick_n < 0.0 {
+                    grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
+                }
+                0.0
+            } else {
+                ::contact::energy::booked_kick(p.pushed[i])
+            };
             p.pushed[i] |= 2;
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
@@ -124,8 +140,10 @@ impl SphStage {
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];
-            if held.get(i).copied().unwrap_or(false) {
-                p.hold[i] = n;
+            // the holder's tag as the normal's length (`hold_on_faces`)
+            let tag = held.get(i).copied().unwrap_or(0);
+            if tag > 0 {
+                p.hold[i] = n.map(|c| c * f64::from(tag));
             }
         }
         work
@@ -145,23 +163,49 @@ impl SphStage {
     /// the hold books nothing itself. Momentum: the faces' nodes are prescribed (infinite
     /// mass), so the impulse goes to their constraint, as a push-back on them does.
     pub(super) fn hold_on_faces(&mut self, dt: f64) {
+        let solids = self.solid.as_ref().map(|s| &s.solids);
+        let (grid, mgrid) = (self.grids.energy, self.grids.momentum);
         let p = &mut self.parts;
         for i in 0..p.n_owned {
-            let n = p.hold[i];
-            if n == [0.0; 3] {
+            let h = p.hold[i];
+            if h == [0.0; 3] {
                 continue;
             }
             p.hold[i] = [0.0; 3];
+            // the holder's tag is the stored normal's length (`apply_contact`): 1 the faces,
+            // 2 + k rigid wall k
+            let tag = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt().round();
+            let n = h.map(|c| c / tag);
             let k = (0..3)
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
             if p.fixed[i] || k >= 0.0 {
                 continue;
             }
-            // Held: its start velocity in the next step carries no kick into the faces.
-            p.pushed[i] &= !2;
+            if solids.is_some_and(|s| s.is_solid(p.mat[i])) {
+                // A solid's (pair work at full-step velocities, `apply_contact`): the hold's
+                // change of the kinetic energy beyond the closing kick's pair work at the held
+                // velocity, m h . (q + h/2 - v) with h = k n the velocity taken, q = (dt/2) a
+                // the closing kick and v the velocity before, less m k^2 / 2 (the closing
+                // kick's share of the telescoping term): m k (k - v . n). Zero for a particle
+                // at rest on the face; it stays a particle corrected in this step.
+                let vn = (0..3).map(|c| p.v[i][c] * n[c]).sum::<f64>();
+                grid.add(&mut self.hold_work, p.m[i] * k * (k - vn));
+            } else {
+                // Held: its start velocity in the next step carries no kick into the faces.
+                p.pushed[i] &= !2;
+            }
             for c in 0..3 {
                 p.v[i][c] -= k * n[c];
+            }
+            // a rigid wall's hold is part of its impulse (reactions.csv), m (-k n)
+            if tag >= 2.0 {
+                // (sized to the scene's walls at set-up: `Walls::size_holds`)
+                if let Some(j) = self.hold_impulse.get_mut(tag as usize - 2) {
+                    for c in 0..3 {
+                        mgrid.add(&mut j[c], -p.m[i] * k * n[c]);
+                    }
+                }
             }
         }
     }
