@@ -29,7 +29,7 @@ fn rubber_blocks_give_the_same_bytes_at_np_1_2_3() {
 /// momentum, zero at the start, stays zero to round-off: 1e-12 of M v (M = 2,000 particles of
 /// 1200 kg/m^3 x (4 mm)^3 = 0.1536 kg, v = 5 m/s; measured ~2e-16 of it). The pair work is
 /// booked in internal_energy (the stress work), so kinetic + internal is conserved up to the
-/// leapfrog's O(dt^2) error: energy_error below 1e-3 over the run (measured 3.0e-4; the serial
+/// leapfrog's O(dt^2) error: energy_error below 1e-3 over the run (measured 1.9e-4; the serial
 /// plate of sph/tests/solid_plate.rs drifts ~1e-4). The blocks rebound: each block's centre
 /// (the probe) moves back at the end, and stress work was done (internal energy > 0).
 #[test]
@@ -46,7 +46,7 @@ fn rubber_blocks_conserve_momentum_and_energy_and_rebound() {
     let err = column(&h, &rows, "energy_error")
         .iter()
         .fold(0.0f64, |m, e| m.max(*e));
-    assert!(err < 1e-3, "energy error {err:e} (measured 3.0e-4)");
+    assert!(err < 1e-3, "energy error {err:e} (measured 1.9e-4)");
     let ie = column(&h, &rows, "internal_energy");
     assert!(
         ie.iter().cloned().fold(0.0, f64::max) > 0.1,
@@ -174,7 +174,7 @@ fn plastic_particles_on_a_clamp_of_fixed_particles() {
 ///   energy of their ovalling and the viscosity's heat, not told apart here), and the gap
 ///   between them has opened;
 /// - their total energy (kinetic + internal, the stress and viscous work) within 5 % of its
-///   start (the bound; measured energy_error at most 3.6e-4);
+///   start (the bound; measured energy_error at most 8.9e-5);
 /// - no fracture and no tensile clumping: every particle's nearest neighbour (through the
 ///   periodic z) between 0.5 and 1.5 dp at the end (measured 0.565 to 1.025 dp; with the
 ///   artificial stress off, epsilon = 0, the closest pair comes to 0.46 dp: the bound sees
@@ -183,7 +183,7 @@ fn plastic_particles_on_a_clamp_of_fixed_particles() {
 /// And with every SPH setting at its default (the solids' viscosity alpha 0.3, beta 0, which
 /// the Taylor bar of particles needs: at alpha 1, beta 2 it ends 9 % long and its foot 17 %
 /// narrow), at np 2: the same energy bound, intact and unclumped by the same bound (measured
-/// 0.535 to 1.053 dp, energy error 2.9e-3), and rebounding: the rings move apart with the gap
+/// 0.535 to 1.053 dp, energy error 1.1e-4), and rebounding: the rings move apart with the gap
 /// between them open (measured 3.26 m/s each, 6.5 % of the impact speed: less viscosity
 /// leaves more of the impact in the rings' ovalling).
 ///
@@ -242,7 +242,7 @@ fn rings_at_the_end(out: &Path, what: &str) -> Rings {
         .fold(0.0f64, |m, e| m.max(*e));
     assert!(
         err < 0.05,
-        "{what}: total energy within 5 %: error {err:e} (measured 3.6e-4, 2.9e-3 with the defaults)"
+        "{what}: total energy within 5 %: error {err:e} (measured 8.9e-5, 1.1e-4 with the defaults)"
     );
     let f = hdf5::File::open(out.join("fields.h5")).unwrap();
     let mut frames = f.group("frames").unwrap().member_names().unwrap();
