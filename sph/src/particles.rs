@@ -62,9 +62,10 @@ pub struct Particles {
     pub mat: Vec<u16>,
     /// Boundary particle: its density (and energy) evolve, it never moves.
     pub fixed: Vec<bool>,
-    /// The unit outward normal of the immovable faces holding this particle in the current
-    /// step (set by the contact push-back, used and cleared after the step's closing kick by
-    /// the parallel layer); zero when none. Carried when the particle migrates within a step.
+    /// The outward normal of the immovable faces or the rigid wall holding this particle in
+    /// the current step, times its holder's tag (1 the faces, 2 + k rigid wall k: the length
+    /// says who holds it), set by the push-back, used and cleared after the step's closing kick
+    /// by the parallel layer; zero when none. Carried when the particle migrates within a step.
     pub hold: Vec<[f64; 3]>,
     /// Contact corrections: bit 0 set when the push-back or a wall moved the particle in the
     /// last step, bit 1 in this one (the step's drift shifts bit 1 into bit 0; what the
