@@ -451,3 +451,18 @@ fn a_sphere_region_takes_center_or_centre() {
     let e = refused(&with("middle")).to_string();
     assert!(e.contains("middle") && e.contains("center"), "{e}");
 }
+
+/// More rigid walls than a particle can name its holder by are refused by key.
+#[test]
+fn too_many_rigid_walls_are_refused_by_key() {
+    let wall = |k: usize| {
+        format!(
+            "[[rigid_wall]]\nname = \"w{k}\"\npoint = [0.0, 0.0, -1.0]\nnormal = [0.0, 0.0, 1.0]\n"
+        )
+    };
+    let many: String = (0..201).map(wall).collect();
+    let e = refused(&(base() + &many)).to_string();
+    assert!(e.contains("rigid_wall") && e.contains("at most 200"), "{e}");
+    let enough: String = (0..200).map(wall).collect();
+    assert!(parse(&(base() + &enough), Path::new("scene.toml")).is_ok());
+}
