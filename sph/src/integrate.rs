@@ -56,6 +56,58 @@ pub fn stable_dt(p: &Particles) -> f64 {
     dt
 }
 
+/// Books the work of this step's pair forces at the velocity the step ends with (standard
+/// profile; after `second_half` and any hold of a face or wall on the closing kick): for each
+/// owned moving particle, with f the pair force (the force pass's, the particle's weight taken
+/// off), v its velocity after the closing half-kick and v^ the rates' velocity the passes took,
+///
+/// ```text
+/// rate = -f . (v - v^) / m                                            W/kg
+/// de += rate;   e += (dt/2) rate (energy equation on: the EOS is run again), else
+///               work += (dt/2) rate                                    J/kg
+/// ```
+///
+/// Why: the passes' energy rate is the forces' power at v^ = v(n+1/2) + (dt/2) a(n), the
+/// velocity predicted with the last step's acceleration (`Particles::vhat`), booked for the
+/// closing half of the step and the opening half of the next. With velocity Verlet,
+/// v(n+1/2) - v(n-1/2) = dt f(n) / m and v(n) = (v(n-1/2) + v(n+1/2)) / 2, so
+/// dt f(n) . v(n) = m (|v(n+1/2)|^2 - |v(n-1/2)|^2) / 2 exactly: work booked at v(n) is the
+/// kinetic energy the forces took, step by step, with nothing left over. At v^ instead each
+/// step books dt f(n) . (v^ - v)(n) = dt^2 f(n) . (a(n-1) - a(n)) / 2 more, whose sum over a
+/// run grows with |f(n) - f(n-1)|^2 and does not telescope. Measured at the default step:
+/// a block of elastic particles stopped by a rigid wall booked 17 % more internal energy than
+/// its motion lost, and water dropped at 10 m/s on a rigid floor (sound speed 100 m/s) 15 %
+/// once its splash broke up, until the energy check stopped the runs; booked at v(n), 0.6 %
+/// and 0.3 %. The forces and the motion are unchanged (with the energy equation on, e and so
+/// the pressure move by this term, O(dt^2) a step). The LIGGGHTS profile keeps LIGGGHTS's
+/// booking (its e and the energies `tdyn crosscheck` compares).
+pub fn book_work_at_step_velocity(p: &mut Particles, params: &Params, dt: f64) {
+    if params.profile != Profile::Standard {
+        return;
+    }
+    for i in 0..p.n_owned {
+        if p.fixed[i] {
+            continue;
+        }
+        let m = p.m[i];
+        let mut power = 0.0;
+        for (c, g) in params.gravity.iter().enumerate() {
+            let f = p.f[i][c] - m * g;
+            power -= f * (p.v[i][c] - p.vhat[i][c]);
+        }
+        let rate = power / m;
+        p.de[i] += rate;
+        if params.energy {
+            p.e[i] += 0.5 * dt * rate;
+        } else {
+            p.work[i] += 0.5 * dt * rate;
+        }
+    }
+    if params.energy {
+        update_eos(p, params);
+    }
+}
+
 /// Prepares the owned particles for the set-up evaluation (before step 1).
 /// LIGGGHTS: v^ = 0, p = 0, drho/dt = 0, f = 0 (its state when the set-up forces are
 /// computed), c = the material sound speed. Standard: v^ = v, rho_half = rho, e_half = e, and

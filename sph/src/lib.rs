@@ -60,7 +60,9 @@ pub mod strength;
 
 pub use diagnostics::{energies, gravity_power, interpolate, Energies};
 pub use eos::Eos;
-pub use integrate::{first_half, second_half, setup_state, stable_dt, CFL_FACTOR};
+pub use integrate::{
+    book_work_at_step_velocity, first_half, second_half, setup_state, stable_dt, CFL_FACTOR,
+};
 pub use kernel::{Kernel, SmoothingKernel};
 pub use neighbour::{
     canonical, coi, pairs, pairs_in_box, CellList, Coi, KeptBoxPairs, KeptPairs, PairEnd,

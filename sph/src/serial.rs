@@ -3,7 +3,7 @@
 //! parallel layer does for a rank that spans a periodic box), and ghost sums are folded back into
 //! their owners.
 use crate::exact::{exact_pass, PassGrids};
-use crate::integrate::{first_half, second_half, setup_state};
+use crate::integrate::{book_work_at_step_velocity, first_half, second_half, setup_state};
 use crate::neighbour::pairs;
 use crate::params::{DensityMode, Params};
 use crate::particles::Particles;
@@ -55,6 +55,7 @@ impl SerialSim {
         first_half(&mut self.parts, dt, &self.params);
         let work = self.evaluate(true);
         second_half(&mut self.parts, dt, &self.params);
+        book_work_at_step_velocity(&mut self.parts, &self.params, dt);
         self.time += dt;
         self.steps += 1;
         work

@@ -6,7 +6,7 @@ use super::{
     stress_force_pass, update_stress, velocity_gradient_pass, ArtificialStress, Solids,
 };
 use crate::exact::{exact_pass, PassGrids};
-use crate::integrate::{first_half, second_half, setup_state};
+use crate::integrate::{book_work_at_step_velocity, first_half, second_half, setup_state};
 use crate::neighbour::pairs;
 use crate::params::{DensityMode, Params};
 use crate::particles::Particles;
@@ -70,12 +70,7 @@ impl SolidSim {
         first_half(&mut self.sim.parts, dt, &self.sim.params);
         let work = self.evaluate(Some(dt));
         second_half(&mut self.sim.parts, dt, &self.sim.params);
-        super::book_work_at_step_velocity(
-            &mut self.sim.parts,
-            &self.solids,
-            self.sim.params.gravity,
-            dt,
-        );
+        book_work_at_step_velocity(&mut self.sim.parts, &self.sim.params, dt);
         // second_half ran the EOS on every owned particle: the solids' p, c from their stress
         solid_pressure(&mut self.sim.parts, &self.solids);
         self.sim.time += dt;

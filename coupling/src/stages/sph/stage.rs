@@ -21,11 +21,10 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use sph::exact::{exact_pass, PassGrids, TermMax};
-use sph::solid::book_work_at_step_velocity;
 use sph::{
-    add_gravity, continuity_and_force_pass_with, density_pass, first_half, force_pass,
-    pairs_in_box, periodic_images, second_half, setup_state, update_eos, DensityMode, EosState,
-    PairSums, PairWork, Params, ParticleRecord, Particles,
+    add_gravity, book_work_at_step_velocity, continuity_and_force_pass_with, density_pass,
+    first_half, force_pass, pairs_in_box, periodic_images, second_half, setup_state, update_eos,
+    DensityMode, EosState, PairSums, PairWork, Params, ParticleRecord, Particles, Profile,
 };
 use std::time::Instant;
 
@@ -398,11 +397,10 @@ impl SphStage {
             self.evaluate(true);
         }
         second_half(&mut self.parts, dt, &self.params);
-        self.solid_pressure_after_step();
         self.hold_on_faces(dt);
-        if let Some(sp) = &self.solid {
-            book_work_at_step_velocity(&mut self.parts, &sp.solids, self.params.gravity, dt);
-        }
+        // (its EOS, with the energy equation on, before the solids' pressure from their stress)
+        book_work_at_step_velocity(&mut self.parts, &self.params, dt);
+        self.solid_pressure_after_step();
         self.finish_stats(t0, self.drift_s);
         self.check_partners()
     }

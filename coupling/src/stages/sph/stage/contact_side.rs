@@ -94,7 +94,7 @@ impl SphStage {
     /// `held`: who holds each particle through the closing kick (see `hold_on_faces`): 0 none,
     /// 1 the immovable faces alone, 2 + k rigid wall k.
     pub fn apply_contact(&mut self, force: &[[f64; 3]], held: &[u8], dt: f64) -> Folds {
-        let solids = self.solid.as_ref().map(|s| &s.solids);
+        let standard = self.params.profile == Profile::Standard;
         let p = &mut self.parts;
         let grid = self.grids.energy;
         let mut work = [0.0; 3];
@@ -112,16 +112,16 @@ impl SphStage {
             let kick_n = (0..3)
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
-            // A fluid's correction is booked against the start velocity and the share of the
-            // start kick `contact::energy::booked_kick` gives. A solid's pair work is booked
-            // at its full-step velocities (`sph::solid::book_work_at_step_velocity`); its
-            // correction books its own change of the kinetic energy, m dv . (v + dv/2), and,
-            // the first in a step of a particle also corrected in the last, m (p . n)^2 / 2 of
-            // the start kick p = (dt/2) a(n) into the face: the share of the integrator's
-            // telescoping m (|p|^2 - |q|^2) / 2 that `hold_on_faces` takes back with the
-            // closing kick q's, so that a particle resting on a face books nothing.
-            let solid = solids.is_some_and(|s| s.is_solid(p.mat[i]));
-            let kick = if solid {
+            // The standard profile books the pair work at full-step velocities
+            // (`sph::book_work_at_step_velocity`): the correction books its own change of the
+            // kinetic energy, m dv . (v + dv/2), and, the first in a step of a particle also
+            // corrected in the last, m (p . n)^2 / 2 of the start kick p = (dt/2) a(n) into
+            // the face: the share of the integrator's telescoping m (|p|^2 - |q|^2) / 2 that
+            // `hold_on_faces` takes back with the closing kick q's, so that a particle
+            // resting on a face books nothing. The LIGGGHTS profile (pair work at v^) books
+            // it against the start velocity and the share of the start kick
+            // `contact::energy::booked_kick` gives.
+            let kick = if standard {
                 if p.pushed[i] & 3 == 1 && kick_n < 0.0 {
                     grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
                 }
@@ -157,13 +157,15 @@ impl SphStage {
     /// pressed on a fixed face ends each step with the velocity `a dt/2` into the face, its
     /// kinetic energy `m (a dt/2)^2 / 2` made by no motion, and contact books that energy as
     /// given back at the step the pressing starts. Energy: the hold and the push-back together
-    /// do no work on a particle at rest on the faces, and the push-back's booking counts both
-    /// (a held particle starts the next step as one the push-back meets first:
+    /// do no work on a particle at rest on the faces. The standard profile (pair work at
+    /// full-step velocities) books the hold's change of the kinetic energy beyond that work
+    /// in `hold_work` (below: zero at rest). The LIGGGHTS profile's push-back booking counts
+    /// both (a held particle starts the next step as one the push-back meets first:
     /// `contact::energy::booked_kick`, `m (-p) . (p/2 - p/2) = 0` for `p = (dt/2) a`), so
-    /// the hold books nothing itself. Momentum: the faces' nodes are prescribed (infinite
+    /// there the hold books nothing itself. Momentum: the faces' nodes are prescribed (infinite
     /// mass), so the impulse goes to their constraint, as a push-back on them does.
     pub(super) fn hold_on_faces(&mut self, dt: f64) {
-        let solids = self.solid.as_ref().map(|s| &s.solids);
+        let standard = self.params.profile == Profile::Standard;
         let (grid, mgrid) = (self.grids.energy, self.grids.momentum);
         let p = &mut self.parts;
         for i in 0..p.n_owned {
@@ -182,8 +184,8 @@ impl SphStage {
             if p.fixed[i] || k >= 0.0 {
                 continue;
             }
-            if solids.is_some_and(|s| s.is_solid(p.mat[i])) {
-                // A solid's (pair work at full-step velocities, `apply_contact`): the hold's
+            if standard {
+                // The standard profile's (pair work at full-step velocities, `apply_contact`): the hold's
                 // change of the kinetic energy beyond the closing kick's pair work at the held
                 // velocity, m h . (q + h/2 - v) with h = k n the velocity taken, q = (dt/2) a
                 // the closing kick and v the velocity before, less m k^2 / 2 (the closing
