@@ -63,10 +63,7 @@ fn main() {
     }]);
     params.profile = Profile::Liggghts;
     params.viscosity = Some(ArtificialViscosity::new(0.1, 0.0));
-    params.tensile = Some(TensileCorrection {
-        epsilon: 0.2,
-        delta_p: DX,
-    });
+    params.tensile = Some(TensileCorrection::monaghan(0.2, DX));
     params.gravity = [0.0, 0.0, -9.81];
     let mut p = dam_break();
     let n = p.n_owned;

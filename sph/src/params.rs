@@ -66,14 +66,46 @@ impl ArtificialViscosity {
     }
 }
 
-/// Tensile-instability correction R_ab f_ab^n with f_ab = W(r)/W(delta_p), n = 4
-/// (Monaghan, J. Comput. Phys. 159 (2000) 290).
+/// Tensile-instability correction R_ab f_ab^n with f_ab = W(r)/W(delta_p): R = epsilon
+/// |p|/rho^2 for a particle in tension (p < 0) and `positive` p/rho^2 in compression.
+/// Monaghan's (J. Comput. Phys. 159 (2000) 290): positive 0.01, n = 4
+/// ([`TensileCorrection::monaghan`], `[sph] tensile_correction`); Gray, Monaghan & Swift's
+/// artificial stress of a fluid, whose stress -p I is tensile where p < 0 (CMAME 190 (2001)
+/// 6641, eq. 25): positive 0, their n ([`TensileCorrection::gray`], `[sph] artificial_stress`
+/// in a scene of fluids only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TensileCorrection {
     /// epsilon, the factor on |p|/rho^2 of particles in tension (0.2 typical).
     pub epsilon: f64,
     /// The reference distance delta_p (the initial particle spacing), m.
     pub delta_p: f64,
+    /// The factor on p/rho^2 of particles in compression (Monaghan 2000: 0.01; Gray et al.: 0).
+    pub positive: f64,
+    /// The exponent n of f_ab^n (1 to 16).
+    pub exponent: i32,
+}
+
+impl TensileCorrection {
+    /// Monaghan's (2000) correction: epsilon on tension, 0.01 on compression, n = 4.
+    pub fn monaghan(epsilon: f64, delta_p: f64) -> Self {
+        Self {
+            epsilon,
+            delta_p,
+            positive: crate::passes::POSITIVE_PRESSURE_TENSILE_FACTOR,
+            exponent: crate::passes::TENSILE_EXPONENT,
+        }
+    }
+
+    /// Gray, Monaghan & Swift's (2001) artificial stress on a fluid: epsilon on tension only,
+    /// exponent `n`.
+    pub fn gray(epsilon: f64, n: i32, delta_p: f64) -> Self {
+        Self {
+            epsilon,
+            delta_p,
+            positive: 0.0,
+            exponent: n,
+        }
+    }
 }
 
 /// Everything the passes and the integrator need besides the particles.

@@ -626,19 +626,31 @@ fn pair_tensile<const LIGGGHTS: bool>(
             let fab = w_norm * kind.shape(s) * inv_w_delta;
             // epsilon |x| in tension (x < 0), else 0: epsilon max(-x, 0)
             let tension = |x: f64| tc.epsilon * pos_part(-x);
-            let r_ab = if LIGGGHTS {
+            if LIGGGHTS {
                 // 0.01 (pa + pb) when both pressures are positive (the tension terms
                 // are then zero), else the tension terms
                 let both = (a.p > 0.0) & (b.p > 0.0);
                 let positive = POSITIVE_PRESSURE_TENSILE_FACTOR * (pa + pb);
-                select_or_zero(both, positive) + (tension(pa) + tension(pb))
+                (select_or_zero(both, positive) + (tension(pa) + tension(pb)))
+                    * fab.powi(TENSILE_EXPONENT)
             } else {
-                let one = |x: f64| tension(x) + POSITIVE_PRESSURE_TENSILE_FACTOR * pos_part(x);
-                one(pa) + one(pb)
-            };
-            r_ab * fab.powi(TENSILE_EXPONENT)
+                let one = |x: f64| tension(x) + tc.positive * pos_part(x);
+                (one(pa) + one(pb)) * powi_tensile(fab, tc.exponent)
+            }
         }
         _ => 0.0,
+    }
+}
+
+/// f^n of the tensile correction: n = 4 (Monaghan's, the default) written out as `powi(4)`
+/// with a constant exponent (the same bits as the runtime routine's for n = 4, and no call
+/// per pair); other n through `powi`.
+#[inline(always)]
+fn powi_tensile(f: f64, n: i32) -> f64 {
+    if n == TENSILE_EXPONENT {
+        f.powi(TENSILE_EXPONENT)
+    } else {
+        f.powi(n)
     }
 }
 

@@ -46,10 +46,7 @@ fn water_params(profile: Profile) -> Params {
     }]);
     params.profile = profile;
     params.viscosity = Some(ArtificialViscosity::new(0.1, 0.2));
-    params.tensile = Some(TensileCorrection {
-        epsilon: 0.2,
-        delta_p: 0.01,
-    });
+    params.tensile = Some(TensileCorrection::monaghan(0.2, 0.01));
     params
 }
 

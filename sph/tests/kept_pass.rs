@@ -58,10 +58,7 @@ fn params(profile: Profile, conductivity: bool) -> Params {
     }]);
     params.profile = profile;
     params.viscosity = Some(ArtificialViscosity::new(0.1, 0.2));
-    params.tensile = Some(TensileCorrection {
-        epsilon: 0.2,
-        delta_p: DX,
-    });
+    params.tensile = Some(TensileCorrection::monaghan(0.2, DX));
     if conductivity {
         params.energy = true;
         params.conductivity = Some(0.5);

@@ -270,10 +270,7 @@ fn deck_params(alpha: f64, beta: f64, gravity: [f64; 3]) -> Params {
     params.kernel = Kernel::CubicSpline;
     params.density = DensityMode::Continuity;
     params.viscosity = Some(ArtificialViscosity::new(alpha, beta));
-    params.tensile = Some(TensileCorrection {
-        epsilon: 0.2,
-        delta_p: DX,
-    });
+    params.tensile = Some(TensileCorrection::monaghan(0.2, DX));
     params.gravity = gravity;
     params
 }

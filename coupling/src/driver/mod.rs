@@ -113,7 +113,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     if world.rank() == 0 {
         let warnings = scene::unit_warnings(&scene)
             .into_iter()
-            .chain(scene::interaction_warnings(&scene));
+            .chain(scene::interaction_warnings(&scene))
+            .chain(scene::sph_warnings(&scene));
         for w in warnings {
             eprintln!("tdyn: warning: {w}");
         }

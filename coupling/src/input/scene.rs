@@ -822,8 +822,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 mod check;
 pub use check::{
-    check_work, interaction_warnings, num_text, parse, unit_warnings, validate_groups,
-    LOW_SOLID_DENSITY, LOW_YOUNGS_MODULUS,
+    check_work, interaction_warnings, num_text, parse, sph_warnings, unit_warnings,
+    validate_groups, LOW_SOLID_DENSITY, LOW_YOUNGS_MODULUS,
 };
 
 #[cfg(test)]

@@ -96,7 +96,12 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         .transpose()?;
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
     let loads = check_loads(&cx, &raw.load)?;
-    check_particles(&cx, &raw.particles, &materials, raw.sph.as_ref())?;
+    // failed elements that become particles make the run one with solid particles
+    let born = raw.block.iter().any(|b| {
+        !b.deletes()
+            && (materials.iter().zip(&failures)).any(|(m, f)| m.name == b.material && f.is_some())
+    });
+    check_particles(&cx, &raw.particles, &materials, raw.sph.as_ref(), born)?;
     if let Some(s) = &raw.sph {
         check_sph(&cx, s)?;
     }
@@ -744,6 +749,34 @@ pub fn interaction_warnings(scene: &Scene) -> Vec<String> {
                 ));
             }
         }
+    }
+    out
+}
+
+/// The `[sph]` corrections a scene gives and the run does not use, one warning line each
+/// (docs/scene.md, `[sph]`): `tensile_correction` in a run with solid particles (a solid
+/// `[[particles]]` entry, or failed elements that become particles), whose stress pass serves
+/// every particle and has `artificial_stress` for the fluids' tension too; `artificial_stress`
+/// beside `tensile_correction` in a scene of fluids, where the fluids take the latter.
+pub fn sph_warnings(scene: &Scene) -> Vec<String> {
+    let file = scene.file.display();
+    let Some(s) = &scene.sph else {
+        return Vec::new();
+    };
+    let solids = scene.releases_any()
+        || scene
+            .particles
+            .iter()
+            .any(|p| (scene.materials.iter()).any(|m| m.name == p.material && m.eos.is_none()));
+    let mut out = Vec::new();
+    if solids && s.tensile_correction.is_some() {
+        out.push(format!(
+            "{file}: sph.tensile_correction is not used: with solid particles every particle takes the stress pass, where artificial_stress acts on the fluids' tension too"
+        ));
+    } else if s.tensile_correction.is_some() && s.artificial_stress.is_some() {
+        out.push(format!(
+            "{file}: sph.artificial_stress is not used: a scene of fluid particles takes tensile_correction (give one of the two)"
+        ));
     }
     out
 }

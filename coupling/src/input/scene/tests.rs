@@ -367,8 +367,9 @@ fn failed_elements_become_particles_by_default_and_blocks_of_a_material_agree() 
 }
 
 /// Particles of a solid material (docs/scene.md `[[particles]] material`) and `[sph]
-/// artificial_stress` as docs/scene.md writes them are accepted; a bad value is refused in one
-/// line naming the key and what was expected.
+/// artificial_stress` as docs/scene.md writes them are accepted, the latter in a scene of fluids
+/// too; a correction the run would not use is accepted with a warning naming it; a bad value is
+/// refused in one line naming the key and what was expected.
 #[test]
 fn solid_particles_and_artificial_stress_are_read_and_bad_values_refused() {
     let b = base();
@@ -380,8 +381,34 @@ fn solid_particles_and_artificial_stress_are_read_and_bad_values_refused() {
     let a = s.sph.and_then(|s| s.artificial_stress).expect("read");
     assert_eq!((a.epsilon, a.n), (0.3, 4));
     assert!(parse(&solid, Path::new("scene.toml")).is_ok(), "defaults");
+    let water = "[[material]]\nname = \"water\"\nmodel = \"fluid\"\ndensity = 1000.0\n\
+                 eos = { kind = \"tait\", rho0 = 1000.0, sound_speed = 20.0, gamma = 7.0 }\n\
+                 [[particles]]\nname = \"w\"\nmaterial = \"water\"\nspacing = 0.01\n\
+                 region = { box = { min = [0.0, 0.0, 0.2], max = [0.1, 0.1, 0.3] } }\n";
+    // a scene of fluids takes the artificial stress on their tension (the fluid pass)
+    assert!(parse(&(b.clone() + water + art), Path::new("scene.toml")).is_ok());
+    // tensile_correction beside solid particles is not used: accepted, with a warning naming it
+    let tc = "[sph]\ntensile_correction = { epsilon = 0.2 }\n";
+    let s = parse(&(solid.clone() + tc), Path::new("scene.toml")).expect("accepted");
+    let w = sph_warnings(&s);
+    assert!(
+        w.len() == 1 && w[0].contains("sph.tensile_correction is not used"),
+        "{w:?}"
+    );
+    let both =
+        "[sph]\ntensile_correction = { epsilon = 0.2 }\nartificial_stress = { epsilon = 0.3 }\n";
+    let s = parse(&(b.clone() + water + both), Path::new("scene.toml")).expect("accepted");
+    let w = sph_warnings(&s);
+    assert!(
+        w.len() == 1 && w[0].contains("sph.artificial_stress is not used"),
+        "{w:?}"
+    );
     let cases: Vec<(String, &str, &str)> = vec![
-        (b.clone() + art, "sph.artificial_stress", "solid material"),
+        (
+            b.clone() + water + &art.replace("[sph]\n", "[sph]\nprofile = \"liggghts\"\n"),
+            "sph.artificial_stress",
+            "liggghts profile",
+        ),
         (
             solid.clone() + &art.replace("0.3", "-0.3"),
             "sph.artificial_stress.epsilon",
@@ -401,11 +428,6 @@ fn solid_particles_and_artificial_stress_are_read_and_bad_values_refused() {
             solid.clone() + "[sph]\nprofile = \"liggghts\"\n",
             "sph.profile",
             "standard",
-        ),
-        (
-            solid.clone() + "[sph]\ntensile_correction = { epsilon = 0.2 }\n",
-            "sph.tensile_correction",
-            "artificial_stress",
         ),
         (
             solid.clone() + "[sph]\nenergy = true\nconductivity = 0.5\n",

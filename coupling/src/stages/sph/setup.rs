@@ -2,7 +2,7 @@
 //! particles from their seeds; and what the driver reads from the particles (global sums,
 //! probe values).
 use crate::input::particles::ParticleSeed;
-use crate::input::scene::{Probe, ProbeField, Scene};
+use crate::input::scene::{Probe, ProbeField, Scene, SphDef};
 use crate::stages::sph::stage::SphStage;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -123,11 +123,7 @@ pub fn params_from_scene(
         params.viscosity = s
             .artificial_viscosity
             .map(|a| ArtificialViscosity::new(a.alpha, a.beta));
-        let spacing = scene.particles.first().map(|p| p.spacing).unwrap_or(0.0);
-        params.tensile = s.tensile_correction.map(|t| TensileCorrection {
-            epsilon: t.epsilon,
-            delta_p: spacing,
-        });
+        params.tensile = fluid_tensile(scene, s, solids.is_some());
         params.adaptive_h = s.adaptive_h;
         params.conductivity = s.conductivity;
         params.periodic = s.periodic.as_ref().map(|p| Periodic {
@@ -171,6 +167,23 @@ pub fn params_from_scene(
 pub const SOLID_VISCOSITY_ALPHA: f64 = 0.3;
 /// See [`SOLID_VISCOSITY_ALPHA`].
 pub const SOLID_VISCOSITY_BETA: f64 = 0.0;
+
+/// The fluid pass's tensile correction (none in a run with solid particles, whose stress pass
+/// serves every particle and has the artificial stress: `tensile_correction` is then not used,
+/// with a warning, `scene::sph_warnings`): `[sph] tensile_correction` (Monaghan 2000), else
+/// `[sph] artificial_stress` (Gray et al. 2001's form on the fluids' tension; None at epsilon
+/// 0), at the spacing of the first `[[particles]]` entry.
+fn fluid_tensile(scene: &Scene, s: &SphDef, solids: bool) -> Option<TensileCorrection> {
+    let spacing = scene.particles.first().map(|p| p.spacing).unwrap_or(0.0);
+    if solids {
+        return None;
+    }
+    if let Some(t) = s.tensile_correction {
+        return Some(TensileCorrection::monaghan(t.epsilon, spacing));
+    }
+    let a = s.artificial_stress?;
+    (a.epsilon > 0.0).then(|| TensileCorrection::gray(a.epsilon, a.n as i32, spacing))
+}
 
 /// The artificial stress of a scene with solid particles: `[sph] artificial_stress`, or Gray et
 /// al.'s epsilon 0.3, n 4 where omitted (None where epsilon = 0), at the initial spacing of the

@@ -54,10 +54,7 @@ fn blob(seed: u64, n: usize, profile: Profile, periodic: bool) -> (Vec<NewPartic
     }]);
     params.profile = profile;
     params.viscosity = Some(ArtificialViscosity::new(0.1, 0.2));
-    params.tensile = Some(TensileCorrection {
-        epsilon: 0.2,
-        delta_p: DX,
-    });
+    params.tensile = Some(TensileCorrection::monaghan(0.2, DX));
     params.gravity = [0.0, 0.0, -9.81];
     if periodic {
         params.periodic = Some(Periodic {

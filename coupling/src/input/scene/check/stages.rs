@@ -10,6 +10,7 @@ pub(super) fn check_particles(
     particles: &[ParticlesDef],
     materials: &[MaterialSpec],
     sph: Option<&SphDef>,
+    born: bool,
 ) -> Result<(), SceneError> {
     for (i, p) in particles.iter().enumerate() {
         if !materials.iter().any(|m| m.name == p.material) {
@@ -42,7 +43,7 @@ pub(super) fn check_particles(
             ));
         }
     }
-    check_solid_particles(cx, particles, materials, sph)
+    check_solid_particles(cx, particles, materials, sph, born)
 }
 
 /// The models whose particles carry stress (docs/scene.md `[[particles]] material`).
@@ -50,13 +51,16 @@ const SOLID_MODELS: [&str; 3] = ["elastic", "j2_plastic", "johnson_cook"];
 
 /// Solid particles (a `[[particles]]` entry whose material has no eos): a model of
 /// [`SOLID_MODELS`], `[sph]` with continuity density and the standard profile and without the
-/// fluid pass's `tensile_correction` and `conductivity`; `[sph] artificial_stress` only with
-/// them, epsilon >= 0, n an integer from 1 to 16.
+/// fluid pass's `conductivity` (its `tensile_correction` is not used there: a warning,
+/// `sph_warnings`); `[sph] artificial_stress`: epsilon >= 0, n an integer from 1 to 16, and in
+/// a scene of fluids only (no solid particles, `born` false: no failed elements become
+/// particles) the standard profile.
 fn check_solid_particles(
     cx: &Ctx,
     particles: &[ParticlesDef],
     materials: &[MaterialSpec],
     sph: Option<&SphDef>,
+    born: bool,
 ) -> Result<(), SceneError> {
     let mut solid = None;
     for (i, p) in particles.iter().enumerate() {
@@ -83,10 +87,10 @@ fn check_solid_particles(
         return Ok(());
     };
     if let Some(a) = &s.artificial_stress {
-        if solid.is_none() {
+        if solid.is_none() && !born && s.profile == "liggghts" && s.tensile_correction.is_none() {
             return Err(cx.err(
                 "sph.artificial_stress",
-                "acts on particles of a solid material (elastic, j2_plastic, johnson_cook) and no [[particles]] entry has one; for fluids see tensile_correction".into(),
+                "not in the liggghts profile (LIGGGHTS 3.8.0 has no artificial stress): use tensile_correction, or profile = \"standard\"".into(),
             ));
         }
         if !(a.epsilon >= 0.0 && a.epsilon.is_finite()) {
@@ -111,18 +115,11 @@ fn check_solid_particles(
     if let Some((i, name)) = solid {
         // the stress pass serves every particle of a run with solids (a fluid's stress -p I):
         // the fluid pass's own corrections have no place in it
-        for (k, set, instead) in [
-            (
-                "sph.tensile_correction",
-                s.tensile_correction.is_some(),
-                "artificial_stress acts on the fluids' tension too",
-            ),
-            (
-                "sph.conductivity",
-                s.conductivity.is_some(),
-                "artificial conductivity is not in the stress pass",
-            ),
-        ] {
+        for (k, set, instead) in [(
+            "sph.conductivity",
+            s.conductivity.is_some(),
+            "artificial conductivity is not in the stress pass",
+        )] {
             if set {
                 return Err(cx.err(
                     k,
