@@ -11,6 +11,15 @@ use crate::exact::values3;
 use binsum::{value2, Folds2};
 use bytemuck::{Pod, Zeroable};
 
+/// [`Particles::pushed`]: corrected by the push-back or a wall in the last step.
+pub const PUSHED_LAST: u8 = 1;
+/// [`Particles::pushed`]: corrected in this step.
+pub const PUSHED_NOW: u8 = 2;
+/// [`Particles::pushed`]: held by a face or wall through the last step's closing kick.
+pub const HELD_LAST: u8 = 4;
+/// [`Particles::pushed`]: held through this step's closing kick.
+pub const HELD_NOW: u8 = 8;
+
 /// The SPH particles held by one box.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Particles {
@@ -67,9 +76,12 @@ pub struct Particles {
     /// says who holds it), set by the push-back, used and cleared after the step's closing kick
     /// by the parallel layer; zero when none. Carried when the particle migrates within a step.
     pub hold: Vec<[f64; 3]>,
-    /// Contact corrections: bit 0 set when the push-back or a wall moved the particle in the
-    /// last step, bit 1 in this one (the step's drift shifts bit 1 into bit 0; what the
-    /// push-back books depends on it: `contact::energy::booked_kick`). Carried.
+    /// Contact corrections: [`PUSHED_LAST`] set when the push-back or a wall moved the particle
+    /// in the last step, [`PUSHED_NOW`] in this one; [`HELD_LAST`] when a face or wall held it
+    /// through the last step's closing kick, [`HELD_NOW`] this step's (the step's drift shifts
+    /// each "now" bit into its "last" bit: [`Particles::start_step_flags`]; what the push-back
+    /// books depends on them: `contact::energy::booked_kick` and coupling's `apply_contact`).
+    /// Carried.
     pub pushed: Vec<u8>,
     /// The exact sums a pass adds to, one per entry (sized by the passes' resets; not carried).
     pub sums: Vec<PairSums>,
@@ -208,6 +220,14 @@ macro_rules! for_each_field {
 }
 
 impl Particles {
+    /// At a step's start (its drift): each "now" bit of `pushed` becomes its "last" bit and
+    /// the "now" bits clear ([`PUSHED_NOW`] -> [`PUSHED_LAST`], [`HELD_NOW`] -> [`HELD_LAST`]).
+    pub fn start_step_flags(&mut self) {
+        for p in &mut self.pushed {
+            *p = (*p >> 1) & (PUSHED_LAST | HELD_LAST);
+        }
+    }
+
     /// No particles.
     pub fn new() -> Self {
         Self::default()

@@ -347,9 +347,7 @@ impl SphStage {
         self.x_start.clear();
         self.x_start
             .extend_from_slice(&self.parts.x_real[..self.parts.n_owned]);
-        for p in &mut self.parts.pushed {
-            *p >>= 1;
-        }
+        self.parts.start_step_flags();
         first_half(&mut self.parts, dt, &self.params);
         self.drift_s = t0.elapsed().as_secs_f64();
     }

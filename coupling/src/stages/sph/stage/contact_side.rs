@@ -1,6 +1,7 @@
 //! The SPH stage's side of contact: its particles as contact nodes (radius, start and
 //! predicted position, start velocity), the push-back's energy terms and its correction applied.
 use super::*;
+use sph::particles::{HELD_LAST, HELD_NOW, PUSHED_NOW};
 
 impl SphStage {
     /// Sets each material's initial density (per EOS index), kg/m^3: the contact radius's
@@ -114,22 +115,26 @@ impl SphStage {
                 .sum::<f64>();
             // The standard profile books the pair work at full-step velocities
             // (`sph::book_work_at_step_velocity`): the correction books its own change of the
-            // kinetic energy, m dv . (v + dv/2), and, the first in a step of a particle also
-            // corrected in the last, m (p . n)^2 / 2 of the start kick p = (dt/2) a(n) into
-            // the face: the share of the integrator's telescoping m (|p|^2 - |q|^2) / 2 that
-            // `hold_on_faces` takes back with the closing kick q's, so that a particle
-            // resting on a face books nothing. The LIGGGHTS profile (pair work at v^) books
+            // kinetic energy, m dv . (v + dv/2), which with that work and the integrator's
+            // telescoping m (|p|^2 - |q|^2) / 2 (p = (dt/2) a(n), q = (dt/2) a(n+1)) is the
+            // step's whole change; and, the first in a step of a particle that a face or wall
+            // held through the last step's closing kick, m (p . n)^2 / 2 of the start kick
+            // into the face: the share of that telescoping term the hold took back with the
+            // closing kick q's (`hold_on_faces`), so that a particle resting on a face books
+            // nothing. Not for one corrected without a hold (pressed on a moving face): its
+            // telescoping is whole, and the term booked every step it stays pressed was a
+            // loss of m (a dt/2)^2 / 2 a step, first order in dt over a run. The LIGGGHTS profile (pair work at v^) books
             // it against the start velocity and the share of the start kick
             // `contact::energy::booked_kick` gives.
             let kick = if standard {
-                if p.pushed[i] & 3 == 1 && kick_n < 0.0 {
+                if p.pushed[i] & (HELD_LAST | PUSHED_NOW) == HELD_LAST && kick_n < 0.0 {
                     grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
                 }
                 0.0
             } else {
                 ::contact::energy::booked_kick(p.pushed[i])
             };
-            p.pushed[i] |= 2;
+            p.pushed[i] |= PUSHED_NOW;
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
                 let start_kick = kick * dt * p.f[i][c] / p.m[i];
@@ -193,9 +198,10 @@ impl SphStage {
                 // at rest on the face; it stays a particle corrected in this step.
                 let vn = (0..3).map(|c| p.v[i][c] * n[c]).sum::<f64>();
                 grid.add(&mut self.hold_work, p.m[i] * k * (k - vn));
+                p.pushed[i] |= HELD_NOW;
             } else {
                 // Held: its start velocity in the next step carries no kick into the faces.
-                p.pushed[i] &= !2;
+                p.pushed[i] &= !PUSHED_NOW;
             }
             for c in 0..3 {
                 p.v[i][c] -= k * n[c];
