@@ -81,12 +81,7 @@ pub fn stable_dt(p: &Particles) -> f64 {
 /// and 0.3 %. The forces and the motion are unchanged (with the energy equation on, e and so
 /// the pressure move by this term, O(dt^2) a step). The LIGGGHTS profile keeps LIGGGHTS's
 /// booking (its e and the energies `tdyn crosscheck` compares).
-///
-/// `taken` (empty, or one entry per owned particle): a velocity the work is booked without,
-/// m/s: a particle pressed on a moving face ends the step with the closing kick's part into
-/// the face, which no motion makes; coupling's contact side books the work without it and the
-/// difference with the particle's next correction (zero entries change nothing).
-pub fn book_work_at_step_velocity(p: &mut Particles, params: &Params, dt: f64, taken: &[[f64; 3]]) {
+pub fn book_work_at_step_velocity(p: &mut Particles, params: &Params, dt: f64) {
     if params.profile != Profile::Standard {
         return;
     }
@@ -95,11 +90,10 @@ pub fn book_work_at_step_velocity(p: &mut Particles, params: &Params, dt: f64, t
             continue;
         }
         let m = p.m[i];
-        let t = taken.get(i).copied().unwrap_or([0.0; 3]);
         let mut power = 0.0;
         for (c, g) in params.gravity.iter().enumerate() {
             let f = p.f[i][c] - m * g;
-            power -= f * ((p.v[i][c] - t[c]) - p.vhat[i][c]);
+            power -= f * (p.v[i][c] - p.vhat[i][c]);
         }
         let rate = power / m;
         p.de[i] += rate;

@@ -55,7 +55,7 @@ impl SerialSim {
         first_half(&mut self.parts, dt, &self.params);
         let work = self.evaluate(true);
         second_half(&mut self.parts, dt, &self.params);
-        book_work_at_step_velocity(&mut self.parts, &self.params, dt, &[]);
+        book_work_at_step_velocity(&mut self.parts, &self.params, dt);
         self.time += dt;
         self.steps += 1;
         work

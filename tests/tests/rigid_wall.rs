@@ -166,6 +166,30 @@ fn taylor_bar_on_a_rigid_wall_matches_the_symmetry_plane_and_its_impulse() {
     }
 }
 
+/// The water block of scenes/water_on_floor.toml: 8 x 8 x 8 particles of 1000 kg/m^3 x
+/// (5 mm)^3, kg.
+const WATER_BLOCK_MASS: f64 = 512.0 * 1000.0 * 0.005 * 0.005 * 0.005;
+
+/// The water block's run in `out` against the conservation laws: its largest energy error
+/// under `tol`, and its momentum change p(t) - p(0) the floor's impulse + M g t, to 1e-3 of
+/// M g t (gravity and the floor are all that act). Returns the floor's impulse, N s.
+fn water_balance(out: &Path, np: usize, tol: f64) -> f64 {
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let err = column(&h, &rows, "energy_error")
+        .into_iter()
+        .fold(0.0, f64::max);
+    assert!(err < tol, "np {np}: energy error {err:e} ({tol})");
+    let (t, pz) = (column(&h, &rows, "time"), column(&h, &rows, "momentum_z"));
+    let gravity = -9.81 * WATER_BLOCK_MASS * t.last().unwrap();
+    let dp = pz.last().unwrap() - pz[0];
+    let j = impulse(out, "floor.force_z");
+    assert!(
+        (dp - (j + gravity)).abs() < 1e-3 * gravity.abs(),
+        "np {np}: momentum change {dp:e} vs floor impulse {j:e} + M g t {gravity:e} (1e-3 of M g t)"
+    );
+    j
+}
+
 #[test]
 fn water_falling_on_a_rigid_floor_stays_above_it() {
     // scenes/water_on_floor.toml: SPH particles only, gravity, the floor a rigid wall at z = 0.
@@ -192,24 +216,10 @@ fn water_falling_on_a_rigid_floor_stays_above_it() {
                 "np {np}, frame {fr}: a particle centre at z = {low:e} m (>= its radius 2.5e-3)"
             );
         }
-        let (h, rows) = read_csv(&out.join("history.csv"));
-        let err = column(&h, &rows, "energy_error")
-            .into_iter()
-            .fold(0.0, f64::max);
-        assert!(err < 0.02, "np {np}: energy error {err:e} (2 %)");
-        let (t, pz) = (column(&h, &rows, "time"), column(&h, &rows, "momentum_z"));
-        // The block's mass: 8 x 8 x 8 particles of 1000 kg/m^3 x (5 mm)^3.
-        let mass = 512.0 * 1000.0 * 0.005f64.powi(3);
-        let gravity = -9.81 * mass * t.last().unwrap();
-        let dp = pz.last().unwrap() - pz[0];
-        let j = impulse(&out, "floor.force_z");
+        let j = water_balance(&out, np, 0.02);
         assert!(
-            j > 0.5 * mass * 2.0,
+            j > 0.5 * WATER_BLOCK_MASS * 2.0,
             "np {np}: the floor stopped the water: {j:e} N s"
-        );
-        assert!(
-            (dp - (j + gravity)).abs() < 1e-3 * gravity.abs(),
-            "np {np}: momentum change {dp:e} vs floor impulse {j:e} + M g t {gravity:e} (1e-3 of M g t)"
         );
         match &first {
             None => first = Some(out),
@@ -247,20 +257,7 @@ fn water_splashing_on_a_rigid_floor_keeps_its_energy_at_the_default_step() {
     for np in [1, 3] {
         let out = dir.join(format!("np{np}"));
         run_ok(np, &scene, &out);
-        let (h, rows) = read_csv(&out.join("history.csv"));
-        let err = column(&h, &rows, "energy_error")
-            .into_iter()
-            .fold(0.0, f64::max);
-        assert!(err < 0.01, "np {np}: energy error {err:e} (1 %)");
-        let (t, pz) = (column(&h, &rows, "time"), column(&h, &rows, "momentum_z"));
-        let mass = 512.0 * 1000.0 * 0.005f64.powi(3);
-        let gravity = -9.81 * mass * t.last().unwrap();
-        let dp = pz.last().unwrap() - pz[0];
-        let j = impulse(&out, "floor.force_z");
-        assert!(
-            (dp - (j + gravity)).abs() < 1e-3 * gravity.abs(),
-            "np {np}: momentum change {dp:e} vs floor impulse {j:e} + M g t {gravity:e} (1e-3 of M g t)"
-        );
+        water_balance(&out, np, 0.01);
         match &first {
             None => first = Some(out),
             Some(a) => same_bits(a, &out, "water splashing on a floor, np 3 against np 1"),

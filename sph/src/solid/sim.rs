@@ -70,7 +70,7 @@ impl SolidSim {
         first_half(&mut self.sim.parts, dt, &self.sim.params);
         let work = self.evaluate(Some(dt));
         second_half(&mut self.sim.parts, dt, &self.sim.params);
-        book_work_at_step_velocity(&mut self.sim.parts, &self.sim.params, dt, &[]);
+        book_work_at_step_velocity(&mut self.sim.parts, &self.sim.params, dt);
         // second_half ran the EOS on every owned particle: the solids' p, c from their stress
         solid_pressure(&mut self.sim.parts, &self.solids);
         self.sim.time += dt;

@@ -147,9 +147,6 @@ pub struct SphStage {
     /// This step's impulses of the rigid walls' holds (`hold_on_faces`), per wall and
     /// component, on the momentum grid, N s; reset at each drift.
     pub hold_impulse: Vec<[Folds; 3]>,
-    /// Per owned particle, the closing kick's part into a moving face that pressed it in this
-    /// step (m/s; zero elsewhere), which its pair work is booked without (`hold_on_faces`).
-    pub taken: Vec<[f64; 3]>,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -204,7 +201,6 @@ impl SphStage {
             solid: None,
             hold_work: [0.0; 3],
             hold_impulse: Vec::new(),
-            taken: Vec::new(),
         }
     }
 
@@ -401,7 +397,7 @@ impl SphStage {
         second_half(&mut self.parts, dt, &self.params);
         self.hold_on_faces(dt);
         // (its EOS, with the energy equation on, before the solids' pressure from their stress)
-        book_work_at_step_velocity(&mut self.parts, &self.params, dt, &self.taken);
+        book_work_at_step_velocity(&mut self.parts, &self.params, dt);
         self.solid_pressure_after_step();
         self.finish_stats(t0, self.drift_s);
         self.check_partners()

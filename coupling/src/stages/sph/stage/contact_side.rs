@@ -3,11 +3,6 @@
 use super::*;
 use sph::particles::{HELD_LAST, HELD_NOW, PUSHED_NOW};
 
-/// The tag (`Particles::hold`'s length) of a particle corrected by faces that do not hold it
-/// (they move): pressed on them, its pair work is booked without the closing kick's part into
-/// them (`SphStage::hold_on_faces`). Above every holder's (at most 2 + 200 rigid walls).
-const PRESSED_TAG: f64 = 255.0;
-
 impl SphStage {
     /// Sets each material's initial density (per EOS index), kg/m^3: the contact radius's
     /// (`contact_records`).
@@ -152,14 +147,10 @@ impl SphStage {
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];
-            // the holder's tag as the normal's length (`hold_on_faces`); in the standard
-            // profile a correction by faces that do not hold (they move) marks the particle
-            // pressed, unless a holder has it
+            // the holder's tag as the normal's length (`hold_on_faces`)
             let tag = held.get(i).copied().unwrap_or(0);
             if tag > 0 {
                 p.hold[i] = n.map(|c| c * f64::from(tag));
-            } else if standard && p.hold[i] == [0.0; 3] {
-                p.hold[i] = n.map(|c| c * PRESSED_TAG);
             }
         }
         work
@@ -184,8 +175,6 @@ impl SphStage {
         let standard = self.params.profile == Profile::Standard;
         let (grid, mgrid) = (self.grids.energy, self.grids.momentum);
         let p = &mut self.parts;
-        self.taken.clear();
-        self.taken.resize(p.n_owned, [0.0; 3]);
         for i in 0..p.n_owned {
             let h = p.hold[i];
             p.hold[i] = [0.0; 3];
@@ -207,22 +196,6 @@ impl SphStage {
                 .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
                 .sum::<f64>();
             if p.fixed[i] || k >= 0.0 {
-                continue;
-            }
-            if tag == PRESSED_TAG {
-                // Pressed on moving faces (standard profile): the velocity stays (the faces'
-                // nodes take their own push-back), but the closing kick's part into them,
-                // k n, is no motion: the particle ends the step with it and the next
-                // push-back takes it out again, and the pair work booked at that velocity,
-                // m q . (k n) = m k^2 in each half-step, would move 2 m k^2 a step from
-                // internal into contact energy while the particle rests on the faces. The
-                // work is booked without it (`sph::book_work_at_step_velocity`'s `taken`) and
-                // the 2 m k^2 with the particle's next correction (`apply_contact`), which a
-                // particle resting on the faces takes back: it books nothing, the balance
-                // exact.
-                self.taken[i] = n.map(|c| k * c);
-                p.pushed[i] |= HELD_NOW;
-                p.hold[i] = [2.0 * p.m[i] * k * k, 0.0, 0.0];
                 continue;
             }
             if standard {
