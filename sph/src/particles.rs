@@ -74,10 +74,7 @@ pub struct Particles {
     /// The outward normal of the immovable faces or the rigid wall holding this particle in
     /// the current step, times its holder's tag (1 the faces, 2 + k rigid wall k: the length
     /// says who holds it), set by the push-back, used and cleared after the step's closing kick
-    /// by the parallel layer; zero when none. After a hold of the standard profile (flag
-    /// [`HELD_NOW`], then [`HELD_LAST`]) it keeps `[m k^2 / 2, 0, 0]` instead (J, k the kick the
-    /// hold took) until the particle's next correction books it. Carried when the particle
-    /// migrates.
+    /// by the parallel layer; zero when none. Carried when the particle migrates within a step.
     pub hold: Vec<[f64; 3]>,
     /// Contact corrections: [`PUSHED_LAST`] set when the push-back or a wall moved the particle
     /// in the last step, [`PUSHED_NOW`] in this one; [`HELD_LAST`] when a face or wall held it

@@ -118,19 +118,17 @@ impl SphStage {
             // kinetic energy, m dv . (v + dv/2), which with that work and the integrator's
             // telescoping m (|p|^2 - |q|^2) / 2 (p = (dt/2) a(n), q = (dt/2) a(n+1)) is the
             // step's whole change; and, the first in a step of a particle that a face or wall
-            // held through the last step's closing kick, the rest of that hold's change,
-            // m k^2 / 2 (k the kick it took, kept in `hold`: `hold_on_faces`), so that a
-            // particle resting on a face books nothing. That rest is booked as the hold kept
-            // it, not from this step's kick along this correction's direction: in a corner the
-            // walls correct one after the other and one of them holds, and the two differ
-            // every step (a block resting in a corner stopped on the energy check). The
-            // LIGGGHTS profile (pair work at v^) books the correction against the start
-            // velocity and the share of the start kick `contact::energy::booked_kick` gives.
+            // held through the last step's closing kick, m (p . n)^2 / 2 of the start kick
+            // into the face: the share of that telescoping term the hold took back with the
+            // closing kick q's (`hold_on_faces`), so that a particle resting on a face books
+            // nothing. Not for one corrected without a hold (pressed on a moving face): its
+            // telescoping is whole, and the term booked every step it stays pressed was a
+            // loss of m (a dt/2)^2 / 2 a step, first order in dt over a run. The LIGGGHTS profile (pair work at v^) books
+            // it against the start velocity and the share of the start kick
+            // `contact::energy::booked_kick` gives.
             let kick = if standard {
-                if p.pushed[i] & HELD_LAST != 0 {
-                    grid.add(&mut work, p.hold[i][0]);
-                    p.hold[i] = [0.0; 3];
-                    p.pushed[i] &= !HELD_LAST;
+                if p.pushed[i] & (HELD_LAST | PUSHED_NOW) == HELD_LAST && kick_n < 0.0 {
+                    grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
                 }
                 0.0
             } else {
@@ -177,17 +175,10 @@ impl SphStage {
         let p = &mut self.parts;
         for i in 0..p.n_owned {
             let h = p.hold[i];
-            p.hold[i] = [0.0; 3];
-            if p.pushed[i] & HELD_LAST != 0 {
-                // the rest of the last step's hold, kept for a correction this step did not
-                // make (the particle left the face): it stays with the integrator's
-                // telescoping term, in the energy error
-                p.pushed[i] &= !HELD_LAST;
-                continue;
-            }
             if h == [0.0; 3] {
                 continue;
             }
+            p.hold[i] = [0.0; 3];
             // the holder's tag is the stored normal's length (`apply_contact`): 1 the faces,
             // 2 + k rigid wall k
             let tag = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt().round();
@@ -202,16 +193,12 @@ impl SphStage {
                 // The standard profile's (pair work at full-step velocities, `apply_contact`): the hold's
                 // change of the kinetic energy beyond the closing kick's pair work at the held
                 // velocity, m h . (q + h/2 - v) with h = k n the velocity taken, q = (dt/2) a
-                // the closing kick and v the velocity before, less m k^2 / 2: m k (k - v . n),
-                // zero for a particle at rest on the face. The rest, m k^2 / 2 (the closing
-                // kick's share of the telescoping term), is kept in `hold` (with `HELD_NOW`)
-                // and booked with the particle's next correction (`apply_contact`), where a
-                // particle resting on the face takes it back. It stays a particle corrected
-                // in this step.
+                // the closing kick and v the velocity before, less m k^2 / 2 (the closing
+                // kick's share of the telescoping term): m k (k - v . n). Zero for a particle
+                // at rest on the face; it stays a particle corrected in this step.
                 let vn = (0..3).map(|c| p.v[i][c] * n[c]).sum::<f64>();
                 grid.add(&mut self.hold_work, p.m[i] * k * (k - vn));
                 p.pushed[i] |= HELD_NOW;
-                p.hold[i] = [0.5 * p.m[i] * k * k, 0.0, 0.0];
             } else {
                 // Held: its start velocity in the next step carries no kick into the faces.
                 p.pushed[i] &= !PUSHED_NOW;
