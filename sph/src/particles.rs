@@ -75,7 +75,18 @@ pub struct Particles {
     /// the current step, times its holder's tag (1 the faces, 2 + k rigid wall k: the length
     /// says who holds it), set by the push-back, used and cleared after the step's closing kick
     /// by the parallel layer; zero when none. Carried when the particle migrates within a step.
+    /// The first holder of the step; the rigid walls that hold it besides (a corner) are in
+    /// [`Particles::hold_more`].
     pub hold: Vec<[f64; 3]>,
+    /// The tags (2 + k, rigid wall k) of up to two more rigid walls holding this particle in the
+    /// current step, besides [`Particles::hold`]'s (0: none): a particle in a corner of walls is
+    /// held by each (their normals are the walls'). Set and cleared with `hold`. Carried.
+    pub hold_more: Vec<[u8; 2]>,
+    /// The tags of the holders (1 the faces, 2 + k rigid wall k; 0: none) that took part of the
+    /// last step's closing kick from this particle (set with [`HELD_NOW`]), each used once by
+    /// the push-back's booking of the start kick it took back (coupling's `apply_contact`).
+    /// Carried.
+    pub held_by: Vec<[u8; 3]>,
     /// Contact corrections: [`PUSHED_LAST`] set when the push-back or a wall moved the particle
     /// in the last step, [`PUSHED_NOW`] in this one; [`HELD_LAST`] when a face or wall held it
     /// through the last step's closing kick, [`HELD_NOW`] this step's (the step's drift shifts
@@ -117,10 +128,11 @@ pub struct ParticleRecord {
     pub fixed: u32,
     /// See [`Particles::hold`].
     pub hold: [f64; 3],
-    /// See [`Particles::pushed`] (u8 widened).
+    /// See [`Particles::pushed`] (bits 0-7), with [`Particles::hold_more`]'s tags in bits 8-15
+    /// and 16-23.
     pub pushed: u32,
-    /// Padding (zero), so the record has none.
-    pub pad: u32,
+    /// [`Particles::held_by`]'s tags in bits 0-7, 8-15 and 16-23.
+    pub held_by: u32,
 }
 
 /// What a pass added to an entry, as exact sums ([`crate::exact`]); a ghost copy's go to its
@@ -215,6 +227,8 @@ macro_rules! for_each_field {
         $mac!($p.mat);
         $mac!($p.fixed);
         $mac!($p.hold);
+        $mac!($p.hold_more);
+        $mac!($p.held_by);
         $mac!($p.pushed);
     }};
 }
@@ -223,7 +237,10 @@ impl Particles {
     /// At a step's start (its drift): each "now" bit of `pushed` becomes its "last" bit and
     /// the "now" bits clear ([`PUSHED_NOW`] -> [`PUSHED_LAST`], [`HELD_NOW`] -> [`HELD_LAST`]).
     pub fn start_step_flags(&mut self) {
-        for p in &mut self.pushed {
+        for (p, by) in self.pushed.iter_mut().zip(&mut self.held_by) {
+            if *p & HELD_NOW == 0 {
+                *by = [0; 3];
+            }
             *p = (*p >> 1) & (PUSHED_LAST | HELD_LAST);
         }
     }
@@ -318,6 +335,13 @@ impl Particles {
         self.mat.push(r.mat as u16);
         self.fixed.push(r.fixed != 0);
         self.hold.push(r.hold);
+        self.hold_more
+            .push([(r.pushed >> 8) as u8, (r.pushed >> 16) as u8]);
+        self.held_by.push([
+            r.held_by as u8,
+            (r.held_by >> 8) as u8,
+            (r.held_by >> 16) as u8,
+        ]);
         self.pushed.push(r.pushed as u8);
     }
 
@@ -344,8 +368,15 @@ impl Particles {
             mat: self.mat[i] as u32,
             fixed: self.fixed[i] as u32,
             hold: self.hold[i],
-            pushed: self.pushed[i] as u32,
-            pad: 0,
+            pushed: u32::from(self.pushed[i])
+                | u32::from(self.hold_more[i][0]) << 8
+                | u32::from(self.hold_more[i][1]) << 16,
+            held_by: u32::from_le_bytes([
+                self.held_by[i][0],
+                self.held_by[i][1],
+                self.held_by[i][2],
+                0,
+            ]),
         }
     }
 
@@ -447,6 +478,8 @@ impl Particles {
             + b(&self.mat)
             + b(&self.fixed)
             + b(&self.hold)
+            + b(&self.hold_more)
+            + b(&self.held_by)
             + b(&self.pushed)
             + b(&self.sums)
     }

@@ -590,3 +590,40 @@ pub fn run_digest(out: &Path) -> String {
     }
     format!("{h:016x}")
 }
+
+/// A 40 x 40 x 20 mm block of elastic rubber particles (spacing 4 mm) resting in the corner of
+/// two rigid walls, the floor z = 0 and the wall x = 0, gravity tilted 30 degrees towards the
+/// wall, 20 ms (tests/tests/rigid_wall.rs), written into `dir`.
+pub fn corner_block_scene(dir: &Path) -> PathBuf {
+    let scene = dir.join("corner.toml");
+    std::fs::write(
+        &scene,
+        r#"title = "Rubber block resting in a corner of two rigid walls"
+gravity = [-4.905, 0.0, -8.496]
+[run]
+end_time = 0.02
+history_every = 1.0e-4
+[[material]]
+name = "rubber"
+model = "elastic"
+density = 1200.0
+youngs_modulus = 1.0e7
+poisson_ratio = 0.4
+[[particles]]
+name = "block"
+material = "rubber"
+region = { box = { min = [0.0, 0.0, 0.0], max = [0.04, 0.04, 0.02] } }
+spacing = 0.004
+[[rigid_wall]]
+name = "floor"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[rigid_wall]]
+name = "wall"
+point = [0.0, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+"#,
+    )
+    .unwrap();
+    scene
+}

@@ -252,6 +252,11 @@ fn rigid_wall_run_stopped_and_restarted_ends_bit_identical_at_np_1_and_3() {
     for np in [1, 3] {
         stop_and_restart("scenes/water_on_floor.toml", np, 64, &[]);
     }
+    // A block of solid particles in a corner of two walls: the walls that held each particle
+    // through the last closing kick continue from the checkpoint (`held_by`).
+    let dir = workdir("restart_corner_np2");
+    let scene = corner_block_scene(&dir);
+    stop_and_restart_in(&dir, &scene, 2, 64, &[]);
 }
 
 #[test]

@@ -235,9 +235,11 @@ impl Walls {
         self.wall_s += t0.elapsed().as_secs_f64();
     }
 
-    /// Sizes the SPH stage's per-wall hold impulses (`SphStage::hold_impulse`) to the walls.
+    /// Sizes the SPH stage's per-wall hold impulses (`SphStage::hold_impulse`) to the walls and
+    /// gives it their normals (`SphStage::wall_normals`).
     pub fn size_holds(&self, sph: &mut Sph) {
         sph.stage.hold_impulse = vec![[[0.0; 3]; 3]; self.impulse.len()];
+        sph.stage.wall_normals = self.walls.iter().map(|w| w.normal).collect();
     }
 
     /// After the step's closing kicks: the impulses the walls' holds gave the particles

@@ -147,6 +147,9 @@ pub struct SphStage {
     /// This step's impulses of the rigid walls' holds (`hold_on_faces`), per wall and
     /// component, on the momentum grid, N s; reset at each drift.
     pub hold_impulse: Vec<[Folds; 3]>,
+    /// The rigid walls' unit normals, in scene order (`Walls::size_holds`): a particle held by
+    /// more than one wall is held on each (`hold_on_faces`).
+    pub wall_normals: Vec<[f64; 3]>,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -201,6 +204,7 @@ impl SphStage {
             solid: None,
             hold_work: [0.0; 3],
             hold_impulse: Vec::new(),
+            wall_normals: Vec::new(),
         }
     }
 

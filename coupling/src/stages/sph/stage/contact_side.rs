@@ -117,18 +117,29 @@ impl SphStage {
             // (`sph::book_work_at_step_velocity`): the correction books its own change of the
             // kinetic energy, m dv . (v + dv/2), which with that work and the integrator's
             // telescoping m (|p|^2 - |q|^2) / 2 (p = (dt/2) a(n), q = (dt/2) a(n+1)) is the
-            // step's whole change; and, the first in a step of a particle that a face or wall
-            // held through the last step's closing kick, m (p . n)^2 / 2 of the start kick
-            // into the face: the share of that telescoping term the hold took back with the
-            // closing kick q's (`hold_on_faces`), so that a particle resting on a face books
-            // nothing. Not for one corrected without a hold (pressed on a moving face): its
-            // telescoping is whole, and the term booked every step it stays pressed was a
-            // loss of m (a dt/2)^2 / 2 a step, first order in dt over a run. The LIGGGHTS profile (pair work at v^) books
-            // it against the start velocity and the share of the start kick
-            // `contact::energy::booked_kick` gives.
+            // step's whole change; and, for a particle that faces or walls held through the
+            // last step's closing kick, m (p . n)^2 / 2 of the start kick into the face: the
+            // share of that telescoping term the hold took back with the closing kick q's
+            // (`hold_on_faces`; p = q, the same a(n)), so that a particle resting on a face
+            // books nothing. Once per holder of that kick (`Particles::held_by`): the step's
+            // first correction takes its own holder's share (or the first holder's), a later
+            // one only its own holder's, so that a particle resting in a corner of walls books
+            // the share each wall took (for walls at right angles the shares add up to the
+            // whole hold, |p . n1|^2 + |p . n2|^2) and one held by one face books one. Not for
+            // one corrected without a hold (pressed on a moving face): its telescoping is
+            // whole, and the term booked every step it stays pressed was a loss of
+            // m (a dt/2)^2 / 2 a step, first order in dt over a run. The LIGGGHTS profile
+            // (pair work at v^) books it against the start velocity and the share of the start
+            // kick `contact::energy::booked_kick` gives.
+            // The holder of this correction (`held`): 0 none, 1 the immovable faces alone,
+            // 2 + k rigid wall k.
+            let tag = held.get(i).copied().unwrap_or(0);
             let kick = if standard {
-                if p.pushed[i] & (HELD_LAST | PUSHED_NOW) == HELD_LAST && kick_n < 0.0 {
-                    grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
+                if p.pushed[i] & HELD_LAST != 0 && kick_n < 0.0 {
+                    let first = p.pushed[i] & PUSHED_NOW == 0;
+                    if take_holder(&mut p.held_by[i], tag, first) {
+                        grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
+                    }
                 }
                 0.0
             } else {
@@ -145,10 +156,8 @@ impl SphStage {
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];
-            // the holder's tag as the normal's length (`hold_on_faces`)
-            let tag = held.get(i).copied().unwrap_or(0);
             if tag > 0 {
-                p.hold[i] = n.map(|c| c * f64::from(tag));
+                add_holder(p, i, n, tag);
             }
         }
         work
@@ -179,42 +188,96 @@ impl SphStage {
                 continue;
             }
             p.hold[i] = [0.0; 3];
-            // the holder's tag is the stored normal's length (`apply_contact`): 1 the faces,
-            // 2 + k rigid wall k
-            let tag = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt().round();
-            let n = h.map(|c| c / tag);
-            let k = (0..3)
-                .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * n[c])
-                .sum::<f64>();
-            if p.fixed[i] || k >= 0.0 {
+            let more = std::mem::take(&mut p.hold_more[i]);
+            // this step's holders, from the last step's (`Particles::held_by`)
+            p.held_by[i] = [0; 3];
+            if p.fixed[i] {
                 continue;
             }
-            if standard {
-                // The standard profile's (pair work at full-step velocities, `apply_contact`): the hold's
-                // change of the kinetic energy beyond the closing kick's pair work at the held
-                // velocity, m h . (q + h/2 - v) with h = k n the velocity taken, q = (dt/2) a
-                // the closing kick and v the velocity before, less m k^2 / 2 (the closing
-                // kick's share of the telescoping term): m k (k - v . n). Zero for a particle
-                // at rest on the face; it stays a particle corrected in this step.
-                let vn = (0..3).map(|c| p.v[i][c] * n[c]).sum::<f64>();
-                grid.add(&mut self.hold_work, p.m[i] * k * (k - vn));
-                p.pushed[i] |= HELD_NOW;
-            } else {
-                // Held: its start velocity in the next step carries no kick into the faces.
-                p.pushed[i] &= !PUSHED_NOW;
-            }
-            for c in 0..3 {
-                p.v[i][c] -= k * n[c];
-            }
-            // a rigid wall's hold is part of its impulse (reactions.csv), m (-k n)
-            if tag >= 2.0 {
-                // (sized to the scene's walls at set-up: `Walls::size_holds`)
-                if let Some(j) = self.hold_impulse.get_mut(tag as usize - 2) {
-                    for c in 0..3 {
-                        mgrid.add(&mut j[c], -p.m[i] * k * n[c]);
+            // the first holder's tag is the stored normal's length (`add_holder`): 1 the
+            // faces, 2 + k rigid wall k; the others are rigid walls, their normals the walls'
+            let tag = holder_tag(h);
+            let n = h.map(|c| c / f64::from(tag));
+            let others = more
+                .into_iter()
+                .filter_map(|t| Some((t, *self.wall_normals.get(usize::from(t).checked_sub(2)?)?)));
+            // The closing kick q = (dt/2) a, less what the holders before took: in a corner
+            // each wall takes the part still pointing into it (walls at right angles: each its
+            // own component, in any order).
+            let mut q: [f64; 3] = std::array::from_fn(|c| 0.5 * dt * p.f[i][c] / p.m[i]);
+            let mut slot = 0;
+            for (tag, n) in std::iter::once((tag, n)).chain(others) {
+                let k = (0..3).map(|c| q[c] * n[c]).sum::<f64>();
+                if k >= 0.0 {
+                    continue;
+                }
+                if standard {
+                    // The standard profile's (pair work at full-step velocities,
+                    // `apply_contact`): the hold's change of the kinetic energy beyond the
+                    // closing kick's pair work at the held velocity, m h . (q + h/2 - v) with
+                    // h = k n the velocity taken, q = (dt/2) a the closing kick and v the
+                    // velocity before, less m k^2 / 2 (the closing kick's share of the
+                    // telescoping term): m k (k - v . n). Zero for a particle at rest on the
+                    // face; it stays a particle corrected in this step.
+                    let vn = (0..3).map(|c| p.v[i][c] * n[c]).sum::<f64>();
+                    grid.add(&mut self.hold_work, p.m[i] * k * (k - vn));
+                    p.pushed[i] |= HELD_NOW;
+                    p.held_by[i][slot] = tag;
+                    slot += 1;
+                } else {
+                    // Held: its start velocity in the next step carries no kick into the faces.
+                    p.pushed[i] &= !PUSHED_NOW;
+                }
+                for c in 0..3 {
+                    p.v[i][c] -= k * n[c];
+                    q[c] -= k * n[c];
+                }
+                // a rigid wall's hold is part of its impulse (reactions.csv), m (-k n)
+                if tag >= 2 {
+                    // (sized to the scene's walls at set-up: `Walls::size_holds`)
+                    if let Some(j) = self.hold_impulse.get_mut(usize::from(tag) - 2) {
+                        for c in 0..3 {
+                            mgrid.add(&mut j[c], -p.m[i] * k * n[c]);
+                        }
                     }
                 }
             }
         }
     }
+}
+
+/// Takes the holder `tag` (`apply_contact`'s `held`) out of a particle's last holders `by`
+/// ([`Particles::held_by`]); for the step's `first` correction, one that is not among them takes
+/// the first there is. Whether the correction books a held share of the start kick.
+fn take_holder(by: &mut [u8; 3], tag: u8, first: bool) -> bool {
+    let slot = by
+        .iter()
+        .position(|&t| t != 0 && t == tag)
+        .or_else(|| by.iter().position(|&t| t != 0).filter(|_| first));
+    if let Some(s) = slot {
+        by[s] = 0;
+    }
+    // The first correction books whether or not a holder is left (as before holders were
+    // kept).
+    slot.is_some() || first
+}
+
+/// Records holder `tag` (1 the faces, 2 + k rigid wall k), pushing particle `i` back along the
+/// unit normal `n`, for the step's closing kick (`hold_on_faces`): the first holder of the step
+/// (or the same one again) as `n` times its tag in `hold`; another rigid wall by its tag in
+/// `hold_more`, its normal the wall's (a third beyond those is not held).
+fn add_holder(p: &mut Particles, i: usize, n: [f64; 3], tag: u8) {
+    let first = holder_tag(p.hold[i]);
+    if first == 0 || first == tag {
+        p.hold[i] = n.map(|c| c * f64::from(tag));
+    } else if tag >= 2 && !p.hold_more[i].contains(&tag) {
+        if let Some(slot) = p.hold_more[i].iter_mut().find(|t| **t == 0) {
+            *slot = tag;
+        }
+    }
+}
+
+/// The holder's tag a stored hold carries as its length (`add_holder`), 0 for none.
+fn holder_tag(h: [f64; 3]) -> u8 {
+    (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt().round() as u8
 }
