@@ -150,6 +150,9 @@ pub struct SphStage {
     /// The rigid walls' unit normals, in scene order (`Walls::size_holds`): a particle held by
     /// more than one wall is held on each (`hold_on_faces`).
     pub wall_normals: Vec<[f64; 3]>,
+    /// Per owned particle, in the contact phase of a step: what the last step's holds left it
+    /// to book that its corrections have not booked yet, J (`apply_contact`; not carried).
+    hold_left: Vec<f64>,
 }
 
 /// What a rank of several keeps between rebuilds of the SPH decomposition: its box's pair
@@ -205,6 +208,7 @@ impl SphStage {
             hold_work: [0.0; 3],
             hold_impulse: Vec::new(),
             wall_normals: Vec::new(),
+            hold_left: Vec::new(),
         }
     }
 

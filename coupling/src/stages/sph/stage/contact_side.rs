@@ -99,6 +99,12 @@ impl SphStage {
         let p = &mut self.parts;
         let grid = self.grids.energy;
         let mut work = [0.0; 3];
+        // what the last step's holds left each particle to book (`hold`), from its first
+        // correction of the step on
+        let left = &mut self.hold_left;
+        if left.len() < p.n_owned {
+            left.resize(p.n_owned, 0.0);
+        }
         for (i, f) in force.iter().enumerate().take(p.n_owned) {
             if *f == [0.0; 3] || p.fixed[i] {
                 continue;
@@ -125,7 +131,11 @@ impl SphStage {
             // first correction takes its own holder's share (or the first holder's), a later
             // one only its own holder's, so that a particle resting in a corner of walls books
             // the share each wall took (for walls at right angles the shares add up to the
-            // whole hold, |p . n1|^2 + |p . n2|^2) and one held by one face books one. Not for
+            // whole hold, |p . n1|^2 + |p . n2|^2) and one held by one face books one. The
+            // later ones book at most what the holds took and the earlier ones left,
+            // m |d|^2 / 2 in all (`hold_on_faces`, kept in `hold` between steps): friction
+            // leans a wall's push-back towards the other wall of a corner, and the two shares
+            // along the push-backs would count that part twice. Not for
             // one corrected without a hold (pressed on a moving face): its telescoping is
             // whole, and the term booked every step it stays pressed was a loss of
             // m (a dt/2)^2 / 2 a step, first order in dt over a run. The LIGGGHTS profile
@@ -135,11 +145,24 @@ impl SphStage {
             // 2 + k rigid wall k.
             let tag = held.get(i).copied().unwrap_or(0);
             let kick = if standard {
-                if p.pushed[i] & HELD_LAST != 0 && kick_n < 0.0 {
-                    let first = p.pushed[i] & PUSHED_NOW == 0;
-                    if take_holder(&mut p.held_by[i], tag, first) {
-                        grid.add(&mut work, 0.5 * p.m[i] * kick_n * kick_n);
-                    }
+                let first = p.pushed[i] & PUSHED_NOW == 0;
+                if first && p.pushed[i] & HELD_LAST != 0 {
+                    // what the last step's holds left to book, kept in `hold` since
+                    left[i] = p.hold[i][0];
+                    p.hold[i] = [0.0; 3];
+                }
+                if p.pushed[i] & HELD_LAST != 0
+                    && kick_n < 0.0
+                    && take_holder(&mut p.held_by[i], tag, first)
+                {
+                    let term = 0.5 * p.m[i] * kick_n * kick_n;
+                    let booked = if first {
+                        term
+                    } else {
+                        term.min(left[i].max(0.0))
+                    };
+                    grid.add(&mut work, booked);
+                    left[i] -= booked;
                 }
                 0.0
             } else {
@@ -191,7 +214,9 @@ impl SphStage {
             let more = std::mem::take(&mut p.hold_more[i]);
             // this step's holders, from the last step's (`Particles::held_by`)
             p.held_by[i] = [0; 3];
-            if p.fixed[i] {
+            // Not corrected in this step: `hold` kept what the last step's holds left to book
+            // (`apply_contact`), unused; it stays with the integrator's telescoping term.
+            if p.fixed[i] || p.pushed[i] & PUSHED_NOW == 0 && standard {
                 continue;
             }
             // the first holder's tag is the stored normal's length (`add_holder`): 1 the
@@ -206,6 +231,8 @@ impl SphStage {
             // own component, in any order).
             let mut q: [f64; 3] = std::array::from_fn(|c| 0.5 * dt * p.f[i][c] / p.m[i]);
             let mut slot = 0;
+            // the velocity the holds take, d
+            let mut d = [0.0; 3];
             for (tag, n) in std::iter::once((tag, n)).chain(others) {
                 let k = (0..3).map(|c| q[c] * n[c]).sum::<f64>();
                 if k >= 0.0 {
@@ -231,6 +258,7 @@ impl SphStage {
                 for c in 0..3 {
                     p.v[i][c] -= k * n[c];
                     q[c] -= k * n[c];
+                    d[c] += k * n[c];
                 }
                 // a rigid wall's hold is part of its impulse (reactions.csv), m (-k n)
                 if tag >= 2 {
@@ -241,6 +269,11 @@ impl SphStage {
                         }
                     }
                 }
+            }
+            if standard && p.pushed[i] & HELD_NOW != 0 {
+                // what the next step's corrections may book (`apply_contact`): m |d|^2 / 2
+                let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                p.hold[i] = [0.5 * p.m[i] * dd, 0.0, 0.0];
             }
         }
     }
