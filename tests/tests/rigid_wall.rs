@@ -678,3 +678,47 @@ fields = ["pressure"]
         );
     }
 }
+
+#[test]
+fn a_rubber_block_in_a_corner_of_two_rough_walls_keeps_its_energy() {
+    // The block of the test above with friction 0.3 on both walls: the floor's friction and
+    // the wall both take the block's push towards the wall. References: the energy balance
+    // (conservation) within 0.5 % (each wall booking its share of the start kick without the
+    // cap of what the holds took: 5 % at 9.7 ms and the run stopped); contact never gives
+    // energy back (`run_ok`: with the floor's hold along its push-back, which friction leans
+    // into the wall's normal, contact_energy fell from 1.1e-8 J to -5.9e-9 J); momentum along
+    // x and z, the walls' impulses = M g t + p(t) to 1e-6 of M g t (gravity and the walls are
+    // all that act). np 1 and np 3 the same bytes.
+    let dir = workdir("rigid_wall_rough_corner");
+    let text = std::fs::read_to_string(corner_block_scene(&dir))
+        .unwrap()
+        .replace(
+            "normal = [0.0, 0.0, 1.0]",
+            "normal = [0.0, 0.0, 1.0]\nfriction = 0.3",
+        )
+        .replace(
+            "normal = [1.0, 0.0, 0.0]",
+            "normal = [1.0, 0.0, 0.0]\nfriction = 0.3",
+        );
+    assert_eq!(text.matches("friction").count(), 2);
+    let scene = dir.join("rough.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = run_np1_np3_same_bytes(&scene, &dir);
+    let err = largest_energy_error(&out);
+    assert!(err < 5e-3, "energy error {err:e} (0.5 %)");
+    let mass = 1200.0 * 0.04 * 0.04 * 0.02;
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let t = *column(&h, &rows, "time").last().unwrap();
+    for (axis, g) in [("x", -4.905), ("z", -8.496)] {
+        let j = impulse(&out, &format!("floor.force_{axis}"))
+            + impulse(&out, &format!("wall.force_{axis}"));
+        let p = *column(&h, &rows, &format!("momentum_{axis}"))
+            .last()
+            .unwrap();
+        let mgt = -mass * g * t;
+        assert!(
+            (j - (mgt + p)).abs() < 1e-6 * mgt,
+            "{axis}: the walls' impulse {j:e} N s against M g t + p(t) = {mgt:e} + {p:e} (1e-6)"
+        );
+    }
+}

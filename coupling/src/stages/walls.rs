@@ -240,6 +240,7 @@ impl Walls {
     pub fn size_holds(&self, sph: &mut Sph) {
         sph.stage.hold_impulse = vec![[[0.0; 3]; 3]; self.impulse.len()];
         sph.stage.wall_normals = self.walls.iter().map(|w| w.normal).collect();
+        sph.stage.rough_walls = self.walls.iter().map(|w| w.friction > 0.0).collect();
     }
 
     /// After the step's closing kicks: the impulses the walls' holds gave the particles

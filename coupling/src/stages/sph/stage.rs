@@ -150,6 +150,8 @@ pub struct SphStage {
     /// The rigid walls' unit normals, in scene order (`Walls::size_holds`): a particle held by
     /// more than one wall is held on each (`hold_on_faces`).
     pub wall_normals: Vec<[f64; 3]>,
+    /// Whether each rigid wall has friction (`Walls::size_holds`; `hold_on_faces`).
+    pub rough_walls: Vec<bool>,
     /// Per owned particle, in the contact phase of a step: what the last step's holds left it
     /// to book that its corrections have not booked yet, J (`apply_contact`; not carried).
     hold_left: Vec<f64>,
@@ -208,6 +210,7 @@ impl SphStage {
             hold_work: [0.0; 3],
             hold_impulse: Vec::new(),
             wall_normals: Vec::new(),
+            rough_walls: Vec::new(),
             hold_left: Vec::new(),
         }
     }

@@ -222,10 +222,31 @@ impl SphStage {
             // the first holder's tag is the stored normal's length (`add_holder`): 1 the
             // faces, 2 + k rigid wall k; the others are rigid walls, their normals the walls'
             let tag = holder_tag(h);
-            let n = h.map(|c| c / f64::from(tag));
-            let others = more
+            let mut n = h.map(|c| c / f64::from(tag));
+            let others: Vec<(u8, [f64; 3])> = more
                 .into_iter()
-                .filter_map(|t| Some((t, *self.wall_normals.get(usize::from(t).checked_sub(2)?)?)));
+                .filter_map(|t| Some((t, *self.wall_normals.get(usize::from(t).checked_sub(2)?)?)))
+                .collect();
+            // A rough wall's push-back leans by its friction, and in a corner it leans into
+            // the other walls' normals: the first holder's direction loses those parts (each
+            // other wall holds its own), or its hold would give the particle velocity along
+            // them, away from the other walls (water in a box of rough walls climbed them).
+            let rough = usize::from(tag)
+                .checked_sub(2)
+                .and_then(|k| self.rough_walls.get(k))
+                == Some(&true);
+            if rough && !others.is_empty() {
+                for (_, m) in &others {
+                    let c = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+                    n = std::array::from_fn(|l| n[l] - c * m[l]);
+                }
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                n = if len > 0.0 {
+                    n.map(|c| c / len)
+                } else {
+                    [0.0; 3]
+                };
+            }
             // The closing kick q = (dt/2) a, less what the holders before took: in a corner
             // each wall takes the part still pointing into it (walls at right angles: each its
             // own component, in any order).
