@@ -105,6 +105,7 @@ impl SphStage {
         if left.len() < p.n_owned {
             left.resize(p.n_owned, 0.0);
         }
+        let rough = &self.rough_walls;
         for (i, f) in force.iter().enumerate().take(p.n_owned) {
             if *f == [0.0; 3] || p.fixed[i] {
                 continue;
@@ -169,13 +170,26 @@ impl SphStage {
                 ::contact::energy::booked_kick(p.pushed[i])
             };
             p.pushed[i] |= PUSHED_NOW;
+            // The rates' velocity loses the kick into the face along the face's normal: a
+            // rough wall's push-back leans along the wall by its friction, and the kick along
+            // that lean would leave the particle moving into the wall and along it in the
+            // rates (water on a rough floor expanded into tension and rose).
+            let (vn, k_vhat) = match rough_wall_normal(&self.wall_normals, rough, tag) {
+                Some(m) => (
+                    m,
+                    (0..3)
+                        .map(|c| 0.5 * dt * p.f[i][c] / p.m[i] * m[c])
+                        .sum::<f64>(),
+                ),
+                None => (n, kick_n),
+            };
             for c in 0..3 {
                 let dv = f[c] * dt / p.m[i];
                 let start_kick = kick * dt * p.f[i][c] / p.m[i];
                 let w = ::contact::energy::booked_work(p.m[i], dv, p.v[i][c], start_kick);
                 grid.add(&mut work, w);
                 p.v[i][c] += dv;
-                p.vhat[i][c] += dv - kick_n.min(0.0) * n[c];
+                p.vhat[i][c] += dv - k_vhat.min(0.0) * vn[c];
                 p.x[i][c] += dv * dt;
             }
             p.x_real[i] = p.x[i];
@@ -334,4 +348,11 @@ fn add_holder(p: &mut Particles, i: usize, n: [f64; 3], tag: u8) {
 /// The holder's tag a stored hold carries as its length (`add_holder`), 0 for none.
 fn holder_tag(h: [f64; 3]) -> u8 {
     (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt().round() as u8
+}
+
+/// The unit normal of the rough rigid wall whose tag (2 + k, wall k) is `tag`, `None` for a
+/// frictionless wall or another holder.
+fn rough_wall_normal(normals: &[[f64; 3]], rough: &[bool], tag: u8) -> Option<[f64; 3]> {
+    let k = usize::from(tag).checked_sub(2)?;
+    rough.get(k).copied()?.then(|| normals[k])
 }
