@@ -12,7 +12,7 @@
 use super::tensor::{self, inverse, mul, Mat3};
 use super::{Solids, CORRECTION_MAX, CORRECTION_SINGULAR, SURFACE_SHAPE_TOL};
 use crate::exact::{note, PassGrids, TermMax};
-use crate::kernel::SmoothingKernel;
+use crate::kernel::{Kernel, SmoothingKernel};
 use crate::particles::Particles;
 use bytemuck::{Pod, Zeroable};
 
@@ -67,6 +67,67 @@ pub struct PairGeom {
 
 /// Pairs whose geometry the gradient pass computes before their terms (a few kB, in L1).
 const PAIR_CHUNK: usize = 256;
+
+/// A chunk's pair geometry, lane by lane (one lane per pair of the chunk): what
+/// [`gradient_pairs`] gathers of each pair (`d` = x_a - x_b, `dvh` = v^_a - v^_b, the kernel's
+/// 1/h and grad_sigma/h^4 at the pair's h) and what [`GeomLanes::settle`] computes from it.
+struct GeomLanes {
+    d: [[f64; PAIR_CHUNK]; 3],
+    dvh: [[f64; PAIR_CHUNK]; 3],
+    inv_h: [f64; PAIR_CHUNK],
+    dw_norm: [f64; PAIR_CHUNK],
+    r: [f64; PAIR_CHUNK],
+    gr: [f64; PAIR_CHUNK],
+}
+
+impl Default for GeomLanes {
+    fn default() -> Self {
+        let z = [0.0; PAIR_CHUNK];
+        GeomLanes {
+            d: [z; 3],
+            dvh: [z; 3],
+            inv_h: z,
+            dw_norm: z,
+            r: z,
+            gr: z,
+        }
+    }
+}
+
+impl GeomLanes {
+    /// For the first `n` lanes: r = |d|, dW/dr = grad_sigma/h^4 f'(r (1/h))
+    /// (`ScaledKernel::dw_dr`), gr = dW/dr / r (0 where r = 0: a coincident pair, skipped by
+    /// both passes) and the continuity term dW/dr (v^_ab . d) / r into `t_rho`. Each lane's
+    /// operations are those of one pair, in the order the scalar form has them (the same bits);
+    /// the loop over the lanes is what the wider builds do several lanes at a time.
+    #[inline(always)]
+    fn settle(&mut self, kind: Kernel, n: usize, t_rho: &mut [f64; PAIR_CHUNK]) {
+        // one loop per kernel shape, so that each is a straight loop over the lanes
+        match kind {
+            Kernel::CubicSpline => {
+                self.settle_with(n, t_rho, |s| Kernel::CubicSpline.shape_derivative(s))
+            }
+            Kernel::Wendland => {
+                self.settle_with(n, t_rho, |s| Kernel::Wendland.shape_derivative(s))
+            }
+        }
+    }
+
+    /// [`GeomLanes::settle`] with the shape's derivative f'.
+    #[inline(always)]
+    fn settle_with(&mut self, n: usize, t_rho: &mut [f64; PAIR_CHUNK], df: impl Fn(f64) -> f64) {
+        let [dx, dy, dz] = &self.d;
+        let [vx, vy, vz] = &self.dvh;
+        for p in 0..n.min(PAIR_CHUNK) {
+            let r = (dx[p] * dx[p] + dy[p] * dy[p] + dz[p] * dz[p]).sqrt();
+            let dw = self.dw_norm[p] * df(r * self.inv_h[p]);
+            let gr = dw / r;
+            t_rho[p] = dw * (vx[p] * dx[p] + vy[p] * dy[p] + vz[p] * dz[p]) / r;
+            self.r[p] = r;
+            self.gr[p] = if r == 0.0 { 0.0 } else { gr };
+        }
+    }
+}
 
 /// The (row, column) of each Voigt component xx, yy, zz, xy, yz, zx.
 const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
@@ -220,27 +281,33 @@ fn gradient_pairs(
     geom.clear();
     geom.resize(pairs.len(), PairGeom::default());
     let mut t_rho = [0.0; PAIR_CHUNK];
+    let mut lanes = GeomLanes::default();
     for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks_mut(PAIR_CHUNK)) {
-        // the geometry of the chunk's pairs first: a short loop whose square roots and
-        // divisions, a chain in each pair, overlap from pair to pair
-        for ((&(i, j), g), t_rho) in chunk.iter().zip(geom.iter_mut()).zip(t_rho.iter_mut()) {
+        // the geometry of the chunk's pairs first, in three short loops: the inputs gathered
+        // pair by pair, then the arithmetic lane by lane over the chunk (its square roots and
+        // divisions, a chain in each pair, in vector registers), then the geometry kept
+        let n = chunk.len();
+        for (p, &(i, j)) in chunk.iter().enumerate() {
             let (a, b) = (&slots[i as usize], &slots[j as usize]);
-            let d: [f64; 3] = std::array::from_fn(|c| a.x[c] - b.x[c]);
-            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            for c in 0..3 {
+                lanes.d[c][p] = a.x[c] - b.x[c];
+                lanes.dvh[c][p] = a.vhat[c] - b.vhat[c];
+            }
             let h = 0.5 * (a.h + b.h);
             if kern.h != h {
                 kern = k.at(h);
             }
-            let dw = kern.dw_dr(r);
-            let gr = dw / r;
-            let dvh: [f64; 3] = std::array::from_fn(|c| a.vhat[c] - b.vhat[c]);
-            *t_rho = dw * (dvh[0] * d[0] + dvh[1] * d[1] + dvh[2] * d[2]) / r;
-            // coincident (r = 0): gr 0, and the pair is skipped below and by the force pass
+            let (inv_h, _, dw_norm) = kern.factors();
+            lanes.inv_h[p] = inv_h;
+            lanes.dw_norm[p] = dw_norm;
+        }
+        lanes.settle(k.kind, n, &mut t_rho);
+        for (p, (&(i, j), g)) in chunk.iter().zip(geom.iter_mut()).enumerate() {
             *g = PairGeom {
                 i,
                 j,
-                r,
-                gr: if r == 0.0 { 0.0 } else { gr },
+                r: lanes.r[p],
+                gr: lanes.gr[p],
             };
         }
         for (g, &t_rho) in geom.iter().zip(&t_rho) {
