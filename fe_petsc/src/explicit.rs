@@ -50,10 +50,12 @@ mod restart;
 pub use contact::ContactCorrection;
 mod setup;
 mod tets;
+mod wall_hold;
 pub use loads::{face_forces, Loads, PressureLoad};
 pub use queries::ElementRef;
 pub use restart::{restart_layout, RestartLayout, RESTART_DT_STABLE};
 pub use tets::{TetPart, TetSums};
+pub use wall_hold::WallHold;
 
 /// A nodal constraint from a boundary condition.
 #[derive(Debug, Clone, PartialEq)]
@@ -262,6 +264,8 @@ pub struct ExplicitFe {
     pub tets: Option<TetPart>,
     /// Element failure and erosion, where a material fails ([`ExplicitFe::set_failure`]).
     pub(crate) erosion: Option<Box<failure::Erosion>>,
+    /// The rigid walls' holds of this step's closing kick ([`ExplicitFe::set_wall_holds`]).
+    wall_holds: wall_hold::WallHolds,
 }
 
 /// What the element loop sums over elements.

@@ -38,9 +38,9 @@ pub fn step(
     for stage in model.stages_mut() {
         next = next.min(stage.forces(world, dt)?);
     }
-    // The walls' holds of particles through the closing kick: their impulses.
+    // The walls' holds of nodes and particles through the closing kick: their impulses.
     if let Some(walls) = &mut model.walls {
-        walls.after_holds(model.sph.as_ref());
+        walls.after_holds(world, model.fe.as_ref(), model.sph.as_ref());
     }
     // Failed elements become particles (FE -> SPH), in the SPH stage's rates from now on.
     if let (Some(rel), Some(fe), Some(sph)) = (&mut model.releases, &mut model.fe, &mut model.sph) {

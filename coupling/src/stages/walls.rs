@@ -48,6 +48,7 @@ use crate::kernels::collective;
 use crate::output::state::{StateReader, StateWriter};
 use contact::Wall;
 use fe_petsc::exact::{self as exact_sum, Folds};
+use fe_petsc::explicit::WallHold;
 use fe_petsc::implicit::WallPlane;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -243,11 +244,28 @@ impl Walls {
         sph.stage.rough_walls = self.walls.iter().map(|w| w.friction > 0.0).collect();
     }
 
-    /// After the step's closing kicks: the impulses the walls' holds gave the particles
-    /// (`SphStage::hold_on_faces`, summed over ranks), added to the walls' and their work
-    /// `W . J` to the walls' energy; the holds' change of the kinetic energy is the SPH
-    /// stage's (`Sph::hold_taken`), so the two together are what the walls took.
-    pub fn after_holds(&mut self, sph: Option<&Sph>) {
+    /// After the step's closing kicks (collective): the impulses the walls' holds gave the
+    /// particles (`SphStage::hold_on_faces`, summed over ranks) and the mesh nodes
+    /// (`ExplicitFe::set_wall_holds`, summed here), added to the walls' and their work `W . J`
+    /// to the walls' energy. The particles' holds' change of the kinetic energy is the SPH
+    /// stage's (`Sph::hold_taken`), the nodes' is booked here: the two together with the work
+    /// are what the walls took.
+    pub fn after_holds(&mut self, world: &SimpleCommunicator, fe: Option<&Fe>, sph: Option<&Sph>) {
+        if let Some(Integrator::Explicit(state)) = fe.map(|f| &f.integrator) {
+            let local = state.wall_hold_sums();
+            if local.len() == 1 + 3 * self.impulse.len() {
+                let flat = exact_sum::flatten(local);
+                let mut g = vec![0.0f64; flat.len()];
+                world.all_reduce_into(&flat[..], &mut g[..], SystemOperation::sum());
+                let g = exact_sum::values(&g);
+                let impulses: Vec<[f64; 3]> = (0..self.impulse.len())
+                    .map(|k| std::array::from_fn(|c| g[1 + 3 * k + c]))
+                    .collect();
+                let velocities = self.step_velocities.clone();
+                let work = self.book(&impulses, &velocities);
+                self.energy += work - g[0];
+            }
+        }
         let Some(sph) = sph else {
             return;
         };
@@ -370,6 +388,8 @@ impl Walls {
 fn fe_step(walls: &[(Wall, f64)], fe: &mut Fe, dt: f64, folds: &mut [Folds]) {
     let state = fe.state_mut();
     let grid = state.grids.momentum;
+    // the nodes each wall put back (every local copy), held through the closing kick
+    let mut holds = Vec::new();
     for (k, &(wall, t)) in walls.iter().enumerate() {
         let nodes = (0..state.n_nodes()).map(|n| (n, state.x[n], state.v[n], state.mass[n]));
         let Some(f) = forces_of(&wall, (t, dt), nodes, state.n_nodes()) else {
@@ -379,6 +399,17 @@ fn fe_step(walls: &[(Wall, f64)], fe: &mut Fe, dt: f64, folds: &mut [Folds]) {
             .filter(|&n| f[n] != [0.0; 3] && state.owned[n])
             .map(|n| (n, state.v[n]))
             .collect();
+        holds.extend(
+            (0..f.len())
+                .filter(|&n| f[n] != [0.0; 3])
+                .map(|n| WallHold {
+                    node: n as u32,
+                    normal: wall.normal,
+                    wall: k,
+                    velocity: wall.velocity,
+                    friction: wall.friction,
+                }),
+        );
         let w = super::fe::apply_contact(state, &f, dt);
         exact_sum::merge(&mut folds[0], &w);
         for (n, v0) in touched {
@@ -390,6 +421,7 @@ fn fe_step(walls: &[(Wall, f64)], fe: &mut Fe, dt: f64, folds: &mut [Folds]) {
             }
         }
     }
+    state.set_wall_holds(holds, walls.len());
 }
 
 /// The owned moving particles' corrections by `walls` (each with its time): work into

@@ -81,6 +81,7 @@ impl ExplicitFe {
             constrained: vec![false; nn],
             tets,
             erosion: None,
+            wall_holds: Default::default(),
         };
         fe.start();
         Ok(fe)
