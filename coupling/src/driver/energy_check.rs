@@ -144,19 +144,21 @@ impl EnergyCheck {
             self.err_max_checked = self.err_max_checked.max(err);
         }
         // Before step 100 a blow-up is measured against the start scale (energy.rs,
-        // EARLY_BLOW_UP_ERROR); err <= early always (S(t) >= the start scale).
+        // EARLY_BLOW_UP_ERROR); err <= early always (S(t) >= the start scale). It stops the run
+        // where the error against S(t) is also past EARLY_SCALED_ERROR: energy the state
+        // stores at the start (pressure) is not in E(0), and its work is no blow-up.
         let early = energy::energy_error(
             total,
             self.e0,
             external,
             self.scale.start_value(self.e0, external),
         );
-        let measured = if step >= ENERGY_CHECK_FROM_STEP {
-            err
+        let (measured, scaled_past) = if step >= ENERGY_CHECK_FROM_STEP {
+            (err, true)
         } else {
-            early
+            (early, err > energy::EARLY_SCALED_ERROR)
         };
-        if measured > energy_error_limit(step, self.max_energy_error) {
+        if scaled_past && measured > energy_error_limit(step, self.max_energy_error) {
             let err = measured;
             let _ = outputs.history_row(model, &self.row(clock, model, err));
             let _ = outputs.force_rows(world, model, clock.time);
