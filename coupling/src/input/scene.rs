@@ -617,8 +617,10 @@ pub struct SphDef {
     pub kernel: String,
     #[serde(default = "d_density")]
     pub density: String,
+    /// Whether particles evolve their specific internal energy; omitted: where a particle
+    /// material's eos depends on it ([`Scene::particles_needing_energy`]).
     #[serde(default)]
-    pub energy: bool,
+    pub energy: Option<bool>,
     #[serde(default)]
     pub artificial_viscosity: Option<ArtificialViscosity>,
     #[serde(default)]
@@ -808,6 +810,33 @@ impl Scene {
     pub fn releases_any(&self) -> bool {
         (0..self.materials.len()).any(|m| self.releases(m))
     }
+
+    /// Whether the particles evolve their specific internal energy: `[sph] energy` where given,
+    /// else where a particle material's eos depends on it ([`particles_needing_energy`]).
+    pub fn sph_energy(&self) -> bool {
+        self.sph
+            .as_ref()
+            .and_then(|s| s.energy)
+            .unwrap_or_else(|| particles_needing_energy(&self.particles, &self.materials).is_some())
+    }
+}
+
+/// The eos kinds whose pressure depends on the specific internal energy (`tait` does not).
+pub const ENERGY_EOS: [&str; 3] = ["ideal_gas", "jwl", "mie_gruneisen"];
+
+/// The first `[[particles]]` entry whose material's eos is of [`ENERGY_EOS`]: its index, its
+/// material's name and the eos kind.
+pub fn particles_needing_energy(
+    particles: &[ParticlesDef],
+    materials: &[MaterialSpec],
+) -> Option<(usize, String, String)> {
+    particles.iter().enumerate().find_map(|(i, p)| {
+        let m = materials.iter().find(|m| m.name == p.material)?;
+        let kind = &m.eos.as_ref()?.kind;
+        ENERGY_EOS
+            .contains(&kind.as_str())
+            .then(|| (i, m.name.clone(), kind.clone()))
+    })
 }
 
 /// Reads and checks a scene file.

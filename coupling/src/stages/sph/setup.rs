@@ -103,6 +103,7 @@ pub fn params_from_scene(
     };
     let mut params = Params::new(eos);
     params.gravity = scene.gravity;
+    params.energy = scene.sph_energy();
     if let Some(s) = &scene.sph {
         params.profile = if s.profile == "liggghts" {
             Profile::Liggghts
@@ -119,7 +120,6 @@ pub fn params_from_scene(
         } else {
             DensityMode::Continuity
         };
-        params.energy = s.energy;
         params.viscosity = s
             .artificial_viscosity
             .map(|a| ArtificialViscosity::new(a.alpha, a.beta));

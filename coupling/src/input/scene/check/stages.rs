@@ -43,7 +43,21 @@ pub(super) fn check_particles(
             ));
         }
     }
-    check_solid_particles(cx, particles, materials, sph, born)
+    check_solid_particles(cx, particles, materials, sph, born)?;
+    // an eos of the specific internal energy with that energy frozen is an isothermal gas:
+    // refused where the scene asks for it (omitted, `energy` is on for such particles)
+    if let (Some(false), Some((i, name, kind))) = (
+        sph.and_then(|s| s.energy),
+        particles_needing_energy(particles, materials),
+    ) {
+        return Err(cx.err(
+            "sph.energy",
+            format!(
+                "false, but particles[{i}] are of material \"{name}\" whose eos \"{kind}\" depends on the specific internal energy: remove the key or set it true (it is on by default for such particles)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The models whose particles carry stress (docs/scene.md `[[particles]] material`).
