@@ -329,6 +329,12 @@ pub fn particles(
                     None => read_file(&path, def, density, i, material),
                 }
                 .map_err(|e| format!("{file}: particles[{i}].region.file: {e}"))?;
+                if seeds.is_empty() {
+                    return Err(format!(
+                        "{file}: particles[{i}].region.file: no particle in {} (a header and no rows)",
+                        path.display()
+                    ));
+                }
                 from_files.append(&mut seeds);
             }
             r => {
@@ -388,6 +394,7 @@ pub fn particles(
             next += 1;
         }
     }
+    check_periodic(scene, &all)?;
     let n = all.len();
     for s in &all {
         if ids.entry_runs.last().is_none_or(|r| r.1 != s.entry as u32) {
@@ -397,6 +404,31 @@ pub fn particles(
     ids.seeded = n as u64;
     let (a, b) = (n * rank / nranks, n * (rank + 1) / nranks);
     Ok((all[a..b].to_vec(), ids))
+}
+
+/// Every particle inside `[sph] periodic`'s range `[min, max)` on each periodic axis: one
+/// outside would be wrapped onto another's place (a lattice region longer than the period
+/// overlaps itself), so it is an error naming the entry, the axis and the range.
+fn check_periodic(scene: &Scene, seeds: &[ParticleSeed]) -> Result<(), String> {
+    let Some(p) = scene.sph.as_ref().and_then(|s| s.periodic.as_ref()) else {
+        return Ok(());
+    };
+    for s in seeds {
+        for c in (0..3).filter(|&c| p.axes[c]) {
+            if !(s.x[c] >= p.min[c] && s.x[c] < p.max[c]) {
+                return Err(format!(
+                    "{}: particles[{}]: a particle at {} = {:e} m lies outside sph.periodic's range [{:e}, {:e}) m on that axis: the region must lie within the periodic box (wrapped, its particles would sit on others)",
+                    scene.file.display(),
+                    s.entry,
+                    ["x", "y", "z"][c],
+                    s.x[c],
+                    p.min[c],
+                    p.max[c]
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
