@@ -37,7 +37,24 @@ fn read_table(path: &Path) -> Result<Table, String> {
 /// magnitude is largest. `Err` naming the columns there are.
 fn pick(t: &Table, file: &str, name: &str, kind: &str) -> Result<(String, Vec<f64>), String> {
     let col = |j: usize| -> Vec<f64> { t.at(j) };
+    let of_kind = |h: &str| {
+        ["x", "y", "z"]
+            .iter()
+            .any(|c| h.ends_with(&format!(".{kind}_{c}")))
+    };
     if let Some(j) = t.header.iter().position(|h| h == name) {
+        if !of_kind(name) {
+            let names: Vec<&str> = t
+                .header
+                .iter()
+                .map(String::as_str)
+                .filter(|h| of_kind(h))
+                .collect();
+            return Err(format!(
+                "{file}: {name} is not a {kind} column (<name>.{kind}_{{x,y,z}}); its {kind} columns: {}",
+                if names.is_empty() { "none".to_string() } else { names.join(", ") }
+            ));
+        }
         return Ok((name.to_string(), col(j)));
     }
     let mut best: Option<(f64, String, Vec<f64>)> = None;

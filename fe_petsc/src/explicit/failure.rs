@@ -68,7 +68,14 @@ impl Failure {
             Failure::PlasticStrain(eps_f) => ep >= eps_f,
             Failure::JohnsonCook { .. } => {
                 if dep > 0.0 {
-                    *damage += dep / self.strain_to_failure(triaxiality(stress), dep / dt);
+                    // (a strain to failure that a negative d4 took to zero or below, past the
+                    // rates the scene check allows: the point fails)
+                    let eps_f = self.strain_to_failure(triaxiality(stress), dep / dt);
+                    *damage += if eps_f > 0.0 {
+                        dep / eps_f
+                    } else {
+                        f64::INFINITY
+                    };
                 }
                 *damage >= 1.0
             }

@@ -181,6 +181,9 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
             // toml says nothing at some ends of input (`model = ` as the last line).
             msg = "invalid TOML (a value missing?)".into();
         }
+        if let Some(q) = quoted_number(&msg) {
+            msg = format!("expected a number, got a string (\"{q}\": write it without quotes)");
+        }
         if let Some(r) = inner.span() {
             let (line, column) = line_column(text, r.start);
             msg = format!("{msg} (line {line}, column {column})");
@@ -192,6 +195,18 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
         };
         cx.err(&key, msg)
     })
+}
+
+/// The quoted text of serde's `invalid type: string "X", expected f64` (or another number
+/// type) where `X` reads as a number: a number written in quotes.
+fn quoted_number(msg: &str) -> Option<&str> {
+    let rest = msg.strip_prefix("invalid type: string \"")?;
+    let (q, tail) = rest.split_once('"')?;
+    let wanted = tail.strip_prefix(", expected ")?;
+    let numeric = [
+        "f64", "f32", "u64", "u32", "u16", "u8", "usize", "i64", "i32", "a number",
+    ];
+    (numeric.iter().any(|t| wanted.starts_with(t)) && q.trim().parse::<f64>().is_ok()).then_some(q)
 }
 
 /// The 1-based line and column (in characters) of byte `at` of `text`.

@@ -33,14 +33,26 @@ pub(super) fn check_failures(
                 "expected { plastic_strain = ... } or { johnson_cook = { d1 = ..., d2 = ..., d3 = ..., d4 = ... } }".into(),
             )
         })?;
+        if let Some(k) = table
+            .keys()
+            .find(|k| !["plastic_strain", "johnson_cook"].contains(&k.as_str()))
+        {
+            return Err(cx.err(
+                &format!("{key}.{k}"),
+                "unknown key (expected plastic_strain or johnson_cook)".into(),
+            ));
+        }
         let kinds: Vec<&String> = table.keys().collect();
         let f = match kinds.as_slice() {
             [k] if k.as_str() == "plastic_strain" => {
-                let e = number(&table["plastic_strain"]).filter(|e| *e > 0.0 && e.is_finite());
+                let v = &table["plastic_strain"];
+                let e = number(v).filter(|e| *e > 0.0 && e.is_finite());
                 let e = e.ok_or_else(|| {
                     cx.err(
                         &format!("{key}.plastic_strain"),
-                        "expected a positive equivalent plastic strain (dimensionless)".into(),
+                        quoted(v).unwrap_or_else(|| {
+                            "expected a positive equivalent plastic strain (dimensionless)".into()
+                        }),
                     )
                 })?;
                 Failure::PlasticStrain(e)
@@ -62,6 +74,15 @@ pub(super) fn check_failures(
     Ok(out)
 }
 
+/// The message for a number written in quotes (`"0.3"`), where `v` is one.
+fn quoted(v: &toml::Value) -> Option<String> {
+    let s = v.as_str()?;
+    s.trim().parse::<f64>().ok()?;
+    Some(format!(
+        "expected a number, got a string (\"{s}\": write it without quotes)"
+    ))
+}
+
 fn number(v: &toml::Value) -> Option<f64> {
     match v {
         toml::Value::Float(x) => Some(*x),
@@ -70,8 +91,13 @@ fn number(v: &toml::Value) -> Option<f64> {
     }
 }
 
+/// The largest plastic strain rate, over the reference rate, at which Johnson-Cook's rate
+/// factor of the strain to failure must stay positive (a negative `d4` is checked against it).
+const MAX_RATE_RATIO: f64 = 1e8;
+
 /// `{ d1, d2, d3, d4 }`: four finite numbers, and a strain to failure positive at every
-/// triaxiality from -1/3 to 3 at the reference rate (d1 + d2 exp(d3 s) > 0 there).
+/// triaxiality from -1/3 to 3 at the reference rate (d1 + d2 exp(d3 s) > 0 there) and up to
+/// [`MAX_RATE_RATIO`] times that rate.
 fn johnson_cook(cx: &Ctx, key: &str, v: &toml::Value) -> Result<[f64; 4], SceneError> {
     let t = v.as_table().ok_or_else(|| {
         cx.err(
@@ -90,16 +116,32 @@ fn johnson_cook(cx: &Ctx, key: &str, v: &toml::Value) -> Result<[f64; 4], SceneE
     }
     let mut d = [0.0; 4];
     for (j, name) in ["d1", "d2", "d3", "d4"].iter().enumerate() {
-        d[j] = t
-            .get(*name)
+        let v = t.get(*name);
+        d[j] = v
             .and_then(number)
             .filter(|x| x.is_finite())
             .ok_or_else(|| {
                 cx.err(
                     &format!("{key}.{name}"),
-                    "missing or not a finite number".into(),
+                    v.and_then(quoted)
+                        .unwrap_or_else(|| "missing or not a finite number".into()),
                 )
             })?;
+    }
+    // The rate factor 1 + d4 ln(rate*) stays positive up to rate* = 1e8 (a negative d4 makes
+    // the material more brittle with the rate, and past its zero the strain to failure would
+    // be negative: damage would fall as the element deforms).
+    let rate_factor = 1.0 + d[3] * MAX_RATE_RATIO.ln();
+    if rate_factor <= 0.0 {
+        return Err(cx.err(
+            &format!("{key}.d4"),
+            format!(
+                "{}: the rate factor 1 + d4 ln(rate / eps_dot0) would reach zero at a plastic strain rate of {} times eps_dot0 (it must stay positive up to {MAX_RATE_RATIO:e} times: d4 > {})",
+                num_text(d[3]),
+                format!("{:.3e}", (-1.0 / d[3]).exp()),
+                format!("{:.4}", -1.0 / MAX_RATE_RATIO.ln())
+            ),
+        ));
     }
     for s in [-1.0 / 3.0, 0.0, 1.0 / 3.0, 1.0, 3.0f64] {
         let e = d[0] + d[1] * (d[2] * s).exp();
