@@ -136,10 +136,10 @@ fn johnson_cook(cx: &Ctx, key: &str, v: &toml::Value) -> Result<[f64; 4], SceneE
         return Err(cx.err(
             &format!("{key}.d4"),
             format!(
-                "{}: the rate factor 1 + d4 ln(rate / eps_dot0) would reach zero at a plastic strain rate of {} times eps_dot0 (it must stay positive up to {MAX_RATE_RATIO:e} times: d4 > {})",
+                "{}: the rate factor 1 + d4 ln(rate / eps_dot0) would reach zero at a plastic strain rate of {:.3e} times eps_dot0 (it must stay positive up to {MAX_RATE_RATIO:e} times: d4 > {:.4})",
                 num_text(d[3]),
-                format!("{:.3e}", (-1.0 / d[3]).exp()),
-                format!("{:.4}", -1.0 / MAX_RATE_RATIO.ln())
+                (-1.0 / d[3]).exp(),
+                -1.0 / MAX_RATE_RATIO.ln()
             ),
         ));
     }
