@@ -485,11 +485,7 @@ fn regauge(b: &ContactBox, c: &Contact, dx: &[V3]) -> Option<([f64; 2], V3, f64)
         q.x[k] = add(q.x[k], dx[i as usize]);
     }
     let proj = q.closest_point(p)?;
-    Some((
-        proj.xi,
-        proj.normal,
-        b.nodes.radius[j] - proj.signed_distance,
-    ))
+    Some((proj.xi, proj.normal, c.radius - proj.signed_distance))
 }
 
 /// Number of cell colours ([`Cells::colour`]): the parities of three indices.

@@ -89,7 +89,7 @@ pub fn recheck(
     for c in &mut out {
         let q = b.quad(c.face as usize, Config::End);
         let p1 = b.nodes.x1[c.node as usize];
-        c.depth = b.nodes.radius[c.node as usize] - dot(sub(p1, q.point(c.xi)), c.normal);
+        c.depth = c.radius - dot(sub(p1, q.point(c.xi)), c.normal);
     }
     out.sort_by_key(|c| (c.node_gid, c.face_gid));
     out
@@ -115,6 +115,7 @@ fn new_contacts_of_node(
                 xi: c.xi,
                 normal: c.normal,
                 depth: c.depth,
+                radius: c.radius,
             };
             (h, c.face as usize)
         })
@@ -152,6 +153,7 @@ fn new_contacts_of_node(
                 xi: h.xi,
                 normal: h.normal,
                 depth: h.depth,
+                radius: h.radius,
             });
         }
     }

@@ -56,7 +56,7 @@ impl Default for SearchParams {
 }
 
 /// One detected contact: owned node `node` crossed face `face` (box indices; the gids too).
-/// `Pod`, so results can be sent as bytes (72 bytes, no padding).
+/// `Pod`, so results can be sent as bytes (80 bytes, no padding).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Contact {
@@ -74,6 +74,10 @@ pub struct Contact {
     pub normal: V3,
     /// Penetration depth, m (> 0): how far the node (or the particle's sphere) is behind the face.
     pub depth: f64,
+    /// The contact radius the depth is measured with, m: the node's own (0 for a mesh node), or
+    /// less for a particle whose sphere started the step across the face's offset surface
+    /// ([`crate::pair`], "A particle that starts across the offset surface").
+    pub radius: f64,
 }
 
 /// Growth of a face's box per unit of `param_tol * diameter`: a point of the face at parametric
@@ -380,6 +384,7 @@ pub fn search_candidates(
                 xi: h.xi,
                 normal: h.normal,
                 depth: h.depth,
+                radius: h.radius,
             });
         }
     }

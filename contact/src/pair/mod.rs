@@ -8,7 +8,9 @@
 //! signed distance `s1 = (p1 - X1(xi1)) . n1(xi1)`. The pair is a contact when
 //!
 //! 1. the node ends behind the offset surface: `s1 < r`;
-//! 2. the node started outside it, or within the capture tolerance `tol = gap_tol * diameter`;
+//! 2. the node started outside it, or within the capture tolerance `tol = gap_tol * diameter`
+//!    (a particle whose centre started outside the face but its sphere across the offset
+//!    surface: see "A particle that starts across the offset surface" below);
 //! 3. the node's path crossed the surface *on the face*, and then the contact point, normal and
 //!    depth are taken where it did:
 //!    - **the end projection falls on the face** (`|xi1|, |eta1| <= 1 + param_tol`, the usual
@@ -31,6 +33,23 @@
 //! Test 2 is what makes this a test of *crossing during the step*: a node that is behind a face at
 //! both ends (the far face of a thin plate, say) is not a contact. The tolerance keeps a node that
 //! push-back left on the face (at a signed distance of round-off) in contact at the next step.
+//!
+//! # A particle that starts across the offset surface
+//!
+//! A particle's sphere can start a step already across a face's offset surface, its centre
+//! still outside the face: a particle born from a failed element next to the face (the element
+//! crushed against a striker, its centroid 0.17 mm from the ball's surface for a contact radius
+//! of 0.45 mm, half its size), or one whose neighbours pushed it there. Rule 2 with the radius
+//! `r` would never count it again (it started behind the offset surface, past the tolerance),
+//! and the face would pass through it: measured on a 4 mm ball at 600 m/s through a plate whose
+//! failed elements become particles, such a particle kept -329 m/s while the ball moved at
+//! -550 m/s and ended 0.8 mm inside it. So such a pair (`0 <= s0 < r - tol`, with `s0` as in
+//! rule 2) is measured with the radius the particle started with, `s0` (the [`Hit`]'s
+//! `radius`): it is a contact when the step brings the centre closer than that, its depth what
+//! the step made. As for a node within the capture tolerance, the overlap the particle started
+//! with is kept, not pushed out at once (which no motion of the step explains and would give
+//! energy back); the face then carries the particle on at that distance. A particle whose centre
+//! started behind the face is not a contact, as a node.
 //!
 //! # Why the second branch (a node over a node, an edge or a corner)
 //!
@@ -78,8 +97,13 @@ pub struct Hit {
     pub xi: [f64; 2],
     /// Unit outward normal of the face at the contact point (end configuration).
     pub normal: V3,
-    /// Penetration depth, m (> 0).
+    /// Penetration depth, m (> 0): behind the face offset outward by `radius`.
     pub depth: f64,
+    /// The contact radius the pair is measured with, m: the node's (0 for a mesh node), or for
+    /// a particle whose sphere started the step already across the offset surface, its centre
+    /// outside the face, that start distance (see the module documentation, "A particle that
+    /// starts across the offset surface").
+    pub radius: f64,
 }
 
 /// Tests node `j` against face `f` of the box, with the rules of the node's kind (a mesh node or
@@ -123,25 +147,25 @@ pub(crate) fn crossing(
     let on_face = |xi: [f64; 2]| xi[0].abs() <= lim && xi[1].abs() <= lim;
     if on_face(end.xi) {
         // 3, the end projection on the face; 2 at the same parametric point.
-        let depth = r - end.signed_distance;
-        if depth > reach {
-            return None;
-        }
         let n0 = q0.normal(end.xi)?;
-        if dot(sub(p0, q0.point(end.xi)), n0) < r - tol {
+        let r = started_outside(dot(sub(p0, q0.point(end.xi)), n0), r, tol)?;
+        let depth = r - end.signed_distance;
+        if depth <= 0.0 || depth > reach {
             return None;
         }
         return Some(Hit {
             xi: end.xi,
             normal: end.normal,
             depth,
+            radius: r,
         });
     }
     // 3, the end projection off the face: where did the path meet the offset surface?
     let start = q0.closest_point(p0)?;
     let (s0, s1) = (start.signed_distance, end.signed_distance);
     // 2.
-    if s0.is_nan() || s0 < r - tol {
+    let r = started_outside(s0, r, tol)?;
+    if s1 >= r {
         return None;
     }
     let t = if s0 > r { (s0 - r) / (s0 - s1) } else { 0.0 };
@@ -159,5 +183,28 @@ pub(crate) fn crossing(
     if depth.is_nan() || depth <= 0.0 || norm(gap) > reach {
         return None;
     }
-    Some(Hit { xi, normal, depth })
+    Some(Hit {
+        xi,
+        normal,
+        depth,
+        radius: r,
+    })
+}
+
+/// Rule 2 for a node of contact radius `r` that started the step at signed distance `s0` from
+/// the face (capture tolerance `tol`): the radius the pair is measured with, or `None` where
+/// the node did not start outside. Outside is `s0 >= r - tol`, measured with `r`; a particle
+/// (`r > 0`) whose centre started outside the face but its sphere across the offset surface
+/// (`0 <= s0 < r - tol`) is measured with the radius `s0` it started with (module
+/// documentation, "A particle that starts across the offset surface").
+fn started_outside(s0: f64, r: f64, tol: f64) -> Option<f64> {
+    if s0.is_nan() {
+        None
+    } else if s0 >= r - tol {
+        Some(r)
+    } else if r > 0.0 && s0 >= 0.0 {
+        Some(s0)
+    } else {
+        None
+    }
 }

@@ -201,16 +201,29 @@ pub fn reference_pair(
     let m0 = Mono::new(x0);
     let corner_motion = (0..4).map(|k| norm(sub(x1[k], x0[k]))).fold(0.0, f64::max);
     let cap = norm(sub(p1, p0)) + corner_motion + r + tol;
+    // A particle whose centre started outside the face, its sphere across the offset surface:
+    // measured with the distance it started at.
+    let started = |s0: f64| {
+        if s0 >= r - tol {
+            (true, r)
+        } else if r > 0.0 && s0 >= 0.0 {
+            (true, s0)
+        } else {
+            (false, r)
+        }
+    };
     let (hit, xi, depth) = if s.abs() <= lim && t.abs() <= lim {
-        let depth = r - s1;
         let s0 = dot(sub(p0, m0.at(s, t)), m0.normal(s, t));
         margin = margin.min((s0 - (r - tol)).abs() / size);
+        let (outside, r) = started(s0);
+        let depth = r - s1;
         margin = margin.min((cap - depth).abs() / size);
-        (depth > 0.0 && s0 >= r - tol && depth <= cap, [s, t], depth)
+        (depth > 0.0 && outside && depth <= cap, [s, t], depth)
     } else {
         let (a, b) = m0.project(p0);
         let s0 = dot(sub(p0, m0.at(a, b)), m0.normal(a, b));
         margin = margin.min((s0 - (r - tol)).abs() / size);
+        let (outside, r) = started(s0);
         let frac = if s0 > r { (s0 - r) / (s0 - s1) } else { 0.0 };
         let c = [a + frac * (s - a), b + frac * (t - b)];
         margin = margin.min((lim - c[0].abs()).abs().min((lim - c[1].abs()).abs()));
@@ -220,7 +233,7 @@ pub fn reference_pair(
         margin = margin.min(depth.abs() / size);
         margin = margin.min((cap - norm(gap)).abs() / size);
         let hit = s1 < r
-            && s0 >= r - tol
+            && outside
             && c[0].abs() <= lim
             && c[1].abs() <= lim
             && depth > 0.0
