@@ -558,6 +558,7 @@ fn start_info<'a>(
         dt_stable: stable0,
         dt,
         end_time: scene.run.end_time,
+        fixed_dt: scene.run.dt.is_some(),
         mesh_split: model.mesh_split.map(|s| s.describe()).or_else(|| {
             // Native tetrahedra: say so, as the split says what it did.
             let tets = mesh.map_or(0, |l| l.global_tets);

@@ -37,6 +37,8 @@ pub struct StartInfo<'a> {
     pub dt: f64,
     /// The end time, s.
     pub end_time: f64,
+    /// Whether the step is fixed (`run.dt`, implicit mode): the count is then the run's.
+    pub fixed_dt: bool,
     /// The mesh's tetrahedra and prisms run as hexahedra, in words (`SplitSummary::describe`).
     pub mesh_split: Option<String>,
 }
@@ -61,13 +63,15 @@ impl Progress {
             last: 0.0,
             drawn: false,
         };
-        let steps = info.end_time / info.dt;
+        // (the schedule ends a run whose time is within round-off of end_time: 1e-4 / 2e-6
+        // is 50 steps, not the 51 a plain ceiling of 50.000000000000001 gives)
+        let steps = info.end_time / info.dt * (1.0 - 1e-12);
         if let (true, Some(split)) = (active, &info.mesh_split) {
             eprintln!("tdyn: {}: mesh: {split}", info.scene);
         }
         if active {
             eprintln!(
-                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s at this step (the step shrinks as bodies deform; the progress lines update the count)",
+                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s{}",
                 info.scene,
                 info.elements,
                 info.nodes,
@@ -78,7 +82,12 @@ impl Progress {
                 info.dt_stable,
                 info.dt,
                 steps_text(steps),
-                info.end_time
+                info.end_time,
+                if info.fixed_dt {
+                    ""
+                } else {
+                    " at this step (the step shrinks as bodies deform; the progress lines update the count)"
+                }
             );
         }
         if warn && steps > STEPS_WARNING {
