@@ -253,6 +253,23 @@ pub fn build(
             // The FE stage lends the contact stage the nodes and faces of the named surfaces.
             let mesh_ids = fe.mesh.local.global_nodes;
             let surfaces = fe.set_contact_surfaces(world, def, &block_names, &groups);
+            // Faces of one body alone, without self-contact or particles to meet them: no pair
+            // can form (the same count on every rank; rank 0 says it).
+            let particles_meet =
+                def.particles == Some(true) && (sph.is_some() || scene.releases_any());
+            if surfaces.bodies_in_contact < 2
+                && !def.self_contact
+                && !particles_meet
+                && world.rank() == 0
+            {
+                eprintln!(
+                    "tdyn: warning: {file}: contact.surfaces: {}: no pair can form (pairs are searched between bodies; name the surfaces of the bodies that meet, or set self_contact = true)",
+                    match surfaces.bodies_in_contact {
+                        0 => "no face of the surfaces named lies on a body's boundary",
+                        _ => "every contact face is on one body, and self_contact is false",
+                    }
+                );
+            }
             Some(Contact::new(
                 world,
                 &file,

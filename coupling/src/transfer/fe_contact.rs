@@ -55,6 +55,8 @@ pub struct FeContact {
     pub global_faces: u64,
     /// Bodies in the mesh.
     pub n_bodies: u32,
+    /// Bodies with a contact face or an element that may fail (every rank the same).
+    pub bodies_in_contact: u32,
     /// Whether each body is a master of the one-pass search (all false with two passes).
     pub master_body: Vec<bool>,
     /// Each body's block (index in `block_tags` of `build`: the scene's `[[block]]` order):
@@ -200,6 +202,8 @@ struct RootSurfaces {
     body_block: Vec<u64>,
     /// Each block's flag of a contact face (0 or 1).
     block_in_contact: Vec<u64>,
+    /// Bodies with a contact face or a failing element (whose faces may open).
+    bodies_in_contact: u64,
 }
 
 /// On rank 0: the boundary faces and bodies of the whole mesh (elements `all_e` gathered from
@@ -271,6 +275,14 @@ fn root_surfaces(
     kept.extend(openings::opening_faces(&hexes, &fail, &surf.element_body));
     // Deterministic face gids: by (element gid, side), independent of the rank count.
     kept.sort_by_key(|(f, _)| (elem_gid[f.element], f.side));
+    let mut in_contact: Vec<u32> = kept.iter().map(|(f, _)| f.body).collect();
+    in_contact.extend(
+        (0..hexes.len())
+            .filter(|&e| fail[e])
+            .map(|e| surf.element_body[e]),
+    );
+    in_contact.sort_unstable();
+    in_contact.dedup();
     let mut block_in_contact = vec![0u64; nb];
     for (f, _) in &kept {
         let b = all_block[order[f.element]] as usize;
@@ -312,6 +324,7 @@ fn root_surfaces(
         global_faces: kept.len() as u64,
         body_block,
         block_in_contact,
+        bodies_in_contact: in_contact.len() as u64,
     }
 }
 
@@ -351,7 +364,11 @@ impl FeContact {
             );
         }
         let mine = scatterv_u64(comm, std::mem::take(&mut root.per_rank));
-        let mut gf = [root.global_faces, root.n_bodies as u64];
+        let mut gf = [
+            root.global_faces,
+            root.n_bodies as u64,
+            root.bodies_in_contact,
+        ];
         comm.process_at_rank(0).broadcast_into(&mut gf[..]);
         root.master_body.resize(gf[1] as usize, 0);
         comm.process_at_rank(0)
@@ -364,6 +381,7 @@ impl FeContact {
         let out = FeContact {
             global_faces: gf[0],
             n_bodies: gf[1] as u32,
+            bodies_in_contact: gf[2] as u32,
             master_body: root.master_body.iter().map(|&m| m != 0).collect(),
             body_block: root.body_block.iter().map(|&b| b as u32).collect(),
             block_in_contact: root.block_in_contact.iter().map(|&b| b != 0).collect(),
