@@ -63,3 +63,18 @@ pub fn half_step_terms(m: f64, dv: f64, v: f64) -> [f64; 2] {
 pub fn booked_work(m: f64, dv: f64, v: f64, start_kick: f64) -> f64 {
     m * dv * (v + 0.5 * dv - start_kick)
 }
+
+/// One component of the work a contact correction does on a constrained node of mass `m`
+/// moving at its half-step velocity `v` (a `velocity` node's prescribed one), where its
+/// constraints removed `removed` of the correction `F dt / m` (J): `m removed v`, `F . v dt`.
+/// The node's motion does not change (its reaction takes the impulse, and its work, the
+/// opposite, is external work), but the contact force works on it: a face driven into a free
+/// node gives the node kinetic energy, `m dv . (v + dv/2)` in [`booked_work`], that the
+/// driven corners' share takes back. The pair's total is then what contact takes (a free node
+/// of mass `m` at rest met by an immovable face at speed `V`: `m V^2 / 2 - m V^2 = -m V^2 /
+/// 2`, an inelastic impact's loss), not the boundary's work through the face, which booked on
+/// the free node alone reads as contact giving energy back. Counted in the energy guard's
+/// first term too (`half_step_terms`' `A`).
+pub fn constrained_work(m: f64, removed: f64, v: f64) -> f64 {
+    m * removed * v
+}

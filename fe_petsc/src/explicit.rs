@@ -186,6 +186,10 @@ pub struct ExplicitFe {
     /// their half of the trapezoids), J: counted by the kick and the contact push-back, taken by
     /// `finish_step` (zero between steps).
     kick_work: Folds,
+    /// The work of the constraints' reactions to the contact push-back over the owned nodes
+    /// ([`ExplicitFe::apply_contact`]), J: taken by `finish_step` into the external work
+    /// (zero between steps).
+    contact_reaction_work: Folds,
     /// The grids of the energy and momentum sums ([`crate::exact`]), from the mass
     /// ([`ExplicitFe::initial_energies`]).
     pub grids: SumGrids,

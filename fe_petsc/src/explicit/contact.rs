@@ -18,6 +18,11 @@ pub struct ContactCorrection {
     pub a: [f64; 3],
     /// The node's push-back bits before the correction (bit 0: corrected in the last step).
     pub pushed: u8,
+    /// The part of the correction `F dt / m` that the node's constraints removed (zero on a
+    /// free node), m/s: a `velocity` node driven into a face takes the push-back's impulse in
+    /// its reaction, and the contact force does work on it at its prescribed velocity `v`
+    /// ([`ExplicitFe::apply_contact`]).
+    pub removed: [f64; 3],
 }
 
 impl ExplicitFe {
@@ -68,7 +73,14 @@ impl ExplicitFe {
     /// Node `n`'s velocity correction for contact force `f` over `dt`, its constraints applied,
     /// `dv = F dt / m`, m/s: what [`ExplicitFe::apply_contact`] adds to the half-step velocity.
     pub fn contact_dv(&self, n: usize, f: [f64; 3], dt: f64) -> [f64; 3] {
-        let mut dv = impulse_dv(f, dt, self.mass[n]);
+        self.contact_dv_removed(n, f, dt).0
+    }
+
+    /// [`ExplicitFe::contact_dv`] and the part of `F dt / m` that the constraints removed
+    /// ([`ContactCorrection::removed`]), m/s.
+    pub fn contact_dv_removed(&self, n: usize, f: [f64; 3], dt: f64) -> ([f64; 3], [f64; 3]) {
+        let free = impulse_dv(f, dt, self.mass[n]);
+        let mut dv = free;
         if self.constrained[n] {
             for (m, c) in &self.constraints {
                 if *m as usize == n {
@@ -76,7 +88,7 @@ impl ExplicitFe {
                 }
             }
         }
-        dv
+        (dv, std::array::from_fn(|c| free[c] - dv[c]))
     }
 
     /// Applies contact push-back forces after `kick_drift`: `force` holds each node's force
@@ -86,6 +98,15 @@ impl ExplicitFe {
     /// components as `book` gives them ([`ContactCorrection`]; the contact stage's
     /// bookkeeping, `m dv . (v + dv/2 - kick a_n dt)` with `dv` the velocity correction):
     /// what closes the energy balance of the step with the element and external work.
+    ///
+    /// A constrained node takes in its reaction the part of the correction its constraints
+    /// remove (`contact_reaction`, reactions.csv): over the step the contact force does the
+    /// work `m removed . v` on it at its half-step velocity `v` (a `velocity` node's prescribed
+    /// one; zero at a `fixed` node and along a symmetry plane's normal), which `book` counts
+    /// with the push-back's ([`ContactCorrection::removed`]), and the reaction the opposite,
+    /// counted in the external work (as the reactions at constrained nodes are). Without it a
+    /// face driven by a `velocity` boundary that pushes a free node books the kinetic energy it
+    /// gives the node as contact giving energy back, while the energy came from the boundary.
     pub fn apply_contact(
         &mut self,
         force: &[[f64; 3]],
@@ -104,6 +125,7 @@ impl ExplicitFe {
                 continue;
             }
             let mut dv = impulse_dv(f, dt, self.mass[n]);
+            let mut removed = [0.0; 3];
             if let Some(i) = cons[n] {
                 // The constraint removes what it does not allow of the correction: it applies
                 // m (dv_constrained - dv_free) / dt to the node over the step (-F for a fixed
@@ -112,6 +134,7 @@ impl ExplicitFe {
                 apply(&self.constraints[i].1, &mut dv, false);
                 let m_dt = self.mass[n] / dt;
                 self.contact_reaction[i] = std::array::from_fn(|c| m_dt * (dv[c] - free[c]));
+                removed = std::array::from_fn(|c| free[c] - dv[c]);
             }
             let a_n = self.acceleration(n);
             if self.owned[n] {
@@ -129,7 +152,15 @@ impl ExplicitFe {
                     v: self.v[n],
                     a: a_n,
                     pushed: self.pushed[n],
+                    removed,
                 });
+                // The reaction's share: the opposite of the contact force's work on the node.
+                if removed != [0.0; 3] {
+                    let (m, v) = (self.mass[n], self.v[n]);
+                    for c in 0..3 {
+                        grid.add(&mut self.contact_reaction_work, -(m * removed[c] * v[c]));
+                    }
+                }
                 for wc in w {
                     grid.add(&mut work, wc);
                 }

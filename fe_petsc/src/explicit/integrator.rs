@@ -153,6 +153,11 @@ impl ExplicitFe {
         }
         // The element work's other half, counted at the kick (`nodal::kick_drift`).
         exact_sum::merge(&mut sums[1], &std::mem::take(&mut self.kick_work));
+        // The constraints' reactions to the push-back, with the other reactions' work.
+        exact_sum::merge(
+            &mut sums[2],
+            &std::mem::take(&mut self.contact_reaction_work),
+        );
         // The rigid walls hold the nodes they put back through the closing kick.
         self.hold_on_walls(dt, &mut sums);
         self.timers.nodal += t0.elapsed().as_secs_f64();

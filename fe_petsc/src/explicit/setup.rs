@@ -42,6 +42,7 @@ impl ExplicitFe {
             force: vec![[0.0; 3]; nn],
             assembly,
             kick_work: [0.0; 3],
+            contact_reaction_work: [0.0; 3],
             grids: SumGrids::for_mass(1.0),
             constrained_nodes: Vec::new(),
             constrained_force: Vec::new(),

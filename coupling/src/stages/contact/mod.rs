@@ -161,7 +161,9 @@ pub const ENERGY_INJECTION_BUDGET: f64 = 1e-6;
 /// penetration"). The push-back is an impulse on the half-step velocities `v(n+1/2)` that the
 /// drift moved the nodes with; for its forces scaled by `alpha` it changes their kinetic
 /// energy by `dK(alpha) = alpha A + alpha^2 B` (`A = sum m dv . v(n+1/2)`, `B = sum m |dv|^2 /
-/// 2`, `dv = F dt / m`, summed over ranks: FE nodes and particles). An inelastic projection has
+/// 2`, `dv = F dt / m`, summed over ranks: FE nodes and particles; `A` also holds the contact
+/// force's work on the nodes a `velocity` boundary drives, `contact::energy::constrained_work`,
+/// so that a driven face pushing a free node is not read as contact adding energy). An inelastic projection has
 /// `dK <= 0`, and so do the bounded rows of a linear solve (restitution at most 1); what the
 /// geometric passes, the rechecks' rows and friction leave can be positive. Where `dK(1)` is
 /// positive past round-off ([`ENERGY_TOL`]) and past [`ENERGY_INJECTION_BUDGET`] of the run's

@@ -7,7 +7,7 @@ use super::{Fe, Integrator};
 use crate::input::scene::ContactDef;
 use crate::stages::contact::body::ContactBody;
 use crate::transfer::fe_contact::{FeContact, FullFace};
-use contact::energy::{booked_kick, booked_work, half_step_terms};
+use contact::energy::{booked_kick, booked_work, constrained_work, half_step_terms};
 use contact::NodeRecord;
 use fe_petsc::exact::Folds;
 use fe_petsc::explicit::ExplicitFe;
@@ -68,11 +68,16 @@ impl Fe {
 /// ranks) to the FE state after the drift ([`ExplicitFe::apply_contact`]) and returns the work
 /// the corrections book over owned nodes, as the contact stage books every correction: `m dv .
 /// (v + dv/2 - kick a(n) dt)`, `kick` = [`booked_kick`] of the node's push-back bits
-/// ([`booked_work`]). The contact stage's and the rigid walls' push-back.
+/// ([`booked_work`]), plus on a constrained node the contact force's work at its prescribed
+/// velocity, `m removed . v` ([`constrained_work`]). The contact stage's and the rigid walls'
+/// push-back.
 pub fn apply_contact(state: &mut ExplicitFe, force: &[[f64; 3]], dt: f64) -> Folds {
     state.apply_contact(force, dt, |c| {
         let kick = booked_kick(c.pushed);
-        std::array::from_fn(|k| booked_work(c.mass, c.dv[k], c.v[k], kick * dt * c.a[k]))
+        std::array::from_fn(|k| {
+            booked_work(c.mass, c.dv[k], c.v[k], kick * dt * c.a[k])
+                + constrained_work(c.mass, c.removed[k], c.v[k])
+        })
     })
 }
 
@@ -133,12 +138,16 @@ impl ContactBody for Fe {
             if f == [0.0; 3] || !fe.owned[n] {
                 continue;
             }
-            let dv = fe.contact_dv(n, f, dt);
+            let (dv, removed) = fe.contact_dv_removed(n, f, dt);
             let v = fe.v[n];
             for c in 0..3 {
                 let [a, b] = half_step_terms(fe.mass[n], dv[c], v[c]);
                 e.add(&mut t[0], a);
                 e.add(&mut t[1], b);
+                // A driven node's share: the contact force's work on it (`constrained_work`).
+                if removed[c] != 0.0 {
+                    e.add(&mut t[0], constrained_work(fe.mass[n], removed[c], v[c]));
+                }
             }
         }
         t
