@@ -1081,13 +1081,24 @@ fn a_round_tube_folding_onto_its_driven_end_never_has_contact_give_energy_back()
         let (h, rows) = read_csv(&out.join("history.csv"));
         let ce = column(&h, &rows, "contact_energy");
         let contacts = column(&h, &rows, "contacts");
-        assert!(contacts.iter().any(|&c| c > 0.0), "np {np}: the folds touch");
+        assert!(
+            contacts.iter().any(|&c| c > 0.0),
+            "np {np}: the folds touch"
+        );
         let low = ce.iter().copied().fold(f64::MAX, f64::min);
-        assert!(low >= 0.0, "np {np}: contact_energy reaches {low:e} J (>= 0)");
+        assert!(
+            low >= 0.0,
+            "np {np}: contact_energy reaches {low:e} J (>= 0)"
+        );
         outs.push(out);
     }
     for file in ["history.csv", "probes.csv"] {
-        let bad = csv_columns_differ(&outs[0], &outs[1], file, &["contact_imbalance", "contact_bytes"]);
+        let bad = csv_columns_differ(
+            &outs[0],
+            &outs[1],
+            file,
+            &["contact_imbalance", "contact_bytes"],
+        );
         assert!(bad.is_empty(), "np 3 against np 1: {file} differs: {bad:?}");
     }
 }

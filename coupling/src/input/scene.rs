@@ -618,7 +618,7 @@ pub struct SphDef {
     #[serde(default = "d_density")]
     pub density: String,
     /// Whether particles evolve their specific internal energy; omitted: where a particle
-    /// material's eos depends on it ([`Scene::particles_needing_energy`]).
+    /// material's eos depends on it ([`particles_needing_energy`]).
     #[serde(default)]
     pub energy: Option<bool>,
     #[serde(default)]
