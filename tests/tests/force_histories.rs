@@ -254,6 +254,21 @@ fn contact_force_of_a_resting_block_is_its_weight_at_np_1_and_3() {
             "tdyn plot --force plate-block: {}",
             String::from_utf8_lossy(&o.stderr)
         );
+        // A column of another quantity is refused, naming the displacement columns
+        // (docs/cli.md): a velocity drawn as metres would be a wrong chart.
+        let o = std::process::Command::new(tdyn())
+            .arg("plot")
+            .arg(&out)
+            .args(["--force", "plate-block", "--displacement", "time"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && err.contains("not a displacement column")
+                && err.contains("block_top.displacement_z"),
+            "tdyn plot --displacement time is refused naming the displacement columns: {err}"
+        );
     }
 }
 
