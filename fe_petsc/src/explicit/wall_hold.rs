@@ -114,8 +114,11 @@ impl ExplicitFe {
             let mut q = self.closing_kick(n, con.is_some(), dt);
             let v0 = self.v[n];
             let mut v = v0;
-            for hold in group {
-                let Some(mut dv) = hold_change(hold, v, q) else {
+            for (i, hold) in group.iter().enumerate() {
+                // the node's other walls (a corner): their normals hold their own directions
+                let others = group.iter().enumerate().filter(|&(j, _)| j != i);
+                let others: Vec<[f64; 3]> = others.map(|(_, h)| h.normal).collect();
+                let Some(mut dv) = hold_change(hold, v, q, &others) else {
                     continue;
                 };
                 if let Some(con) = con {
@@ -167,8 +170,11 @@ impl ExplicitFe {
 /// before left of it), m/s: `None` where `q` does not point into the wall; else the normal
 /// change `du = -q . n` that stops the kick into it, and with friction the stop of the sliding
 /// relative to the wall up to `friction du` (`contact::Wall::correction`'s Coulomb rule with
-/// the hold's normal change for the correction's).
-fn hold_change(hold: &WallHold, v: [f64; 3], q: [f64; 3]) -> Option<[f64; 3]> {
+/// the hold's normal change for the correction's), less its parts along the normals of the
+/// node's `others` walls: in a corner each wall holds its own direction, and a rough floor's
+/// friction taking the motion into the wall beside it booked that as friction (a rubber cube
+/// resting in a floor-wall corner with a rough floor passed 5 % of energy error in 4 ms).
+fn hold_change(hold: &WallHold, v: [f64; 3], q: [f64; 3], others: &[[f64; 3]]) -> Option<[f64; 3]> {
     let n = hold.normal;
     let k = q[0] * n[0] + q[1] * n[1] + q[2] * n[2];
     if !(k < 0.0) {
@@ -180,7 +186,11 @@ fn hold_change(hold: &WallHold, v: [f64; 3], q: [f64; 3]) -> Option<[f64; 3]> {
     }
     let w: [f64; 3] = std::array::from_fn(|c| v[c] + du * n[c] - hold.velocity[c]);
     let wn = w[0] * n[0] + w[1] * n[1] + w[2] * n[2];
-    let wt: [f64; 3] = std::array::from_fn(|c| w[c] - wn * n[c]);
+    let mut wt: [f64; 3] = std::array::from_fn(|c| w[c] - wn * n[c]);
+    for m in others {
+        let wm = wt[0] * m[0] + wt[1] * m[1] + wt[2] * m[2];
+        wt = std::array::from_fn(|c| wt[c] - wm * m[c]);
+    }
     let slide = (wt[0] * wt[0] + wt[1] * wt[1] + wt[2] * wt[2]).sqrt();
     let stop = if slide > 0.0 {
         (hold.friction * du / slide).min(1.0)
