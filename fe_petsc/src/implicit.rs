@@ -518,6 +518,21 @@ impl ImplicitFe {
         self.walls.as_ref().map_or(&self.dofs[n], |w| w.base(n))
     }
 
+    /// The step from now on, s (the run's last step, shortened onto the end time when the
+    /// fixed step does not divide it): the mass term 4 M / dt^2, the walls' increments and the
+    /// tangent (rebuilt at the next Newton iteration) follow it.
+    pub fn set_dt(&mut self, dt: f64) {
+        if dt == self.dt {
+            return;
+        }
+        self.dt = dt;
+        self.mass_term = self.fe.mass.iter().map(|m| 4.0 * m / (dt * dt)).collect();
+        if let Some(w) = self.walls.as_mut() {
+            w.set_dt(dt);
+        }
+        self.tangent_stale = true;
+    }
+
     /// Number of local nodes.
     pub fn n_nodes(&self) -> usize {
         self.fe.x.len()

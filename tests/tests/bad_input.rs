@@ -608,3 +608,46 @@ fn particles_behind_a_rigid_wall_are_refused() {
         "rigid_wall[0] (\"floor\"): 0 mesh nodes and",
     );
 }
+
+#[test]
+fn particles_on_a_face_inside_a_meshed_body_are_refused_and_on_its_outer_face_accepted() {
+    // docs/scene.md: a particle may not start inside a meshed body (nothing would push it out:
+    // particle-face contact sees crossings only). A plate 4 mm thick of two hexahedra through
+    // its thickness (meshes/plate.geo) has an inner face at z = -2 mm; a lattice of spacing
+    // 2 mm whose layer lies on it (z = -2 mm exactly, x and y off the element faces) is inside
+    // the plate, on no element's interior: refused, naming the entry and the block. The same
+    // lattice one layer up, resting on the plate's top face (z = 0), is outside: accepted.
+    let dir = workdir("particles_on_inner_face");
+    let scene = |zmin: f64, zmax: f64| {
+        format!(
+            "title = \"jet on plate\"\n[run]\nend_time = 1.0e-7\n[[mesh]]\nfile = \"{}\"\n\
+             params = {{ L = 0.1, T = 0.004, N = 10, M = 2 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\n\
+             youngs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[material]]\nname = \"water\"\nmodel = \"fluid\"\ndensity = 1000.0\n\
+             eos = {{ kind = \"tait\", rho0 = 1000.0, sound_speed = 50.0, gamma = 7.0 }}\n\
+             [[block]]\ngroup = \"plate\"\nmaterial = \"steel\"\n\
+             [[particles]]\nname = \"jet\"\nmaterial = \"water\"\nspacing = 0.002\n\
+             region = {{ box = {{ min = [-0.008, -0.008, {zmin}], max = [0.008, 0.008, {zmax}] }} }}\n\
+             velocity = [0.0, 0.0, -50.0]\n\
+             [contact]\nsurfaces = [\"top\"]\nparticles = true\n",
+            root().join("meshes/plate.geo").display()
+        )
+    };
+    let inner = dir.join("scene.toml");
+    std::fs::write(&inner, scene(-0.003, -0.001)).unwrap();
+    assert_scene_refused(
+        "a lattice on the plate's inner face",
+        &inner,
+        &dir.join("inner"),
+        "particles[0] \"jet\": a particle at (-0.007, -0.007, -0.002) starts inside block \"plate\"",
+    );
+    let outer = dir.join("outer.toml");
+    std::fs::write(&outer, scene(-0.001, 0.001)).unwrap();
+    let o = run(2, &outer, &dir.join("outer"));
+    assert!(
+        o.status.success(),
+        "a lattice resting on the plate's top face is outside it:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

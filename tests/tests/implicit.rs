@@ -507,3 +507,53 @@ fn compare_charts_both_modes_and_exits_0_on_unstable_runs() {
         "the implicit period error grows with dt: {err:?}"
     );
 }
+
+#[test]
+fn a_fixed_step_that_does_not_divide_the_end_time_ends_the_run_on_it() {
+    // docs/scene.md: end_time is when the run stops and the state at end_time is written. A
+    // fixed run.dt of 3e-5 s to 1e-3 s is 33 steps and a last one of 1e-5 s; 5e-3 s to 1e-3 s
+    // is one step of 1e-3 s. The bar (free, no supports, moving at 1 m/s along x) translates
+    // rigidly, so its displacement at the end is v t_end = 1e-3 m (analytic; within 1e-13 m,
+    // the round-off of 1 m coordinates over a few dozen steps: with the whole last step it was
+    // 1.02e-3 and 5e-3 m). Implicit and explicit alike (the
+    // explicit fixed step 1e-7 s, below the stable limit, to 3.05e-6 s: 30 steps and a half).
+    for (mode, dt, end, steps) in [
+        ("implicit", 3e-5, 1e-3, 34.0),
+        ("implicit", 5e-3, 1e-3, 1.0),
+        ("explicit", 1e-7, 3.05e-6, 31.0),
+    ] {
+        let dir = workdir(&format!("fixed_dt_end_{mode}_{dt:e}"));
+        let run = format!("end_time = {end:e}\nmode = \"{mode}\"\ndt = {dt:e}\n");
+        let scene = bar_scene(
+            &dir,
+            4,
+            &run,
+            "[[probe]]\nname = \"tip\"\npoint = [1.0, 0.0, 0.0]\nfields = [\"displacement_x\"]\n",
+        );
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "material = \"steel\"\n\n[[boundary]]",
+            "material = \"steel\"\nvelocity = [1.0, 0.0, 0.0]\n\n[[boundary]]",
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(1, &scene, &out);
+        let (h, rows) = read_csv(&out.join("history.csv"));
+        let (t, step) = (column(&h, &rows, "time"), column(&h, &rows, "step"));
+        assert_eq!(
+            *step.last().unwrap(),
+            steps,
+            "{mode} dt {dt:e} to {end:e}: steps (the last shortened onto end_time)"
+        );
+        assert!(
+            (t.last().unwrap() - end).abs() <= 1e-15 * end,
+            "{mode} dt {dt:e}: the run ends at end_time {end:e}, not {}",
+            t.last().unwrap()
+        );
+        let (ph, prow) = read_csv(&out.join("probes.csv"));
+        let u = *column(&ph, &prow, "tip.displacement_x").last().unwrap();
+        assert!(
+            (u - end).abs() <= 1e-13,
+            "{mode} dt {dt:e}: rigid translation v t_end = {end:e} m, got {u:e} (1e-13 m)"
+        );
+    }
+}

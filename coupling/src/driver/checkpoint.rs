@@ -73,6 +73,9 @@ pub struct CheckState {
     /// The external work after the last step, J.
     #[serde(default)]
     pub external_last: f64,
+    /// Steps in a row, up to the last, whose checked energy error was past the limit.
+    #[serde(default)]
+    pub over_limit_steps: u64,
 }
 
 /// What every rank shares (`meta.json`).

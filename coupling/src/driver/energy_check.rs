@@ -16,6 +16,9 @@ pub(super) struct EnergyCheck {
     pub(super) scale: energy::EnergyScale,
     /// The external work after the last step, J.
     pub(super) external_last: f64,
+    /// Checked steps in a row, up to the last, whose error was past the limit
+    /// (`energy::ENERGY_STOP_STEPS`).
+    pub(super) over_limit_steps: u64,
 }
 
 impl EnergyCheck {
@@ -37,6 +40,7 @@ impl EnergyCheck {
             err_max: 0.0,
             err_max_checked: 0.0,
             hourglass: energy::HourglassWatch::new(scene),
+            over_limit_steps: 0,
         }
     }
 
@@ -54,6 +58,7 @@ impl EnergyCheck {
             hourglass: self.hourglass.clone(),
             scale: self.scale,
             external_last: self.external_last,
+            over_limit_steps: self.over_limit_steps,
         }
     }
 
@@ -63,6 +68,7 @@ impl EnergyCheck {
         self.err_max = s.err_max;
         self.err_max_checked = s.err_max_checked;
         self.hourglass = s.hourglass.clone();
+        self.over_limit_steps = s.over_limit_steps;
         if s.scale.floor > 0.0 {
             self.scale = s.scale;
             self.external_last = s.external_last;
@@ -158,7 +164,16 @@ impl EnergyCheck {
         } else {
             (early, err > energy::EARLY_SCALED_ERROR)
         };
-        if scaled_past && measured > energy_error_limit(step, self.max_energy_error) {
+        let limit = energy_error_limit(step, self.max_energy_error);
+        let past = scaled_past && measured > limit;
+        // From step 100 an error past the limit stops the run when it stays there
+        // (energy::ENERGY_STOP_STEPS) or passes ten times the limit.
+        self.over_limit_steps = if past { self.over_limit_steps + 1 } else { 0 };
+        let stop = past
+            && (step < ENERGY_CHECK_FROM_STEP
+                || self.over_limit_steps >= energy::ENERGY_STOP_STEPS
+                || measured > energy::ENERGY_STOP_AT_ONCE * limit);
+        if stop {
             let err = measured;
             let _ = outputs.history_row(model, &self.row(clock, model, err));
             let _ = outputs.force_rows(world, model, clock.time);
@@ -168,11 +183,23 @@ impl EnergyCheck {
                 format!(
                     "{file}: energy error {err:.3e} passed run.max_energy_error = {}{} at t = {t:e} s, step {step} (E = {total:e} J, E0 = {:e} J, external work {external:e} J): {blow_up}",
                     self.max_energy_error,
-                    early_note(step),
+                    self.stop_note(step),
                     self.e0
                 ),
             ));
         }
         Ok(err)
+    }
+
+    /// How the error passed the limit, for the stop's message: the early check's rule, ten
+    /// times the limit at once, or the limit for `energy::ENERGY_STOP_STEPS` steps.
+    fn stop_note(&self, step: u64) -> String {
+        if step < ENERGY_CHECK_FROM_STEP {
+            early_note(step)
+        } else if self.over_limit_steps >= energy::ENERGY_STOP_STEPS {
+            format!(" for {} steps in a row", self.over_limit_steps)
+        } else {
+            format!(" (over {} times it at once)", energy::ENERGY_STOP_AT_ONCE)
+        }
     }
 }

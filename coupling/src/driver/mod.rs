@@ -114,7 +114,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         let warnings = scene::unit_warnings(&scene)
             .into_iter()
             .chain(scene::interaction_warnings(&scene))
-            .chain(scene::sph_warnings(&scene));
+            .chain(scene::sph_warnings(&scene))
+            .chain(scene::mode_warnings(&scene));
         for w in warnings {
             eprintln!("tdyn: warning: {w}");
         }

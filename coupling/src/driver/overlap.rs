@@ -20,6 +20,10 @@ use rustc_hash::FxHashMap as HashMap;
 /// particle resting on it) is not inside it.
 const INSIDE_MARGIN: f64 = 1e-6;
 
+/// The diagonal step, in mean element sizes, of the test for a particle on a face the body's
+/// elements share (`first_inside`): far above [`INSIDE_MARGIN`], far below a particle spacing.
+const PROBE_STEP: f64 = 1e-4;
+
 /// Whether any particle of `scene` starts inside an element of `fe` (collective): the error
 /// names the `[[particles]]` entry, the block, the element and the point.
 pub fn check(world: &SimpleCommunicator, scene: &Scene, fe: &ExplicitFe) -> Result<(), String> {
@@ -72,30 +76,50 @@ fn first_inside(scene: &Scene, fe: &ExplicitFe) -> Option<String> {
             }
         }
     }
-    for s in &seeds {
-        let Some(list) = grid.get(&cell(s.x)) else {
-            continue;
-        };
-        for &e in list {
-            let e = e as usize;
+    // The element that holds `q` strictly inside (see `inside`), if any.
+    let holder = |q: [f64; 3]| -> Option<usize> {
+        let list = grid.get(&cell(q))?;
+        list.iter().map(|&e| e as usize).find(|&e| {
             let (lo, hi) = boxes[e];
-            if (0..3).any(|c| s.x[c] <= lo[c] || s.x[c] >= hi[c]) {
-                continue;
-            }
-            if inside(fe, e, &corners(e), s.x) {
-                let def = &scene.particles[s.entry];
-                let block = &scene.blocks[fe.element_block(e)].group;
-                return Some(format!(
-                    "{}: particles[{}] \"{}\": a particle at ({}, {}, {}) starts inside block \"{block}\" (element {}): particle regions must not overlap meshed bodies (move the region, or shrink it by a particle spacing)",
-                    scene.file.display(),
-                    s.entry,
-                    def.name,
-                    s.x[0],
-                    s.x[1],
-                    s.x[2],
-                    fe.element_id(e)
-                ));
-            }
+            (0..3).all(|c| q[c] > lo[c] && q[c] < hi[c]) && inside(fe, e, &corners(e), q)
+        })
+    };
+    // A point on a face, an edge or a corner the body's elements share (a lattice that lines
+    // up with a structured mesh) is inside none of them strictly, yet inside the body: it is
+    // when every point a short step from it along the eight diagonals is inside an element
+    // (a point on the body's outer face has a diagonal step leaving the body; the steps, of
+    // PROBE_STEP element sizes, leave every face and edge the point lies on).
+    let step = PROBE_STEP * size / 3f64.sqrt();
+    let on_shared_face = |q: [f64; 3]| -> Option<usize> {
+        let near = grid.get(&cell(q))?.iter().any(|&e| {
+            let (lo, hi) = boxes[e as usize];
+            (0..3).all(|c| q[c] >= lo[c] && q[c] <= hi[c])
+        });
+        if !near {
+            return None;
+        }
+        let mut first = None;
+        for d in 0..8 {
+            let sign = |c: usize| if d >> c & 1 == 1 { 1.0 } else { -1.0 };
+            let e = holder(std::array::from_fn(|c| q[c] + sign(c) * step))?;
+            first.get_or_insert(e);
+        }
+        first
+    };
+    for s in &seeds {
+        if let Some(e) = holder(s.x).or_else(|| on_shared_face(s.x)) {
+            let def = &scene.particles[s.entry];
+            let block = &scene.blocks[fe.element_block(e)].group;
+            return Some(format!(
+                "{}: particles[{}] \"{}\": a particle at ({}, {}, {}) starts inside block \"{block}\" (element {}): particle regions must not overlap meshed bodies (move the region, or shrink it by a particle spacing)",
+                scene.file.display(),
+                s.entry,
+                def.name,
+                s.x[0],
+                s.x[1],
+                s.x[2],
+                fe.element_id(e)
+            ));
         }
     }
     None

@@ -10,7 +10,8 @@ pub const TIME_EPS_STEPS: f64 = 1e-6;
 pub struct Clock {
     /// Steps taken.
     pub step: u64,
-    /// Time, s. With a fixed step t = step * dt exactly.
+    /// Time, s. With a fixed step t = step * dt exactly (the end time after a last step
+    /// shortened onto it).
     pub time: f64,
     /// The next step's size, s.
     pub dt: f64,
@@ -74,7 +75,13 @@ impl Clock {
                 if (self.step as f64) * d >= self.end - TIME_EPS_STEPS * d {
                     return None;
                 }
-                self.dt = d;
+                // A fixed step that does not divide the end time: the last step is shortened
+                // onto it (the run ends at end_time, as with the automatic step).
+                self.dt = if ((self.step + 1) as f64) * d > self.end + TIME_EPS_STEPS * d {
+                    self.end - (self.step as f64) * d
+                } else {
+                    d
+                };
             }
             None => {
                 let remaining = self.end - self.time;
@@ -92,6 +99,7 @@ impl Clock {
     pub fn advance(&mut self) {
         self.step += 1;
         self.time = match self.fixed_dt {
+            Some(d) if self.dt < d => self.end,
             Some(d) => self.step as f64 * d,
             None => self.time + self.dt,
         };

@@ -851,7 +851,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 mod check;
 pub use check::{
-    check_work, interaction_warnings, num_text, parse, sph_warnings, unit_warnings,
+    check_work, interaction_warnings, mode_warnings, num_text, parse, sph_warnings, unit_warnings,
     validate_groups, LOW_SOLID_DENSITY, LOW_YOUNGS_MODULUS,
 };
 

@@ -297,6 +297,13 @@ impl WallSet {
     }
 }
 
+impl WallSet {
+    /// The step from now on, s ([`ImplicitFe::set_dt`]).
+    pub(super) fn set_dt(&mut self, dt: f64) {
+        self.dt = dt;
+    }
+}
+
 impl ImplicitFe {
     /// Rigid walls for this run (`n` of them, at most 32); their planes are set before each
     /// step ([`ImplicitFe::set_wall_planes`]).

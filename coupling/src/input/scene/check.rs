@@ -768,6 +768,44 @@ pub fn interaction_warnings(scene: &Scene) -> Vec<String> {
     out
 }
 
+/// The `[run]` keys of the other integration mode that a scene gives and the run does not use,
+/// one warning line each (docs/scene.md, `[run]`): in implicit mode `dt_safety`, `force_dt`
+/// and `bulk_viscosity` (explicit only); in explicit mode with a fixed `dt`, `dt_safety`. A key
+/// counts as given when it differs from its default.
+pub fn mode_warnings(scene: &Scene) -> Vec<String> {
+    let file = scene.file.display();
+    let r = &scene.run;
+    let mut out = Vec::new();
+    let safety_given = r.dt_safety != super::d_safety();
+    match r.mode {
+        Mode::Implicit => {
+            if safety_given {
+                out.push(format!(
+                    "{file}: run.dt_safety is not used in implicit mode (the step is run.dt)"
+                ));
+            }
+            if r.force_dt {
+                out.push(format!(
+                    "{file}: run.force_dt is not used in implicit mode (any run.dt is stable there)"
+                ));
+            }
+            if r.bulk_viscosity != super::d_bv() {
+                out.push(format!(
+                    "{file}: run.bulk_viscosity is not used in implicit mode (explicit only)"
+                ));
+            }
+        }
+        Mode::Explicit => {
+            if safety_given && r.dt.is_some() {
+                out.push(format!(
+                    "{file}: run.dt_safety is not used: run.dt fixes the step"
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// The `[sph]` corrections a scene gives and the run does not use, one warning line each
 /// (docs/scene.md, `[sph]`): `tensile_correction` in a run with solid particles (a solid
 /// `[[particles]]` entry, or failed elements that become particles), whose stress pass serves

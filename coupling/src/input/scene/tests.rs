@@ -488,3 +488,63 @@ fn too_many_rigid_walls_are_refused_by_key() {
     let enough: String = (0..200).map(wall).collect();
     assert!(parse(&(base() + &enough), Path::new("scene.toml")).is_ok());
 }
+
+/// docs/scene.md `[run]`: the keys of the other integration mode are not used; a scene that
+/// gives them is run with a warning naming each (implicit: dt_safety, force_dt,
+/// bulk_viscosity; explicit with a fixed dt: dt_safety), and a scene that does not warns of
+/// nothing.
+#[test]
+fn keys_of_the_other_mode_warn_by_key() {
+    let b = base();
+    let implicit = b.replace(
+        "end_time = 1.0e-5\n",
+        "end_time = 1.0e-5\nmode = \"implicit\"\ndt = 1.0e-6\n",
+    );
+    let s = parse(&implicit, Path::new("scene.toml")).expect("accepted");
+    assert!(mode_warnings(&s).is_empty(), "{:?}", mode_warnings(&s));
+    let given = implicit.replace(
+        "dt = 1.0e-6\n",
+        "dt = 1.0e-6\ndt_safety = 0.5\nforce_dt = true\nbulk_viscosity = { linear = 0.5 }\n",
+    );
+    let w = mode_warnings(&parse(&given, Path::new("scene.toml")).expect("accepted"));
+    assert_eq!(w.len(), 3, "{w:?}");
+    for key in ["run.dt_safety", "run.force_dt", "run.bulk_viscosity"] {
+        assert!(
+            w.iter().any(|l| l.contains(key) && l.contains("implicit")),
+            "{key}: {w:?}"
+        );
+    }
+    let explicit = b.replace(
+        "end_time = 1.0e-5\n",
+        "end_time = 1.0e-5\ndt = 1.0e-7\ndt_safety = 0.5\n",
+    );
+    let w = mode_warnings(&parse(&explicit, Path::new("scene.toml")).expect("accepted"));
+    assert!(
+        w.len() == 1 && w[0].contains("run.dt_safety is not used: run.dt fixes the step"),
+        "{w:?}"
+    );
+    assert!(mode_warnings(&parse(&b, Path::new("scene.toml")).unwrap()).is_empty());
+}
+
+/// Two `[[particles]]` entries of one name would share their columns in contact_forces.csv:
+/// refused, naming the key.
+#[test]
+fn particles_entries_need_their_own_names() {
+    let water = "[[material]]\nname = \"water\"\nmodel = \"fluid\"\ndensity = 1000.0\n\
+                 eos = { kind = \"tait\", rho0 = 1000.0, sound_speed = 20.0, gamma = 7.0 }\n";
+    let entry = |z: f64| {
+        format!(
+            "[[particles]]\nname = \"jet\"\nmaterial = \"water\"\nspacing = 0.01\n\
+             region = {{ box = {{ min = [0.0, 0.0, {z}], max = [0.1, 0.1, {}] }} }}\n",
+            z + 0.1
+        )
+    };
+    let text = base() + water + &entry(0.2) + &entry(0.4);
+    let e = refused(&text).to_string();
+    assert!(
+        e.contains("particles[1].name") && e.contains("\"jet\" names an earlier"),
+        "{e}"
+    );
+    let renamed = base() + water + &entry(0.2) + &entry(0.4).replace("\"jet\"", "\"jet2\"");
+    assert!(parse(&renamed, Path::new("scene.toml")).is_ok());
+}

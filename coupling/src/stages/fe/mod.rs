@@ -380,6 +380,7 @@ impl Stage for Fe {
                 next
             }
             Integrator::Implicit(imp) => {
+                imp.set_dt(dt);
                 Self::implicit_step(world, &self.file, imp, &mut self.mesh)?;
                 let st = imp.stats;
                 let per_solve = st.ksp_iterations as f64 / st.newton_iterations.max(1) as f64;

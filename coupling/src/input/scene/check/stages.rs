@@ -13,6 +13,16 @@ pub(super) fn check_particles(
     born: bool,
 ) -> Result<(), SceneError> {
     for (i, p) in particles.iter().enumerate() {
+        // (the name heads its columns in contact_forces.csv and its probes)
+        if particles[..i].iter().any(|q| q.name == p.name) {
+            return Err(cx.err(
+                &format!("particles[{i}].name"),
+                format!(
+                    "\"{}\" names an earlier [[particles]] entry too: give each its own name",
+                    p.name
+                ),
+            ));
+        }
         if !materials.iter().any(|m| m.name == p.material) {
             return Err(cx.err(
                 &format!("particles[{i}].material"),
