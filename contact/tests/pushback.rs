@@ -282,6 +282,70 @@ fn immovable_face() {
     );
 }
 
+/// A held node (infinite mass) a distance `e` from the held edge of a face whose other two
+/// corners are free (1 kg each) and rise by `h` over the step: the face tilts up through the
+/// node, which ends `e h` behind it. The row's weights on the free corners are `e / 2` each,
+/// so its impulse is `2 h / e` (huge for small `e`), of which only the part between the held
+/// node and the free corners can be measured (contact::pushback, "Infinite masses on both
+/// sides"): the free corners are put back by `h` (impulse `h` each), the held node takes
+/// their sum, `2 h / dt^2`, and the held corners nothing (the part between two infinite masses
+/// left out); the forces still sum to zero.
+#[test]
+fn held_node_on_a_partly_held_face_takes_only_what_the_free_corners_carry() {
+    let dt = 1e-2;
+    let (e, h) = (1e-6, 1e-3);
+    let face = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut nodes: Vec<NodeRecord> = (0..4)
+        .map(|i| {
+            let (mass, rise) = if face[i][0] == 0.0 {
+                (f64::INFINITY, 0.0)
+            } else {
+                (1.0, h)
+            };
+            let x1 = add(face[i], [0.0, 0.0, rise]);
+            common::node_record(10 + i as u64, 1, mass, face[i], x1, dt)
+        })
+        .collect();
+    let p = [e, 0.5, 0.0];
+    nodes.push(common::node_record(0, 0, f64::INFINITY, p, p, dt));
+    let faces = [FaceRecord {
+        gid: 0,
+        nodes: [10, 11, 12, 13],
+        body: 1,
+        reserved: 0,
+    }];
+    let b = ContactBox::from_records(&nodes, nodes.len(), &faces).unwrap();
+    let contacts = search(&b, &SearchParams::default());
+    assert_eq!(contacts.len(), 1, "the held node is behind the face");
+    let pb = push_back(&b, &contacts, &PushBackParams::new(dt));
+    let carried = 2.0 * h / (dt * dt);
+    for j in [1, 2] {
+        let dx = pb.position_correction(&b, j, dt)[2];
+        assert!(
+            (dx + h).abs() <= 1e-6 * h,
+            "free corner {j} put back by {dx} m, not -{h} m (1e-6)"
+        );
+    }
+    assert!(
+        (pb.force[4][2] - carried).abs() <= 1e-6 * carried,
+        "the held node takes {} N, not the free corners' {carried} N (1e-6)",
+        pb.force[4][2]
+    );
+    for j in [0, 3] {
+        assert!(
+            norm(pb.force[j]) <= 1e-9 * carried,
+            "held corner {j} takes {:?} N from the held node: nothing measurable",
+            pb.force[j]
+        );
+    }
+    assert!(momentum_error(&pb.force) <= MOMENTUM_TOL);
+}
+
 /// Two coincident surfaces crossing each other (each node penetrates the other surface's face:
 /// redundant contacts) share the impulse instead of pushing twice: the pair ends in contact, not
 /// flying apart.

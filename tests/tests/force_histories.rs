@@ -424,3 +424,133 @@ fn ramped_pull_reaction_is_hookes_ea_u_over_l_once_settled_at_np_1_and_3() {
     }
     same_text(&outs[0], &outs[1], "reactions.csv");
 }
+
+/// A steel cube (side 20 mm, 4 hexahedra per edge) set on a steel plate (40 x 40 x 10 mm,
+/// 8 x 8 x 2), touching from t = 0 node over node, the cube's face x = -20 mm in the plane of
+/// the plate's. Surfaces: "plate_top" (under and beside the cube), "plate_bottom", "plate_xm"
+/// and "block_xm" (the two faces x = -20 mm), "block_skin".
+const FLUSH_BLOCK_GEO: &str = r#"If(!Exists(A)) A = 0.02; EndIf
+If(!Exists(NB)) NB = 4; EndIf
+If(!Exists(W)) W = 0.04; EndIf
+If(!Exists(H)) H = 0.01; EndIf
+If(!Exists(NP)) NP = 8; EndIf
+If(!Exists(NH)) NH = 2; EndIf
+SetFactory("OpenCASCADE");
+Box(1) = {-W/2, -W/2, -H, W, W, H};
+Box(2) = {-W/2, -A/2, 0, A, A, A};
+eps = 1e-7;
+bc() = Curve In BoundingBox{-W/2 - eps, -A/2 - eps, -eps, -W/2 + A + eps, A/2 + eps, A + eps};
+pc() = Curve In BoundingBox{-W/2 - eps, -W/2 - eps, -H - eps, W/2 + eps, W/2 + eps, eps};
+pc() -= bc();
+bs() = Surface In BoundingBox{-W/2 - eps, -A/2 - eps, -eps, -W/2 + A + eps, A/2 + eps, A + eps};
+top() = Surface In BoundingBox{-W/2 - eps, -W/2 - eps, -eps, W/2 + eps, W/2 + eps, eps};
+top() -= bs();
+bottom() = Surface In BoundingBox{-W/2 - eps, -W/2 - eps, -H - eps, W/2 + eps, W/2 + eps, -H + eps};
+pxm() = Surface In BoundingBox{-W/2 - eps, -W/2 - eps, -H - eps, -W/2 + eps, W/2 + eps, eps};
+bxm() = Surface In BoundingBox{-W/2 - eps, -A/2 - eps, -eps, -W/2 + eps, A/2 + eps, A + eps};
+For i In {0 : #pc() - 1}
+  bb() = BoundingBox Curve{pc(i)};
+  If (bb(5) - bb(2) > 0.5 * H)
+    Transfinite Curve{pc(i)} = NH + 1;
+  Else
+    Transfinite Curve{pc(i)} = NP + 1;
+  EndIf
+EndFor
+Transfinite Curve{bc()} = NB + 1;
+Transfinite Surface{:};
+Recombine Surface{:};
+Transfinite Volume{:};
+Physical Volume("plate") = {1};
+Physical Volume("block") = {2};
+Physical Surface("plate_top") = {top()};
+Physical Surface("plate_bottom") = {bottom()};
+Physical Surface("plate_xm") = {pxm()};
+Physical Surface("block_skin") = {bs()};
+Physical Surface("block_xm") = {bxm()};
+"#;
+
+#[test]
+fn supports_holding_both_sides_of_a_contact_carry_the_weight_at_np_1_and_3() {
+    // FLUSH_BLOCK_GEO under gravity for 0.2 ms, every step a row: the plate held at its
+    // bottom and at its face x = -20 mm, the cube at its face in the same plane, contact
+    // between the cube's skin and the plate's top. The cube's held edge lies on plate faces
+    // whose corners along x = -20 mm are held too: contacts with infinite masses on both sides
+    // (docs/output.md), which gave the two side groups opposite forces of 1e15 N. Statics:
+    // the supports' z forces, averaged over the run, add up to the weight M g (1.848 N) to
+    // 1 %, and no group's mean exceeds it by more than 1 % (none pulls down by more than 1 %
+    // of it); every row of every group stays under twice the weight (the dynamic response to
+    // gravity switched on at rest: measured 1.14 M g). The momentum (history.csv) changes by
+    // the supports' impulse (trapezoid) less M g t, to 1e-3 of M g t (a conservation law).
+    // The plate carries at most the cube's weight: the mean contact force on it from the cube
+    // (each row over the step ending at it) lies in [-1.01, 0.01] m g. Both files
+    // byte-identical at np 1 and 3.
+    let groups = ["plate_bottom", "plate_xm", "block_xm"];
+    let block_weight = BLOCK_MASS * 9.81;
+    let mut outs = Vec::new();
+    for np in [1, 3] {
+        let dir = workdir(&format!("reactions_held_sides_np{np}"));
+        std::fs::write(dir.join("flush.geo"), FLUSH_BLOCK_GEO).unwrap();
+        let scene = dir.join("scene.toml");
+        let mut text = String::from(
+            "title = \"a cube on a plate, both held on their common side face\"\n\
+             gravity = [0.0, 0.0, -9.81]\n[run]\nend_time = 2.0e-4\nhistory_every = 0\n\
+             output_every = 2.0e-4\n[[mesh]]\nfile = \"flush.geo\"\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\n\
+             youngs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[block]]\ngroup = \"plate\"\nmaterial = \"steel\"\n\
+             [[block]]\ngroup = \"block\"\nmaterial = \"steel\"\n",
+        );
+        for g in groups {
+            text += &format!("[[boundary]]\ngroup = \"{g}\"\nkind = \"fixed\"\n");
+        }
+        text += "[contact]\nsurfaces = [\"block_skin\", \"plate_top\"]\n";
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join("out");
+        run_ok(np, &scene, &out);
+        let mass = RHO * (0.04 * 0.04 * 0.01 + 0.02 * 0.02 * 0.02);
+        let weight = mass * 9.81;
+        let rx = out.join("reactions.csv");
+        let t = col(&rx, "time");
+        let span = t[t.len() - 1] - t[0];
+        let mut total = vec![0.0; t.len()];
+        let mut mean_total = 0.0;
+        for g in groups {
+            let f = col(&rx, &format!("{g}.force_z"));
+            let mean = trapezoid(&t, &f) / span;
+            assert!(
+                mean.abs() <= 1.01 * weight,
+                "np {np}: {g}: mean support force {mean} N, more than the total weight {weight} N (1 %)"
+            );
+            let peak = f.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                peak <= 2.0 * weight,
+                "np {np}: {g}: a row's support force {peak} N, more than twice the total weight {weight} N"
+            );
+            mean_total += mean;
+            for (s, v) in total.iter_mut().zip(&f) {
+                *s += v;
+            }
+        }
+        assert!(
+            (mean_total - weight).abs() <= 0.01 * weight,
+            "np {np}: the supports' mean force {mean_total} N against the weight {weight} N (1 %)"
+        );
+        let p = col(&out.join("history.csv"), "momentum_z");
+        let dp = p[p.len() - 1] - p[0];
+        let gravity_impulse = weight * span;
+        let impulse = trapezoid(&t, &total) - gravity_impulse;
+        assert!(
+            (impulse - dp).abs() <= 1e-3 * gravity_impulse,
+            "np {np}: reaction impulse less M g t {impulse} N s against the momentum change {dp} kg m/s (1e-3 of {gravity_impulse})"
+        );
+        let f = col(&out.join("contact_forces.csv"), "plate-block.force_z");
+        let pressed = step_impulse(&t, &f) / span;
+        assert!(
+            (-1.01 * block_weight..=0.01 * block_weight).contains(&pressed),
+            "np {np}: mean contact force on the plate from the cube {pressed} N, outside [-1.01, 0.01] of the cube's weight {block_weight} N"
+        );
+        outs.push(out);
+    }
+    same_text(&outs[0], &outs[1], "reactions.csv");
+    same_text(&outs[0], &outs[1], "contact_forces.csv");
+}

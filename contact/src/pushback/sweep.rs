@@ -46,7 +46,7 @@ impl Pass<'_> {
         let step = new - lambda[k];
         lambda[k] = new;
         for q in 0..r.len {
-            axpy(&mut impulse[r.nodes[q]], r.w[q] * step, r.normal);
+            axpy(&mut impulse[r.nodes[q]], r.rw[q] * step, r.normal);
         }
     }
 }
@@ -116,7 +116,7 @@ pub(super) fn friction(
                 let step = sub(new, lambda_t[k]);
                 lambda_t[k] = new;
                 for q in 0..r.len {
-                    axpy(&mut impulse[r.nodes[q]], r.w[q], step);
+                    axpy(&mut impulse[r.nodes[q]], r.rw[q], step);
                 }
                 change = change.max(norm(step) * r.inv_mass);
             }
