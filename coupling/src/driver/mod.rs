@@ -604,15 +604,34 @@ fn check_fixed_dt(
         return Ok(false);
     }
     if !scene.run.force_dt {
+        let native_tets = scene.run.tetrahedra == crate::input::scene::Tetrahedra::NodalPressure;
+        let elements = if native_tets {
+            "the element estimate with bulk viscosity (Flanagan-Belytschko for hexahedra, the native tetrahedra's own bound)"
+        } else {
+            "Flanagan-Belytschko element estimate with bulk viscosity"
+        };
         let what = match (&model.fe, &model.sph) {
-            (Some(_), Some(_)) => "Flanagan-Belytschko element estimate with bulk viscosity, and 0.3 h/(c + |v|) over the particles",
-            (Some(_), None) => "Flanagan-Belytschko element estimate with bulk viscosity",
-            _ => "SPH: 0.3 min h/(c + |v|) over the particles",
+            (Some(_), Some(_)) => format!("{elements}, and 0.3 h/(c + |v|) over the particles"),
+            (Some(_), None) => elements.to_string(),
+            _ => "SPH: 0.3 min h/(c + |v|) over the particles".to_string(),
+        };
+        // implicit mode only where the scene could run in it (setup::check_scene's refusals)
+        let implicit_possible = model.sph.is_none()
+            && scene.contact.is_none()
+            && !native_tets
+            && scene.failures.iter().all(Option::is_none)
+            && !scene.blocks.iter().any(|b| {
+                (scene.materials.iter()).any(|m| m.name == b.material && m.model == "fluid")
+            });
+        let implicit = if implicit_possible {
+            " set mode = \"implicit\","
+        } else {
+            ""
         };
         return Err(RunFailure::new(
             FailureKind::Refused,
             format!(
-                "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s ({what}); use run.dt <= {stable0:e}, remove run.dt, set mode = \"implicit\", or set run.force_dt = true to run it anyway"
+                "{file}: run.dt: {dt:e} s is above the explicit stable limit {stable0:e} s ({what}); use run.dt <= {stable0:e}, remove run.dt,{implicit} or set run.force_dt = true to run it anyway"
             ),
         ));
     }

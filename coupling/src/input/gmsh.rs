@@ -497,49 +497,52 @@ pub(crate) fn read_msh22(path: &Path) -> Result<Msh22, MeshError> {
     })
 }
 
-/// A `.msh` in the 2.2 ASCII format: the file itself, or a conversion by gmsh into `cache_dir`.
+/// A `.msh` in the 2.2 ASCII format: the file itself, or a conversion by gmsh into `cache_dir`
+/// (other versions, and binary files of any version, which gmsh reads). A conversion is written
+/// under a temporary name and kept only when gmsh succeeded without an error line, so a file
+/// gmsh cannot load is reported each time, never cached half-written.
 pub fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
-    let head = std::fs::read_to_string(path).map_err(|e| {
-        bad(
-            path,
-            &format!("cannot read as text ({e}); save the mesh as ASCII"),
-        )
-    })?;
-    if head
-        .lines()
+    let bytes = std::fs::read(path).map_err(|e| bad(path, &format!("cannot read ({e})")))?;
+    // "2.2 0 8": version 2.2, ASCII (a binary file has "2.2 1 8")
+    let ascii22 = bytes
+        .split(|&b| b == b'\n')
         .nth(1)
-        .map(|l| l.starts_with("2.2 0"))
-        .unwrap_or(false)
-    {
+        .is_some_and(|l| l.starts_with(b"2.2 0"));
+    if ascii22 {
         return Ok(path.to_path_buf());
     }
     std::fs::create_dir_all(cache_dir).map_err(|e| bad(cache_dir, &e.to_string()))?;
     let mut h = Sha256::new();
-    h.update(head.as_bytes());
+    h.update(&bytes);
     let hash = short_hash(h);
     let out = cache_dir.join(format!("converted-{hash}.msh"));
     if out.exists() {
         return Ok(out);
     }
+    let tmp = cache_dir.join(format!("converted-{hash}.msh.{}.part", std::process::id()));
     let res = Command::new("gmsh")
         .arg(path)
         .args(["-save", "-format", "msh22", "-o"])
-        .arg(&out)
+        .arg(&tmp)
         .output()
         .map_err(|e| MeshError::Gmsh {
             path: path.to_path_buf(),
             why: format!("cannot run gmsh: {e}"),
         })?;
-    if !res.status.success() || !out.exists() {
+    let text =
+        String::from_utf8_lossy(&res.stderr).to_string() + &String::from_utf8_lossy(&res.stdout);
+    let error = text.lines().find(|l| l.contains("Error"));
+    if !res.status.success() || error.is_some() || !tmp.exists() {
+        let _ = std::fs::remove_file(&tmp);
         return Err(MeshError::Gmsh {
             path: path.to_path_buf(),
-            why: String::from_utf8_lossy(&res.stderr)
-                .lines()
-                .last()
+            why: error
+                .or_else(|| text.lines().last())
                 .unwrap_or("conversion to msh 2.2 failed")
                 .to_string(),
         });
     }
+    std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
     Ok(out)
 }
 

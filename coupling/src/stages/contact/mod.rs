@@ -80,6 +80,8 @@ pub struct ContactStats {
     pub rcb_wall_s: f64,
     /// See `rcb_migrated`.
     pub rcb_imbalance_sum: f64,
+    /// Steps whose RCB rebalanced (those `rcb_imbalance_sum` sums over).
+    pub rcb_rebalances: u64,
     /// Transfers between decompositions (FE/SPH owners <-> contact owners): bytes, time (each
     /// step's max over ranks) and byte imbalance, summed over steps.
     pub transfer_bytes: f64,
@@ -128,7 +130,10 @@ impl ContactStats {
         self.rcb_migrated += out.rcb.migrated;
         self.rcb_bytes += out.rcb.bytes_sent as f64;
         self.rcb_wall_s += out.rcb.wall_s;
-        self.rcb_imbalance_sum += out.rcb.imbalance;
+        if out.rcb.imbalance > 0.0 {
+            self.rcb_imbalance_sum += out.rcb.imbalance;
+            self.rcb_rebalances += 1;
+        }
         self.transfer_bytes += out.transfer.bytes_sent as f64;
         self.transfer_s += out.transfer.wall_s;
         self.transfer_imbalance_sum += out.transfer.imbalance;
@@ -474,7 +479,10 @@ impl Contact {
         if matches!(self.search, Search::Dynamic(_)) {
             let mine = StageStats {
                 wall_s: c.rcb_wall_s,
-                imbalance: c.rcb_imbalance_sum / n_steps,
+                imbalance: crate::stages::sph::mean_imbalance(
+                    c.rcb_imbalance_sum,
+                    c.rcb_rebalances,
+                ),
                 bytes_sent: c.rcb_bytes,
             };
             report.rcb = Some(match report.rcb.take() {

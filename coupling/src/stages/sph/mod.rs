@@ -49,6 +49,8 @@ pub struct Sph {
     pub rcb_bytes: f64,
     /// See `rcb_s`.
     pub rcb_imbalance_sum: f64,
+    /// Steps whose RCB rebalanced (those `rcb_imbalance_sum` sums over).
+    pub rcb_rebalances: u64,
     /// The scene's gravity and its scale in time (`gravity_curve`).
     gravity0: [f64; 3],
     gravity_curve: Option<crate::input::curve::Curve>,
@@ -129,6 +131,7 @@ impl Sph {
             rcb_s: 0.0,
             rcb_bytes: 0.0,
             rcb_imbalance_sum: 0.0,
+            rcb_rebalances: 0,
             steps: 0,
             file: scene.file.display().to_string(),
             gravity0: scene.gravity,
@@ -211,7 +214,11 @@ impl Sph {
         let r = &self.stage.stats.rcb;
         self.rcb_s += r.wall_s;
         self.rcb_bytes += r.bytes_sent as f64;
-        self.rcb_imbalance_sum += r.imbalance;
+        // (a step that kept its decomposition reports no imbalance: the mean is over rebalances)
+        if r.imbalance > 0.0 {
+            self.rcb_imbalance_sum += r.imbalance;
+            self.rcb_rebalances += 1;
+        }
         let g = globals(world, &self.stage);
         self.external_work += 0.5 * (self.globals.gravity_power + g.gravity_power) * dt;
         self.hold_taken -= g.hold_work;
@@ -359,7 +366,7 @@ impl Stage for Sph {
         });
         report.rcb = Some(StageStats {
             wall_s: self.rcb_s,
-            imbalance: self.rcb_imbalance_sum / steps,
+            imbalance: mean_imbalance(self.rcb_imbalance_sum, self.rcb_rebalances),
             bytes_sent: self.rcb_bytes,
         });
         report.us_per_particle_step =
@@ -418,5 +425,14 @@ pub fn particle_frame<'a>(
         plastic_strain: None,
         failed: None,
         rank: Some(ranks),
+    }
+}
+
+/// The mean imbalance (max/mean) of `n` RCB rebalances summing to `sum`; 1 where none ran.
+pub(crate) fn mean_imbalance(sum: f64, n: u64) -> f64 {
+    if n == 0 {
+        1.0
+    } else {
+        sum / n as f64
     }
 }
