@@ -823,3 +823,146 @@ fn perforation_into_particles_stopped_and_restarted_ends_bit_identical_at_np_3()
         &["contact_imbalance", "contact_bytes"],
     );
 }
+
+/// `tdyn run scene --restart out EXTRA` on one rank, which must be refused: its stderr.
+fn restart_refused(scene: &Path, out: &Path, extra: &[&str]) -> String {
+    let o = mpirun(1, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(scene)
+        .arg("--restart")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "refused: {extra:?}\n{err}");
+    err
+}
+
+#[test]
+fn a_restart_is_checked_against_what_the_run_computes_and_names_what_differs() {
+    // The example bar, run with -p values and --end-time to its end with a checkpoint there. A
+    // restart that passes the check is refused only as finished: so "that run is finished"
+    // says the check took the run as the checkpoint's. The same -p values in another order,
+    // an end time spelt otherwise and a comment added to the scene pass it; another -p value,
+    // a missing --end-time and a changed scene value do not, each named.
+    let dir = workdir("restart_identity");
+    let text = std::fs::read_to_string(scene_copy("scenes/example_bar.toml", &dir)).unwrap();
+    let scene = dir.join("bar_checkpointed.toml");
+    std::fs::write(
+        &scene,
+        text.replace("[output]\n", "[output]\ncheckpoint_every = 5.0e-6\n"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    run_ok_args(
+        1,
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("checkpoint/meta.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        meta["params"],
+        serde_json::json!([["M", 2.0], ["N", 10.0]]),
+        "meta.json holds the -p values"
+    );
+    assert_eq!(
+        meta["end_time"],
+        serde_json::json!(1e-5),
+        "and the end time"
+    );
+    let finished = |err: &str| err.contains("that run is finished");
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "M=2", "-p", "N=10", "--end-time", "0.00001"],
+    );
+    assert!(
+        finished(&err),
+        "-p in another order is the same run:\n{err}"
+    );
+    std::fs::write(
+        &scene,
+        format!(
+            "# a comment\n{}",
+            std::fs::read_to_string(&scene)
+                .unwrap()
+                .replace("density = 2700.0", "density = 2.7e3   # kg/m^3")
+        ),
+    )
+    .unwrap();
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    assert!(
+        finished(&err),
+        "comments and spelling change nothing:\n{err}"
+    );
+    let err = restart_refused(&scene, &out, &["-p", "N=12", "-p", "M=2"]);
+    assert!(
+        err.contains("-p N: 10 at the checkpoint, 12 now")
+            && err.contains("--end-time: 0.00001 at the checkpoint, not given now")
+            && err.contains("-p M=2 -p N=10 --end-time 0.00001 --restart")
+            && err.lines().filter(|l| l.starts_with("tdyn:")).count() == 1,
+        "the differing values named, and the command that continues:\n{err}"
+    );
+    std::fs::write(
+        &scene,
+        std::fs::read_to_string(&scene)
+            .unwrap()
+            .replace("density = 2.7e3", "density = 2.8e3"),
+    )
+    .unwrap();
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    assert!(
+        err.contains("the scene's values changed") && !finished(&err),
+        "a changed scene value is refused:\n{err}"
+    );
+}
+
+#[test]
+fn the_stop_line_names_a_restart_command_that_works_as_written() {
+    // The Taylor bar run with -p values and --end-time, stopped by SIGTERM: the command the
+    // stop line names (the values included) continues it, and the run ends as without a stop.
+    let dir = workdir("restart_stop_line");
+    let scene = scene_copy("scenes/taylor_impact.toml", &dir);
+    let extra = ["-p", "N=30", "-p", "M=4", "--end-time", "6e-5"];
+    let (a, b) = (dir.join("A"), dir.join("B"));
+    run_ok_args(1, &scene, &a, &extra);
+    let mut child = start(1, &scene, &b, &extra);
+    assert!(signal_after_rows(&mut child, &b, 600, "-TERM"), "stopped");
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let command = err
+        .split('`')
+        .nth(1)
+        .unwrap_or_else(|| panic!("the stop line names a command:\n{err}"));
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[..2], ["tdyn", "run"], "{command}");
+    assert!(
+        command.contains("-p M=4 -p N=30 --end-time 0.00006 --restart"),
+        "{command}"
+    );
+    let o = mpirun(1, 600)
+        .arg(tdyn())
+        .args(&words[1..])
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "`{command}` continues:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    same_csv(&a.join("history.csv"), &b.join("history.csv"), &[]).unwrap();
+}
