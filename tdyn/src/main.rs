@@ -350,6 +350,14 @@ fn on_mpi_with_petsc<T>(
     gate.pass(line.as_deref(), EXIT_GRACE);
     // Every rank is here: the outcome is the lowest failing rank's, on every rank.
     let agreed = first_error(&world, res.as_ref().err().cloned());
+    let unused = unused_petsc_options(&world);
+    if rank == 0 {
+        for o in unused {
+            eprintln!(
+                "tdyn: warning: {o}: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)"
+            );
+        }
+    }
     drop(petsc);
     match (res, agreed) {
         (Ok(v), Ok(())) => {
@@ -367,6 +375,52 @@ fn on_mpi_with_petsc<T>(
     }
 }
 
+/// The PETSc options nothing read on any rank (collective): rank 0's unused options, each kept
+/// when no rank read it, as `-name value`.
+fn unused_petsc_options(world: &mpi::topology::SimpleCommunicator) -> Vec<String> {
+    let root = world.process_at_rank(0);
+    let mine = if world.rank() == 0 {
+        Petsc::unused_options()
+    } else {
+        Vec::new()
+    };
+    let mut text = mine
+        .iter()
+        .map(|(n, v)| match v {
+            Some(v) => format!("{n} {v}"),
+            None => n.clone(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .into_bytes();
+    let mut len = text.len() as u64;
+    root.broadcast_into(&mut len);
+    text.resize(len as usize, 0);
+    if len > 0 {
+        root.broadcast_into(&mut text[..]);
+    }
+    let text = String::from_utf8_lossy(&text).into_owned();
+    let listed: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
+    let used_here: Vec<u8> = listed
+        .iter()
+        .map(|l| u8::from(Petsc::option_used(l.split(' ').next().unwrap_or(l))))
+        .collect();
+    let mut used = vec![0u8; listed.len()];
+    if !listed.is_empty() {
+        world.all_reduce_into(
+            &used_here[..],
+            &mut used[..],
+            mpi::collective::SystemOperation::max(),
+        );
+    }
+    listed
+        .iter()
+        .zip(&used)
+        .filter(|(_, u)| **u == 0)
+        .map(|(l, _)| l.to_string())
+        .collect()
+}
+
 fn parse_var(s: &str) -> Result<(String, String), String> {
     let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
     Ok((k.to_string(), v.to_string()))
@@ -378,13 +432,15 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
     Ok((k.to_string(), v))
 }
 
-/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own.
+/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own. A
+/// word with `=` is never a PETSc option (they have none): `-pN=30` is `-p N=30`.
 fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
     let is_petsc = |a: &str| {
         a.len() > 2
             && a.starts_with('-')
             && !a.starts_with("--")
             && a[1..2].chars().all(|c| c.is_ascii_lowercase())
+            && !a.contains('=')
     };
     let mut ours = Vec::new();
     let mut petsc = Vec::new();
@@ -753,6 +809,30 @@ mod tests {
             .filter(|w| EXAMPLE_ROOTS.iter().any(|r| w.starts_with(r)) && !w.contains("/."))
             .map(str::to_string)
             .collect()
+    }
+
+    #[test]
+    fn a_word_with_an_equals_sign_is_never_a_petsc_option() {
+        let words = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (ours, petsc) = split_petsc(words(&[
+            "tdyn",
+            "run",
+            "a.toml",
+            "-pN=30",
+            "-ksp_type",
+            "cg",
+            "-log_view",
+            "-p",
+            "M=2",
+        ]));
+        assert_eq!(
+            ours,
+            words(&["tdyn", "run", "a.toml", "-pN=30", "-p", "M=2"])
+        );
+        assert_eq!(petsc, words(&["-ksp_type", "cg", "-log_view"]));
+        let a = Cli::try_parse_from(ours).unwrap();
+        let Cmd::Run(r) = a.cmd else { panic!("run") };
+        assert_eq!(r.params, ["N=30", "M=2"]);
     }
 
     #[test]

@@ -1,0 +1,106 @@
+//! The command line (docs/cli.md): PETSc options told from tdyn's own, options nobody read
+//! named, one message per mistake at any rank count, and the subcommands' refusals.
+use std::path::Path;
+use std::process::Output;
+use tdyn_tests::*;
+
+/// `mpirun -np NP tdyn ARGS` (2 min limit).
+fn tdyn_np(np: usize, args: &[&str]) -> Output {
+    mpirun(np, 120).arg(tdyn()).args(args).output().unwrap()
+}
+
+/// The lines of `o`'s standard error that tdyn wrote (not mpirun's).
+fn tdyn_lines(o: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&o.stderr)
+        .lines()
+        .filter(|l| l.starts_with("tdyn"))
+        .map(str::to_string)
+        .collect()
+}
+
+fn elements(out: &Path) -> u64 {
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    r["mesh"]["elements"]
+        .as_u64()
+        .or_else(|| r["elements"].as_u64())
+        .unwrap_or_else(|| panic!("report.json names its elements: {r}"))
+}
+
+#[test]
+fn a_p_word_with_its_value_attached_is_a_param_and_unused_options_are_named_once() {
+    // `-pN=8` is `-p N=8` (a PETSc option has no `=`); a misspelt tdyn option and a misspelt
+    // PETSc option are named by one warning each, from rank 0 only; -petscpartitioner_type
+    // (read) and -log_view (read at the end) are not.
+    let dir = workdir("cli_unused_options");
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let s = scene.display().to_string();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let (sa, sb) = (a.display().to_string(), b.display().to_string());
+    let o = tdyn_np(2, &["run", &s, "--out", &sa, "-q", "-p", "N=8"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = tdyn_np(
+        2,
+        &[
+            "run",
+            &s,
+            "--out",
+            &sb,
+            "-q",
+            "-pN=8",
+            "-tdyn_newton_rtl",
+            "1e-12",
+            "-petscpartitioner_typo",
+            "simple",
+            "-petscpartitioner_type",
+            "simple",
+        ],
+    );
+    let lines = tdyn_lines(&o);
+    assert!(o.status.success(), "{lines:?}");
+    assert_eq!(elements(&a), elements(&b), "-pN=8 is -p N=8");
+    assert_eq!(
+        lines,
+        [
+            "tdyn: warning: -petscpartitioner_typo simple: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)",
+            "tdyn: warning: -tdyn_newton_rtl 1e-12: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)",
+        ]
+    );
+    // At one rank -petscpartitioner_type is read too (no warning), -log_view at the end.
+    let o = tdyn_np(
+        1,
+        &[
+            "run",
+            &s,
+            "--out",
+            &sb,
+            "--overwrite",
+            "-q",
+            "-petscpartitioner_type",
+            "simple",
+        ],
+    );
+    assert!(
+        o.status.success() && tdyn_lines(&o).is_empty(),
+        "{:?}",
+        tdyn_lines(&o)
+    );
+}
+
+#[test]
+fn newton_needs_at_least_one_iteration() {
+    let dir = workdir("cli_newton_max_it");
+    let scene = implicit_bar(&dir, 4, (1e-5, 2e-5), "", "");
+    let s = scene.display().to_string();
+    let out = dir.join("out").display().to_string();
+    let o = tdyn_np(
+        2,
+        &["run", &s, "--out", &out, "-q", "-tdyn_newton_max_it", "0"],
+    );
+    let lines = tdyn_lines(&o);
+    assert!(!o.status.success(), "refused");
+    assert_eq!(
+        lines,
+        ["tdyn: error: -tdyn_newton_max_it 0: expected at least 1 Newton iteration per step (default 30)"]
+    );
+}
