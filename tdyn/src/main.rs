@@ -173,7 +173,7 @@ struct RunArgs {
     #[arg(long = "param", short = 'p')]
     params: Vec<String>,
     /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
-    #[arg(long = "end-time")]
+    #[arg(long = "end-time", allow_negative_numbers = true)]
     end_time: Option<f64>,
     /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
     /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
@@ -233,7 +233,7 @@ struct SweepArgs {
     #[arg(long = "param", short = 'p')]
     params: Vec<String>,
     /// The [[mesh]] a parameter without `K:` belongs to.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     mesh: usize,
     /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
     /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
@@ -260,7 +260,11 @@ struct CompareArgs {
     modes: Vec<String>,
     /// Steps as multiples of the explicit stable limit, comma-separated (default: both
     /// sides of the limit, 0.25 to 100).
-    #[arg(long = "dt-factors", value_delimiter = ',')]
+    #[arg(
+        long = "dt-factors",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     dt_factors: Option<Vec<f64>>,
     /// Output directory (default: out/<scene name>/compare).
     #[arg(long)]
@@ -279,10 +283,14 @@ struct CrosscheckArgs {
     #[arg(long)]
     deck: PathBuf,
     /// Ranks for our run.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     np: usize,
     /// Ranks for LIGGGHTS.
-    #[arg(long = "liggghts-np", default_value_t = 1)]
+    #[arg(
+        long = "liggghts-np",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
     liggghts_np: usize,
     /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
     #[arg(long = "var", value_parser = parse_var)]
@@ -292,7 +300,7 @@ struct CrosscheckArgs {
     out: Option<PathBuf>,
     /// Exit non-zero when a per-field difference exceeds this fraction of the field's
     /// largest LIGGGHTS value.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     tol: Option<f64>,
     /// Compare against the LIGGGHTS dumps already in the work directory.
     #[arg(long)]
@@ -306,7 +314,7 @@ struct ValidateArgs {
     #[arg(long, value_delimiter = ',')]
     cases: Vec<String>,
     /// Ranks per run.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     np: usize,
     /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
     #[arg(long)]
@@ -332,7 +340,7 @@ fn on_mpi_with_petsc<T>(
     ok: impl FnOnce(T),
 ) -> ExitCode {
     let Some(universe) = mpi::initialize() else {
-        eprintln!("tdyn: MPI could not be initialised");
+        print_once("tdyn: error: MPI could not be initialised");
         return ExitCode::FAILURE;
     };
     let world = universe.world();
@@ -341,7 +349,9 @@ fn on_mpi_with_petsc<T>(
     let petsc = match Petsc::init(world.as_raw(), petsc_args) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("tdyn: {e}");
+            if rank == 0 {
+                eprintln!("tdyn: error: {e}");
+            }
             return ExitCode::FAILURE;
         }
     };
@@ -463,9 +473,50 @@ fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
     (ours, petsc)
 }
 
+/// Whether this process is a rank other than 0 of an MPI job, told before MPI starts (and
+/// without it) from the launcher's environment: Open MPI, PMIx, MPICH's and Intel MPI's PMI,
+/// Slurm. A mistake found before MPI starts (the command line) is printed by rank 0 alone;
+/// every rank exits with the same status.
+fn not_rank_0() -> bool {
+    [
+        "OMPI_COMM_WORLD_RANK",
+        "PMIX_RANK",
+        "PMI_RANK",
+        "SLURM_PROCID",
+    ]
+    .iter()
+    .any(|v| std::env::var(v).is_ok_and(|r| r.trim() != "0"))
+}
+
+/// How long a rank other than 0 waits before it exits on a mistake found before MPI starts:
+/// mpirun ends the job when the first rank exits with a failure, and rank 0 must have printed
+/// the line by then.
+const QUIET_RANK_EXIT_DELAY: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Prints `line` to standard error on rank 0, or on a rank other than 0 of an MPI job
+/// ([`not_rank_0`]) waits for rank 0 to print it: for mistakes found before MPI starts.
+fn print_once(line: &str) {
+    if not_rank_0() {
+        std::thread::sleep(QUIET_RANK_EXIT_DELAY);
+    } else {
+        eprintln!("{line}");
+    }
+}
+
 fn main() -> ExitCode {
     let (ours, petsc_args) = split_petsc(std::env::args().collect());
-    match Cli::parse_from(ours).cmd {
+    let cli = match Cli::try_parse_from(ours) {
+        Ok(c) => c,
+        // clap's own report (and --help, --version) from rank 0 only, the same status on all.
+        Err(e) if not_rank_0() => {
+            if e.exit_code() != 0 {
+                std::thread::sleep(QUIET_RANK_EXIT_DELAY);
+            }
+            std::process::exit(e.exit_code())
+        }
+        Err(e) => e.exit(),
+    };
+    match cli.cmd {
         Cmd::Run(a) => run(a, &petsc_args),
         Cmd::Sweep(a) => sweep(a, &petsc_args),
         Cmd::Plot {
@@ -506,7 +557,7 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
     let overrides = match run_overrides(&a) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("tdyn: error: {e}");
+            print_once(&format!("tdyn: error: {e}"));
             return ExitCode::FAILURE;
         }
     };

@@ -104,3 +104,32 @@ fn newton_needs_at_least_one_iteration() {
         ["tdyn: error: -tdyn_newton_max_it 0: expected at least 1 Newton iteration per step (default 30)"]
     );
 }
+
+#[test]
+fn a_command_line_mistake_is_printed_once_at_any_rank_count() {
+    // Rank 0 alone prints (docs/cli.md), parse errors included; every rank exits with the
+    // same status. A negative number is a value, checked by tdyn itself.
+    let dir = workdir("cli_once");
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let s = scene.display().to_string();
+    let out = dir.join("out").display().to_string();
+    let o = tdyn_np(3, &["run", &s, "--out", &out, "--end-time", "-1"]);
+    assert_eq!(o.status.code(), Some(1));
+    let lines = tdyn_lines(&o);
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("run.end_time: expected a positive time in s, got -1"),
+        "{lines:?}"
+    );
+    let o = tdyn_np(2, &["run", &s, "--out", &out, "--kernel", "lanes16"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.matches("invalid value 'lanes16'").count(),
+        1,
+        "clap's report once:\n{err}"
+    );
+    let o = tdyn_np(2, &["run", &s, "--out", &out, "-p", "N"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(tdyn_lines(&o).len(), 1, "{:?}", tdyn_lines(&o));
+}
