@@ -836,9 +836,21 @@ fn mesh(geo: &Path, params: Vec<(String, f64)>) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("tdyn: {}: {e}", geo.display());
+            eprintln!("{}", mesh_error_line(geo, &e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `tdyn mesh`'s one line for `e`: the file named once (the file and gmsh errors name it
+/// themselves), a parameter as the `-p` it came from.
+fn mesh_error_line(geo: &Path, e: &coupling::input::gmsh::MeshError) -> String {
+    use coupling::input::gmsh::MeshError;
+    match e {
+        MeshError::Param { name, why } => {
+            format!("tdyn: error: {}: -p {name}: {why}", geo.display())
+        }
+        _ => format!("tdyn: error: {e}"),
     }
 }
 
@@ -860,6 +872,21 @@ mod tests {
             .filter(|w| EXAMPLE_ROOTS.iter().any(|r| w.starts_with(r)) && !w.contains("/."))
             .map(str::to_string)
             .collect()
+    }
+
+    #[test]
+    fn tdyn_mesh_names_a_missing_file_once() {
+        let geo = Path::new("meshes/nosuch.geo");
+        let def = coupling::input::scene::MeshDef {
+            file: geo.to_path_buf(),
+            params: Default::default(),
+            translate: [0.0; 3],
+        };
+        let e = coupling::input::gmsh::mesh_file(&def, Path::new("meshes/.cache")).unwrap_err();
+        assert_eq!(
+            mesh_error_line(geo, &e),
+            "tdyn: error: meshes/nosuch.geo: no such file"
+        );
     }
 
     #[test]

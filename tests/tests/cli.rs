@@ -133,3 +133,67 @@ fn a_command_line_mistake_is_printed_once_at_any_rank_count() {
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(tdyn_lines(&o).len(), 1, "{:?}", tdyn_lines(&o));
 }
+
+/// `tdyn ARGS` without mpirun, in the repository's root.
+fn tdyn_here(args: &[&str]) -> Output {
+    std::process::Command::new(tdyn())
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn tdyn_mesh_names_a_missing_file_once_as_an_error() {
+    let o = tdyn_here(&["mesh", "meshes/nosuch.geo"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stderr).trim_end(),
+        "tdyn: error: meshes/nosuch.geo: no such file"
+    );
+}
+
+#[test]
+fn tdyn_validate_refuses_nothing_to_run_and_keeps_the_last_report() {
+    let dir = workdir("cli_validate_nothing");
+    let out = dir.join("validation");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("report.md"), "the last report\n").unwrap();
+    let o_s = out.display().to_string();
+    let o = tdyn_here(&["validate", "--np", "0", "--out", &o_s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1) && err.contains("--np 0: expected at least 1"),
+        "{err}"
+    );
+    // cantilever_tets is not marked fast (validation/cantilever_tets/reference.toml).
+    let o = tdyn_here(&[
+        "validate",
+        "--cases",
+        "cantilever_tets",
+        "--fast",
+        "--out",
+        &o_s,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1)
+            && err.starts_with("tdyn validate: error: --cases cantilever_tets: none of them runs with --fast (cases with --fast: bar_wave,")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    let o = tdyn_here(&["validate", "--cases", "nosuch", "--fast", "--out", &o_s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1)
+            && err.contains("no case \"nosuch\"")
+            && err.contains("cantilever_tets")
+            && err.contains("with --fast: bar_wave"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("report.md")).unwrap(),
+        "the last report\n",
+        "report.md left as it was"
+    );
+}
