@@ -205,7 +205,8 @@ struct RunArgs {
     /// `checkpoint/`; written with
     /// `[output] checkpoint_every`, at its end, or when it was stopped with Ctrl-C or
     /// SIGTERM) to the scene's end time, appending to its history, probes and frames. The
-    /// scene and its --param values must be those of the run; the rank count too.
+    /// scene and its --param and --end-time values must be those of the run (the line a
+    /// stopped run prints gives them); any rank count continues it.
     #[arg(long, value_name = "DIR")]
     restart: Option<PathBuf>,
 }
