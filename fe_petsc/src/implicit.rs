@@ -107,12 +107,24 @@ pub struct NewtonOptions {
 
 impl NewtonOptions {
     /// Defaults, overridden by `-tdyn_newton_rtol`, `-tdyn_newton_max_it`, `-tdyn_newton_full`.
-    pub fn from_options() -> Result<NewtonOptions, PetscError> {
+    /// A tolerance that is not a positive number or fewer than one iteration is refused
+    /// (`ImplicitError::Option`).
+    pub fn from_options() -> Result<NewtonOptions, ImplicitError> {
+        let rtol = solver::option_real("-tdyn_newton_rtol")?;
+        if let Some(r) = rtol.filter(|r| !(*r > 0.0 && r.is_finite())) {
+            return Err(ImplicitError::Option(format!(
+                "-tdyn_newton_rtol {r}: expected a positive tolerance (default {NEWTON_RTOL:e})"
+            )));
+        }
+        let max_it = solver::option_int("-tdyn_newton_max_it")?;
+        if let Some(n) = max_it.filter(|n| *n < 1) {
+            return Err(ImplicitError::Option(format!(
+                "-tdyn_newton_max_it {n}: expected at least 1 Newton iteration per step (default {NEWTON_MAX_IT})"
+            )));
+        }
         Ok(NewtonOptions {
-            rtol: solver::option_real("-tdyn_newton_rtol")?.unwrap_or(NEWTON_RTOL),
-            max_iterations: solver::option_int("-tdyn_newton_max_it")?
-                .map(|v| v.max(1) as u32)
-                .unwrap_or(NEWTON_MAX_IT),
+            rtol: rtol.unwrap_or(NEWTON_RTOL),
+            max_iterations: max_it.map_or(NEWTON_MAX_IT, |v| v as u32),
             full: crate::petsc::Petsc::has_option("-tdyn_newton_full"),
         })
     }
@@ -171,6 +183,9 @@ pub enum ImplicitError {
     /// This rank is fine; another one failed (its message is the one to report).
     #[error("another rank failed")]
     OtherRank,
+    /// A command-line option (`-tdyn_newton_*`) with a value it cannot take.
+    #[error("{0}")]
+    Option(String),
 }
 
 impl From<PetscError> for ImplicitError {

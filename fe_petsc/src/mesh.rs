@@ -384,7 +384,8 @@ fn inspect_on_root(
     for v in v0..v1 {
         facts.orig[(v - p0) as usize] = v - v0;
     }
-    if size > 1 && !Petsc::has_option("-petscpartitioner_type") {
+    // Asked first: the option counts as read at any rank count (no unused-option warning).
+    if !Petsc::has_option("-petscpartitioner_type") && size > 1 {
         facts.partition = Some(metis_partition(dm, c0, c1, size)?);
     }
     Ok(facts)

@@ -138,6 +138,52 @@ impl Petsc {
         code == 0 && set != 0
     }
 
+    /// The options in PETSc's database (the command line's and `PETSC_OPTIONS`') that nothing
+    /// has read so far on this rank, as `(name, value)`, the name with its dash
+    /// (`PetscOptionsLeftGet`).
+    pub fn unused_options() -> Vec<(String, Option<String>)> {
+        let mut n: sys::PetscInt = 0;
+        let mut names: *mut *mut c_char = std::ptr::null_mut();
+        let mut values: *mut *mut c_char = std::ptr::null_mut();
+        // SAFETY: PETSc allocates the two arrays of n strings; they are given back below.
+        let code = unsafe {
+            sys::PetscOptionsLeftGet(std::ptr::null_mut(), &mut n, &mut names, &mut values)
+        };
+        if code != 0 {
+            return Vec::new();
+        }
+        let text = |p: *mut c_char| {
+            // SAFETY: NUL-terminated strings owned by PETSc, or null.
+            (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+        };
+        let mut left = Vec::new();
+        for i in 0..n.max(0) as usize {
+            // SAFETY: both arrays hold n entries.
+            let (name, value) = unsafe { (*names.add(i), *values.add(i)) };
+            let Some(name) = text(name) else { continue };
+            let name = if name.starts_with('-') {
+                name
+            } else {
+                format!("-{name}")
+            };
+            left.push((name, text(value).filter(|v| !v.is_empty())));
+        }
+        // SAFETY: the arrays PetscOptionsLeftGet gave.
+        unsafe {
+            sys::PetscOptionsLeftRestore(std::ptr::null_mut(), &mut n, &mut names, &mut values)
+        };
+        left
+    }
+
+    /// True when the option `name` (with its dash) has been read on this rank
+    /// (`PetscOptionsUsed`; an option not given reads as unused).
+    pub fn option_used(name: &str) -> bool {
+        let c = CString::new(name.trim_start_matches('-')).unwrap_or_default();
+        let mut used: sys::PetscBool = 0;
+        let code = unsafe { sys::PetscOptionsUsed(std::ptr::null_mut(), c.as_ptr(), &mut used) };
+        code == 0 && used != 0
+    }
+
     /// Memory PETSc and the process hold now (resident set size), bytes.
     pub fn memory_usage() -> f64 {
         let mut m: sys::PetscLogDouble = 0.0;

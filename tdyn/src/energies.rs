@@ -411,6 +411,22 @@ const OUTPUTS: [(&str, &str); 6] = [
     ("report.json", "timings, balance and bytes per stage"),
 ];
 
+/// What the output file `path` holds: `what`, or, for a force history with no column but
+/// `time` (a scene with no supports or walls, no pairs of contact bodies), that it holds none.
+fn what_holds(path: &Path, what: &str) -> String {
+    let header = std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.lines().next().map(|l| l.trim().to_string()));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    match (name, header.as_deref()) {
+        ("reactions.csv", Some("time")) => "no supports or walls: time only".to_string(),
+        ("contact_forces.csv", Some("time")) => {
+            "no pairs of bodies in contact: time only".to_string()
+        }
+        _ => what.to_string(),
+    }
+}
+
 /// A relative error as a percentage with two decimals, or in scientific notation when smaller.
 fn percent(x: f64) -> String {
     if 100.0 * x >= 0.01 {
@@ -436,7 +452,7 @@ pub fn closing(f: &Finished, chart: &Result<PathBuf, String>) -> String {
         .iter()
         .map(|(name, what)| (f.out.join(name), *what))
         .filter(|(p, _)| p.is_file())
-        .map(|(p, what)| (p.display().to_string(), what.to_string()))
+        .map(|(p, what)| (p.display().to_string(), what_holds(&p, what)))
         .collect();
     match chart {
         Ok(png) => rows.push((
@@ -506,6 +522,23 @@ mod tests {
         assert!(text.contains(&png.display().to_string()), "{text}");
         assert!(
             text.contains("report.json") && !text.contains("fields.xmf"),
+            "{text}"
+        );
+        // A force history with no force column says so.
+        assert!(!text.contains("reactions.csv"), "{text}");
+        std::fs::write(dir.join("reactions.csv"), "time\n0\n1e-4\n").unwrap();
+        let f = Finished {
+            out: dir.clone(),
+            steps: 100,
+            wall_s: None,
+            energy_error_max: 0.0,
+        };
+        let text = closing(&f, &Ok(png.clone()));
+        assert!(text.contains("no supports or walls: time only"), "{text}");
+        std::fs::write(dir.join("reactions.csv"), "time,left.force_x\n0,0\n").unwrap();
+        let text = closing(&f, &Ok(png.clone()));
+        assert!(
+            text.contains("the supports' and rigid walls' forces"),
             "{text}"
         );
         std::fs::remove_dir_all(&dir).unwrap();

@@ -173,7 +173,7 @@ struct RunArgs {
     #[arg(long = "param", short = 'p')]
     params: Vec<String>,
     /// Replace `run.end_time`, s (a shorter run, e.g. for per-step figures).
-    #[arg(long = "end-time")]
+    #[arg(long = "end-time", allow_negative_numbers = true)]
     end_time: Option<f64>,
     /// Where contact is searched: `rcb` (its own dynamic decomposition, the default) or
     /// `static` (the FE decomposition: the paper's baseline, for benchmarks; mesh nodes only).
@@ -205,7 +205,8 @@ struct RunArgs {
     /// `checkpoint/`; written with
     /// `[output] checkpoint_every`, at its end, or when it was stopped with Ctrl-C or
     /// SIGTERM) to the scene's end time, appending to its history, probes and frames. The
-    /// scene and its --param values must be those of the run; the rank count too.
+    /// scene and its --param and --end-time values must be those of the run (the line a
+    /// stopped run prints gives them); any rank count continues it.
     #[arg(long, value_name = "DIR")]
     restart: Option<PathBuf>,
 }
@@ -233,7 +234,7 @@ struct SweepArgs {
     #[arg(long = "param", short = 'p')]
     params: Vec<String>,
     /// The [[mesh]] a parameter without `K:` belongs to.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     mesh: usize,
     /// An accuracy measure: `COLUMN[:peak|final][=REFERENCE]`, COLUMN a probes.csv column
     /// (`probe.field`) or a history.csv column; against REFERENCE when given, else against
@@ -260,7 +261,11 @@ struct CompareArgs {
     modes: Vec<String>,
     /// Steps as multiples of the explicit stable limit, comma-separated (default: both
     /// sides of the limit, 0.25 to 100).
-    #[arg(long = "dt-factors", value_delimiter = ',')]
+    #[arg(
+        long = "dt-factors",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     dt_factors: Option<Vec<f64>>,
     /// Output directory (default: out/<scene name>/compare).
     #[arg(long)]
@@ -279,10 +284,14 @@ struct CrosscheckArgs {
     #[arg(long)]
     deck: PathBuf,
     /// Ranks for our run.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     np: usize,
     /// Ranks for LIGGGHTS.
-    #[arg(long = "liggghts-np", default_value_t = 1)]
+    #[arg(
+        long = "liggghts-np",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
     liggghts_np: usize,
     /// A LIGGGHTS variable, NAME=VALUE (passed as -var NAME VALUE); repeatable.
     #[arg(long = "var", value_parser = parse_var)]
@@ -292,7 +301,7 @@ struct CrosscheckArgs {
     out: Option<PathBuf>,
     /// Exit non-zero when a per-field difference exceeds this fraction of the field's
     /// largest LIGGGHTS value.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     tol: Option<f64>,
     /// Compare against the LIGGGHTS dumps already in the work directory.
     #[arg(long)]
@@ -306,7 +315,7 @@ struct ValidateArgs {
     #[arg(long, value_delimiter = ',')]
     cases: Vec<String>,
     /// Ranks per run.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     np: usize,
     /// Coarse meshes only (the ladders' fast rungs) and only the cases marked fast.
     #[arg(long)]
@@ -332,7 +341,7 @@ fn on_mpi_with_petsc<T>(
     ok: impl FnOnce(T),
 ) -> ExitCode {
     let Some(universe) = mpi::initialize() else {
-        eprintln!("tdyn: MPI could not be initialised");
+        print_once("tdyn: error: MPI could not be initialised");
         return ExitCode::FAILURE;
     };
     let world = universe.world();
@@ -341,7 +350,9 @@ fn on_mpi_with_petsc<T>(
     let petsc = match Petsc::init(world.as_raw(), petsc_args) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("tdyn: {e}");
+            if rank == 0 {
+                eprintln!("tdyn: error: {e}");
+            }
             return ExitCode::FAILURE;
         }
     };
@@ -350,6 +361,14 @@ fn on_mpi_with_petsc<T>(
     gate.pass(line.as_deref(), EXIT_GRACE);
     // Every rank is here: the outcome is the lowest failing rank's, on every rank.
     let agreed = first_error(&world, res.as_ref().err().cloned());
+    let unused = unused_petsc_options(&world);
+    if rank == 0 {
+        for o in unused {
+            eprintln!(
+                "tdyn: warning: {o}: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)"
+            );
+        }
+    }
     drop(petsc);
     match (res, agreed) {
         (Ok(v), Ok(())) => {
@@ -367,6 +386,52 @@ fn on_mpi_with_petsc<T>(
     }
 }
 
+/// The PETSc options nothing read on any rank (collective): rank 0's unused options, each kept
+/// when no rank read it, as `-name value`.
+fn unused_petsc_options(world: &mpi::topology::SimpleCommunicator) -> Vec<String> {
+    let root = world.process_at_rank(0);
+    let mine = if world.rank() == 0 {
+        Petsc::unused_options()
+    } else {
+        Vec::new()
+    };
+    let mut text = mine
+        .iter()
+        .map(|(n, v)| match v {
+            Some(v) => format!("{n} {v}"),
+            None => n.clone(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .into_bytes();
+    let mut len = text.len() as u64;
+    root.broadcast_into(&mut len);
+    text.resize(len as usize, 0);
+    if len > 0 {
+        root.broadcast_into(&mut text[..]);
+    }
+    let text = String::from_utf8_lossy(&text).into_owned();
+    let listed: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
+    let used_here: Vec<u8> = listed
+        .iter()
+        .map(|l| u8::from(Petsc::option_used(l.split(' ').next().unwrap_or(l))))
+        .collect();
+    let mut used = vec![0u8; listed.len()];
+    if !listed.is_empty() {
+        world.all_reduce_into(
+            &used_here[..],
+            &mut used[..],
+            mpi::collective::SystemOperation::max(),
+        );
+    }
+    listed
+        .iter()
+        .zip(&used)
+        .filter(|(_, u)| **u == 0)
+        .map(|(l, _)| l.to_string())
+        .collect()
+}
+
 fn parse_var(s: &str) -> Result<(String, String), String> {
     let (k, v) = s.split_once('=').ok_or("expected NAME=VALUE")?;
     Ok((k.to_string(), v.to_string()))
@@ -378,13 +443,15 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
     Ok((k.to_string(), v))
 }
 
-/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own.
+/// Splits PETSc options (single dash, e.g. `-log_view`, `-ksp_type cg`) from tdyn's own. A
+/// word with `=` is never a PETSc option (they have none): `-pN=30` is `-p N=30`.
 fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
     let is_petsc = |a: &str| {
         a.len() > 2
             && a.starts_with('-')
             && !a.starts_with("--")
             && a[1..2].chars().all(|c| c.is_ascii_lowercase())
+            && !a.contains('=')
     };
     let mut ours = Vec::new();
     let mut petsc = Vec::new();
@@ -407,9 +474,50 @@ fn split_petsc(args: Vec<String>) -> (Vec<String>, Vec<String>) {
     (ours, petsc)
 }
 
+/// Whether this process is a rank other than 0 of an MPI job, told before MPI starts (and
+/// without it) from the launcher's environment: Open MPI, PMIx, MPICH's and Intel MPI's PMI,
+/// Slurm. A mistake found before MPI starts (the command line) is printed by rank 0 alone;
+/// every rank exits with the same status.
+fn not_rank_0() -> bool {
+    [
+        "OMPI_COMM_WORLD_RANK",
+        "PMIX_RANK",
+        "PMI_RANK",
+        "SLURM_PROCID",
+    ]
+    .iter()
+    .any(|v| std::env::var(v).is_ok_and(|r| r.trim() != "0"))
+}
+
+/// How long a rank other than 0 waits before it exits on a mistake found before MPI starts:
+/// mpirun ends the job when the first rank exits with a failure, and rank 0 must have printed
+/// the line by then.
+const QUIET_RANK_EXIT_DELAY: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Prints `line` to standard error on rank 0, or on a rank other than 0 of an MPI job
+/// ([`not_rank_0`]) waits for rank 0 to print it: for mistakes found before MPI starts.
+fn print_once(line: &str) {
+    if not_rank_0() {
+        std::thread::sleep(QUIET_RANK_EXIT_DELAY);
+    } else {
+        eprintln!("{line}");
+    }
+}
+
 fn main() -> ExitCode {
     let (ours, petsc_args) = split_petsc(std::env::args().collect());
-    match Cli::parse_from(ours).cmd {
+    let cli = match Cli::try_parse_from(ours) {
+        Ok(c) => c,
+        // clap's own report (and --help, --version) from rank 0 only, the same status on all.
+        Err(e) if not_rank_0() => {
+            if e.exit_code() != 0 {
+                std::thread::sleep(QUIET_RANK_EXIT_DELAY);
+            }
+            std::process::exit(e.exit_code())
+        }
+        Err(e) => e.exit(),
+    };
+    match cli.cmd {
         Cmd::Run(a) => run(a, &petsc_args),
         Cmd::Sweep(a) => sweep(a, &petsc_args),
         Cmd::Plot {
@@ -450,7 +558,7 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
     let overrides = match run_overrides(&a) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("tdyn: error: {e}");
+            print_once(&format!("tdyn: error: {e}"));
             return ExitCode::FAILURE;
         }
     };
@@ -729,9 +837,21 @@ fn mesh(geo: &Path, params: Vec<(String, f64)>) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("tdyn: {}: {e}", geo.display());
+            eprintln!("{}", mesh_error_line(geo, &e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `tdyn mesh`'s one line for `e`: the file named once (the file and gmsh errors name it
+/// themselves), a parameter as the `-p` it came from.
+fn mesh_error_line(geo: &Path, e: &coupling::input::gmsh::MeshError) -> String {
+    use coupling::input::gmsh::MeshError;
+    match e {
+        MeshError::Param { name, why } => {
+            format!("tdyn: error: {}: -p {name}: {why}", geo.display())
+        }
+        _ => format!("tdyn: error: {e}"),
     }
 }
 
@@ -753,6 +873,45 @@ mod tests {
             .filter(|w| EXAMPLE_ROOTS.iter().any(|r| w.starts_with(r)) && !w.contains("/."))
             .map(str::to_string)
             .collect()
+    }
+
+    #[test]
+    fn tdyn_mesh_names_a_missing_file_once() {
+        let geo = Path::new("meshes/nosuch.geo");
+        let def = coupling::input::scene::MeshDef {
+            file: geo.to_path_buf(),
+            params: Default::default(),
+            translate: [0.0; 3],
+        };
+        let e = coupling::input::gmsh::mesh_file(&def, Path::new("meshes/.cache")).unwrap_err();
+        assert_eq!(
+            mesh_error_line(geo, &e),
+            "tdyn: error: meshes/nosuch.geo: no such file"
+        );
+    }
+
+    #[test]
+    fn a_word_with_an_equals_sign_is_never_a_petsc_option() {
+        let words = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (ours, petsc) = split_petsc(words(&[
+            "tdyn",
+            "run",
+            "a.toml",
+            "-pN=30",
+            "-ksp_type",
+            "cg",
+            "-log_view",
+            "-p",
+            "M=2",
+        ]));
+        assert_eq!(
+            ours,
+            words(&["tdyn", "run", "a.toml", "-pN=30", "-p", "M=2"])
+        );
+        assert_eq!(petsc, words(&["-ksp_type", "cg", "-log_view"]));
+        let a = Cli::try_parse_from(ours).unwrap();
+        let Cmd::Run(r) = a.cmd else { panic!("run") };
+        assert_eq!(r.params, ["N=30", "M=2"]);
     }
 
     #[test]

@@ -625,14 +625,32 @@ fn run_rung(
 /// broken reference.toml, an unknown case, an unwritable output); failed runs and measures
 /// are rows.
 pub fn validate(o: &ValidateOptions) -> Result<Outcome, String> {
+    if o.np < 1 {
+        return Err(format!("--np {}: expected at least 1 rank per run", o.np));
+    }
     let all = case_names(&o.dir)?;
+    // The cases --fast runs, named in the refusals below.
+    let fast_cases = || -> Result<String, String> {
+        let mut fast = Vec::new();
+        for n in &all {
+            if load_case(&o.dir, n)?.fast {
+                fast.push(n.clone());
+            }
+        }
+        Ok(fast.join(", "))
+    };
     let names = if o.cases.is_empty() {
         all.clone()
     } else {
         for c in &o.cases {
             if !all.contains(c) {
+                let fast = if o.fast {
+                    format!("; with --fast: {}", fast_cases()?)
+                } else {
+                    String::new()
+                };
                 return Err(format!(
-                    "--cases: no case \"{c}\" in {} (cases: {})",
+                    "--cases: no case \"{c}\" in {} (cases: {}{fast})",
                     o.dir.display(),
                     all.join(", ")
                 ));
@@ -644,6 +662,24 @@ pub fn validate(o: &ValidateOptions) -> Result<Outcome, String> {
         .iter()
         .map(|n| load_case(&o.dir, n).map(|c| (n.clone(), c)))
         .collect::<Result<Vec<_>, _>>()?;
+    // Nothing to run is a mistake, not an empty report over the last one.
+    if o.fast && cases.iter().all(|(_, c)| !c.fast) {
+        let what = if o.cases.is_empty() {
+            format!("no case in {} is marked fast", o.dir.display())
+        } else {
+            format!(
+                "--cases {}: none of them runs with --fast",
+                o.cases.join(",")
+            )
+        };
+        return Err(format!(
+            "{what} (cases with --fast: {}); leave out --fast, or name one of those",
+            fast_cases()?
+        ));
+    }
+    if cases.is_empty() {
+        return Err(format!("no cases in {}", o.dir.display()));
+    }
     std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();

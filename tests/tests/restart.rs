@@ -457,6 +457,47 @@ fn contact_run_checkpointed_on_3_ranks_continues_on_2() {
     restart_on_other_ranks("scenes/block_drop.toml", 3, &[2], 100, 0.0, &[]);
 }
 
+/// report.json's Newton counts of a restarted implicit run `b` are the whole run's: within
+/// `within` of those of the run without a stop `a` (the restart assembles a fresh tangent, with
+/// which the next steps take fewer iterations, or the iterates differ at the tolerance and a
+/// step takes one more: measured 123 against 136 for the plate stopped at step 35 of 48, 441
+/// against 418 for the bar stopped at 66 of 171; counting only the steps since the restart
+/// gives a quarter to two thirds of the whole run's), and the count per step is the count over the
+/// steps of the whole run.
+fn newton_counts_carried(a: &Path, b: &Path, within: f64) {
+    let report = |d: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join("report.json")).unwrap()).unwrap()
+    };
+    let (ra, rb) = (report(a), report(b));
+    let find = |r: &serde_json::Value, key: &str| -> f64 {
+        fn walk<'a>(v: &'a serde_json::Value, key: &str) -> Option<&'a serde_json::Value> {
+            match v {
+                serde_json::Value::Object(m) => {
+                    m.get(key).or_else(|| m.values().find_map(|x| walk(x, key)))
+                }
+                _ => None,
+            }
+        }
+        walk(r, key)
+            .and_then(|v| v.as_f64())
+            .unwrap_or_else(|| panic!("report.json has {key}"))
+    };
+    let (na, nb) = (
+        find(&ra, "newton_iterations"),
+        find(&rb, "newton_iterations"),
+    );
+    assert!(
+        (nb - na).abs() <= within * na,
+        "Newton iterations after a restart {nb}, without a stop {na}"
+    );
+    let steps = find(&rb, "steps");
+    let per_step = find(&rb, "newton_iterations_per_step");
+    assert!(
+        (per_step - nb / steps).abs() < 1e-12 * per_step,
+        "per step {per_step}: {nb} over {steps} steps"
+    );
+}
+
 #[test]
 fn implicit_run_checkpointed_on_3_ranks_continues_on_2() {
     // The bar's free vibration, implicit (Newmark, Newton, KSP): the same remap by node and
@@ -495,6 +536,7 @@ fn implicit_run_checkpointed_on_3_ranks_continues_on_2() {
             );
         }
     }
+    newton_counts_carried(&a, &b, 0.2);
 }
 
 #[test]
@@ -707,6 +749,7 @@ fn implicit_run_with_a_pressure_load_stopped_and_restarted_continues() {
             );
         }
     }
+    newton_counts_carried(&a, &b, 0.2);
 }
 
 /// Native tetrahedra (`[run] tetrahedra = "nodal_pressure"`, the copper Taylor bar's first
@@ -822,4 +865,147 @@ fn perforation_into_particles_stopped_and_restarted_ends_bit_identical_at_np_3()
         300,
         &["contact_imbalance", "contact_bytes"],
     );
+}
+
+/// `tdyn run scene --restart out EXTRA` on one rank, which must be refused: its stderr.
+fn restart_refused(scene: &Path, out: &Path, extra: &[&str]) -> String {
+    let o = mpirun(1, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(scene)
+        .arg("--restart")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "refused: {extra:?}\n{err}");
+    err
+}
+
+#[test]
+fn a_restart_is_checked_against_what_the_run_computes_and_names_what_differs() {
+    // The example bar, run with -p values and --end-time to its end with a checkpoint there. A
+    // restart that passes the check is refused only as finished: so "that run is finished"
+    // says the check took the run as the checkpoint's. The same -p values in another order,
+    // an end time spelt otherwise and a comment added to the scene pass it; another -p value,
+    // a missing --end-time and a changed scene value do not, each named.
+    let dir = workdir("restart_identity");
+    let text = std::fs::read_to_string(scene_copy("scenes/example_bar.toml", &dir)).unwrap();
+    let scene = dir.join("bar_checkpointed.toml");
+    std::fs::write(
+        &scene,
+        text.replace("[output]\n", "[output]\ncheckpoint_every = 5.0e-6\n"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    run_ok_args(
+        1,
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("checkpoint/meta.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        meta["params"],
+        serde_json::json!([["M", 2.0], ["N", 10.0]]),
+        "meta.json holds the -p values"
+    );
+    assert_eq!(
+        meta["end_time"],
+        serde_json::json!(1e-5),
+        "and the end time"
+    );
+    let finished = |err: &str| err.contains("that run is finished");
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "M=2", "-p", "N=10", "--end-time", "0.00001"],
+    );
+    assert!(
+        finished(&err),
+        "-p in another order is the same run:\n{err}"
+    );
+    std::fs::write(
+        &scene,
+        format!(
+            "# a comment\n{}",
+            std::fs::read_to_string(&scene)
+                .unwrap()
+                .replace("density = 2700.0", "density = 2.7e3   # kg/m^3")
+        ),
+    )
+    .unwrap();
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    assert!(
+        finished(&err),
+        "comments and spelling change nothing:\n{err}"
+    );
+    let err = restart_refused(&scene, &out, &["-p", "N=12", "-p", "M=2"]);
+    assert!(
+        err.contains("-p N: 10 at the checkpoint, 12 now")
+            && err.contains("--end-time: 0.00001 at the checkpoint, not given now")
+            && err.contains("-p M=2 -p N=10 --end-time 0.00001 --restart")
+            && err.lines().filter(|l| l.starts_with("tdyn:")).count() == 1,
+        "the differing values named, and the command that continues:\n{err}"
+    );
+    std::fs::write(
+        &scene,
+        std::fs::read_to_string(&scene)
+            .unwrap()
+            .replace("density = 2.7e3", "density = 2.8e3"),
+    )
+    .unwrap();
+    let err = restart_refused(
+        &scene,
+        &out,
+        &["-p", "N=10", "-p", "M=2", "--end-time", "1e-5"],
+    );
+    assert!(
+        err.contains("the scene's values changed") && !finished(&err),
+        "a changed scene value is refused:\n{err}"
+    );
+}
+
+#[test]
+fn the_stop_line_names_a_restart_command_that_works_as_written() {
+    // The Taylor bar run with -p values and --end-time, stopped by SIGTERM: the command the
+    // stop line names (the values included) continues it, and the run ends as without a stop.
+    let dir = workdir("restart_stop_line");
+    let scene = scene_copy("scenes/taylor_impact.toml", &dir);
+    let extra = ["-p", "N=30", "-p", "M=4", "--end-time", "6e-5"];
+    let (a, b) = (dir.join("A"), dir.join("B"));
+    run_ok_args(1, &scene, &a, &extra);
+    let mut child = start(1, &scene, &b, &extra);
+    assert!(signal_after_rows(&mut child, &b, 600, "-TERM"), "stopped");
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let command = err
+        .split('`')
+        .nth(1)
+        .unwrap_or_else(|| panic!("the stop line names a command:\n{err}"));
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[..2], ["tdyn", "run"], "{command}");
+    assert!(
+        command.contains("-p M=4 -p N=30 --end-time 0.00006 --restart"),
+        "{command}"
+    );
+    let o = mpirun(1, 600)
+        .arg(tdyn())
+        .args(&words[1..])
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "`{command}` continues:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    same_csv(&a.join("history.csv"), &b.join("history.csv"), &[]).unwrap();
 }

@@ -25,7 +25,9 @@
 //! agrees with the run without a stop to round-off (sums are taken in another order), as runs
 //! on different rank counts do.
 use super::energy::HourglassWatch;
+use super::options::{restart_command, run_args, RunOverrides};
 use super::setup::Model;
+use crate::input::scene::Scene;
 use crate::kernels::collective::first_error;
 use crate::output::state::{StateReader, StateWriter};
 use mpi::topology::SimpleCommunicator;
@@ -85,8 +87,21 @@ pub struct Meta {
     pub version: u32,
     /// Ranks that wrote it.
     pub ranks: i32,
-    /// SHA-256 of the scene file's text and the command line's replacements of its keys.
+    /// SHA-256 of the scene as the run computes it: parsed, with the command line's
+    /// replacements of its values (`scene_hash`). Comments, layout and the order of `-p`
+    /// values do not change it.
     pub scene_hash: String,
+    /// SHA-256 of the scene as parsed, before the command line's replacements (`scene_hash`
+    /// of the scene file alone): tells a changed scene from changed command-line values.
+    /// Empty in a checkpoint of an earlier tdyn, whose `scene_hash` is of the file's bytes.
+    #[serde(default)]
+    pub scene_file_hash: String,
+    /// The `-p` values of the run, `(NAME, value)` (`RunOverrides::params`).
+    #[serde(default)]
+    pub params: Vec<(String, f64)>,
+    /// The run's `--end-time`, s (none: the scene's).
+    #[serde(default)]
+    pub end_time: Option<f64>,
     /// The clock.
     pub clock: ClockState,
     /// The energy check.
@@ -105,15 +120,127 @@ fn rank_file(dir: &Path, rank: i32, step: u64) -> PathBuf {
     dir.join(format!("rank-{rank:06}-step-{step:010}.bin"))
 }
 
-/// The hash a checkpoint is tied to: the scene file's text and the replacements of its keys
-/// given on the command line.
-pub fn scene_hash(scene_text: &str, overrides: &str) -> String {
+/// The hash a checkpoint is tied to: of what the run computes, the scene as parsed (with the
+/// command line's replacements of its values already in it), not the file's bytes: comments,
+/// layout, the spelling of numbers and the order of `-p` values do not change it. Where the
+/// scene file is (its path, the folder its mesh files are resolved against), its title and its
+/// `[compare]` and `[sweep]` tables (not read by a run) are left out.
+pub fn scene_hash(scene: &Scene) -> String {
+    let mut s = scene.clone();
+    for m in &mut s.meshes {
+        if let Ok(rel) = m.file.strip_prefix(&scene.dir) {
+            m.file = rel.to_path_buf();
+        }
+    }
+    s.file = PathBuf::new();
+    s.dir = PathBuf::new();
+    s.title = String::new();
+    s.compare = None;
+    s.sweep = None;
+    sha256(&[format!("{s:?}").as_bytes()])
+}
+
+/// The hash an earlier tdyn wrote: the scene file's bytes and the replacements' `Debug` form.
+fn legacy_scene_hash(scene_text: &str, overrides: &RunOverrides) -> String {
+    sha256(&[
+        scene_text.as_bytes(),
+        &[0u8],
+        format!("{overrides:?}").as_bytes(),
+    ])
+}
+
+fn sha256(parts: &[&[u8]]) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
-    h.update(scene_text.as_bytes());
-    h.update([0u8]);
-    h.update(overrides.as_bytes());
+    for p in parts {
+        h.update(p);
+    }
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// What a restart is checked against: the scene as the run computes it, the scene file alone,
+/// and the command line's replacements.
+pub struct RunIdentity<'a> {
+    /// `scene_hash` of the scene with the replacements.
+    pub scene_hash: String,
+    /// `scene_hash` of the scene file alone.
+    pub scene_file_hash: String,
+    /// The scene file.
+    pub scene_file: &'a Path,
+    /// The replacements given on the command line.
+    pub overrides: &'a RunOverrides,
+}
+
+/// Why a checkpoint of `meta` is not of the run `now` (`None`: it is). Names the `-p` and
+/// `--end-time` values that differ, else says the scene's values changed.
+fn mismatch(meta: &Meta, now: &RunIdentity, run_dir: &Path) -> Option<String> {
+    if meta.scene_file_hash.is_empty() {
+        // An earlier tdyn's checkpoint: its hash is of the file's bytes.
+        let text = std::fs::read_to_string(now.scene_file).unwrap_or_default();
+        if legacy_scene_hash(&text, now.overrides) == meta.scene_hash {
+            return None;
+        }
+        return Some(format!(
+            "--restart {}: {} (or the values given on the command line) changed since the checkpoint was written; a restart continues the same scene: undo the change, or start a new run",
+            run_dir.display(),
+            now.scene_file.display()
+        ));
+    }
+    if meta.scene_hash == now.scene_hash {
+        return None;
+    }
+    let mut diffs = Vec::new();
+    let then: std::collections::BTreeMap<&str, f64> =
+        meta.params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    let params = now.overrides.params();
+    let current: std::collections::BTreeMap<&str, f64> =
+        params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    let names: std::collections::BTreeSet<&str> =
+        then.keys().chain(current.keys()).copied().collect();
+    let given = |v: Option<&f64>| v.map_or("not given".to_string(), |v| format!("{v}"));
+    for name in names {
+        let (a, b) = (then.get(name), current.get(name));
+        if a != b {
+            diffs.push(format!(
+                "-p {name}: {} at the checkpoint, {} now",
+                given(a),
+                given(b)
+            ));
+        }
+    }
+    if meta.end_time != now.overrides.end_time {
+        diffs.push(format!(
+            "--end-time: {} at the checkpoint, {} now",
+            given(meta.end_time.as_ref()),
+            given(now.overrides.end_time.as_ref())
+        ));
+    }
+    if meta.scene_file_hash != now.scene_file_hash {
+        diffs.push(format!(
+            "the scene's values changed ({})",
+            now.scene_file.display()
+        ));
+    }
+    if diffs.is_empty() {
+        diffs.push("the values given on the command line changed".to_string());
+    }
+    let fix = if meta.scene_file_hash == now.scene_file_hash {
+        format!(
+            "`{}` continues it, or start a new run",
+            restart_command(
+                now.scene_file,
+                &run_args(&meta.params, meta.end_time),
+                run_dir
+            )
+        )
+    } else {
+        "undo the change, or start a new run".to_string()
+    };
+    Some(format!(
+        "--restart {}: not the run of the checkpoint: {}; a restart continues the same run: {fix}",
+        run_dir.display(),
+        diffs.join("; ")
+    ))
 }
 
 /// Writes a checkpoint of `model` into `out_dir/checkpoint` (collective).
@@ -185,13 +312,13 @@ pub enum Saved {
 }
 
 /// Reads the checkpoint in `run_dir/checkpoint` (collective): this rank's file, or every
-/// rank's when it was written on another rank count. Refused when it was written for another
-/// scene (`scene_hash`) or by another format version.
+/// rank's when it was written on another rank count. Refused, naming what differs, when it
+/// was written for another run (`scene_hash`, the `-p` and `--end-time` values) or by another
+/// format version.
 pub fn read(
     world: &SimpleCommunicator,
     run_dir: &Path,
-    scene_hash: &str,
-    scene_file: &str,
+    now: &RunIdentity,
 ) -> Result<(Meta, Saved), String> {
     let dir = run_dir.join(DIR);
     let meta_path = dir.join("meta.json");
@@ -213,21 +340,17 @@ pub fn read(
             unreachable!("first_error returns the error")
         }
     };
-    let mut err = None;
-    if meta.version != VERSION {
-        err = Some(format!(
+    let err = if meta.version != VERSION {
+        Some(format!(
             "{}: format version {}, this tdyn reads {VERSION}",
             meta_path.display(),
             meta.version
-        ));
+        ))
     } else if meta.ranks < 1 {
-        err = Some(format!("{}: ranks {}", meta_path.display(), meta.ranks));
-    } else if meta.scene_hash != scene_hash {
-        err = Some(format!(
-            "--restart {}: {scene_file} (or the values given on the command line) changed since the checkpoint was written; a restart continues the same scene: undo the change, or start a new run",
-            run_dir.display()
-        ));
-    }
+        Some(format!("{}: ranks {}", meta_path.display(), meta.ranks))
+    } else {
+        mismatch(&meta, now, run_dir)
+    };
     first_error(world, err)?;
     let read_one = |rank: i32| {
         let path = rank_file(&dir, rank, meta.clock.step);

@@ -108,6 +108,7 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
     let wall0 = Instant::now();
     // Every rank parses the scene (identical result, no communication).
     let mut scene = scene::load(&opts.scene).map_err(|e| e.to_string())?;
+    let scene_file_hash = checkpoint::scene_hash(&scene);
     opts.overrides.apply(&mut scene)?;
     setup::check_scene(&scene)?;
     if world.rank() == 0 {
@@ -135,20 +136,20 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
             ..RunSummary::set_up(scene.run.mode, stable0, clock.dt)
         });
     }
-    let hash = checkpoint::scene_hash(
-        &std::fs::read_to_string(&scene.file).unwrap_or_default(),
-        &format!("{:?}", opts.overrides),
-    );
+    let identity = checkpoint::RunIdentity {
+        scene_hash: checkpoint::scene_hash(&scene),
+        scene_file_hash,
+        scene_file: &scene.file,
+        overrides: &opts.overrides,
+    };
     let mut check = EnergyCheck::new(world, &scene, &model, forced, stable0);
-    let restart = restart_from(
-        world, opts, &hash, &scene, &mut model, &mut clock, &mut check,
-    )?;
+    let restart = restart_from(world, opts, &identity, &mut model, &mut clock, &mut check)?;
     let out_dir = out_dir_of(world, opts, &default_out, restart.is_some())?;
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut outputs = outputs::Outputs::create(world, &out_dir, &scene, &model, restart.as_ref())?;
     let mut ctx = LoopCtx {
         out_dir: &out_dir,
-        hash,
+        identity: &identity,
         next_checkpoint: restart.as_ref().map_or(1, |m| m.next_checkpoint),
         checkpoint_every: scene.output.checkpoint_every,
     };
@@ -231,13 +232,12 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
 }
 
 /// `--restart DIR`: the checkpoint's state set into `model`, `clock` and `check` (collective;
-/// `hash` the scene's, which the checkpoint must match). Returns its metadata (`None` without
-/// `--restart`).
+/// `identity` the run's, which the checkpoint must match). Returns its metadata (`None`
+/// without `--restart`).
 fn restart_from(
     world: &SimpleCommunicator,
     opts: &RunOptions,
-    hash: &str,
-    scene: &Scene,
+    identity: &checkpoint::RunIdentity,
     model: &mut Model,
     clock: &mut schedule::Clock,
     check: &mut EnergyCheck,
@@ -251,8 +251,7 @@ fn restart_from(
                 )
                 .into());
             }
-            let (meta, saved) =
-                checkpoint::read(world, dir, hash, &scene.file.display().to_string())?;
+            let (meta, saved) = checkpoint::read(world, dir, identity)?;
             // A run that reached its end time has nothing to continue (the same scene: the
             // checkpoint matched it, so the same end time).
             let mut at = clock.clone();
@@ -332,7 +331,7 @@ fn out_dir_of(
 /// What the time loop needs besides the model, clock and files.
 struct LoopCtx<'a> {
     out_dir: &'a std::path::Path,
-    hash: String,
+    identity: &'a checkpoint::RunIdentity<'a>,
     next_checkpoint: u64,
     checkpoint_every: Option<f64>,
 }
@@ -409,11 +408,14 @@ fn time_loop(
             return Err(RunFailure::new(
                 FailureKind::Stopped,
                 format!(
-                    "stopped at step {}, t = {:e} s: the output is closed and a checkpoint written; `tdyn run {} --restart {}` continues",
+                    "stopped at step {}, t = {:e} s: the output is closed and a checkpoint written; `{}` continues",
                     clock.step,
                     clock.time,
-                    scene.file.display(),
-                    ctx.out_dir.display()
+                    options::restart_command(
+                        &scene.file,
+                        &opts.overrides.run_args(),
+                        ctx.out_dir
+                    )
                 ),
             ));
         }
@@ -516,7 +518,10 @@ fn write_checkpoint(
     let meta = checkpoint::Meta {
         version: 1,
         ranks: world.size(),
-        scene_hash: ctx.hash.clone(),
+        scene_hash: ctx.identity.scene_hash.clone(),
+        scene_file_hash: ctx.identity.scene_file_hash.clone(),
+        params: ctx.identity.overrides.params(),
+        end_time: ctx.identity.overrides.end_time,
         clock: clock.state(),
         check: check.state(),
         history_rows,

@@ -164,3 +164,117 @@ impl RunOverrides {
         Ok(())
     }
 }
+
+impl RunOverrides {
+    /// The `--param` replacements as `tdyn run -p` writes them, `(NAME, value)`: `N` (mesh 0),
+    /// `K:N`, `particles.spacing`, `particles[i].spacing`; sorted by name, the last value given
+    /// for a name kept (as `apply` does).
+    pub fn params(&self) -> Vec<(String, f64)> {
+        let mut m = std::collections::BTreeMap::new();
+        for (k, name, v) in &self.mesh_params {
+            let key = if *k == 0 {
+                name.clone()
+            } else {
+                format!("{k}:{name}")
+            };
+            m.insert(key, *v);
+        }
+        for (i, v) in &self.particle_spacing {
+            let key = match i {
+                Some(i) => format!("particles[{i}].spacing"),
+                None => "particles.spacing".to_string(),
+            };
+            m.insert(key, *v);
+        }
+        m.into_iter().collect()
+    }
+
+    /// The arguments of `tdyn run` that give these replacements (`run_args`).
+    pub fn run_args(&self) -> Vec<String> {
+        run_args(&self.params(), self.end_time)
+    }
+}
+
+/// The arguments of `tdyn run` that give the replacements `params` (`RunOverrides::params`)
+/// and `end_time`: `-p NAME=VALUE` for each, then `--end-time T` (values in Rust's shortest
+/// round-trip form).
+pub fn run_args(params: &[(String, f64)], end_time: Option<f64>) -> Vec<String> {
+    let mut args = Vec::new();
+    for (name, v) in params {
+        args.push("-p".to_string());
+        args.push(format!("{name}={v}"));
+    }
+    if let Some(t) = end_time {
+        args.push("--end-time".to_string());
+        args.push(format!("{t}"));
+    }
+    args
+}
+
+/// `word` as one word of a POSIX shell command line: as it is when it holds only characters
+/// no shell reads specially, else in single quotes.
+pub fn shell_word(word: &str) -> String {
+    let plain = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./:=,+@%".contains(c));
+    if plain {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+/// The command that continues the run of `scene` with the replacements `args` (`run_args`)
+/// from its checkpoint in `dir`: `tdyn run SCENE [-p NAME=VALUE ...] [--end-time T] --restart
+/// DIR`.
+pub fn restart_command(scene: &std::path::Path, args: &[String], dir: &std::path::Path) -> String {
+    let mut words = vec![
+        "tdyn".to_string(),
+        "run".to_string(),
+        shell_word(&scene.display().to_string()),
+    ];
+    words.extend(args.iter().map(|a| shell_word(a)));
+    words.push("--restart".to_string());
+    words.push(shell_word(&dir.display().to_string()));
+    words.join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_restart_command_gives_the_runs_values_in_one_order_quoted_for_a_shell() {
+        let ov = RunOverrides {
+            end_time: Some(8e-4),
+            mesh_params: vec![
+                (0, "NP".into(), 40.0),
+                (0, "NB".into(), 8.0),
+                (1, "N".into(), 3.0),
+                (0, "NB".into(), 9.0),
+            ],
+            particle_spacing: vec![(Some(0), 0.0025)],
+            ..Default::default()
+        };
+        assert_eq!(
+            restart_command(
+                std::path::Path::new("scenes/a b.toml"),
+                &ov.run_args(),
+                std::path::Path::new("out/a")
+            ),
+            "tdyn run 'scenes/a b.toml' -p 1:N=3 -p NB=9 -p NP=40 -p 'particles[0].spacing=0.0025' --end-time 0.0008 --restart out/a"
+        );
+        // Another order of the same values: the same command.
+        let swapped = RunOverrides {
+            mesh_params: vec![
+                (0, "NB".into(), 9.0),
+                (1, "N".into(), 3.0),
+                (0, "NP".into(), 40.0),
+            ],
+            ..ov.clone()
+        };
+        assert_eq!(swapped.run_args(), ov.run_args());
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+    }
+}

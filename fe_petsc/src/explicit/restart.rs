@@ -42,7 +42,9 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         "fe.hex_state" | "fe.mat_state" | "fe.block_forces" | "fe.erosion"
         | "fe.erosion_volume" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
-        "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" => Global,
+        "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" | "implicit.stats" => {
+            Global
+        }
         _ => return None,
     })
 }

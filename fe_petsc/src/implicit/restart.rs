@@ -14,8 +14,23 @@ impl ImplicitFe {
             self.reaction_n.as_flattened().to_vec(),
         ));
         v.push(("implicit.force_scale_max", vec![self.force_scale_max]));
+        v.push(("implicit.stats", self.stats_state()));
         v.extend(self.wall_restart_state());
         v
+    }
+
+    /// The run's counters (the same on every rank: the solves are collective), so that
+    /// report.json counts the whole run after a restart; not its timers, which time this
+    /// process's part.
+    fn stats_state(&self) -> Vec<f64> {
+        let s = &self.stats;
+        vec![
+            s.newton_iterations as f64,
+            s.ksp_iterations as f64,
+            s.assemblies as f64,
+            s.residuals as f64,
+            s.max_step_iterations as f64,
+        ]
     }
 
     /// Sets the state [`ImplicitFe::restart_state`] gave.
@@ -37,6 +52,17 @@ impl ImplicitFe {
         let r = take("implicit.reaction_n", n3)?;
         self.reaction_n.as_flattened_mut().copy_from_slice(&r);
         self.force_scale_max = take("implicit.force_scale_max", 1)?[0];
+        // (absent from a checkpoint of an earlier tdyn: the counts start again)
+        if let Some(c) = get("implicit.stats") {
+            if c.len() != 5 {
+                return Err(format!("implicit.stats: {} values, 5 expected", c.len()));
+            }
+            self.stats.newton_iterations = c[0] as u64;
+            self.stats.ksp_iterations = c[1] as u64;
+            self.stats.assemblies = c[2] as u64;
+            self.stats.residuals = c[3] as u64;
+            self.stats.max_step_iterations = c[4] as u32;
+        }
         self.set_wall_restart_state(get)?;
         self.tangent_stale = true;
         Ok(())

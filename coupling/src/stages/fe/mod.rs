@@ -106,6 +106,8 @@ impl Fe {
                 let res = ImplicitFe::new(world, setup, dt, &mut mesh.exchange);
                 let mine = match &res {
                     Ok(_) | Err(ImplicitError::OtherRank) => None,
+                    // The command line's, not the scene's.
+                    Err(ImplicitError::Option(e)) => Some(e.clone()),
                     Err(e) => Some(format!("{file}: {e}")),
                 };
                 first_error(world, mine)?;

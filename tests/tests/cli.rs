@@ -1,0 +1,199 @@
+//! The command line (docs/cli.md): PETSc options told from tdyn's own, options nobody read
+//! named, one message per mistake at any rank count, and the subcommands' refusals.
+use std::path::Path;
+use std::process::Output;
+use tdyn_tests::*;
+
+/// `mpirun -np NP tdyn ARGS` (2 min limit).
+fn tdyn_np(np: usize, args: &[&str]) -> Output {
+    mpirun(np, 120).arg(tdyn()).args(args).output().unwrap()
+}
+
+/// The lines of `o`'s standard error that tdyn wrote (not mpirun's).
+fn tdyn_lines(o: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&o.stderr)
+        .lines()
+        .filter(|l| l.starts_with("tdyn"))
+        .map(str::to_string)
+        .collect()
+}
+
+fn elements(out: &Path) -> u64 {
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    r["mesh"]["elements"]
+        .as_u64()
+        .or_else(|| r["elements"].as_u64())
+        .unwrap_or_else(|| panic!("report.json names its elements: {r}"))
+}
+
+#[test]
+fn a_p_word_with_its_value_attached_is_a_param_and_unused_options_are_named_once() {
+    // `-pN=8` is `-p N=8` (a PETSc option has no `=`); a misspelt tdyn option and a misspelt
+    // PETSc option are named by one warning each, from rank 0 only; -petscpartitioner_type
+    // (read) and -log_view (read at the end) are not.
+    let dir = workdir("cli_unused_options");
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let s = scene.display().to_string();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let (sa, sb) = (a.display().to_string(), b.display().to_string());
+    let o = tdyn_np(2, &["run", &s, "--out", &sa, "-q", "-p", "N=8"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = tdyn_np(
+        2,
+        &[
+            "run",
+            &s,
+            "--out",
+            &sb,
+            "-q",
+            "-pN=8",
+            "-tdyn_newton_rtl",
+            "1e-12",
+            "-petscpartitioner_typo",
+            "simple",
+            "-petscpartitioner_type",
+            "simple",
+        ],
+    );
+    let lines = tdyn_lines(&o);
+    assert!(o.status.success(), "{lines:?}");
+    assert_eq!(elements(&a), elements(&b), "-pN=8 is -p N=8");
+    assert_eq!(
+        lines,
+        [
+            "tdyn: warning: -petscpartitioner_typo simple: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)",
+            "tdyn: warning: -tdyn_newton_rtl 1e-12: option not used (misspelt, or not for this run; docs/cli.md lists tdyn's and PETSc's)",
+        ]
+    );
+    // At one rank -petscpartitioner_type is read too (no warning), -log_view at the end.
+    let o = tdyn_np(
+        1,
+        &[
+            "run",
+            &s,
+            "--out",
+            &sb,
+            "--overwrite",
+            "-q",
+            "-petscpartitioner_type",
+            "simple",
+        ],
+    );
+    assert!(
+        o.status.success() && tdyn_lines(&o).is_empty(),
+        "{:?}",
+        tdyn_lines(&o)
+    );
+}
+
+#[test]
+fn newton_needs_at_least_one_iteration() {
+    let dir = workdir("cli_newton_max_it");
+    let scene = implicit_bar(&dir, 4, (1e-5, 2e-5), "", "");
+    let s = scene.display().to_string();
+    let out = dir.join("out").display().to_string();
+    let o = tdyn_np(
+        2,
+        &["run", &s, "--out", &out, "-q", "-tdyn_newton_max_it", "0"],
+    );
+    let lines = tdyn_lines(&o);
+    assert!(!o.status.success(), "refused");
+    assert_eq!(
+        lines,
+        ["tdyn: error: -tdyn_newton_max_it 0: expected at least 1 Newton iteration per step (default 30)"]
+    );
+}
+
+#[test]
+fn a_command_line_mistake_is_printed_once_at_any_rank_count() {
+    // Rank 0 alone prints (docs/cli.md), parse errors included; every rank exits with the
+    // same status. A negative number is a value, checked by tdyn itself.
+    let dir = workdir("cli_once");
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let s = scene.display().to_string();
+    let out = dir.join("out").display().to_string();
+    let o = tdyn_np(3, &["run", &s, "--out", &out, "--end-time", "-1"]);
+    assert_eq!(o.status.code(), Some(1));
+    let lines = tdyn_lines(&o);
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("run.end_time: expected a positive time in s, got -1"),
+        "{lines:?}"
+    );
+    let o = tdyn_np(2, &["run", &s, "--out", &out, "--kernel", "lanes16"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.matches("invalid value 'lanes16'").count(),
+        1,
+        "clap's report once:\n{err}"
+    );
+    let o = tdyn_np(2, &["run", &s, "--out", &out, "-p", "N"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(tdyn_lines(&o).len(), 1, "{:?}", tdyn_lines(&o));
+}
+
+/// `tdyn ARGS` without mpirun, in the repository's root.
+fn tdyn_here(args: &[&str]) -> Output {
+    std::process::Command::new(tdyn())
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn tdyn_mesh_names_a_missing_file_once_as_an_error() {
+    let o = tdyn_here(&["mesh", "meshes/nosuch.geo"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stderr).trim_end(),
+        "tdyn: error: meshes/nosuch.geo: no such file"
+    );
+}
+
+#[test]
+fn tdyn_validate_refuses_nothing_to_run_and_keeps_the_last_report() {
+    let dir = workdir("cli_validate_nothing");
+    let out = dir.join("validation");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("report.md"), "the last report\n").unwrap();
+    let o_s = out.display().to_string();
+    let o = tdyn_here(&["validate", "--np", "0", "--out", &o_s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1) && err.contains("--np 0: expected at least 1"),
+        "{err}"
+    );
+    // cantilever_tets is not marked fast (validation/cantilever_tets/reference.toml).
+    let o = tdyn_here(&[
+        "validate",
+        "--cases",
+        "cantilever_tets",
+        "--fast",
+        "--out",
+        &o_s,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1)
+            && err.starts_with("tdyn validate: error: --cases cantilever_tets: none of them runs with --fast (cases with --fast: bar_wave,")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    let o = tdyn_here(&["validate", "--cases", "nosuch", "--fast", "--out", &o_s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1)
+            && err.contains("no case \"nosuch\"")
+            && err.contains("cantilever_tets")
+            && err.contains("with --fast: bar_wave"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("report.md")).unwrap(),
+        "the last report\n",
+        "report.md left as it was"
+    );
+}
