@@ -605,6 +605,8 @@ fn run(a: RunArgs, petsc_args: &[String]) -> ExitCode {
                     steps: s.steps,
                     wall_s: Some(s.wall_s),
                     energy_error_max: s.energy_error_max,
+                    energy_error_max_checked: s.energy_error_max_checked,
+                    energy_error_last: s.energy_error_last,
                 })
                 .map_err(|e| e.to_string())
         },

@@ -12,6 +12,8 @@ pub(super) struct EnergyCheck {
     pub(super) stable0: f64,
     pub(super) err_max: f64,
     pub(super) err_max_checked: f64,
+    /// The error after the last step.
+    pub(super) err_last: f64,
     pub(super) hourglass: energy::HourglassWatch,
     pub(super) scale: energy::EnergyScale,
     /// The external work after the last step, J.
@@ -39,6 +41,7 @@ impl EnergyCheck {
             stable0,
             err_max: 0.0,
             err_max_checked: 0.0,
+            err_last: 0.0,
             hourglass: energy::HourglassWatch::new(scene),
             over_limit_steps: 0,
         }
@@ -136,6 +139,7 @@ impl EnergyCheck {
             ));
         }
         self.err_max = self.err_max.max(err);
+        self.err_last = err;
         if let Some(fe) = &model.fe {
             for line in self
                 .hourglass

@@ -45,6 +45,10 @@ pub struct RunSummary {
     pub steps: u64,
     /// Largest energy error seen.
     pub energy_error_max: f64,
+    /// Largest energy error from the check's first step on (`energy::ENERGY_CHECK_FROM_STEP`).
+    pub energy_error_max_checked: f64,
+    /// The energy error after the last step.
+    pub energy_error_last: f64,
     /// Time-loop cost, ns per element-cycle.
     pub ns_per_element_cycle: f64,
     /// The explicit stable step at t = 0 (no safety factor), s.
@@ -219,6 +223,8 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         out: out_dir,
         steps: clock.step,
         energy_error_max: check.err_max,
+        energy_error_max_checked: check.err_max_checked,
+        energy_error_last: check.err_last,
         ns_per_element_cycle: if cycles > 0.0 {
             loop_s * 1e9 * world.size() as f64 / cycles
         } else {
@@ -293,6 +299,8 @@ impl RunSummary {
             mode,
             steps: 0,
             energy_error_max: 0.0,
+            energy_error_max_checked: 0.0,
+            energy_error_last: 0.0,
             ns_per_element_cycle: 0.0,
             dt_stable,
             dt_min: dt,
