@@ -523,6 +523,152 @@ impl Hourglass {
         }
         k
     }
+
+    /// The hourglass tangent of an element at its step's own state, K[3 I + i][3 J + j] =
+    /// d(-f_iI)/d(u_jJ) for the physical kind as [`Hourglass::apply`] computes its force: the
+    /// amplitudes `hg` at the step's start, the step's motion `s.v` (the displacement increment
+    /// over `s.dt`), `mat`'s tangent ratio on loading (held), and the yield bound's factor
+    /// lambda of each group at the trial amplitudes ([`BoundSlope`]: the map's own derivative
+    /// where lambda is 0 or 1, a symmetric positive semi-definite form of it in between). The
+    /// other kinds: [`Hourglass::tangent`]. For the implicit Newmark solver.
+    pub fn tangent_at(
+        &self,
+        s: &HourglassStep,
+        mat: &HourglassMaterial,
+        hg: &[[f64; 3]; 4],
+    ) -> Box<[[f64; 24]; 24]> {
+        let Hourglass::Physical { scale } = self.for_material(mat.mu) else {
+            return self.tangent(s, mat, s.dt);
+        };
+        let gam = vectors(s.x, s.b);
+        let frame = Frame::new(s.x);
+        let rates = |v: &[[f64; 3]; 8]| -> [[f64; 3]; 4] {
+            let qd: [[f64; 3]; 4] = std::array::from_fn(|al| {
+                let mut q = [0.0; 3];
+                for k in 0..8 {
+                    for c in 0..3 {
+                        q[c] += v[k][c] * gam[al][k];
+                    }
+                }
+                frame.to_local(&q)
+            });
+            physical_strain_rates(&qd, &frame.ia)
+        };
+        // The step's own amplitudes before the bound, as `physical_step` forms them.
+        let e = rates(s.v);
+        let power: f64 =
+            (0..3).map(|g| dot(&hg[g], &e[g])).sum::<f64>() + dot(&hg[3], &e[3]) * THIRD;
+        let s_eff = if power > 0.0 { mat.tangent_ratio } else { 1.0 };
+        let mu = scale * s_eff * mat.mu;
+        let rate = physical_stress_rates(&e, mu, mat.nu);
+        let trial: [[f64; 3]; 4] =
+            std::array::from_fn(|al| std::array::from_fn(|i| hg[al][i] + s.dt * rate[al][i]));
+        let slope = mat
+            .yield_stress
+            .map(|sy| BoundSlope::new(&trial, &centre_stress(&mat.stress, &frame.e), sy, mat.nu));
+        let mut k = Box::new([[0.0; 24]; 24]);
+        for col in 0..24 {
+            // A unit displacement of one dof over the step: its amplitude increments, through
+            // the bound's slope, their generalised forces.
+            let mut v = [[0.0; 3]; 8];
+            v[col / 3][col % 3] = 1.0 / s.dt;
+            let r = physical_stress_rates(&rates(&v), mu, mat.nu);
+            let mut dsig: [[f64; 3]; 4] =
+                std::array::from_fn(|al| std::array::from_fn(|i| s.dt * r[al][i]));
+            if let Some(b) = &slope {
+                b.apply(&mut dsig);
+            }
+            let h = physical_forces(&dsig, &frame.ia, s.vol);
+            let mut f = [[0.0; 3]; 8];
+            add_forces(&frame, &gam, &h, &mut f);
+            for row in 0..24 {
+                k[row][col] = -f[row / 3][row % 3];
+            }
+        }
+        k
+    }
+}
+
+/// The derivative of the yield bound's map tau -> lambda(tau) tau (`yield_bound`) of each group
+/// at the trial amplitudes, the centre stress held: 0 where the centre is on or outside the
+/// surface (lambda is 0 about every amplitude with a deviator), the identity where the bound
+/// does not act (lambda = 1). Where it acts with 0 < lambda < 1, lambda tau lies on the fibre
+/// surface Phi(s) = A + 2 |B(s)| + C(s) = sy^2 and the map's own derivative,
+/// lambda (I - tau n^T / (n . tau)) with n = grad Phi, is oblique (its stiffness not
+/// symmetric, indefinite once symmetrised); it is taken as lambda (I - E n n^T / (n . E n)),
+/// E the group's elastic matrix: the same tangent plane, a projection symmetric in the
+/// energy's metric (the form of a closest-point return), so the stiffness stays symmetric
+/// positive semi-definite.
+struct BoundSlope {
+    /// Per group: `None` for the identity, else (lambda, n, E n / (n . E n)); lambda = 0: the
+    /// zero map.
+    groups: [Option<GroupSlope>; 4],
+}
+
+/// One group's bound slope: lambda, n and E n / (n . E n) ([`BoundSlope`]).
+type GroupSlope = (f64, [f64; 3], [f64; 3]);
+
+impl BoundSlope {
+    fn new(trial: &[[f64; 3]; 4], centre: &[[f64; 3]; 3], sy: f64, nu: f64) -> BoundSlope {
+        let centre = Centre::new(centre);
+        let a = centre.mises_sq;
+        let sy2 = sy * sy;
+        let groups = std::array::from_fn(|g| {
+            let tau = &trial[g];
+            let (b, c) = if g < 3 {
+                centre.group(g, tau)
+            } else {
+                centre.mode3(tau)
+            };
+            if a >= sy2 {
+                return Some((0.0, [0.0; 3], [0.0; 3]));
+            }
+            if c <= 0.0 {
+                return None;
+            }
+            let lambda = (-b.abs() + (b * b + c * (sy2 - a)).sqrt()) / c;
+            if lambda >= 1.0 {
+                return None;
+            }
+            // n = grad(2 |B| + C) at s = lambda tau; E (unit shear modulus) times n.
+            let sb = if b < 0.0 { -1.0 } else { 1.0 };
+            let st = tau.map(|t| lambda * t);
+            let (n, en) = if g < 3 {
+                let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+                let gb = [1.5 * centre.da[p], 1.5 * centre.da[r], 3.0 * centre.a[p][r]];
+                let tm = (st[0] + st[1]) * THIRD;
+                let (dp, dr) = (st[0] - tm, st[1] - tm);
+                let gc = [2.0 * dp - dr + tm, 2.0 * dr - dp + tm, 6.0 * st[2]];
+                let n: [f64; 3] = std::array::from_fn(|i| 2.0 * sb * gb[i] + gc[i]);
+                let ebar = 2.0 / (1.0 - nu);
+                let en = [ebar * (n[0] + nu * n[1]), ebar * (n[1] + nu * n[0]), n[2]];
+                (n, en)
+            } else {
+                let tm = (st[0] + st[1] + st[2]) * THIRD;
+                let n: [f64; 3] =
+                    std::array::from_fn(|i| 3.0 * sb * centre.da[i] + 3.0 * (st[i] - tm));
+                (n, n.map(|x| 2.0 * x))
+            };
+            let nen = dot(&n, &en);
+            if !(nen > 0.0) {
+                return Some((lambda, [0.0; 3], [0.0; 3]));
+            }
+            Some((lambda, n, en.map(|x| x / nen)))
+        });
+        BoundSlope { groups }
+    }
+
+    /// Applies the slope to each group's amplitude increments `dsig`: lambda (d - m (n . d)).
+    fn apply(&self, dsig: &mut [[f64; 3]; 4]) {
+        for (d, g) in dsig.iter_mut().zip(&self.groups) {
+            if let Some((lambda, n, m)) = g {
+                let nd = dot(n, d);
+                for i in 0..3 {
+                    d[i] = lambda * (d[i] - m[i] * nd);
+                }
+            }
+        }
+    }
 }
 
 /// f_iI -= sum_a H_ia gamma_aI with H in the element frame.

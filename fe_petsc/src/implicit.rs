@@ -27,13 +27,27 @@
 //! from the element state at t(n): the two modes differ only in time integration. Bulk viscosity is off (docs/scene.md:
 //! explicit only).
 //!
-//! **Tangent** (per element, 24 x 24): K = V S^T C S + K_hg, with K_hg the hourglass control's
-//! own linear map (`Hourglass::tangent`: elastic moduli, viscous part as c / dt), with S the strain-displacement matrix of the mean gradient at the trial geometry, C the
-//! algorithmic tangent of the material's own stress update, found by forward differences of
-//! `Material::update_stress` about the step's strain increment (exact for linear elasticity to
-//! round-off, the consistent tangent of the radial return for J2 plasticity). Left out (stated approximation): the geometric (initial-stress) stiffness
-//! and the derivative of the rotation, of relative size |stress| / modulus (1e-3 at most for
-//! metals); Newton then converges linearly at about that ratio per iteration.
+//! **Tangent** (per element, 24 x 24): K = V S^T C S + K_hg, with S the strain-displacement
+//! matrix of the mean gradient at the trial geometry, C the algorithmic tangent of the
+//! material's own stress update, found by forward differences of `Material::update_stress`
+//! about the step's strain increment (exact for linear elasticity to round-off, the consistent
+//! tangent of the radial return for J2 plasticity), and K_hg the hourglass control's own map.
+//! For an elastic material (and the FB forms) K_hg is the control's linear map
+//! (`Hourglass::tangent`: elastic moduli, viscous part as c / dt). For a material with a yield
+//! surface under the physical control it is the linearised hourglass step of the trial state
+//! (`Hourglass::tangent_at`): the loading ratio the residual used, and the yield bound's factor
+//! per mode group, so that an element whose centre flows, whose hourglass stresses the bound
+//! sets to zero, has no hourglass stiffness either. (The elastic hourglass stiffness, about a third
+//! of the element's, in every yielded element made each Newton iteration gain only the mass
+//! term's share, 4 m / dt^2 against the stiffness: 155-258 iterations a step on a bar pressed
+//! past yield, against 5-7 with it.) Left out (stated approximations): the geometric
+//! (initial-stress) stiffness and the derivative of the rotation, of relative size
+//! |stress| / modulus (1e-3 at most for metals); and where the yield bound only partly holds an
+//! element's hourglass stresses (fibres at the surface, the centre inside), the bound's
+//! dependence on the centre stress (not symmetric) and its own slope, taken there in a
+//! symmetric positive semi-definite form. Newton converges linearly at about the first ratio per
+//! iteration, and more slowly in the steps where elements cross from elastic to plastic
+//! (up to 25 iterations a step on a bar whose end is held laterally, docs/status.md).
 //!
 //! **Newton** (modified, with refresh): the tangent is assembled on the first iteration of the
 //! run and again whenever an iteration reduced the residual by less than [`REFRESH_RATIO`]

@@ -1,6 +1,7 @@
 //! The implicit step's tangent: 4 M / dt^2 + K assembled at the trial state, elements and
 //! hourglass control.
 use super::*;
+use crate::hourglass::Hourglass;
 
 /// Forward-difference step of the material tangent, relative to the strain increment...
 const FD_REL: f64 = 1e-6;
@@ -61,7 +62,7 @@ impl ImplicitFe {
                     std::array::from_fn(|bb| (0..6).map(|q| c[p][q] * s[j][q][bb]).sum())
                 })
             });
-            let hg = self.hourglass_tangent(mat, &xe, &b, vol, self.fe.vol0[e]);
+            let hg = self.hourglass_tangent(e, mat, (&xe, &due), &b, vol, &deps);
             let proj: [Option<[[f64; 3]; 3]>; 8] =
                 std::array::from_fn(|k| self.dofs[conn[k] as usize].matrix());
             for i in 0..8 {
@@ -122,20 +123,45 @@ impl ImplicitFe {
         Ok(())
     }
 
-    /// The hourglass tangent of an element (`hourglass::Hourglass::tangent`: the elastic
-    /// physical stiffness, or the FB forms, the viscous part as c / dt).
+    /// The hourglass tangent of element `e` at the trial state (the forces the residual's last
+    /// evaluation computed, `state_trial` and `mat_trial`, at the trial positions `x` and the
+    /// step's increments `du`). For a material with a yield surface under the physical kind,
+    /// the element's own hourglass step linearised (`Hourglass::tangent_at`): its loading
+    /// ratio and its yield bound, so that an element whose centre flows, whose hourglass
+    /// stresses the bound sets to zero, has no hourglass stiffness either (the elastic
+    /// hourglass stiffness there, about a third of the element's, left Newton converging at about
+    /// 1 - 4 m / (dt^2 k_hg) per iteration: hundreds of iterations a step once the elements
+    /// yielded). Otherwise the linear map of `Hourglass::tangent` (elastic moduli, viscous part
+    /// as c / dt).
     pub(super) fn hourglass_tangent(
         &self,
+        e: usize,
         mat: &dyn Material,
-        x: &[[f64; 3]; 8],
+        (x, du): (&[[f64; 3]; 8], &[[f64; 3]; 8]),
         b: &[[f64; 3]; 8],
         vol: f64,
-        vol0: f64,
+        deps: &[f64; 6],
     ) -> Box<[[f64; 24]; 24]> {
         let bb: f64 = b.iter().flatten().map(|q| q * q).sum();
-        let rho = mat.density() * vol0 / vol;
+        let rho = mat.density() * self.fe.vol0[e] / vol;
         let mu = mat.shear_modulus();
-        let hm = HourglassMaterial {
+        let stride = self.mat_stride;
+        let state = &self.mat_trial[e * stride..e * stride + mat.n_state()];
+        let yield_stress = mat.yield_stress(state);
+        let physical = matches!(
+            self.controls.hourglass.for_material(mu),
+            Hourglass::Physical { .. }
+        );
+        let zero = [[0.0; 3]; 8];
+        let mut step = HourglassStep {
+            x,
+            v: &zero,
+            b,
+            bb,
+            vol,
+            dt: self.dt,
+        };
+        let mut hm = HourglassMaterial {
             mu,
             nu: hourglass::poisson_ratio(mat.dilatational_modulus(), mu),
             rho,
@@ -144,16 +170,25 @@ impl ImplicitFe {
             yield_stress: None,
             stress: [0.0; 6],
         };
-        let zero = [[0.0; 3]; 8];
-        let step = HourglassStep {
-            x,
-            v: &zero,
-            b,
-            bb,
-            vol,
-            dt: self.dt,
-        };
-        self.controls.hourglass.tangent(&step, &hm, self.dt)
+        if !(physical && yield_stress.is_some()) {
+            return self.controls.hourglass.tangent(&step, &hm, self.dt);
+        }
+        // The element's hourglass step as the residual took it: the mean velocity du / dt
+        // from the amplitudes at t(n), the trial stress and yield stress, and the tangent
+        // ratio of the trial stress change (unrotated: the rotation of a step is of the order
+        // of its strain).
+        let stress = self.state_trial.stress(e);
+        let stress_n = self.fe.state.stress(e);
+        let dsig: [f64; 6] = std::array::from_fn(|k| stress[k] - stress_n[k]);
+        hm.tangent_ratio = hourglass::tangent_ratio(&dsig, deps, mu);
+        hm.yield_stress = yield_stress;
+        hm.stress = stress;
+        let inv_dt = 1.0 / self.dt;
+        let v: [[f64; 3]; 8] = std::array::from_fn(|k| du[k].map(|d| d * inv_dt));
+        step.v = &v;
+        self.controls
+            .hourglass
+            .tangent_at(&step, &hm, &self.fe.state.get(e).hg)
     }
 }
 
