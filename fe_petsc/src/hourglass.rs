@@ -528,7 +528,7 @@ impl Hourglass {
     /// d(-f_iI)/d(u_jJ) for the physical kind as [`Hourglass::apply`] computes its force: the
     /// amplitudes `hg` at the step's start, the step's motion `s.v` (the displacement increment
     /// over `s.dt`), `mat`'s tangent ratio on loading (held), and the yield bound's factor
-    /// lambda of each group at the trial amplitudes ([`BoundSlope`]: the map's own derivative
+    /// lambda of each group at the trial amplitudes (`BoundSlope`: the map's own derivative
     /// where lambda is 0 or 1, a symmetric positive semi-definite form of it in between). The
     /// other kinds: [`Hourglass::tangent`]. For the implicit Newmark solver.
     pub fn tangent_at(
