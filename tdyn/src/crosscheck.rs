@@ -171,6 +171,11 @@ fn rel(a: f64, b: f64) -> f64 {
 
 /// Runs both codes and compares (see the module comment).
 pub fn crosscheck(o: &CrosscheckOptions) -> Result<CrosscheckSummary, String> {
+    for (flag, np) in [("--np", o.np), ("--liggghts-np", o.liggghts_np)] {
+        if np < 1 {
+            return Err(format!("{flag} {np}: expected at least 1 rank"));
+        }
+    }
     let scene = coupling::input::scene::load(&o.scene).map_err(|e| e.to_string())?;
     if scene.output.dump_every == 0 {
         return Err(format!(

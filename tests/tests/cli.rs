@@ -197,3 +197,25 @@ fn tdyn_validate_refuses_nothing_to_run_and_keeps_the_last_report() {
         "report.md left as it was"
     );
 }
+
+#[test]
+fn tdyn_crosscheck_refuses_zero_ranks_before_running_anything() {
+    // docs/cli.md: `--np` and `--liggghts-np` are rank counts; 0 (which Open MPI reads as
+    // "every slot") is refused in one line naming the flag, exit status non-zero, before
+    // either code runs (no LIGGGHTS needed).
+    let scene = root().join("scenes/liggghts_dambreak.toml");
+    let deck = root().join("scenes/liggghts/in.dambreak3d");
+    let (s, d) = (scene.display().to_string(), deck.display().to_string());
+    for flag in ["--np", "--liggghts-np"] {
+        let o = std::process::Command::new(tdyn())
+            .args(["crosscheck", &s, "--deck", &d, flag, "0"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{flag} 0 refused");
+        assert!(
+            err.contains(&format!("{flag} 0: expected at least 1 rank")),
+            "{flag} 0: the message names the flag: {err}"
+        );
+    }
+}
