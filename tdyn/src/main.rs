@@ -635,7 +635,13 @@ fn run_overrides(a: &RunArgs) -> Result<driver::RunOverrides, String> {
                     "--param {p}: expected one value (tdyn sweep runs several)"
                 ))
             }
-            Err(e) => return Err(format!("--param {e}")),
+            // (the sweep's wording, "NAME=v1,v2,...", is for lists: a run takes one value)
+            Err(e) => {
+                return Err(format!(
+                    "--param {}",
+                    e.replace("NAME=v1,v2,...", "NAME=VALUE")
+                ))
+            }
         }
     }
     Ok(overrides)
