@@ -898,6 +898,24 @@ mod tests {
         );
     }
 
+    /// `tdyn run -p` takes one value: a word without one is asked for as NAME=VALUE (not as
+    /// the sweep's list), and a list is refused naming `tdyn sweep`.
+    #[test]
+    fn a_run_parameter_without_its_value_is_asked_for_as_name_value() {
+        let args = |p: &str| match Cli::try_parse_from(["tdyn", "run", "s.toml", "-p", p]) {
+            Ok(Cli { cmd: Cmd::Run(a) }) => a,
+            _ => panic!("tdyn run parses"),
+        };
+        let e = run_overrides(&args("N")).unwrap_err();
+        assert_eq!(e, "--param \"N\": expected NAME=VALUE");
+        let e = run_overrides(&args("N=1,2")).unwrap_err();
+        assert!(
+            e.contains("expected one value (tdyn sweep runs several)"),
+            "{e}"
+        );
+        assert!(run_overrides(&args("N=3")).is_ok());
+    }
+
     #[test]
     fn a_word_with_an_equals_sign_is_never_a_petsc_option() {
         let words = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
