@@ -118,6 +118,13 @@ fn silent_inputs_and_absurd_work_are_refused_by_key() {
             "particles[0].spacing",
             &["9.200e22 points"],
         ),
+        (
+            b.clone()
+                + &water.replace("-9.2e18", "0.0")
+                + "velocity = [0.0, 0.0, -10.0]\nfixed = true\n",
+            "particles[0].velocity",
+            &["fixed particles, which never move"],
+        ),
     ];
     for (text, key, needles) in cases {
         let e = refused(&text);

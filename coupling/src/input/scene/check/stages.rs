@@ -45,6 +45,17 @@ pub(super) fn check_particles(
                 format!("expected a positive factor, got {}", p.h_factor),
             ));
         }
+        // (fixed particles never move: a velocity would still count in the kinetic energy and
+        // the momentum and enter their neighbours' velocity gradient and viscosity)
+        if p.fixed && p.velocity.iter().any(|&v| v != 0.0) {
+            return Err(cx.err(
+                &format!("particles[{i}].velocity"),
+                format!(
+                    "{:?} on fixed particles, which never move: remove the key, or set fixed = false",
+                    p.velocity
+                ),
+            ));
+        }
         check_region(cx, i, p)?;
         if p.liggghts_type.is_some() && !matches!(p.region, Region::File(_)) {
             return Err(cx.err(
