@@ -67,4 +67,11 @@ pub trait StressModel: Send + Sync + std::fmt::Debug {
     fn temperature(&self, _state: &[f64]) -> Option<f64> {
         None
     }
+
+    /// The material's initial density, kg/m^3, where the law knows it: a particle of mass m
+    /// then has the initial spacing (m / rho0)^(1/3), the artificial stress's delta_p
+    /// ([`crate::ArtificialStress`]). Default `None` (the particle's current density stands in).
+    fn reference_density(&self) -> Option<f64> {
+        None
+    }
 }

@@ -179,7 +179,7 @@ fn stress_force_pass_conserves_momentum_and_energy() {
     let pr = pairs(&p, &params.search_options(), |_| true);
     // the kernel-gradient correction B of each particle (not the identity on a jittered block)
     gradients(&pr, &mut p, &mut s, &params);
-    let art = ArtificialStress::new(DX);
+    let art = ArtificialStress::new();
     let work = forces(&pr, &mut p, &s, &params, &art);
     let (mut fsum, mut fabs, mut ke_rate, mut ie_rate, mut scale) = ([0.0; 3], 0.0, 0.0, 0.0, 0.0);
     for i in 0..p.n_owned {
@@ -220,7 +220,7 @@ fn solid_sums_do_not_depend_on_the_order_of_the_pairs() {
     }
     let mut params = params();
     params.viscosity = Some(ArtificialViscosity::new(1.0, 2.0));
-    let art = ArtificialStress::new(DX);
+    let art = ArtificialStress::new();
     let pr = pairs(&p, &params.search_options(), |_| true);
     // reversed, each pair swapped, then rotated by a third
     let mut other: Vec<(u32, u32)> = pr.iter().rev().map(|&(i, j)| (j, i)).collect();
@@ -264,7 +264,7 @@ fn every_build_of_the_solid_passes_gives_the_same_bits() {
     }
     let mut params = params();
     params.viscosity = Some(ArtificialViscosity::new(1.0, 2.0));
-    let art = ArtificialStress::new(DX);
+    let art = ArtificialStress::new();
     let pr = pairs(&p, &params.search_options(), |_| true);
     let run = |build: Build, p: &mut Particles| {
         let mut s = solids_for(p);
@@ -296,7 +296,7 @@ fn every_build_of_the_solid_passes_gives_the_same_bits() {
 /// 2001, eq. 25).
 #[test]
 fn artificial_stress_acts_on_tension_only() {
-    let art = ArtificialStress::new(DX);
+    let art = ArtificialStress::new();
     let (s, th) = (2.0e5, 0.3f64);
     let n = [th.cos(), th.sin(), 0.0];
     let sig: Mat3 = std::array::from_fn(|a| std::array::from_fn(|b| s * n[a] * n[b]));

@@ -106,12 +106,7 @@ fn run(ny: usize, n_cross: usize) -> (Vec<f64>, f64, f64, f64) {
         max: [1.0, 1.0, width],
     });
     let model: Arc<dyn StressModel> = Arc::new(el);
-    let mut sim = SolidSim::new(
-        p,
-        params,
-        vec![Some(model)],
-        Some(ArtificialStress::new(dp)),
-    );
+    let mut sim = SolidSim::new(p, params, vec![Some(model)], Some(ArtificialStress::new()));
     sim.setup();
     let tip: Vec<usize> = (0..sim.sim.parts.n_owned)
         .filter(|&i| sim.sim.parts.x[i][0] > L - dp)

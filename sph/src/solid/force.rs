@@ -23,19 +23,26 @@ use crate::passes::{add4, lane_shifts, PairWork, Sums as Sums4};
 /// R_a   = Q diag(R'_11, R'_22, R'_33) Q^T                            Pa m^6/kg^2 = m^5/(kg s^2)
 /// ```
 ///
-/// and per pair the term (R_a + R_b) f_ab^n added to sigma_a/rho_a^2 + sigma_b/rho_b^2, with
-/// f_ab = W(r_ab, h) / W(delta_p, h) (dimensionless, 1 at the initial spacing delta_p, so the
+/// and per pair the term (R_a + R_b) f_ab^n added to the stress terms, with
+/// f_ab = W(r_ab, h) / W(delta_ab, h) (dimensionless, 1 at the pair's initial spacing, so the
 /// correction acts where particles close up beyond the lattice: a repulsion that stops the
 /// clumping of particles in tension). A fluid's stress is -p I: its R is epsilon p/rho^2 I
 /// where p < 0 (Monaghan 2000's correction without the compression term).
+///
+/// delta_ab = (delta_a + delta_b) / 2, each particle's own initial spacing
+/// delta_a = (m_a / rho0_a)^(1/3), m (rho0 its material's density: a solid's
+/// [`crate::StressModel::reference_density`], a fluid's EOS rho0; the current density where
+/// there is none): a lattice particle's `spacing`, a failed element's particle the size of its
+/// share of the element. One delta_p for every particle (the first entry's spacing) made
+/// particles of another spacing unstable: a 1 mm block against a 2 mm one, delta_p = 2 mm,
+/// has f = W(1 mm)/W(2 mm) = 8 between neighbours at rest, f^4 = 4,000 (the run stopped at
+/// step 119 with a kinetic energy of 2.5e10 J from 2.3e-3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArtificialStress {
     /// epsilon (Gray et al. 2001 use 0.3).
     pub epsilon: f64,
     /// Exponent n of f_ab^n (Gray et al. 2001: n = 4).
     pub n: i32,
-    /// The initial particle spacing delta_p, m.
-    pub delta_p: f64,
 }
 
 /// Gray et al. (2001)'s epsilon of the artificial stress.
@@ -43,13 +50,18 @@ pub const ARTIFICIAL_STRESS_EPSILON: f64 = 0.3;
 /// Gray et al. (2001)'s exponent n of the artificial stress.
 pub const ARTIFICIAL_STRESS_EXPONENT: i32 = 4;
 
+impl Default for ArtificialStress {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl ArtificialStress {
-    /// epsilon = 0.3, n = 4 (Gray et al. 2001) at the spacing `delta_p`, m.
-    pub fn new(delta_p: f64) -> Self {
+    /// epsilon = 0.3, n = 4 (Gray et al. 2001).
+    pub fn new() -> Self {
         Self {
             epsilon: ARTIFICIAL_STRESS_EPSILON,
             n: ARTIFICIAL_STRESS_EXPONENT,
-            delta_p,
         }
     }
 
@@ -267,7 +279,7 @@ pub fn stress_force_pass(
         Some(a) => a.tensors(n, |i| (to_voigt(&stress_of(p, s, i)), p.rho[i]), s.build),
         None => vec![[[0.0; 3]; 3]; n],
     };
-    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, &rts[i], i)).collect();
+    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, params, &rts[i], i)).collect();
     // force x, y, z and energy rate of each entry, fold by fold, and its partners
     let mut sums = vec![Sums4::default(); n];
     let mut partners = vec![0u32; n];
@@ -340,17 +352,18 @@ fn force_pairs(
     m: &mut TermMax,
 ) -> PairWork {
     let (k, art, shifts) = (&c.kernel, c.art.as_ref(), &c.shifts);
-    // the kernel at the pair's h and 1/W(delta_p, h) (0 without artificial stress or with
-    // delta_p beyond the support), remade where h changes (mostly the same for every pair)
-    let at = |h: f64| {
+    // the kernel at the pair's h and 1/W(delta_ab, h) (0 without artificial stress or with
+    // delta_ab beyond the support), remade where h or delta_ab changes (mostly the same from
+    // pair to pair)
+    let at = |h: f64, dp: f64| {
         let sk = k.at(h);
         let inv_w_dp = match art {
-            Some(a) if sk.w(a.delta_p) > 0.0 => 1.0 / sk.w(a.delta_p),
+            Some(_) if sk.w(dp) > 0.0 => 1.0 / sk.w(dp),
             _ => 0.0,
         };
-        (sk, inv_w_dp)
+        (sk, inv_w_dp, dp)
     };
-    let mut kern = at(f64::NAN);
+    let mut kern = at(f64::NAN, f64::NAN);
     let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
     let mut work = PairWork::default();
     // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
@@ -376,8 +389,9 @@ fn force_pairs(
             out[0] = viscosity(c.viscosity, a, b, h, vr, r2);
             *acts = false;
             if let (Some(an), true) = (art, a.tension || b.tension) {
-                if kern.0.h != h {
-                    kern = at(h);
+                let dp = 0.5 * (a.dp + b.dp);
+                if kern.0.h != h || kern.2 != dp {
+                    kern = at(h, dp);
                 }
                 if kern.1 > 0.0 {
                     out[1] = powi(kern.0.w(pg.r) * kern.1, an.n);
@@ -503,6 +517,8 @@ struct Slot {
     m: f64,
     rho: f64,
     c: f64,
+    /// The initial spacing (m / rho0)^(1/3), m (the artificial stress's delta).
+    dp: f64,
     sr: [f64; 9],
     rt: [f64; 9],
     tension: bool,
@@ -517,9 +533,15 @@ struct Slot {
 impl Slot {
     /// Entry `i`: sigma_a B_a / rho_a for a solid, -p_a / rho_a^2 I for a fluid, and R_a
     /// (`rt`).
-    fn of(p: &Particles, s: &Solids, rt: &Mat3, i: usize) -> Slot {
+    fn of(p: &Particles, s: &Solids, params: &Params, rt: &Mat3, i: usize) -> Slot {
         let t = stress_of(p, s, i);
         let solid = s.is_solid(p.mat[i]);
+        let mat = p.mat[i] as usize;
+        let rho0 = match s.models.get(mat) {
+            Some(Some(model)) => model.reference_density(),
+            _ => params.eos.get(mat).and_then(|e| e.reference_density()),
+        }
+        .unwrap_or(p.rho[i]);
         let inv_rho = 1.0 / p.rho[i];
         // (a fluid's 1/rho^2 as it always was: the fluid pass's bits)
         let inv_rho2 = if solid {
@@ -535,6 +557,7 @@ impl Slot {
             m: p.m[i],
             rho: p.rho[i],
             c: p.c[i],
+            dp: libm::cbrt(p.m[i] / rho0),
             sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
             rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
             tension: rt.iter().flatten().any(|&x| x != 0.0),
@@ -597,7 +620,7 @@ mod tests {
 
     #[test]
     fn tensors_in_lanes_are_the_bits_of_tensor_in_every_build() {
-        let art = ArtificialStress::new(0.004);
+        let art = ArtificialStress::new();
         // 2 x 16 lanes and a partial batch
         let sts = stresses(16 * 2 + 5 + 40);
         let want: Vec<Mat3> = sts.iter().map(|(s, r)| art.tensor(s, *r)).collect();

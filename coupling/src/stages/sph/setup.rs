@@ -185,19 +185,21 @@ fn fluid_tensile(scene: &Scene, s: &SphDef, solids: bool) -> Option<TensileCorre
     (a.epsilon > 0.0).then(|| TensileCorrection::gray(a.epsilon, a.n as i32, spacing))
 }
 
-/// The artificial stress of a scene with solid particles: `[sph] artificial_stress`, or Gray et
-/// al.'s epsilon 0.3, n 4 where omitted (None where epsilon = 0), at the initial spacing of the
-/// first solid `[[particles]]` entry (delta_p, where f_ab = 1), or without one at
-/// `born_spacing` (the failed elements' particles': their mean element size).
+/// The artificial stress of a scene with solid particles (a solid `[[particles]]` entry, or
+/// failed elements' particles: `born_spacing`): `[sph] artificial_stress`, or Gray et al.'s
+/// epsilon 0.3, n 4 where omitted (None where epsilon = 0). Each pair's delta_p (where
+/// f_ab = 1) is its particles' own initial spacing ([`ArtificialStress`]).
 fn artificial_stress(scene: &Scene, born_spacing: Option<f64>) -> Option<ArtificialStress> {
-    let solid = scene.particles.iter().find(|p| {
+    let solid = scene.particles.iter().any(|p| {
         scene
             .materials
             .iter()
             .any(|m| m.name == p.material && m.eos.is_none())
     });
-    let spacing = solid.map(|p| p.spacing).or(born_spacing)?;
-    let mut a = ArtificialStress::new(spacing);
+    if !solid && born_spacing.is_none() {
+        return None;
+    }
+    let mut a = ArtificialStress::new();
     if let Some(d) = scene.sph.as_ref().and_then(|s| s.artificial_stress) {
         a.epsilon = d.epsilon;
         a.n = d.n as i32;

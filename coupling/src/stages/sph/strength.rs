@@ -121,6 +121,10 @@ impl sph::StressModel for MaterialStress {
     fn temperature(&self, state: &[f64]) -> Option<f64> {
         self.law.temperature(&state[..self.law.n_state()])
     }
+
+    fn reference_density(&self) -> Option<f64> {
+        Some(self.density)
+    }
 }
 
 #[cfg(test)]
