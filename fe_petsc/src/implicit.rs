@@ -873,6 +873,17 @@ impl ImplicitFe {
             // change of the velocity), the rest the supports' (reactions.csv, external work).
             let gravity = (self.gravity_n, self.gravity);
             (self.reaction[n], v_new) = self.book_wall_node(n, full, (v_raw, v_new), gravity);
+            // (a curve's kink inside the step: the trapezoid of the end slopes, dt/2 (a(n) +
+            // a(n+1)), is not the velocity's change s(t + dt) - s(t); the rest, m dv, is an
+            // impulse of the constraint too, booked as its force over the step, m dv / dt, so
+            // that the rows of reactions.csv add up to the momentum the constraint gave)
+            if self.curve_of[n] != u32::MAX {
+                let m = self.fe.mass[n];
+                for c in 0..3 {
+                    let dv = v_new[c] - v[c] - 0.5 * dt * (a[c] + a_new[c]);
+                    self.reaction[n][c] += m * dv / dt;
+                }
+            }
             for c in 0..3 {
                 self.fe.x[n][c] += du[c];
             }

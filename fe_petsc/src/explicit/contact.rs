@@ -133,7 +133,9 @@ impl ExplicitFe {
                 let free = dv;
                 apply(&self.constraints[i].1, &mut dv, false);
                 let m_dt = self.mass[n] / dt;
-                self.contact_reaction[i] = std::array::from_fn(|c| m_dt * (dv[c] - free[c]));
+                for c in 0..3 {
+                    self.contact_reaction[i][c] += m_dt * (dv[c] - free[c]);
+                }
                 removed = std::array::from_fn(|c| free[c] - dv[c]);
             }
             let a_n = self.acceleration(n);

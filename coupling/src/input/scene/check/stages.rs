@@ -364,8 +364,7 @@ pub(super) fn check_rigid_walls(
             return Err(cx.err(
                 &key("normal"),
                 format!(
-                    "expected a direction (the side the bodies are on), got [{}, {}, {}] of length zero",
-                    n[0], n[1], n[2]
+                    "expected a direction (the side the bodies are on) of a length a double holds, got {n:?}"
                 ),
             ));
         }
