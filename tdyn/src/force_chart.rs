@@ -178,9 +178,12 @@ impl Figure for ForceChart {
                 .axis_desc_style(("sans-serif", 16))
                 .label_style(("sans-serif", 14));
         })?;
+        // (one pixel wide: the bitmap backend draws a wider line's vertical segments (a force
+        // jumping where the displacement does not move) down past the plot area, to the
+        // image's edge, a negative force the data do not have)
         ch.draw_series(LineSeries::new(
             self.points.iter().copied(),
-            chart::colour(0).stroke_width(2),
+            chart::colour(0).stroke_width(1),
         ))
         .map_err(chart::err)?;
         area.present().map_err(chart::err)
