@@ -493,3 +493,73 @@ fn an_element_that_would_invert_fails_instead_of_stopping_the_run() {
         .fold(0.0, f64::max);
     assert!(worst < 0.01, "energy error {worst:e} (1 %)");
 }
+
+/// A tungsten ball (4 mm, 800 m/s) through a free 3 mm j2 steel plate whose failed elements
+/// become particles (`failure = { plastic_strain = 0.3 }`), a rigid floor 8 mm under the plate
+/// (the tester's scene, meshes/ball_plate.geo).
+fn ball_over_floor(dir: &std::path::Path) -> std::path::PathBuf {
+    let text = format!(
+        "title = \"ball through a plate over a floor\"\n[run]\nend_time = 2.5e-5\n\
+         output_every = 5.0e-6\n\
+         [[mesh]]\nfile = \"{}\"\n\
+         params = {{ R = 0.004, N = 4, M = 2, W = 0.03, H = 0.003, NP = 24, NH = 3, G = 0.0002, BALL_FIRST = 0 }}\n\
+         [[material]]\nname = \"tungsten\"\nmodel = \"elastic\"\ndensity = 17600.0\n\
+         youngs_modulus = 400.0e9\npoisson_ratio = 0.28\n\
+         [[material]]\nname = \"mild\"\nmodel = \"j2_plastic\"\ndensity = 7850.0\n\
+         youngs_modulus = 210.0e9\npoisson_ratio = 0.3\nyield_stress = 300.0e6\n\
+         hardening_modulus = 800.0e6\nfailure = {{ plastic_strain = 0.3 }}\n\
+         [[block]]\ngroup = \"plate\"\nmaterial = \"mild\"\nfailed = \"particles\"\n\
+         [[block]]\ngroup = \"ball\"\nmaterial = \"tungsten\"\nvelocity = [0.0, 0.0, -800.0]\n\
+         [contact]\nsurfaces = [\"ball_skin\", \"plate_top\"]\n\
+         [[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0, -0.008]\nnormal = [0.0, 0.0, 1.0]\n",
+        tdyn_tests::root().join("meshes/ball_plate.geo").display()
+    );
+    let p = dir.join("ball_over_floor.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn nodes_whose_elements_all_became_particles_stay_where_they_were_released() {
+    // docs/scene.md `[[rigid_wall]]`: no mesh node and no particle passes a wall. A node all
+    // of whose elements were released keeps no mass and takes no force: it stops where it is
+    // (fe_petsc explicit/failure.rs `release_failed`). Moving on at its speed (up to 970 m/s)
+    // it carried the released elements' drawing through the floor (78 nodes 14 mm behind it
+    // at 25 us). References: the floor plane (no node or particle behind it in any frame, by
+    // 1e-9 m), and momentum: the floor's impulse (reactions.csv, the rule of walls: each
+    // row's force over the step that ended at it) is the bodies' momentum change, to 1e-9 of
+    // the ball's start momentum (a conservation law; no gravity). np 1 = np 3 bytes.
+    let dir = tdyn_tests::workdir("orphan_nodes_stop");
+    let out = tdyn_tests::run_np1_np3_same_bytes(&ball_over_floor(&dir), &dir);
+    let f = hdf5::File::open(out.join("fields.h5")).unwrap();
+    let mut released = 0;
+    for name in f.group("frames").unwrap().member_names().unwrap() {
+        let g = f.group(&format!("frames/{name}")).unwrap();
+        for set in ["nodes", "particles"] {
+            let Ok(d) = g.dataset(&format!("{set}/position")) else {
+                continue;
+            };
+            let pos: Vec<f64> = d.read_raw().unwrap();
+            if set == "particles" {
+                released = released.max(pos.len() / 3);
+            }
+            let low = pos.chunks(3).map(|c| c[2]).fold(f64::INFINITY, f64::min);
+            assert!(
+                low >= -0.008 - 1e-9,
+                "frame {name}: a {set} position at z = {low} m, behind the floor at -0.008 m"
+            );
+        }
+    }
+    assert!(released > 50, "elements became particles ({released})");
+    let (h, rows) = tdyn_tests::read_csv(&out.join("history.csv"));
+    let pz = tdyn_tests::column(&h, &rows, "momentum_z");
+    let (rh, rrows) = tdyn_tests::read_csv(&out.join("reactions.csv"));
+    let t = tdyn_tests::column(&rh, &rrows, "time");
+    let fz = tdyn_tests::column(&rh, &rrows, "floor.force_z");
+    let j: f64 = (1..t.len()).map(|i| (t[i] - t[i - 1]) * fz[i]).sum();
+    let dp = pz[pz.len() - 1] - pz[0];
+    assert!(
+        (j - dp).abs() <= 1e-9 * pz[0].abs(),
+        "floor impulse {j:e} N s vs momentum change {dp:e} kg m/s"
+    );
+}

@@ -268,6 +268,14 @@ impl ExplicitFe {
             });
         }
         self.resum_masses(exchange)?;
+        // A node all of whose elements left carries nothing: it stops where it is (massless,
+        // moving on it would carry the released elements' drawing through walls and other
+        // bodies, at the speed it had; no momentum or energy changes)
+        for (v, &m) in self.v.iter_mut().zip(&self.mass) {
+            if m == 0.0 {
+                *v = [0.0; 3];
+            }
+        }
         Ok(out)
     }
 
