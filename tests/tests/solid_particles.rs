@@ -1257,3 +1257,36 @@ fn particle_blocks_of_two_spacings_meet_stably_in_either_order() {
     let b = std::fs::read(swapped.join("history.csv")).unwrap();
     assert!(a == b, "history.csv with the entries swapped differs");
 }
+
+/// docs/scene.md `[[probe]]`: a point outside the mesh is a particle probe, a point fixed in
+/// space, NaN for the fields particles do not have: displacement. The run says so at its
+/// start (a warning naming the probe and its fields), and the column is NaN.
+#[test]
+fn a_particle_probe_asked_for_displacement_warns_and_gives_nan() {
+    let dir = workdir("particle_probe_displacement");
+    let text = bundled_scene("oscillating_plate")
+        .replace("end_time = 0.5337", "end_time = 1.0e-5")
+        .replace(
+            "fields = [\"velocity_y\"]",
+            "fields = [\"velocity_y\", \"displacement_y\"]",
+        )
+        .replace(
+            "file = \"oscillating_plate",
+            &format!("file = \"{}/scenes/oscillating_plate", root().display()),
+        );
+    assert!(text.contains("\"displacement_y\""), "the probe's fields");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = run(1, &scene, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("probe[0] \"tip\"") && err.contains("displacement_y will be NaN"),
+        "the warning: {err}"
+    );
+    let (h, rows) = read_csv(&out.join("probes.csv"));
+    assert!(column(&h, &rows, "tip.displacement_y")
+        .iter()
+        .all(|v| v.is_nan()));
+}

@@ -78,6 +78,20 @@ impl Probes {
                 ));
             }
             let here = best.filter(|b| b.0 == lowest).map(|b| (b.1, b.2));
+            // (a particle probe is a point fixed in space: it has no displacement)
+            let moved: Vec<&str> = p
+                .fields
+                .iter()
+                .map(|f| f.name())
+                .filter(|f| f.starts_with("displacement"))
+                .collect();
+            if outside && particles && !moved.is_empty() && comm.rank() == 0 {
+                eprintln!(
+                    "tdyn: warning: probe[{i}] \"{}\" lies outside the mesh: a particle probe, a point fixed in space, whose {} will be NaN (a point that does not move has no displacement; its velocity is the particles' there)",
+                    p.name,
+                    moved.join(", ")
+                );
+            }
             columns.extend(p.columns());
             located.push(Located {
                 here,
