@@ -550,17 +550,14 @@ fn start_info<'a>(
     stable0: f64,
     dt: f64,
 ) -> progress::StartInfo<'a> {
-    let mut stages: Vec<&str> = model.stages().iter().map(|s| s.name()).collect();
+    // (the stages in report.json's `stages_run` order: the rigid walls' pass included)
+    let mut stages: Vec<&'static str> = model.stages().iter().map(|s| s.name()).collect();
     if model.contact.is_some() {
         stages.push("contact");
     }
-    let stages: &'static [&'static str] = match stages.as_slice() {
-        ["fe"] => &["fe"],
-        ["sph"] => &["sph"],
-        ["fe", "sph"] => &["fe", "sph"],
-        ["fe", "contact"] => &["fe", "contact"],
-        _ => &["fe", "sph", "contact"],
-    };
+    if model.walls.is_some() {
+        stages.push("rigid_walls");
+    }
     let mesh = model.fe.as_ref().map(|f| &f.mesh.local);
     progress::StartInfo {
         scene: scene.file.to_str().unwrap_or("scene"),

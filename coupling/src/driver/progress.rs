@@ -28,7 +28,7 @@ pub struct StartInfo<'a> {
     /// See `elements`.
     pub particles: u64,
     /// The stages that run, in order.
-    pub stages: &'a [&'a str],
+    pub stages: Vec<&'a str>,
     /// Ranks.
     pub ranks: i32,
     /// The explicit stable step at t = 0 and the first step taken, s.
