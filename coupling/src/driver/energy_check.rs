@@ -177,6 +177,19 @@ impl EnergyCheck {
             && (step < ENERGY_CHECK_FROM_STEP
                 || self.over_limit_steps >= energy::ENERGY_STOP_STEPS
                 || measured > energy::ENERGY_STOP_AT_ONCE * limit);
+        // (energy::solid_energy_negative: an instability the balance does not see)
+        if energy::solid_energy_negative(en.solid_internal, self.max_energy_error, scale, step) {
+            let _ = outputs.history_row(model, &self.row(clock, model, err));
+            let _ = outputs.force_rows(world, model, clock.time);
+            outputs.flush();
+            return Err(RunFailure::new(
+                FailureKind::Unstable,
+                format!(
+                    "{file}: the solid particles' internal energy fell to {:e} J at t = {t:e} s, step {step}, below -run.max_energy_error = -{} of the energy scale {scale:e} J (their forces are giving back work no strain stored; the kinetic energy is {:e} J): {blow_up}",
+                    en.solid_internal, self.max_energy_error, en.kinetic
+                ),
+            ));
+        }
         if stop {
             let err = measured;
             let _ = outputs.history_row(model, &self.row(clock, model, err));

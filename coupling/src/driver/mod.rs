@@ -687,6 +687,7 @@ fn sum_energies(model: &Model) -> StageEnergies {
         s.internal += e.internal;
         s.hourglass += e.hourglass;
         s.external_work += e.external_work;
+        s.solid_internal += e.solid_internal;
         for c in 0..3 {
             s.momentum[c] += e.momentum[c];
         }

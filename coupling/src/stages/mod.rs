@@ -28,6 +28,10 @@ pub struct StageEnergies {
     pub external_work: f64,
     /// Linear momentum.
     pub momentum: [f64; 3],
+    /// The internal energy of the solid particles alone (part of `internal`; SPH only): the
+    /// work their stresses stored or dissipated from a stress-free start, never negative but
+    /// where the run goes unstable (`driver::energy_check`).
+    pub solid_internal: f64,
 }
 
 impl StageEnergies {

@@ -417,6 +417,7 @@ impl Stage for Fe {
             hourglass: e.hourglass,
             external_work: e.external_work,
             momentum: e.momentum,
+            solid_internal: 0.0,
         }
     }
 

@@ -258,6 +258,8 @@ impl Sph {
             gravity_power: g[5],
             hold_work: 0.0,
             hold_impulses: Vec::new(),
+            // (the next step's sums set it; the check reads it after a step)
+            solid_internal: 0.0,
         };
         self.external_work = g[6];
         self.hold_taken = g.get(7).copied().unwrap_or(0.0);
@@ -313,6 +315,7 @@ impl Stage for Sph {
             hourglass: 0.0,
             external_work: self.external_work,
             momentum: g.momentum,
+            solid_internal: g.solid_internal,
         }
     }
 

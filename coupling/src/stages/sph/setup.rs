@@ -319,6 +319,8 @@ pub struct SphGlobals {
     pub hold_work: f64,
     /// The step's impulses of the rigid walls' holds, per wall, N s (`SphStage::hold_impulse`).
     pub hold_impulses: Vec<[f64; 3]>,
+    /// The solid particles' internal energy, J (part of `internal`).
+    pub solid_internal: f64,
 }
 
 impl SphGlobals {
@@ -338,13 +340,16 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
     let (ge, gm) = (st.grids.energy, st.grids.momentum);
     let g = st.params.gravity;
     // [sum m v.v, sum m (e + work), px, py, pz, sum m g.v (moving particles), the holds'
-    // energy, then each wall's hold impulse x, y, z]
-    let mut f = vec![[0.0; 3]; 7];
+    // energy, the solids' sum m (e + work), then each wall's hold impulse x, y, z]
+    let mut f = vec![[0.0; 3]; 8];
     f[6] = st.hold_work;
     f.extend(st.hold_impulse.iter().flatten().copied());
     for i in 0..p.n_owned {
         let (m, v) = (p.m[i], p.v[i]);
         ge.add(&mut f[1], m * (p.e[i] + p.work[i]));
+        if st.is_solid(i) {
+            ge.add(&mut f[7], m * (p.e[i] + p.work[i]));
+        }
         for c in 0..3 {
             ge.add(&mut f[0], m * (v[c] * v[c]));
             gm.add(&mut f[2 + c], m * v[c]);
@@ -363,6 +368,7 @@ pub fn globals(comm: &SimpleCommunicator, st: &SphStage) -> SphGlobals {
         momentum: [t[2], t[3], t[4]],
         gravity_power: t[5],
         hold_work: t[6],
-        hold_impulses: t[7..].chunks(3).map(|j| [j[0], j[1], j[2]]).collect(),
+        solid_internal: t[7],
+        hold_impulses: t[8..].chunks(3).map(|j| [j[0], j[1], j[2]]).collect(),
     }
 }

@@ -176,6 +176,13 @@ struct KeptBox {
 pub const IMBALANCE_DRIFT: f64 = 0.05;
 
 impl SphStage {
+    /// Whether entry `i` is a solid particle (its material carries stress).
+    pub fn is_solid(&self, i: usize) -> bool {
+        self.solid
+            .as_ref()
+            .is_some_and(|s| s.solids.is_solid(self.parts.mat[i]))
+    }
+
     /// A stage over `comm` (collective) with this rank's initial particles (owned).
     pub fn new(comm: &SimpleCommunicator, parts: Particles, params: Params) -> SphStage {
         SphStage {
