@@ -74,7 +74,7 @@
 use crate::curve::Curve;
 use crate::explicit::{centroid, Constraint, ExplicitFe, ExplicitSetup, StepError};
 use crate::hex::{self, HexControls};
-use crate::hourglass::{self, HourglassMaterial, HourglassStep};
+use crate::hourglass::{self, Hourglass, HourglassMaterial, HourglassStep, YieldBound};
 use crate::material::Material;
 use crate::mesh::NodeExchange;
 use crate::objects::Vector;
@@ -373,10 +373,18 @@ impl ImplicitFe {
         dt: f64,
         exchange: &mut NodeExchange,
     ) -> Result<ImplicitFe, ImplicitError> {
+        // The hourglass tangent (`Hourglass::tangent_at`) is the whole-amplitude yield bound's.
+        let hourglass = match setup.controls.hourglass {
+            Hourglass::Physical { scale, .. } => Hourglass::Physical {
+                scale,
+                bound: YieldBound::Fibres,
+            },
+            h => h,
+        };
         let controls = HexControls {
+            hourglass,
             bv_linear: 0.0,
             bv_quadratic: 0.0,
-            ..setup.controls
         };
         let nn = setup.mesh.coords.len();
         let mut dofs = vec![NodeDof::Free; nn];

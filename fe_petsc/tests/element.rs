@@ -87,7 +87,7 @@ fn patch_test_distorted_mesh_linear_velocity() {
     let dt = 1e-7;
     // Every hourglass kind: none may act on a linear field.
     let controls = [
-        Hourglass::Physical { scale: 1.0 },
+        Hourglass::default(),
         Hourglass::Stiffness { coefficient: 0.05 },
         Hourglass::Viscous { coefficient: 0.1 },
     ]

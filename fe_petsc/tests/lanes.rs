@@ -6,7 +6,7 @@
 //! control. No MPI, no PETSc.
 use fe_petsc::batch::{self, Batch, LaneMaterial, Width};
 use fe_petsc::hex::{self, HexControls, HexOutput, HexState};
-use fe_petsc::hourglass::Hourglass;
+use fe_petsc::hourglass::{Hourglass, YieldBound};
 use fe_petsc::material::{build_material, EosSpec, Material, MaterialSpec, MAX_STATE};
 use fe_petsc::states::HexStates;
 
@@ -389,6 +389,34 @@ fn batched_kernel_equals_the_scalar_kernel_j2_yielding() {
 }
 
 #[test]
+fn batched_kernel_equals_the_scalar_kernel_j2_yielding_tangential_bound() {
+    // The split meshes' yield bound (normal part bounded, tangential part returned radially)
+    // on the yielding block: its amplitudes in lanes against the scalar kernel.
+    let mat = material(
+        "j2_plastic",
+        &[("yield_stress", 250e6), ("hardening_modulus", 2e9)],
+    );
+    let ctl = HexControls {
+        hourglass: Hourglass::Physical {
+            scale: 1.0,
+            bound: YieldBound::Tangential,
+        },
+        ..HexControls::default()
+    };
+    for w in widths() {
+        let (flowed, mixed) = compare_width(w, &*mat, &ctl, "j2_plastic, tangential bound", 12);
+        assert!(
+            flowed > 100,
+            "tangential bound, {w:?}: only {flowed} element-steps flowed"
+        );
+        assert!(
+            mixed > 0 || w == Width::W1,
+            "tangential bound, {w:?}: no group had flowing and elastic lanes in one step"
+        );
+    }
+}
+
+#[test]
 fn batched_kernel_equals_the_scalar_kernel_fb_stiffness_hourglass() {
     // The FB/PRONTO stiffness form (as tube_crush.toml sets it) on the yielding block: its
     // generalised forces, their work and their nodal forces in lanes against the scalar kernel.
@@ -413,10 +441,18 @@ fn batched_kernel_equals_the_scalar_kernel_fb_stiffness_hourglass() {
 fn element_kernel_equals_the_node_by_node_kernel_johnson_cook_thermal() {
     // Johnson-Cook's stress update, yield stress and temperature called lane by lane, the rest
     // of the element in lanes, under the physical hourglass control (bounded by the current
-    // yield stress, which here depends on each lane's history) and the FB stiffness form.
+    // yield stress, which here depends on each lane's history; both bounds) and the FB
+    // stiffness form.
     let mat = johnson_cook();
     for ctl in [
         HexControls::default(),
+        HexControls {
+            hourglass: Hourglass::Physical {
+                scale: 1.0,
+                bound: YieldBound::Tangential,
+            },
+            ..HexControls::default()
+        },
         HexControls {
             hourglass: Hourglass::Stiffness { coefficient: 0.05 },
             ..HexControls::default()

@@ -372,3 +372,105 @@ fn particles_stay_out_of_a_native_tet_plate_and_give_one_answer() {
     assert!(err_max < 0.02, "energy error {err_max} at most (limit 2 %)");
     np3_gives_np1s_rows(&scene, &base, 4.0e-5, "native_tet_slug_np3");
 }
+
+/// A 10 mm steel cube of gmsh's default tetrahedra (meshes/block_tet.geo at H = 4 mm: 184
+/// tetrahedra, split into 736 hexahedra), x = 0 a symmetry plane, x = 10 mm a frictionless rigid
+/// wall moving at -15 m/s (ramped over 10 us), its sides free, to 0.2 ms (true strain 0.346),
+/// isothermal Johnson-Cook (A = 806 MPa, B = 614 MPa, n = 0.168, no rate term). The exact
+/// answer is homogeneous uniaxial stress. With the default hourglass control and the
+/// whole-amplitude yield bound the split's distorted hexahedra let a spurious pattern grow during
+/// the flow (plastic strain 0.254..0.435, stress_xx up to +212 MPa, stress_yy -470..+631 MPa,
+/// the platen force 3.5 % low); the split's tangential bound (fe_petsc/src/hourglass.rs,
+/// `YieldBound::Tangential`) gives plastic strain 0.3396..0.3397, lateral stresses under 1 MPa
+/// and the force 0.1 % under the hand value. References, from the homogeneous solution (the
+/// length L = L0 - 15 m/s (t - 5 us), the true strain ln(L0 / L) the plastic strain ep plus the
+/// elastic sigma / E, sigma = A + B ep^n, the section A0 (L0 / L) J with the elastic volume
+/// ratio J = exp(-sigma (1 - 2 nu) / E)):
+/// - every element's plastic strain within 1 % of ep;
+/// - no element in tension: stress_xx negative in every element, the lateral and shear stresses
+///   each under 2 % of sigma;
+/// - the platen's force within 1.5 % of sigma A0 (L0 / L) J (the rows are the force on the
+///   wall, no inertia term: the block's velocity field is steady once the ramp's wave has
+///   settled);
+/// - one answer: np 3 gives np 1's bytes (`run_digest`).
+#[test]
+fn split_tet_cube_in_uniaxial_plastic_compression_stays_homogeneous() {
+    let dir = workdir("split_tet_uniaxial_jc");
+    let (e, nu, a, b, n): (f64, f64, f64, f64, f64) = (206.9e9, 0.3, 806.0e6, 614.0e6, 0.168);
+    let (l0, speed, ramp, end): (f64, f64, f64, f64) = (0.01, 15.0, 1.0e-5, 2.0e-4);
+    let scene = dir.join("cube.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "title = \"split tetrahedral cube in uniaxial plastic compression\"\n\
+             [run]\nend_time = {end:e}\nhistory_every = 1.0e-6\n\
+             [[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.01, A = 0.01, H = 0.004 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"johnson_cook\"\ndensity = 7830.0\n\
+             youngs_modulus = {e:e}\npoisson_ratio = {nu}\na = {a:e}\nb = {b:e}\nn = {n}\n\
+             c = 0.0\neps_dot0 = 1.0\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n\
+             [[boundary]]\ngroup = \"left\"\nkind = \"symmetry\"\n\
+             [[rigid_wall]]\nname = \"platen\"\npoint = [0.01, 0.0, 0.0]\n\
+             normal = [-1.0, 0.0, 0.0]\nvelocity = [-{speed}, 0.0, 0.0]\n\
+             curve = [[0.0, 0.0], [{ramp:e}, 1.0]]\n",
+            root().join("meshes/block_tet.geo").display()
+        ),
+    )
+    .unwrap();
+    let base = run_np1_np3_same_bytes(&scene, &dir);
+
+    // The homogeneous solution at `end`.
+    let l = l0 - speed * (end - 0.5 * ramp);
+    let strain = (l0 / l).ln();
+    let mut ep = strain;
+    for _ in 0..50 {
+        ep = strain - (a + b * ep.powf(n)) / e;
+    }
+    let sigma = a + b * ep.powf(n);
+    let j = (-sigma * (1.0 - 2.0 * nu) / e).exp();
+    let force = sigma * l0 * l0 * (l0 / l) * j;
+
+    let g = last_frame(&base);
+    let eps: Vec<f64> = g
+        .dataset("elements/plastic_strain")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    let st: Vec<f64> = g.dataset("elements/stress").unwrap().read_raw().unwrap();
+    assert_eq!(eps.len(), 736, "184 tetrahedra as 736 hexahedra");
+    let (lo, hi) = eps
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    let mut worst_lateral: f64 = 0.0;
+    let mut sxx_max = f64::MIN;
+    for s in st.chunks(6) {
+        sxx_max = sxx_max.max(s[0]);
+        for v in &s[1..] {
+            worst_lateral = worst_lateral.max(v.abs());
+        }
+    }
+    let (h, rows) = read_csv(&base.join("reactions.csv"));
+    let t = column(&h, &rows, "time");
+    let fx = column(&h, &rows, "platen.force_x");
+    assert!((t.last().unwrap() - end).abs() < 1e-9, "last row at {t:?}");
+    let f_end = -fx.last().unwrap();
+    eprintln!(
+        "split tet cube: plastic strain {lo:.4}..{hi:.4} (homogeneous {ep:.4}), stress_xx at most {sxx_max:.4e} Pa, lateral and shear stresses at most {worst_lateral:.3e} Pa (sigma {sigma:.4e}), platen force {f_end:.4e} N (sigma A {force:.4e} N)"
+    );
+    assert!(
+        (lo / ep - 1.0).abs() < 0.01 && (hi / ep - 1.0).abs() < 0.01,
+        "plastic strain {lo}..{hi}, homogeneous {ep} (limit 1 %)"
+    );
+    assert!(
+        sxx_max < 0.0,
+        "an element in tension: stress_xx {sxx_max} Pa"
+    );
+    assert!(
+        worst_lateral < 0.02 * sigma,
+        "lateral or shear stress {worst_lateral} Pa, uniaxial sigma {sigma} Pa (limit 2 %)"
+    );
+    assert!(
+        (f_end / force - 1.0).abs() < 0.015,
+        "platen force {f_end} N against sigma A = {force} N (limit 1.5 %)"
+    );
+}

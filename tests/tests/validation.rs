@@ -53,7 +53,7 @@ fn johnson_cook_thermal_taylor_bar_matches_dynela_and_abaqus() {
 /// run as 4 hexahedra): length within 2 % and foot radius within 4 % of the literature at np 1
 /// and 3; and the pressure in the foot free of checkerboarding: its scatter between face
 /// neighbours (`foot_pressure_scatter`) at most `CHECKERBOARD_FACTOR` times the O-grid's
-/// (scenes/taylor_copper.toml, N = 6). Ignored in `make test`: 66,457 steps of 35,336
+/// (scenes/taylor_copper.toml, N = 6). Ignored in `make test`: 68,285 steps of 35,336
 /// hexahedra (133 s at np 2 on an idle 2-core AVX-512 Xeon; about twice that per rank count on
 /// an AVX2 CPU or a loaded machine); the same bar on native tetrahedra runs in the suite (below);
 /// `cargo test --release -p tdyn-tests --test validation tetrahedra -- --ignored`.

@@ -209,7 +209,14 @@ pub fn build(
             .then_some(scene.run.dt)
             .flatten();
         (
-            Some(Fe::new(world, scene, &groups, mesh, implicit_dt)?),
+            Some(Fe::new(
+                world,
+                scene,
+                &groups,
+                mesh,
+                implicit_dt,
+                mesh_split.is_some(),
+            )?),
             groups,
         )
     };

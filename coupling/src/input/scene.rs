@@ -88,6 +88,7 @@ impl Hourglass {
             },
             _ => H::Physical {
                 scale: self.coefficient.unwrap_or(1.0),
+                bound: fe_petsc::hourglass::YieldBound::Fibres,
             },
         }
     }

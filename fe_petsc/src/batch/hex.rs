@@ -469,7 +469,7 @@ fn update_core(
         dsig[i] = stress[i] - rotated[i];
     }
     let (hg_work, tg) = match m.hourglass {
-        LaneHourglassKind::Physical { scale } => {
+        LaneHourglassKind::Physical { scale, bound } => {
             let hg = LaneHourglass {
                 geo: &geo,
                 vol: k.vol,
@@ -479,6 +479,7 @@ fn update_core(
                 scale,
                 tangent_ratio: hourglass_lanes::tangent_ratio(&dsig, &deps, m.mu),
                 yield_stress,
+                bound,
                 stress,
             };
             hourglass_lanes::physical(&hg, &mut st.hg)

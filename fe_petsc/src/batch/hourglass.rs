@@ -4,7 +4,7 @@
 //! tangent ratio's round-off guard) as masked lane operations.
 use super::hex::dot3;
 use super::{F, M};
-use crate::hourglass::{MIN_STRAIN_INCREMENT, THIRD};
+use crate::hourglass::{YieldBound, MIN_STRAIN_INCREMENT, THIRD};
 
 type V3 = [F; 3];
 type M3 = [[F; 3]; 3];
@@ -29,6 +29,8 @@ pub struct LaneHourglass<'a> {
     pub tangent_ratio: F,
     /// Current yield stresses, for materials with a yield surface.
     pub yield_stress: Option<F>,
+    /// How the yield stress bounds the amplitudes.
+    pub bound: YieldBound,
     /// The elements' centre stresses (global axes, Voigt), Pa.
     pub stress: [F; 6],
 }
@@ -245,6 +247,25 @@ impl Centre {
         (b, c)
     }
 
+    /// The gradient g of B over group g's amplitudes (`g == 3`: mode 3's) and m = Q^+ g
+    /// (`Centre::normal`). 10 flops.
+    #[inline(always)]
+    fn normal(&self, g: usize) -> (V3, V3) {
+        if g < 3 {
+            let (p, r) = ((g + 1) % 3, (g + 2) % 3);
+            let gb = [1.5 * self.da[p], 1.5 * self.da[r], 3.0 * self.a[p][r]];
+            let m = [
+                gb[0] * (4.0 * THIRD) + gb[1] * (2.0 * THIRD),
+                gb[0] * (2.0 * THIRD) + gb[1] * (4.0 * THIRD),
+                gb[2] * THIRD,
+            ];
+            (gb, m)
+        } else {
+            let gb = [1.5 * self.da[0], 1.5 * self.da[1], 1.5 * self.da[2]];
+            (gb, self.da)
+        }
+    }
+
     /// (B, C) of mode 3's amplitudes (`Centre::mode3`). 20 flops.
     #[inline(always)]
     fn mode3(&self, tau: &V3) -> (F, F) {
@@ -268,11 +289,14 @@ fn group_scale((b, c): (F, F), a: F, sy2: F) -> F {
     F::select(c.le(F::ZERO), F::splat(1.0), f)
 }
 
-/// `yield_bound` in lanes: each group's amplitudes scaled by lambda in [0, 1] so that the fibre
-/// stresses sigma_c +- lambda tau stay inside the von Mises surface of radius `sy`; lambda = 1
-/// in a lane whose tau has no deviator, 0 in a lane whose centre is on or outside the surface.
+/// `yield_bound` in lanes. [`YieldBound::Fibres`]: each group's amplitudes scaled by lambda in
+/// [0, 1] so that the fibre stresses sigma_c +- lambda tau stay inside the von Mises surface of
+/// radius `sy`; lambda = 1 in a lane whose tau has no deviator, 0 in a lane whose centre is on
+/// or outside the surface. [`YieldBound::Tangential`]: the part of tau normal to the surface at
+/// the centre bounded so, the tangential part returned radially with the fibre
+/// (`crate::hourglass`'s module comment).
 #[inline(always)]
-fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F) {
+fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F, bound: YieldBound) {
     let centre = Centre::new(centre);
     let a = centre.mises_sq;
     let sy2 = sy * sy;
@@ -282,6 +306,27 @@ fn yield_bound(sig: &mut [V3; 4], centre: &M3, sy: F) {
         } else {
             centre.mode3(&sig[3])
         };
+        if bound == YieldBound::Tangential {
+            let (gb, m) = centre.normal(g);
+            let gg = dot(&gb, &m);
+            let (b, c) = bc;
+            // The normal part (B / G) m and its Mises form B^2 / G; none in a lane whose
+            // centre has no deviator on these entries (B = 0 there too).
+            let some = gg.gt(F::splat(1e-300));
+            let igg = gg.recip();
+            let coef = F::select(some, b * igg, F::ZERO);
+            let cn = F::select(some, b * b * igg, F::ZERO);
+            let ct = (c - cn).max(F::ZERO);
+            let ln = group_scale((b, cn), a, sy2);
+            let an = a + 2.0 * ln * b.abs() + ln * ln * cn;
+            let lt = (sy2 * (an + ct).recip()).sqrt().min(F::splat(1.0));
+            let lt = F::select(ct.le(F::ZERO), F::splat(1.0), lt);
+            for i in 0..3 {
+                let tn = coef * m[i];
+                sig[g][i] = ln * tn + lt * (sig[g][i] - tn);
+            }
+            continue;
+        }
         let f = group_scale(bc, a, sy2);
         for v in sig[g].iter_mut() {
             *v *= f;
@@ -376,7 +421,7 @@ pub fn physical(s: &LaneHourglass, sig: &mut [V3; 4]) -> (F, [V3; 4]) {
         }
     }
     if let Some(sy) = s.yield_stress {
-        yield_bound(sig, &centre_stress(&s.stress, &frame.e), sy);
+        yield_bound(sig, &centre_stress(&s.stress, &frame.e), sy, s.bound);
     }
     let h = forces(sig, &frame.ia, s.vol);
     // The work of the step, the trapezoid dt/2 sum_a (H_a(n) + H_a(n+1)) . qd_a, through

@@ -236,6 +236,8 @@ pub(crate) enum LaneHourglassKind {
     Physical {
         /// Multiplier of the physical stiffness.
         scale: f64,
+        /// How the yield stress bounds the amplitudes.
+        bound: hourglass::YieldBound,
     },
     /// The FB/PRONTO stiffness form with coefficient kappa.
     Stiffness {
@@ -261,7 +263,7 @@ impl LaneMaterial {
         let law = mat.lane_law().unwrap_or(LaneLaw::Pointwise { n_state });
         let mu = mat.shear_modulus();
         let hourglass = match ctl.hourglass.for_material(mu) {
-            Hourglass::Physical { scale } => LaneHourglassKind::Physical { scale },
+            Hourglass::Physical { scale, bound } => LaneHourglassKind::Physical { scale, bound },
             Hourglass::Stiffness { coefficient } => LaneHourglassKind::Stiffness { coefficient },
             Hourglass::Viscous { coefficient } => LaneHourglassKind::Viscous { coefficient },
         };

@@ -72,12 +72,24 @@ impl Fe {
         groups: &setup::Groups,
         mut mesh: DistributedMesh,
         implicit_dt: Option<f64>,
+        split: bool,
     ) -> Result<Fe, String> {
         let file = scene.file.display().to_string();
         let mut inputs = setup::prepare(world, scene, groups, &mut mesh)?;
         let reaction_groups = std::mem::take(&mut inputs.reaction_groups);
+        // A mesh split from tetrahedra or prisms bounds the physical hourglass stresses'
+        // tangential part by the fibres' radial return (`fe_petsc::hourglass::YieldBound`):
+        // with the whole-amplitude bound its distorted hexahedra let a spurious pattern grow in
+        // plastic flow. Explicit mode only (the implicit tangent is the whole-amplitude
+        // bound's).
+        let mut hourglass = scene.run.hourglass.control();
+        if let fe_petsc::hourglass::Hourglass::Physical { bound, .. } = &mut hourglass {
+            if split && implicit_dt.is_none() {
+                *bound = fe_petsc::hourglass::YieldBound::Tangential;
+            }
+        }
         let controls = HexControls {
-            hourglass: scene.run.hourglass.control(),
+            hourglass,
             bv_linear: scene.run.bulk_viscosity.linear,
             bv_quadratic: scene.run.bulk_viscosity.quadratic,
         };
