@@ -364,7 +364,7 @@ pub(super) fn check_rigid_walls(
             return Err(cx.err(
                 &key("normal"),
                 format!(
-                    "expected a direction (the side the bodies are on) of a length a double holds, got {n:?}"
+                    "expected a direction (the side the bodies are on), got {n:?} of length zero (or beyond a double's range)"
                 ),
             ));
         }
