@@ -756,14 +756,22 @@ impl ImplicitFe {
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
             let inertia: [f64; 3] =
                 std::array::from_fn(|c| m * (c_mass * (du[c] - dt * v[c]) - a[c] - g[c]));
-            let r: [f64; 3] = std::array::from_fn(|c| inertia[c] - f[c]);
-            let pr = self.dofs[n].free(r);
+            self.residual[n] = std::array::from_fn(|c| inertia[c] - f[c]);
+            if self.fe.owned[n] {
+                for c in 0..3 {
+                    sums[1].push(f[c] * f[c]);
+                    sums[2].push(inertia[c] * inertia[c]);
+                }
+            }
+        }
+        // Friction on the nodes slipping on walls, from their normal force at this iterate.
+        self.add_wall_friction();
+        for n in 0..self.n_nodes() {
+            let pr = self.dofs[n].free(self.residual[n]);
             self.residual[n] = pr;
             if self.fe.owned[n] {
                 for c in 0..3 {
                     sums[0].push(pr[c] * pr[c]);
-                    sums[1].push(f[c] * f[c]);
-                    sums[2].push(inertia[c] * inertia[c]);
                 }
             }
         }
