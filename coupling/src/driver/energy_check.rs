@@ -179,11 +179,7 @@ impl EnergyCheck {
                 || measured > energy::ENERGY_STOP_AT_ONCE * limit);
         // (energy::solid_energy_negative: an instability the balance does not see)
         if energy::solid_energy_negative(en.solid_internal, self.max_energy_error, scale, step) {
-            let _ = outputs.history_row(model, &self.row(clock, model, err));
-            let _ = outputs.force_rows(world, model, clock.time);
-            outputs.flush();
-            return Err(RunFailure::new(
-                FailureKind::Unstable,
+            return Err(self.stop(world, clock, model, outputs, err,
                 format!(
                     "{file}: the solid particles' internal energy fell to {:e} J at t = {t:e} s, step {step}, below -run.max_energy_error = -{} of the energy scale {scale:e} J (their forces are giving back work no strain stored; the kinetic energy is {:e} J): {blow_up}",
                     en.solid_internal, self.max_energy_error, en.kinetic
@@ -192,11 +188,7 @@ impl EnergyCheck {
         }
         if stop {
             let err = measured;
-            let _ = outputs.history_row(model, &self.row(clock, model, err));
-            let _ = outputs.force_rows(world, model, clock.time);
-            outputs.flush();
-            return Err(RunFailure::new(
-                FailureKind::Unstable,
+            return Err(self.stop(world, clock, model, outputs, err,
                 format!(
                     "{file}: energy error {err:.3e} passed run.max_energy_error = {}{} at t = {t:e} s, step {step} (E = {total:e} J, E0 = {:e} J, external work {external:e} J): {blow_up}",
                     self.max_energy_error,
@@ -206,6 +198,23 @@ impl EnergyCheck {
             ));
         }
         Ok(err)
+    }
+
+    /// A stop: the step's history and force rows written (with the error `err`) and flushed,
+    /// then the run's failure with `message`.
+    fn stop(
+        &self,
+        world: &SimpleCommunicator,
+        clock: &schedule::Clock,
+        model: &Model,
+        outputs: &mut outputs::Outputs,
+        err: f64,
+        message: String,
+    ) -> RunFailure {
+        let _ = outputs.history_row(model, &self.row(clock, model, err));
+        let _ = outputs.force_rows(world, model, clock.time);
+        outputs.flush();
+        RunFailure::new(FailureKind::Unstable, message)
     }
 
     /// How the error passed the limit, for the stop's message: the early check's rule, ten
