@@ -55,7 +55,8 @@
 //! ||P r||_2 <= rtol * max(F, 1e-3 F_max), with r = M (a(n+1) - g) - f(u(n+1)) over all nodes,
 //! P the constraint projection, F = ||f||_2 + ||M (a(n+1) - g)||_2 now and F_max the largest F
 //! of the run; rtol = [`NEWTON_RTOL`] (`-tdyn_newton_rtol`), at most [`NEWTON_MAX_IT`] iterations
-//! (`-tdyn_newton_max_it`).
+//! (`-tdyn_newton_max_it`); or the residual within the round-off of the increment's own terms
+//! ([`ROUNDOFF_FLOOR`]: a body moving nearly rigidly under a small load).
 //!
 //! **Constraints** act as projections: at node I, P_I = 0 for `fixed` and `velocity` (du is
 //! prescribed: 0 or dt v), P_I = I - sum n n^T for symmetry planes. Element blocks enter as
@@ -105,6 +106,24 @@ pub const NEWTON_MAX_IT: u32 = 30;
 pub const REFRESH_RATIO: f64 = 0.1;
 /// Below this fraction of the run's largest force scale a residual counts as zero.
 const FORCE_FLOOR: f64 = 1e-3;
+/// A residual within this many f64 epsilons of the increment's force scale R counts as
+/// converged (the round-off floor of the Newton test).
+///
+/// Why: the residual of a node is formed from terms of size k |du|, where du is the step's
+/// increment and k the node's stiffness against it: the inertia m 4/dt^2 (du - dt v), whose
+/// difference cancels to round-off, eps |du|, when the node moves with little acceleration;
+/// and the element forces, whose strain increments come from differences of the increments of
+/// neighbouring nodes, again eps |du| when the element hardly deforms, times a stiffness of at
+/// most m (2/dt_c)^2 (dt_c the explicit stable step: omega_max <= 2/dt_c). A body translating
+/// under a small load (a free cube at 2 m/s under 1 kPa, dt = 1e-4 s) has a force scale F of
+/// 1e-3 N and a residual that stops at 4e-10 N, above rtol F = 4e-11 N, whatever Newton does.
+/// So the test is ||P r|| <= max(rtol max(F, 1e-3 F_max), ROUNDOFF_FLOOR eps R) with
+/// R = (sum over the nodes of (m (4/dt^2 + 4/dt_c^2) |du|)^2)^(1/2), dt_c the smallest stable
+/// step of the trial's elements. R bounds the terms' sizes; 64 eps of it covers the rounding of
+/// an element's eight nodes and of the stress update. In a deforming body R is of the order of F
+/// (the increment is the deformation), and 64 eps R is far below rtol F: the floor takes over
+/// only where the motion is a rigid body's.
+const ROUNDOFF_FLOOR: f64 = 64.0;
 /// Most history variables a material may have (the tangent's scratch space).
 const MAX_MAT_STATE: usize = 8;
 
@@ -352,6 +371,9 @@ pub struct ImplicitFe {
     state_trial: HexStates,
     mat_trial: Vec<f64>,
     hg_work_trial: crate::exact::Folds,
+    /// The smallest stable step of the trial's elements on this rank (`HexOutput::dt_stable`),
+    /// s: the stiffness of the round-off floor ([`ROUNDOFF_FLOOR`]).
+    trial_dt_min: f64,
     owned_buf: Vec<f64>,
     local_buf: Vec<f64>,
     tangent_stale: bool,
@@ -476,6 +498,7 @@ impl ImplicitFe {
             state_trial: fe.state.clone(),
             mat_trial: fe.mat_state.clone(),
             hg_work_trial: [0.0; 3],
+            trial_dt_min: f64::INFINITY,
             owned_buf: vec![0.0; 3 * owned_nodes.len()],
             local_buf: vec![0.0; 3 * nn],
             owned_nodes,
@@ -651,9 +674,10 @@ impl ImplicitFe {
         let mut prev: Option<f64> = None;
         let mut solves = 0u32;
         loop {
-            let (rnorm, scale) = self.evaluate(comm, exchange)?;
+            let (rnorm, scale, roundoff) = self.evaluate(comm, exchange)?;
             self.force_scale_max = self.force_scale_max.max(scale);
-            let tol = self.options.rtol * scale.max(FORCE_FLOOR * self.force_scale_max);
+            let tol = (self.options.rtol * scale.max(FORCE_FLOOR * self.force_scale_max))
+                .max(ROUNDOFF_FLOOR * f64::EPSILON * roundoff);
             if rnorm <= tol {
                 return Ok(tol);
             }
@@ -694,12 +718,12 @@ impl ImplicitFe {
     }
 
     /// Element forces at x(n) + du from the state at t(n), the projected residual, and the
-    /// global norms (||P r||_2, F). Collective.
+    /// global norms (||P r||_2, F, R: the round-off scale of [`ROUNDOFF_FLOOR`]). Collective.
     fn evaluate(
         &mut self,
         comm: &SimpleCommunicator,
         exchange: &mut NodeExchange,
-    ) -> Result<(f64, f64), ImplicitError> {
+    ) -> Result<(f64, f64, f64), ImplicitError> {
         let dt = self.dt;
         let t0 = Instant::now();
         let inv_dt = 1.0 / dt;
@@ -748,9 +772,18 @@ impl ImplicitFe {
         self.fe.timers.exchange += (t2 - t1).as_secs_f64();
         let c_mass = 4.0 / (dt * dt);
         let g = self.gravity;
+        // The stiffness of the round-off floor, 4/dt^2 + 4/dt_c^2 per unit mass, with the
+        // smallest stable step over every rank (a minimum: the same at any rank count).
+        let mut dt_c = self.trial_dt_min;
+        comm.all_reduce_into(&self.trial_dt_min, &mut dt_c, SystemOperation::min());
+        let c_floor = if dt_c.is_finite() && dt_c > 0.0 {
+            c_mass + 4.0 / (dt_c * dt_c)
+        } else {
+            c_mass
+        };
         // The norms' squares as exact sums (`exact::totals`): the same bits at any rank count,
         // so every rank count takes the same Newton iterations.
-        let mut sums: [Vec<f64>; 3] = Default::default();
+        let mut sums: [Vec<f64>; 4] = Default::default();
         for n in 0..self.n_nodes() {
             let m = self.fe.mass[n];
             let (v, a, du, f) = (self.fe.v[n], self.fe.a[n], self.du[n], self.force[n]);
@@ -761,6 +794,8 @@ impl ImplicitFe {
                 for c in 0..3 {
                     sums[1].push(f[c] * f[c]);
                     sums[2].push(inertia[c] * inertia[c]);
+                    let k = m * c_floor * du[c];
+                    sums[3].push(k * k);
                 }
             }
         }
@@ -785,7 +820,7 @@ impl ImplicitFe {
                 step: self.fe.step + 1,
             }));
         }
-        Ok((rnorm, global[1].sqrt() + global[2].sqrt()))
+        Ok((rnorm, global[1].sqrt() + global[2].sqrt(), global[3].sqrt()))
     }
 
     /// Solves (4 M / dt^2 + K) delta = -P r and adds P delta to du on every local node.

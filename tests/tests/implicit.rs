@@ -557,3 +557,75 @@ fn a_fixed_step_that_does_not_divide_the_end_time_ends_the_run_on_it() {
         );
     }
 }
+
+/// A free steel cube (20 mm, 4^3 hexahedra) moving at 2 m/s along x, its face x = L loaded by
+/// a pressure ramped from 0 to 1 kPa over the run (implicit, dt = 0.1 ms, 20 steps). The motion
+/// is a rigid body's and the load tiny: the force scale F is about 1e-3 N, and rtol F is below
+/// the residual's round-off (the increments of 0.2 mm cancel in the strain and inertia terms to
+/// a few 1e-10 N); Newton must stop at its round-off floor, not fail.
+///
+/// References: momentum_x = M v0 - p0 A T / 2 (the ramp's impulse, a trapezoid, exact for a
+/// linear curve), to 1e-6 of the impulse; momentum_y and _z zero to 1e-12 of M v0; one or two
+/// Newton iterations a step (the stiffness is linear and the load small); the same bytes at
+/// np 1 and np 3.
+#[test]
+fn a_free_cube_translating_under_a_small_ramped_pressure_converges_at_its_round_off() {
+    let dir = workdir("implicit_translating_cube");
+    let (a, rho, v0, p0, t_end) = (0.02, 7850.0, 2.0, 1.0e3, 2.0e-3);
+    let scene = dir.join("cube.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"[run]
+end_time = {t_end:e}
+mode = "implicit"
+dt = 1.0e-4
+[[mesh]]
+file = "{root}/meshes/bar.geo"
+params = {{ L = {a}, A = {a}, N = 4, M = 4 }}
+[[material]]
+name = "steel"
+model = "elastic"
+density = {rho}
+youngs_modulus = 200.0e9
+poisson_ratio = 0.3
+[[block]]
+group = "bar"
+material = "steel"
+velocity = [{v0}, 0.0, 0.0]
+[[load]]
+group = "right"
+pressure = {p0:e}
+curve = [[0.0, 0.0], [{t_end:e}, 1.0]]
+"#,
+            root = root().display()
+        ),
+    )
+    .unwrap();
+    let out = run_np1_np3_same_bytes(&scene, &dir);
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let last = |name: &str| *column(&h, &rows, name).last().unwrap();
+    let mass = rho * a * a * a;
+    let impulse = p0 * a * a * t_end / 2.0;
+    let px_exact = mass * v0 - impulse;
+    assert!(
+        (last("momentum_x") - px_exact).abs() < 1e-6 * impulse,
+        "momentum_x {} against M v0 - p0 A T / 2 = {px_exact} (1e-6 of the impulse {impulse:e} N s)",
+        last("momentum_x")
+    );
+    for c in ["momentum_y", "momentum_z"] {
+        assert!(
+            last(c).abs() < 1e-12 * mass * v0,
+            "{c} {} against 0 (1e-12 of M v0)",
+            last(c)
+        );
+    }
+    assert!((last("time") - t_end).abs() < 1e-12 * t_end, "ended early");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let per_step = report["newton_iterations_per_step"].as_f64().unwrap();
+    assert!(
+        per_step <= 2.0,
+        "{per_step} Newton iterations a step (a linear body under a small load: 1 or 2)"
+    );
+}

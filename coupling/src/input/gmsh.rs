@@ -169,6 +169,30 @@ pub fn check_params(def: &MeshDef) -> Result<(), (String, String)> {
     let Ok(text) = std::fs::read_to_string(&def.file) else {
         return Ok(()); // reported where the file is read
     };
+    let code = strip_comments(&text);
+    // A parameter the .geo never names is a typo (`Nz` for `NZ`): gmsh would ignore it and
+    // mesh with the file's default, without a word. (A .geo that includes others may name it
+    // there: not checked.)
+    if !code.contains("Include") {
+        let used = identifiers(&code);
+        for name in def.params.keys() {
+            if !used.contains(name) {
+                let known: Vec<String> = overridable(&code).into_iter().collect();
+                return Err((
+                    name.clone(),
+                    format!(
+                        "{} never uses {name}{}",
+                        def.file.file_name().unwrap_or_default().to_string_lossy(),
+                        if known.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" (it takes {})", known.join(", "))
+                        }
+                    ),
+                ));
+            }
+        }
+    }
     let counts = count_parameters(&text);
     for (name, v) in &def.params {
         if counts.contains(name) && !(*v >= 1.0 && v.fract() == 0.0 && *v <= MAX_COUNT) {
@@ -230,6 +254,62 @@ pub fn count_parameters(geo: &str) -> std::collections::BTreeSet<String> {
             return counts;
         }
     }
+}
+
+/// The identifiers of .geo code (without comments), outside string literals.
+fn identifiers(code: &str) -> std::collections::BTreeSet<String> {
+    let mut out = std::collections::BTreeSet::new();
+    let mut in_string = false;
+    let mut word = String::new();
+    for c in code.chars().chain(std::iter::once(' ')) {
+        if in_string {
+            in_string = c != '"';
+        } else if c.is_alphanumeric() || c == '_' {
+            word.push(c);
+        } else {
+            if word
+                .chars()
+                .next()
+                .is_some_and(|f| f.is_alphabetic() || f == '_')
+            {
+                out.insert(std::mem::take(&mut word));
+            }
+            word.clear();
+            in_string = c == '"';
+        }
+    }
+    out
+}
+
+/// The parameters a .geo offers for overriding: the names it tests with `Exists(NAME)` or
+/// declares with `DefineConstant[NAME = ...]`.
+fn overridable(code: &str) -> std::collections::BTreeSet<String> {
+    let mut out = std::collections::BTreeSet::new();
+    let mut rest = code;
+    while let Some(at) = rest.find("Exists(") {
+        rest = &rest[at + "Exists(".len()..];
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if !name.is_empty() {
+            out.insert(name);
+        }
+    }
+    let mut rest = code;
+    while let Some(at) = rest.find("DefineConstant") {
+        rest = &rest[at + "DefineConstant".len()..];
+        let Some(open) = rest.find('[') else { break };
+        let close = rest[open..].find(']').map_or(rest.len(), |c| open + c);
+        for entry in rest[open + 1..close].split(',') {
+            let name = entry.split('=').next().unwrap_or("").trim();
+            if !name.is_empty() && name.chars().all(|c| c.is_alphanumeric() || c == '_') {
+                out.insert(name.to_string());
+            }
+        }
+        rest = &rest[close..];
+    }
+    out
 }
 
 /// The .geo without `//` and `/* */` comments.

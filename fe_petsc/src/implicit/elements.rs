@@ -30,6 +30,7 @@ impl ImplicitFe {
         let mut g = Box::<B>::default();
         let grid = self.fe.grids.energy;
         let mut hg_work = [0.0; 3];
+        self.trial_dt_min = f64::INFINITY;
         let mut e = 0;
         while e < self.fe.elems.len() {
             let n = self.fe.lane_run(e, B::LANES);
@@ -60,6 +61,7 @@ impl ImplicitFe {
             for l in 0..n {
                 let k = e + l;
                 let out = g.lane_output(l);
+                self.trial_dt_min = self.trial_dt_min.min(out.dt_stable);
                 for (j, &node) in self.fe.elems[k].iter().enumerate() {
                     let f = &mut self.force[node as usize];
                     for c in 0..3 {
