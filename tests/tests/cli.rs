@@ -219,3 +219,49 @@ fn tdyn_crosscheck_refuses_zero_ranks_before_running_anything() {
         );
     }
 }
+
+/// A bar whose Young's modulus was given in MPa (200e3 for steel) read as Pa: the stable step
+/// is sqrt(1e6) = 1,000 times the intended (4.9 ms), and the velocity curve's 10 ms ramps
+/// take two steps each: 0.1 s takes 21 steps, ending before the energy check's first step
+/// (100), with an error of 12 % (measured). The start warns of the modulus below 1e6 Pa, and the
+/// end, its error past run.max_energy_error, warns that the run was never checked, once, at
+/// np 1 and 2 (rank 0 alone); the run still exits 0 (a warning, not a failure).
+#[test]
+fn a_short_run_in_the_wrong_units_is_warned_of_at_its_end() {
+    for np in [1, 2] {
+        let dir = workdir(&format!("cli_short_units_np{np}"));
+        let scene = bar_scene(
+            &dir,
+            4,
+            "end_time = 0.1",
+            "[[boundary]]\ngroup = \"left\"\nkind = \"fixed\"\n\
+             [[boundary]]\ngroup = \"right\"\nkind = \"velocity\"\nvelocity = [0.05, 0.0, 0.0]\n\
+             curve = [[0.0, 0.0], [0.01, 1.0], [0.02, 1.0], [0.03, 0.0]]\n",
+        );
+        let text = std::fs::read_to_string(&scene)
+            .unwrap()
+            .replace("youngs_modulus = 200.0e9", "youngs_modulus = 200.0e3");
+        std::fs::write(&scene, text).unwrap();
+        let o = mpirun(np, 120)
+            .arg(tdyn())
+            .args(["run", scene.to_str().unwrap(), "--out"])
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "np {np}: {o:?}");
+        let lines = tdyn_lines(&o);
+        let modulus: Vec<&String> = lines
+            .iter()
+            .filter(|l| l.contains("below 1e6 Pa"))
+            .collect();
+        let short: Vec<&String> = (lines.iter())
+            .filter(|l| l.contains("ended before the check starts (step 100)"))
+            .collect();
+        assert_eq!(modulus.len(), 1, "np {np}: {lines:#?}");
+        assert_eq!(short.len(), 1, "np {np}: {lines:#?}");
+        assert!(
+            short[0].contains("warning") && short[0].contains("scene.toml"),
+            "{short:?}"
+        );
+    }
+}

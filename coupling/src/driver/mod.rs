@@ -217,6 +217,22 @@ pub fn run(world: &SimpleCommunicator, opts: &RunOptions) -> Result<RunSummary, 
         },
     )?;
     res?;
+    // A run shorter than the energy check's start was never checked: say so when its error
+    // at the end is past the limit (an E in MPa read as Pa ends 2 steps later at 100 %).
+    if world.rank() == 0
+        && clock.step < energy::ENERGY_CHECK_FROM_STEP
+        && check.err_last > check.max_energy_error
+    {
+        eprintln!(
+            "tdyn: warning: {}: energy error {:.2} % at the end, over run.max_energy_error = {} ({} %): this run of {} steps ended before the check starts (step {}); check the scene's units and the end time",
+            check.file,
+            100.0 * check.err_last,
+            check.max_energy_error,
+            100.0 * check.max_energy_error,
+            clock.step,
+            energy::ENERGY_CHECK_FROM_STEP
+        );
+    }
     let elements = model.fe.as_ref().map_or(0, |f| f.mesh.local.global_elems);
     let cycles = elements as f64 * clock.step as f64;
     Ok(RunSummary {

@@ -425,12 +425,43 @@ fn check_materials(cx: &Ctx, raw: &[toml::Table]) -> Result<Vec<MaterialSpec>, S
         let spec = check_material(cx, i, t, &materials)?;
         if spec.model != "fluid" {
             if let Err(e) = fe_petsc::material::build_material(&spec) {
-                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+                return Err(material_error(cx, i, e));
             }
         }
         materials.push(spec);
     }
     Ok(materials)
+}
+
+/// A material the library refused, as `FILE: material[i].KEY: ...` where the error names a key
+/// (a value out of range, a key missing or unknown), else `FILE: material[i]: ...`.
+fn material_error(cx: &Ctx, i: usize, e: fe_petsc::material::MaterialError) -> SceneError {
+    use fe_petsc::material::MaterialError as E;
+    match e {
+        E::BadValue {
+            name,
+            key,
+            value,
+            why,
+        } => cx.err(
+            &format!("material[{i}].{key}"),
+            format!("{why}, got {} (material \"{name}\")", num_text(value)),
+        ),
+        E::Missing { name, key, model } => cx.err(
+            &format!("material[{i}].{key}"),
+            format!("missing (needed by model {model}; material \"{name}\")"),
+        ),
+        E::UnknownKey {
+            name,
+            key,
+            model,
+            expected,
+        } => cx.err(
+            &format!("material[{i}].{key}"),
+            format!("unknown key for model {model} (expected {expected}; material \"{name}\")"),
+        ),
+        e => cx.err(&format!("material[{i}]"), e.to_string()),
+    }
 }
 
 /// One `[[material]]` table (the `i`-th): name (unique among `earlier`), model, density, the
@@ -632,7 +663,7 @@ fn check_blocks(cx: &Ctx, blocks: &[Block], materials: &[MaterialSpec]) -> Resul
     for (i, m) in materials.iter().enumerate() {
         if m.model == "fluid" && blocks.iter().any(|b| b.material == m.name) {
             if let Err(e) = fe_petsc::material::build_material(m) {
-                return Err(cx.err(&format!("material[{i}]"), e.to_string()));
+                return Err(material_error(cx, i, e));
             }
         }
     }
