@@ -125,7 +125,7 @@ impl HourglassWatch {
             if ratio > HOURGLASS_WARN_RATIO && !self.warned[b] {
                 self.warned[b] = true;
                 lines.push(format!(
-                    "tdyn: warning: block \"{}\": hourglass energy {:.1} % of internal energy at t = {:.3e} s (guideline: under {:.0} %): the strain varies inside its elements (a coarse mesh, or loads on single nodes and edges)",
+                    "tdyn: warning: block \"{}\": hourglass energy {:.1} % of internal energy at t = {:.3e} s (guideline: under {:.0} %): the strain varies inside its elements (a coarse mesh: in bending, too few elements through the thickness; or loads on single nodes and edges)",
                     self.names[b],
                     100.0 * ratio,
                     time,
@@ -296,7 +296,7 @@ mod tests {
         assert_eq!(lines.len(), 1, "one warning (wall), said once: {lines:?}");
         assert_eq!(
             lines[0],
-            "tdyn: warning: block \"wall\": hourglass energy 12.3 % of internal energy at t = 2.000e-5 s (guideline: under 10 %): the strain varies inside its elements (a coarse mesh, or loads on single nodes and edges)"
+            "tdyn: warning: block \"wall\": hourglass energy 12.3 % of internal energy at t = 2.000e-5 s (guideline: under 10 %): the strain varies inside its elements (a coarse mesh: in bending, too few elements through the thickness; or loads on single nodes and edges)"
         );
         let (r, t, step) = w.max[0].unwrap();
         assert!(
