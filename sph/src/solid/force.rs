@@ -190,19 +190,47 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
     }
 }
 
-/// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
-/// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
-/// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-#[inline(always)]
-fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
-    match av {
-        Some(av) => {
-            let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
-            let c_mean = 0.5 * (a.c + b.c);
-            let rho_mean = 0.5 * (a.rho + b.rho);
-            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+/// What the Monaghan (1992) artificial viscosity of a chunk's pairs needs, lane by lane (one
+/// lane per pair): h = (h_a + h_b)/2, v^_ab . x_ab, r^2, the mean sound speed and density.
+struct ViscLanes {
+    h: [f64; PAIR_CHUNK],
+    vr: [f64; PAIR_CHUNK],
+    r2: [f64; PAIR_CHUNK],
+    c_mean: [f64; PAIR_CHUNK],
+    rho_mean: [f64; PAIR_CHUNK],
+}
+
+impl Default for ViscLanes {
+    fn default() -> Self {
+        let z = [0.0; PAIR_CHUNK];
+        ViscLanes {
+            h: z,
+            vr: z,
+            r2: z,
+            c_mean: z,
+            rho_mean: z,
         }
-        None => 0.0,
+    }
+}
+
+impl ViscLanes {
+    /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), of the first `n` lanes into
+    /// `pi`, as the fluid pass has it (`passes::pair_viscosity`, `params::ArtificialViscosity`):
+    /// mu = h min(vr, 0)/(r^2 + eta^2), Pi = (-alpha c_mean mu + beta mu^2)/rho_mean (0 without
+    /// viscosity). Each lane's operations are one pair's, in that order; the loop over the
+    /// lanes is what the wider builds do several at a time (its two divisions in vector
+    /// registers).
+    #[inline(always)]
+    fn viscosity(&self, av: Option<ArtificialViscosity>, n: usize, pi: &mut [f64; PAIR_CHUNK]) {
+        let Some(av) = av else {
+            pi.iter_mut().for_each(|x| *x = 0.0);
+            return;
+        };
+        for (p, pi) in pi.iter_mut().enumerate().take(n) {
+            let h = self.h[p];
+            let mu = h * self.vr[p].min(0.0) / (self.r2[p] + av.eta_factor * h * h);
+            *pi = (-av.alpha * self.c_mean[p] * mu + av.beta * mu * mu) / self.rho_mean[p];
+        }
     }
 }
 
@@ -369,27 +397,33 @@ fn force_pairs(
     // term: a maximum does not depend on the order)
     let mut noted = [0.0f64; 6];
     let mut work = PairWork::default();
-    // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
-    let mut visc = [[0.0; 2]; PAIR_CHUNK];
+    // per pair of a chunk: what Pi needs, Pi, and f_ab^n where the artificial stress acts on
+    // the pair
+    let mut vl = ViscLanes::default();
+    let mut visc = [0.0; PAIR_CHUNK];
+    let mut fns = [0.0; PAIR_CHUNK];
     let mut acts = [false; PAIR_CHUNK];
     // per pair of a chunk: the terms of its two entries (force x, y, z and energy rate)
     let mut terms = [[[0.0; 4]; 2]; PAIR_CHUNK];
     for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks(PAIR_CHUNK)) {
-        // the chunk's viscosity and artificial-stress factors first: a short loop whose
-        // divisions, a chain in each pair, overlap from pair to pair
-        let factors = visc.iter_mut().zip(acts.iter_mut());
-        for ((&(i, j), pg), (out, acts)) in chunk.iter().zip(geom).zip(factors) {
+        // the chunk's viscosity and artificial-stress factors first: what the viscosity needs
+        // gathered pair by pair, then Pi lane by lane (its divisions, a chain in each pair, in
+        // vector registers)
+        let factors = fns.iter_mut().zip(acts.iter_mut());
+        for (p, ((&(i, j), pg), (out, acts))) in chunk.iter().zip(geom).zip(factors).enumerate() {
             assert!(
                 (pg.i, pg.j) == (i, j),
                 "the force pass runs over the pairs of the last gradient pass"
             );
             let (a, b) = (&slots[i as usize], &slots[j as usize]);
             let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             let h = 0.5 * (a.h + b.h);
             let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
-            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-            out[0] = viscosity(c.viscosity, a, b, h, vr, r2);
+            vl.r2[p] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            vl.h[p] = h;
+            vl.vr[p] = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            vl.c_mean[p] = 0.5 * (a.c + b.c);
+            vl.rho_mean[p] = 0.5 * (a.rho + b.rho);
             *acts = false;
             if let (Some(an), true) = (art, a.tension || b.tension) {
                 let dp = 0.5 * (a.dp + b.dp);
@@ -397,14 +431,15 @@ fn force_pairs(
                     kern = at(h, dp);
                 }
                 if kern.1 > 0.0 {
-                    out[1] = powi(kern.0.w(pg.r) * kern.1, an.n);
+                    *out = powi(kern.0.w(pg.r) * kern.1, an.n);
                     *acts = true;
                 }
             }
         }
+        vl.viscosity(c.viscosity, chunk.len(), &mut visc);
         // then the chunk's terms, each pair apart (no sum in between: pairs overlap) ...
-        let pair_factors = geom.iter().zip(&visc).zip(&acts);
-        for (((pg, &[pi, fn_ab]), &acts), out) in pair_factors.zip(terms.iter_mut()) {
+        let pair_factors = geom.iter().zip(visc.iter().zip(&fns)).zip(&acts);
+        for (((pg, (&pi, &fn_ab)), &acts), out) in pair_factors.zip(terms.iter_mut()) {
             if pg.r == 0.0 {
                 continue;
             }
