@@ -190,19 +190,47 @@ fn stress_of(p: &Particles, s: &Solids, i: usize) -> Mat3 {
     }
 }
 
-/// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), as the fluid pass has it
-/// (`passes::pair_viscosity`, `params::ArtificialViscosity`): mu = h min(vr, 0)/(r^2 + eta^2),
-/// Pi = (-alpha c_mean mu + beta mu^2)/rho_mean.
-#[inline(always)]
-fn viscosity(av: Option<ArtificialViscosity>, a: &Slot, b: &Slot, h: f64, vr: f64, r2: f64) -> f64 {
-    match av {
-        Some(av) => {
-            let mu = h * vr.min(0.0) / (r2 + av.eta_factor * h * h);
-            let c_mean = 0.5 * (a.c + b.c);
-            let rho_mean = 0.5 * (a.rho + b.rho);
-            (-av.alpha * c_mean * mu + av.beta * mu * mu) / rho_mean
+/// What the Monaghan (1992) artificial viscosity of a chunk's pairs needs, lane by lane (one
+/// lane per pair): h = (h_a + h_b)/2, v^_ab . x_ab, r^2, the mean sound speed and density.
+struct ViscLanes {
+    h: [f64; PAIR_CHUNK],
+    vr: [f64; PAIR_CHUNK],
+    r2: [f64; PAIR_CHUNK],
+    c_mean: [f64; PAIR_CHUNK],
+    rho_mean: [f64; PAIR_CHUNK],
+}
+
+impl Default for ViscLanes {
+    fn default() -> Self {
+        let z = [0.0; PAIR_CHUNK];
+        ViscLanes {
+            h: z,
+            vr: z,
+            r2: z,
+            c_mean: z,
+            rho_mean: z,
         }
-        None => 0.0,
+    }
+}
+
+impl ViscLanes {
+    /// The Monaghan (1992) artificial viscosity Pi_ab, m^5/(kg s^2), of the first `n` lanes into
+    /// `pi`, as the fluid pass has it (`passes::pair_viscosity`, `params::ArtificialViscosity`):
+    /// mu = h min(vr, 0)/(r^2 + eta^2), Pi = (-alpha c_mean mu + beta mu^2)/rho_mean (0 without
+    /// viscosity). Each lane's operations are one pair's, in that order; the loop over the
+    /// lanes is what the wider builds do several at a time (its two divisions in vector
+    /// registers).
+    #[inline(always)]
+    fn viscosity(&self, av: Option<ArtificialViscosity>, n: usize, pi: &mut [f64; PAIR_CHUNK]) {
+        let Some(av) = av else {
+            pi.iter_mut().for_each(|x| *x = 0.0);
+            return;
+        };
+        for (p, pi) in pi.iter_mut().enumerate().take(n) {
+            let h = self.h[p];
+            let mu = h * self.vr[p].min(0.0) / (self.r2[p] + av.eta_factor * h * h);
+            *pi = (-av.alpha * self.c_mean[p] * mu + av.beta * mu * mu) / self.rho_mean[p];
+        }
     }
 }
 
@@ -364,29 +392,38 @@ fn force_pairs(
         (sk, inv_w_dp, dp)
     };
     let mut kern = at(f64::NAN, f64::NAN);
-    let (mut mf, mut me) = (m[q::FORCE], m[q::ENERGY]);
+    // the largest size of the pairs' terms, lane by lane (force x, y, z, the lane past them,
+    // energy rates of a and b), noted in `m` at the end (the same maxima as noting term by
+    // term: a maximum does not depend on the order)
+    let mut noted = [0.0f64; 6];
     let mut work = PairWork::default();
-    // per pair of a chunk: Pi, and f_ab^n where the artificial stress acts on the pair
-    let mut visc = [[0.0; 2]; PAIR_CHUNK];
+    // per pair of a chunk: what Pi needs, Pi, and f_ab^n where the artificial stress acts on
+    // the pair
+    let mut vl = ViscLanes::default();
+    let mut visc = [0.0; PAIR_CHUNK];
+    let mut fns = [0.0; PAIR_CHUNK];
     let mut acts = [false; PAIR_CHUNK];
     // per pair of a chunk: the terms of its two entries (force x, y, z and energy rate)
     let mut terms = [[[0.0; 4]; 2]; PAIR_CHUNK];
     for (chunk, geom) in pairs.chunks(PAIR_CHUNK).zip(geom.chunks(PAIR_CHUNK)) {
-        // the chunk's viscosity and artificial-stress factors first: a short loop whose
-        // divisions, a chain in each pair, overlap from pair to pair
-        let factors = visc.iter_mut().zip(acts.iter_mut());
-        for ((&(i, j), pg), (out, acts)) in chunk.iter().zip(geom).zip(factors) {
+        // the chunk's viscosity and artificial-stress factors first: what the viscosity needs
+        // gathered pair by pair, then Pi lane by lane (its divisions, a chain in each pair, in
+        // vector registers)
+        let factors = fns.iter_mut().zip(acts.iter_mut());
+        for (p, ((&(i, j), pg), (out, acts))) in chunk.iter().zip(geom).zip(factors).enumerate() {
             assert!(
                 (pg.i, pg.j) == (i, j),
                 "the force pass runs over the pairs of the last gradient pass"
             );
             let (a, b) = (&slots[i as usize], &slots[j as usize]);
             let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             let h = 0.5 * (a.h + b.h);
             let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
-            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-            out[0] = viscosity(c.viscosity, a, b, h, vr, r2);
+            vl.r2[p] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            vl.h[p] = h;
+            vl.vr[p] = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+            vl.c_mean[p] = 0.5 * (a.c + b.c);
+            vl.rho_mean[p] = 0.5 * (a.rho + b.rho);
             *acts = false;
             if let (Some(an), true) = (art, a.tension || b.tension) {
                 let dp = 0.5 * (a.dp + b.dp);
@@ -394,62 +431,29 @@ fn force_pairs(
                     kern = at(h, dp);
                 }
                 if kern.1 > 0.0 {
-                    out[1] = powi(kern.0.w(pg.r) * kern.1, an.n);
+                    *out = powi(kern.0.w(pg.r) * kern.1, an.n);
                     *acts = true;
                 }
             }
         }
+        vl.viscosity(c.viscosity, chunk.len(), &mut visc);
         // then the chunk's terms, each pair apart (no sum in between: pairs overlap) ...
-        let pair_factors = geom.iter().zip(&visc).zip(&acts);
-        for (((pg, &[pi, fn_ab]), &acts), out) in pair_factors.zip(terms.iter_mut()) {
+        let pair_factors = geom.iter().zip(visc.iter().zip(&fns)).zip(&acts);
+        for (((pg, (&pi, &fn_ab)), &acts), out) in pair_factors.zip(terms.iter_mut()) {
             if pg.r == 0.0 {
                 continue;
             }
             let (a, b) = (&slots[pg.i as usize], &slots[pg.j as usize]);
-            let d: [f64; 3] = std::array::from_fn(|l| a.x[l] - b.x[l]);
-            let gr = pg.gr;
-            let g = [gr * d[0], gr * d[1], gr * d[2]];
-            let dv: [f64; 3] = std::array::from_fn(|l| a.vhat[l] - b.vhat[l]);
-            let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
-            // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where
-            // either particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n;
-            // none where delta_p is beyond the support, 1/W(delta_p) = 0)
-            // (a solid end's sigma B / rho times the other end's 1 / rho: V_a V_b / (m_a m_b))
-            let (ka, kb) = (a.partner_scale(b), b.partner_scale(a));
-            let mut tg = mat_vec_sum(&a.sr, ka, &b.sr, kb, g);
-            // the quadratic fit's part of the pair weights (surface particles,
-            // `super::quadratic`): (Q_ab - Q_ba) |gr| q(d), q even in d
-            if a.quad || b.quad {
-                let qd = quad_basis(&d);
-                for (l, t) in tg.iter_mut().enumerate() {
-                    let mut x = 0.0;
-                    for (m, &qm) in qd.iter().enumerate() {
-                        x += (a.q[6 * l + m] * ka - b.q[6 * l + m] * kb) * qm;
-                    }
-                    *t += -gr * x;
-                }
+            let (t, de) = pair_terms(a, b, pg.gr, pi, acts.then_some(fn_ab), &mut work);
+            // the largest terms, lane by lane: force x, y, z (|-t| = |t|) and the lane past
+            // them, which is +-0 or NaN (`pair_terms`) and so never raises a maximum (a NaN
+            // is passed over, as `note` does); the energy rates
+            for (mx, x) in noted.iter_mut().zip(t.iter().chain(&de)) {
+                let x = x.abs();
+                *mx = if x > *mx { x } else { *mx };
             }
-            if acts {
-                let rg = mat_vec_sum(&a.rt, 1.0, &b.rt, 1.0, g);
-                for l in 0..3 {
-                    tg[l] += fn_ab * rg[l];
-                }
-            }
-            let mm = a.m * b.m;
-            // the viscous part -Pi I g, kept apart for the work split
-            let full: [f64; 3] = std::array::from_fn(|l| tg[l] - pi * g[l]);
-            let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
-            let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
-            work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
-            work.viscosity += mm * pi * gr * vr;
-            let t: [f64; 3] = std::array::from_fn(|l| mm * full[l]);
-            for &tc in &t {
-                note(&mut mf, tc);
-            }
-            note(&mut me, de_i);
-            note(&mut me, de_j);
             // equal and opposite forces: b's terms are the negated ones, each split on its own
-            *out = [[t[0], t[1], t[2], de_i], [-t[0], -t[1], -t[2], de_j]];
+            *out = [[t[0], t[1], t[2], de[0]], [-t[0], -t[1], -t[2], de[1]]];
         }
         // ... and last their exact sums, in the order of the pairs
         for (pg, out) in geom.iter().zip(&terms) {
@@ -463,9 +467,70 @@ fn force_pairs(
             add4(&mut sums[j].fold, out[1], shifts);
         }
     }
-    m[q::FORCE] = mf;
-    m[q::ENERGY] = me;
+    for (l, &x) in noted.iter().enumerate() {
+        note(&mut m[if l < 4 { q::FORCE } else { q::ENERGY }], x);
+    }
     work
+}
+
+/// The terms of one pair (a, b) with r > 0, `gr` = dW/dr / r, Pi `pi` and f_ab^n where the
+/// artificial stress acts: a's force (b's is its negation), and a's and b's energy rates; the
+/// pair's work rate added to `work`. The 3-vectors are 4 lanes (rows x, y, z and one past
+/// them), so that each of their operations is one in vector registers: every lane's the
+/// scalar form's, in its order. The lane past them starts from the slots' zeros (positions,
+/// matrix columns): every operation on it is a product with such a zero, or a sum or
+/// difference of those, so it is +-0 or NaN (a factor infinite or NaN) in the force too. The
+/// caller notes it with the force (that it is used keeps the vectors four lanes wide).
+#[inline(always)]
+fn pair_terms(
+    a: &Slot,
+    b: &Slot,
+    gr: f64,
+    pi: f64,
+    fn_ab: Option<f64>,
+    work: &mut PairWork,
+) -> (V4, [f64; 2]) {
+    let d: V4 = v4(|l| a.x[l] - b.x[l]);
+    let g: V4 = v4(|l| gr * d[l]);
+    let dv: V4 = v4(|l| a.vhat[l] - b.vhat[l]);
+    let vr = dv[0] * d[0] + dv[1] * d[1] + dv[2] * d[2];
+    // T g without the viscous part: (S_a + S_b) g, plus (R_a + R_b) f_ab^n g where
+    // either particle has a tensile principal stress (f_ab^n = (W(r)/W(delta_p))^n;
+    // none where delta_p is beyond the support, 1/W(delta_p) = 0)
+    // (a solid end's sigma B / rho times the other end's 1 / rho: V_a V_b / (m_a m_b))
+    let (ka, kb) = (a.partner_scale(b), b.partner_scale(a));
+    let mut tg = mat_vec_sum(&a.sr, ka, &b.sr, kb, &g);
+    // the quadratic fit's part of the pair weights (surface particles,
+    // `super::quadratic`): (Q_ab - Q_ba) |gr| q(d), q even in d
+    if a.quad || b.quad {
+        let qd = quad_basis(&[d[0], d[1], d[2]]);
+        let mut x = [0.0; 4];
+        for (m, &qm) in qd.iter().enumerate() {
+            x = v4(|l| x[l] + (a.q[m][l] * ka - b.q[m][l] * kb) * qm);
+        }
+        tg = v4(|l| tg[l] + -gr * x[l]);
+    }
+    if let Some(fn_ab) = fn_ab {
+        let rg = mat_vec_sum(&a.rt, 1.0, &b.rt, 1.0, &g);
+        tg = v4(|l| tg[l] + fn_ab * rg[l]);
+    }
+    let mm = a.m * b.m;
+    // the viscous part -Pi I g, kept apart for the work split
+    let full: V4 = v4(|l| tg[l] - pi * g[l]);
+    let e = dv[0] * full[0] + dv[1] * full[1] + dv[2] * full[2];
+    let (de_i, de_j) = (-0.5 * b.m * e, -0.5 * a.m * e);
+    work.pressure -= mm * (dv[0] * tg[0] + dv[1] * tg[1] + dv[2] * tg[2]);
+    work.viscosity += mm * pi * gr * vr;
+    (v4(|l| mm * full[l]), [de_i, de_j])
+}
+
+/// A 3-vector in four lanes (the last unused), or a column of a 3 x 3 matrix.
+type V4 = [f64; 4];
+
+/// The lanes `f(0..4)`.
+#[inline(always)]
+fn v4(f: impl Fn(usize) -> f64) -> V4 {
+    std::array::from_fn(f)
 }
 
 /// x^n by binary powering, the operations of `f64::powi`'s runtime routine (compiler-builtins'
@@ -497,35 +562,39 @@ fn powi(x: f64, n: i32) -> f64 {
     }
 }
 
-/// (ka A + kb B) g for two matrices stored row by row, summed entry by entry first (a factor
-/// 1 leaves its matrix's bits).
+/// (ka A + kb B) g for two matrices stored column by column (`a[c][r]`, lane 3 unused), summed
+/// entry by entry first (a factor 1 leaves its matrix's bits): row r is
+/// (t_0r g_0 + t_1r g_1) + t_2r g_2, t_cr = a_cr ka + b_cr kb, the rows lane by lane.
 #[inline(always)]
-fn mat_vec_sum(a: &[f64; 9], ka: f64, b: &[f64; 9], kb: f64, g: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|r| {
-        let t = |c: usize| a[3 * r + c] * ka + b[3 * r + c] * kb;
-        t(0) * g[0] + t(1) * g[1] + t(2) * g[2]
-    })
+fn mat_vec_sum(a: &[V4; 3], ka: f64, b: &[V4; 3], kb: f64, g: &V4) -> V4 {
+    let t = |c: usize| v4(|r| a[c][r] * ka + b[c][r] * kb);
+    let (t0, t1, t2) = (t(0), t(1), t(2));
+    v4(|r| t0[r] * g[0] + t1[r] * g[1] + t2[r] * g[2])
 }
 
 /// What the force pass reads of one entry, packed: position, h, predicted velocity, mass,
-/// density, sound speed, its stress term (row by row: a solid's sigma B / rho, a fluid's
-/// sigma / rho^2) and the artificial stress R (row by row), and whether R is not zero.
+/// density and its reciprocal, sound speed, its stress term (a solid's sigma B / rho, a
+/// fluid's sigma / rho^2) and the artificial stress R, both column by column in four lanes
+/// (`sr[c][r]`: row r of column c, lane 3 zero), and whether R is not zero.
 struct Slot {
-    x: [f64; 3],
+    x: V4,
+    vhat: V4,
     h: f64,
-    vhat: [f64; 3],
     m: f64,
     rho: f64,
+    /// 1 / rho.
+    inv_rho: f64,
     c: f64,
     /// The initial spacing (m / rho0)^(1/3), m (the artificial stress's delta).
     dp: f64,
-    sr: [f64; 9],
-    rt: [f64; 9],
+    sr: [V4; 3],
+    rt: [V4; 3],
     tension: bool,
     /// Whether the entry is a solid (its terms are divided by the partner's density).
     solid: bool,
-    /// sigma C_quad / rho (3 x 6, `q[6 k + m]`; zero off the surface and for fluids).
-    q: [f64; 18],
+    /// sigma C_quad / rho (3 x 6, `q[m][k]` row k, column m, lane 3 zero; zero off the
+    /// surface and for fluids).
+    q: [V4; 6],
     /// Whether `q` is not zero.
     quad: bool,
 }
@@ -550,22 +619,25 @@ impl Slot {
             1.0 / (p.rho[i] * p.rho[i])
         };
         let sb = mul(&t, &s.correction[i]);
+        let cq = &s.quad[i];
+        let lanes = |f: &dyn Fn(usize) -> f64| v4(|k| if k < 3 { f(k) } else { 0.0 });
         Slot {
-            x: p.x[i],
+            x: lanes(&|k| p.x[i][k]),
+            vhat: lanes(&|k| p.vhat[i][k]),
             h: p.h[i],
-            vhat: p.vhat[i],
             m: p.m[i],
             rho: p.rho[i],
+            inv_rho,
             c: p.c[i],
             dp: libm::cbrt(p.m[i] / rho0),
-            sr: std::array::from_fn(|e| sb[e / 3][e % 3] * inv_rho2),
-            rt: std::array::from_fn(|e| rt[e / 3][e % 3]),
+            sr: std::array::from_fn(|c| lanes(&|r| sb[r][c] * inv_rho2)),
+            rt: std::array::from_fn(|c| lanes(&|r| rt[r][c])),
             tension: rt.iter().flatten().any(|&x| x != 0.0),
             solid,
-            q: std::array::from_fn(|e| {
-                let (k, m) = (e / 6, e % 6);
-                let cq = &s.quad[i];
-                (t[k][0] * cq[m] + t[k][1] * cq[6 + m] + t[k][2] * cq[12 + m]) * inv_rho2
+            q: std::array::from_fn(|m| {
+                lanes(&|k| {
+                    (t[k][0] * cq[m] + t[k][1] * cq[6 + m] + t[k][2] * cq[12 + m]) * inv_rho2
+                })
             }),
             quad: s.quad[i].iter().any(|&x| x != 0.0),
         }
@@ -576,7 +648,7 @@ impl Slot {
     #[inline(always)]
     fn partner_scale(&self, other: &Slot) -> f64 {
         if self.solid {
-            1.0 / other.rho
+            other.inv_rho
         } else {
             1.0
         }

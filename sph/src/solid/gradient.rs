@@ -275,7 +275,11 @@ fn gradient_pairs(
     shifts: &[[f64; LANES]; 2],
     m: &mut TermMax,
 ) {
-    let (mut mg, mut ms, mut md) = (m[gq::GRAD], m[gq::SHAPE], m[gq::DENSITY]);
+    // the largest sizes of the terms, lane by lane: velocity gradient, shape, density rate and
+    // an unused lane, of the pair's first entry and of its second
+    let mut noted = [0.0f64; 8];
+    // the volume of the partner `other` in the terms of `me` (0 where `me` is a fluid)
+    let vol = |me: &Slot, other: &Slot| if me.solid { other.vol } else { 0.0 };
     // h is mostly the same for every pair: the kernel's factors are remade when it changes
     let mut kern = k.at(f64::NAN);
     geom.clear();
@@ -334,28 +338,39 @@ fn gradient_pairs(
                 (bv, bx) = ((gr * r * dv_max).abs(), (gr * r * r).abs());
             }
             let terms = |me: &Slot, other: &Slot| -> [f64; LANES] {
-                let vol = if me.solid { other.vol } else { 0.0 };
+                let vol = vol(me, other);
                 let mut y: [f64; LANES] = std::array::from_fn(|l| vol * x[l]);
                 y[DENS] = other.m * t_rho;
                 y
             };
             let (yi, yj) = (terms(a, b), terms(b, a));
-            let [si, sj] = sums
-                .get_disjoint_mut([i, j])
-                .expect("a pair of two entries");
-            si.add(&yi, shifts);
-            sj.add(&yj, shifts);
-            for (me, other, y) in [(a, b, &yi), (b, a, &yj)] {
-                let vol = if me.solid { other.vol } else { 0.0 };
-                note(&mut mg, vol * bv);
-                note(&mut ms, vol * bx);
-                note(&mut md, y[DENS]);
+            sums[i].add(&yi, shifts);
+            sums[j].add(&yj, shifts);
+            // the sizes of the entries' terms, lane by lane (velocity gradient, shape, density
+            // rate of i, then of j), into their largest (the maxima `note` would give: a
+            // maximum does not depend on the order, and a NaN is passed over)
+            let (vi, vj) = (vol(a, b), vol(b, a));
+            let sizes = [
+                vi * bv,
+                vi * bx,
+                yi[DENS],
+                0.0,
+                vj * bv,
+                vj * bx,
+                yj[DENS],
+                0.0,
+            ];
+            for (mx, x) in noted.iter_mut().zip(sizes) {
+                let x = x.abs();
+                *mx = if x > *mx { x } else { *mx };
             }
         }
     }
-    m[gq::GRAD] = mg;
-    m[gq::SHAPE] = ms;
-    m[gq::DENSITY] = md;
+    for end in noted.chunks(4) {
+        note(&mut m[gq::GRAD], end[0]);
+        note(&mut m[gq::SHAPE], end[1]);
+        note(&mut m[gq::DENSITY], end[2]);
+    }
 }
 
 /// Sets the density rate `drho` of every owned entry and the corrected velocity gradient of
