@@ -25,6 +25,13 @@ fn elastic_wave_and_elastic_plastic_impact_pass_at_np1_and_np3() {
     passes_at_np1_and_np3("bar_wave,plastic_impact_1d");
 }
 
+/// The ball through the plate against OpenRadioss on the same mesh (the scene's, NP = 32):
+/// the velocity drop and the failed elements within the case's 10 %.
+#[test]
+fn ball_perforation_against_openradioss_passes_at_np1_and_np3() {
+    passes_at_np1_and_np3("ball_perforation");
+}
+
 #[test]
 fn sod_and_the_liggghts_crosscheck_pass_at_np1_and_np3() {
     passes_at_np1_and_np3("sod,liggghts_random");
