@@ -56,7 +56,7 @@
 //! P the constraint projection, F = ||f||_2 + ||M (a(n+1) - g)||_2 now and F_max the largest F
 //! of the run; rtol = [`NEWTON_RTOL`] (`-tdyn_newton_rtol`), at most [`NEWTON_MAX_IT`] iterations
 //! (`-tdyn_newton_max_it`); or the residual within the round-off of the increment's own terms
-//! ([`ROUNDOFF_FLOOR`]: a body moving nearly rigidly under a small load).
+//! (`ROUNDOFF_FLOOR`, 64: a body moving nearly rigidly under a small load).
 //!
 //! **Constraints** act as projections: at node I, P_I = 0 for `fixed` and `velocity` (du is
 //! prescribed: 0 or dt v), P_I = I - sum n n^T for symmetry planes. Element blocks enter as
