@@ -86,7 +86,7 @@ fn gradients(pr: &[(u32, u32)], p: &mut Particles, s: &mut Solids, params: &Para
 fn forces(
     pr: &[(u32, u32)],
     p: &mut Particles,
-    s: &Solids,
+    s: &mut Solids,
     params: &Params,
     art: &ArtificialStress,
 ) -> sph::PairWork {
@@ -180,7 +180,7 @@ fn stress_force_pass_conserves_momentum_and_energy() {
     // the kernel-gradient correction B of each particle (not the identity on a jittered block)
     gradients(&pr, &mut p, &mut s, &params);
     let art = ArtificialStress::new();
-    let work = forces(&pr, &mut p, &s, &params, &art);
+    let work = forces(&pr, &mut p, &mut s, &params, &art);
     let (mut fsum, mut fabs, mut ke_rate, mut ie_rate, mut scale) = ([0.0; 3], 0.0, 0.0, 0.0, 0.0);
     for i in 0..p.n_owned {
         for (c, sum) in fsum.iter_mut().enumerate() {
@@ -232,7 +232,7 @@ fn solid_sums_do_not_depend_on_the_order_of_the_pairs() {
             *st = [0; 6].map(|_| rng.range(-1.0e5, 1.0e5));
         }
         gradients(list, p, &mut s, &params);
-        forces(list, p, &s, &params, &art);
+        forces(list, p, &mut s, &params, &art);
         let out = (
             s.grad_v.clone(),
             s.correction.clone(),
@@ -274,7 +274,7 @@ fn every_build_of_the_solid_passes_gives_the_same_bits() {
             *st = [0; 6].map(|_| rng.range(-1.0e5, 1.0e5));
         }
         gradients(&pr, p, &mut s, &params);
-        let work = forces(&pr, p, &s, &params, &art);
+        let work = forces(&pr, p, &mut s, &params, &art);
         (
             s.grad_v.clone(),
             s.correction.clone(),
@@ -422,7 +422,7 @@ fn the_forces_are_the_transpose_of_the_fitted_gradient() {
     exact_pass(
         &mut g,
         |m| *m,
-        |g, m| stress_force_pass(&pr, &mut p, &s, &params, None, g, m),
+        |g, m| stress_force_pass(&pr, &mut p, &mut s, &params, None, g, m),
     );
     let (mut force_power, mut stress_power, mut scale) = (0.0, 0.0, 0.0);
     for i in 0..p.n_owned {

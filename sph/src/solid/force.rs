@@ -93,7 +93,21 @@ impl ArtificialStress {
         of: impl Fn(usize) -> ([f64; 6], f64),
         build: Build,
     ) -> Vec<Mat3> {
-        let mut out = vec![[[0.0; 3]; 3]; n];
+        let mut out = Vec::new();
+        self.tensors_into(n, of, build, &mut out);
+        out
+    }
+
+    /// [`ArtificialStress::tensors`] into `out` (its memory reused).
+    pub fn tensors_into(
+        &self,
+        n: usize,
+        of: impl Fn(usize) -> ([f64; 6], f64),
+        build: Build,
+        out: &mut Vec<Mat3>,
+    ) {
+        out.clear();
+        out.resize(n, [[0.0; 3]; 3]);
         let mut batch: Vec<(usize, Mat3, f64)> = Vec::with_capacity(EIGEN_LANES);
         let flush = |batch: &mut Vec<(usize, Mat3, f64)>, out: &mut [Mat3]| {
             // lanes past the batch's entries hold zero matrices (converged at once)
@@ -119,14 +133,13 @@ impl ArtificialStress {
             if may_have_tension(&a) {
                 batch.push((i, a, rho));
                 if batch.len() == EIGEN_LANES {
-                    flush(&mut batch, &mut out);
+                    flush(&mut batch, out);
                 }
             }
         }
         if !batch.is_empty() {
-            flush(&mut batch, &mut out);
+            flush(&mut batch, out);
         }
-        out
     }
 }
 
@@ -289,7 +302,7 @@ impl ViscLanes {
 pub fn stress_force_pass(
     pairs: &[(u32, u32)],
     p: &mut Particles,
-    s: &Solids,
+    s: &mut Solids,
     params: &Params,
     art: Option<&ArtificialStress>,
     grids: &PassGrids,
@@ -297,20 +310,40 @@ pub fn stress_force_pass(
 ) -> PairWork {
     let n = p.len();
     let k = params.smoothing_kernel();
-    let geom = &s.pair_geom[..];
     assert_eq!(
-        geom.len(),
+        s.pair_geom.len(),
         pairs.len(),
         "the force pass runs over the pairs of the last gradient pass"
     );
-    let rts = match art {
-        Some(a) => a.tensors(n, |i| (to_voigt(&stress_of(p, s, i)), p.rho[i]), s.build),
-        None => vec![[[0.0; 3]; 3]; n],
-    };
-    let slots: Vec<Slot> = (0..n).map(|i| Slot::of(p, s, params, &rts[i], i)).collect();
+    // the buffers of the last evaluation, refilled (put back at the end)
+    let mut b = std::mem::take(&mut s.buffers);
+    let geom = &s.pair_geom[..];
+    let rts = &mut b.art;
+    match art {
+        Some(a) => a.tensors_into(
+            n,
+            |i| (to_voigt(&stress_of(p, s, i)), p.rho[i]),
+            s.build,
+            rts,
+        ),
+        None => {
+            rts.clear();
+            rts.resize(n, [[0.0; 3]; 3]);
+        }
+    }
+    let slots = &mut b.force_slots;
+    slots.clear();
+    // (m / rho0)^(1/3) is mostly the same from entry to entry (one mass, one material): the
+    // cube root is taken again only where its argument's bits change
+    let mut dp = (f64::NAN, f64::NAN);
+    slots.extend((0..n).map(|i| Slot::of(p, s, params, &rts[i], i, &mut dp)));
     // force x, y, z and energy rate of each entry, fold by fold, and its partners
-    let mut sums = vec![Sums4::default(); n];
-    let mut partners = vec![0u32; n];
+    let sums = &mut b.force_sums;
+    sums.clear();
+    sums.resize(n, Sums4::default());
+    let partners = &mut b.partners;
+    partners.clear();
+    partners.resize(n, 0);
     let shifts = lane_shifts(grids);
     let consts = PassConsts {
         kernel: k,
@@ -318,24 +351,16 @@ pub fn stress_force_pass(
         art: art.copied(),
         shifts,
     };
-    let work = force_pairs_built(
-        s.build,
-        pairs,
-        geom,
-        &slots,
-        &mut sums,
-        &mut partners,
-        &consts,
-        m,
-    );
+    let work = force_pairs_built(s.build, pairs, geom, slots, sums, partners, &consts, m);
     p.sums.resize(n, PairSums::default());
-    for ((e, su), &np) in p.sums.iter_mut().zip(&sums).zip(&partners) {
+    for ((e, su), &np) in p.sums.iter_mut().zip(&*sums).zip(&*partners) {
         let part = |l: usize| [su.fold[0][l], su.fold[1][l]];
         e.f = [part(0), part(1), part(2)];
         e.de = part(3);
         e.partners = np as f64;
     }
     p.settle_forces();
+    s.buffers = b;
     work
 }
 
@@ -576,7 +601,7 @@ fn mat_vec_sum(a: &[V4; 3], ka: f64, b: &[V4; 3], kb: f64, g: &V4) -> V4 {
 /// density and its reciprocal, sound speed, its stress term (a solid's sigma B / rho, a
 /// fluid's sigma / rho^2) and the artificial stress R, both column by column in four lanes
 /// (`sr[c][r]`: row r of column c, lane 3 zero), and whether R is not zero.
-struct Slot {
+pub(super) struct Slot {
     x: V4,
     vhat: V4,
     h: f64,
@@ -601,8 +626,15 @@ struct Slot {
 
 impl Slot {
     /// Entry `i`: sigma_a B_a / rho_a for a solid, -p_a / rho_a^2 I for a fluid, and R_a
-    /// (`rt`).
-    fn of(p: &Particles, s: &Solids, params: &Params, rt: &Mat3, i: usize) -> Slot {
+    /// (`rt`). `dp`: the last (m / rho0, its cube root), updated where m / rho0 differs.
+    fn of(
+        p: &Particles,
+        s: &Solids,
+        params: &Params,
+        rt: &Mat3,
+        i: usize,
+        dp: &mut (f64, f64),
+    ) -> Slot {
         let t = stress_of(p, s, i);
         let solid = s.is_solid(p.mat[i]);
         let mat = p.mat[i] as usize;
@@ -611,6 +643,10 @@ impl Slot {
             _ => params.eos.get(mat).and_then(|e| e.reference_density()),
         }
         .unwrap_or(p.rho[i]);
+        let vol0 = p.m[i] / rho0;
+        if vol0.to_bits() != dp.0.to_bits() {
+            *dp = (vol0, libm::cbrt(vol0));
+        }
         let inv_rho = 1.0 / p.rho[i];
         // (a fluid's 1/rho^2 as it always was: the fluid pass's bits)
         let inv_rho2 = if solid {
@@ -629,7 +665,7 @@ impl Slot {
             rho: p.rho[i],
             inv_rho,
             c: p.c[i],
-            dp: libm::cbrt(p.m[i] / rho0),
+            dp: dp.1,
             sr: std::array::from_fn(|c| lanes(&|r| sb[r][c] * inv_rho2)),
             rt: std::array::from_fn(|c| lanes(&|r| rt[r][c])),
             tension: rt.iter().flatten().any(|&x| x != 0.0),

@@ -185,7 +185,7 @@ fn lane_shifts(g: &PassGrids) -> [[f64; LANES]; 2] {
 
 /// What the gradient pass reads of one entry, packed: position, h, velocity, predicted
 /// velocity, mass, volume m/rho, and whether it is a solid.
-struct Slot {
+pub(super) struct Slot {
     x: [f64; 3],
     h: f64,
     v: [f64; 3],
@@ -229,21 +229,22 @@ pub fn velocity_gradient_pass(
 ) {
     s.resize(p.len());
     s.sums.iter_mut().for_each(|e| *e = GradSums::default());
-    let slots: Vec<Slot> = (0..p.len())
-        .map(|i| Slot {
-            x: p.x[i],
-            h: p.h[i],
-            v: p.v[i],
-            vhat: p.vhat[i],
-            m: p.m[i],
-            vol: p.m[i] / p.rho[i],
-            solid: s.is_solid(p.mat[i]),
-        })
-        .collect();
+    let mut slots = std::mem::take(&mut s.buffers.grad_slots);
+    slots.clear();
+    slots.extend((0..p.len()).map(|i| Slot {
+        x: p.x[i],
+        h: p.h[i],
+        v: p.v[i],
+        vhat: p.vhat[i],
+        m: p.m[i],
+        vol: p.m[i] / p.rho[i],
+        solid: s.is_solid(p.mat[i]),
+    }));
     let shifts = lane_shifts(g);
     let (sums, geom) = (&mut s.sums[..], &mut s.pair_geom);
     let build = s.build;
     gradient_pairs_built(build, pairs, &slots, sums, geom, k, &shifts, m);
+    s.buffers.grad_slots = slots;
 }
 
 super::build::builds!(

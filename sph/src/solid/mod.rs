@@ -151,6 +151,35 @@ pub struct Solids {
     /// correction alone; 1: the fit whole; [`quadratic::surface_blend`] times
     /// [`quadratic::amplification_blend`]), as of the last evaluation (not carried).
     pub quad_share: Vec<f64>,
+    /// The pair passes' per-entry work space, kept from evaluation to evaluation (not state).
+    buffers: PassBuffers,
+}
+
+/// What the pair passes gather of every entry and the force pass's sums, rebuilt by every
+/// pass: kept between evaluations so that each step reuses the memory rather than allocating
+/// and faulting in a few hundred bytes per entry again. No content outlives its pass, so a
+/// clone starts empty.
+#[derive(Default)]
+struct PassBuffers {
+    grad_slots: Vec<gradient::Slot>,
+    quad_slots: Vec<quadratic::QSlot>,
+    force_slots: Vec<force::Slot>,
+    /// The artificial stress R of every entry.
+    art: Vec<Mat3>,
+    force_sums: Vec<crate::passes::Sums>,
+    partners: Vec<u32>,
+}
+
+impl Clone for PassBuffers {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for PassBuffers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PassBuffers")
+    }
 }
 
 impl Solids {
@@ -265,10 +294,12 @@ impl Solids {
     /// ([`Solids::push_owned`]), in the order of the particles'.
     pub fn clear(&mut self) {
         let (models, stride, build) = (std::mem::take(&mut self.models), self.stride, self.build);
+        let buffers = std::mem::take(&mut self.buffers);
         *self = Self {
             models,
             stride,
             build,
+            buffers,
             ..Self::default()
         };
     }

@@ -415,7 +415,7 @@ fn products(d: &[f64; 3], dv: &[f64; 3]) -> [f64; QLANES] {
 
 /// What the quadratic pass reads of one entry: position, velocity, volume, its slot.
 #[derive(Clone, Copy)]
-struct QSlot {
+pub(super) struct QSlot {
     x: [f64; 3],
     v: [f64; 3],
     vol: f64,
@@ -445,22 +445,24 @@ pub fn quadratic_pass(p: &Particles, s: &mut Solids, g: &PassGrids, m: &mut Term
     if k == 0 {
         return;
     }
-    let slots: Vec<QSlot> = (0..n)
-        .map(|i| QSlot {
-            x: p.x[i],
-            v: p.v[i],
-            vol: p.m[i] / p.rho[i],
-            slot: s.quad_slot[i],
-        })
-        .collect();
-    let shifts = lane_shifts(g);
     let Solids {
         pair_geom,
         quad_sums,
+        quad_slot,
         build,
+        buffers,
         ..
     } = s;
-    quad_pairs_built(*build, pair_geom, &slots, quad_sums, &shifts, m);
+    let slots = &mut buffers.quad_slots;
+    slots.clear();
+    slots.extend((0..n).map(|i| QSlot {
+        x: p.x[i],
+        v: p.v[i],
+        vol: p.m[i] / p.rho[i],
+        slot: quad_slot[i],
+    }));
+    let shifts = lane_shifts(g);
+    quad_pairs_built(*build, pair_geom, slots, quad_sums, &shifts, m);
 }
 
 super::build::builds!(

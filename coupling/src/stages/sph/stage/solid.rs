@@ -182,13 +182,13 @@ impl SphStage {
             None => solid_pressure(&mut self.parts, &sp.solids),
         }
         self.solid_to_ghosts();
-        let sp = self.solid.take().expect("solids");
+        let mut sp = self.solid.take().expect("solids");
         let art = sp.art;
         self.work = self.exact(|st, g, m| {
             stress_force_pass(
                 &list,
                 &mut st.parts,
-                &sp.solids,
+                &mut sp.solids,
                 &st.params,
                 art.as_ref(),
                 g,
