@@ -178,7 +178,7 @@ fn tdyn_validate_refuses_nothing_to_run_and_keeps_the_last_report() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         o.status.code() == Some(1)
-            && err.starts_with("tdyn validate: error: --cases cantilever_tets: none of them runs with --fast (cases with --fast: bar_wave,")
+            && err.starts_with("tdyn validate: error: --cases cantilever_tets: none of them runs with --fast (cases with --fast: ball_perforation, bar_wave,")
             && err.lines().count() == 1,
         "{err}"
     );
