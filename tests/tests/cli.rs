@@ -188,7 +188,7 @@ fn tdyn_validate_refuses_nothing_to_run_and_keeps_the_last_report() {
         o.status.code() == Some(1)
             && err.contains("no case \"nosuch\"")
             && err.contains("cantilever_tets")
-            && err.contains("with --fast: bar_wave"),
+            && err.contains("with --fast: ball_perforation, bar_wave"),
         "{err}"
     );
     assert_eq!(
