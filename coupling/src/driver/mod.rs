@@ -17,6 +17,7 @@ use std::time::Instant;
 
 pub mod checkpoint;
 pub mod energy;
+pub mod impact;
 mod options;
 pub mod outdir;
 pub mod outputs;
@@ -377,7 +378,7 @@ fn time_loop(
     let mut progress = progress::Progress::start(
         world.rank() == 0 && !opts.quiet,
         world.rank() == 0,
-        &start_info(world, scene, model, stable0, clock.dt),
+        &start_info(world, scene, model, stable0, (clock.time, clock.dt)),
     );
     if let Some(c) = model.contact.as_mut() {
         c.energy_scale = check.scale_now();
@@ -564,7 +565,7 @@ fn start_info<'a>(
     scene: &'a Scene,
     model: &Model,
     stable0: f64,
-    dt: f64,
+    (time, dt): (f64, f64),
 ) -> progress::StartInfo<'a> {
     // (the stages in report.json's `stages_run` order: the rigid walls' pass included)
     let mut stages: Vec<&'static str> = model.stages().iter().map(|s| s.name()).collect();
@@ -586,6 +587,8 @@ fn start_info<'a>(
         dt,
         end_time: scene.run.end_time,
         fixed_dt: scene.run.dt.is_some(),
+        // (a restart's steps start part way: its count stays the current step's)
+        impact: model.impact.clone().filter(|_| time == 0.0),
         mesh_split: model.mesh_split.map(|s| s.describe()).or_else(|| {
             // Native tetrahedra: say so, as the split says what it did.
             let tets = mesh.map_or(0, |l| l.global_tets);

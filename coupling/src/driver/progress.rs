@@ -37,6 +37,9 @@ pub struct StartInfo<'a> {
     pub dt: f64,
     /// The end time, s.
     pub end_time: f64,
+    /// A plastic impact that will shrink the step (a fresh explicit run's): the count follows
+    /// it ([`super::impact`]).
+    pub impact: Option<super::impact::Impact>,
     /// Whether the step is fixed (`run.dt`, implicit mode): the count is then the run's.
     pub fixed_dt: bool,
     /// The mesh's tetrahedra and prisms run as hexahedra, in words (`SplitSummary::describe`).
@@ -71,7 +74,7 @@ impl Progress {
         }
         if active {
             eprintln!(
-                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {} steps to {:.3e} s{}",
+                "tdyn: {}: {} elements, {} nodes, {} particles on {} rank{}; stages {}; stable step {:.3e} s, dt {:.3e} s: {}",
                 info.scene,
                 info.elements,
                 info.nodes,
@@ -81,13 +84,7 @@ impl Progress {
                 info.stages.join(", "),
                 info.dt_stable,
                 info.dt,
-                steps_text(steps),
-                info.end_time,
-                if info.fixed_dt {
-                    ""
-                } else {
-                    " at this step (the step shrinks as bodies deform; the progress lines update the count)"
-                }
+                count_text(info, steps),
             );
         }
         if warn && steps > STEPS_WARNING {
@@ -162,6 +159,32 @@ impl Progress {
 }
 
 /// A step count for people: "1200", "3.4e7".
+/// The start line's count: the steps at the first step, or where a plastic impact will shrink
+/// the step the estimate that follows it.
+fn count_text(info: &StartInfo, steps: f64) -> String {
+    let end = info.end_time;
+    match (&info.impact, info.fixed_dt) {
+        (_, true) => format!("{} steps to {end:.3e} s", steps_text(steps)),
+        (None, false) => format!(
+            "{} steps to {end:.3e} s at this step (the step shrinks as bodies deform; the progress lines update the count)",
+            steps_text(steps)
+        ),
+        (Some(i), false) => format!(
+            "about {} steps to {end:.3e} s ({} at this step: the step falls about {:.1}-fold as \"{}\" crushes against the {} at {} m/s; the progress lines update the count)",
+            steps_text(i.steps(info.dt, end)),
+            steps_text(steps),
+            i.shrink,
+            i.body,
+            i.against,
+            if i.speed >= 10.0 {
+                format!("{:.0}", i.speed)
+            } else {
+                format!("{:.3}", i.speed)
+            }
+        ),
+    }
+}
+
 fn steps_text(steps: f64) -> String {
     if !steps.is_finite() {
         "infinitely many".into()

@@ -37,6 +37,9 @@ pub struct Model {
     pub erosion_masses: Option<[f64; 2]>,
     /// Where failed elements become particles, the FE -> SPH transfer's state.
     pub releases: Option<crate::transfer::fe_sph::Releases>,
+    /// The plastic impact the start line's step estimate follows (explicit runs;
+    /// [`super::impact`]).
+    pub impact: Option<super::impact::Impact>,
 }
 
 impl Model {
@@ -292,6 +295,10 @@ pub fn build(
         }
         _ => None,
     };
+    let impact = match (&fe, scene.run.mode, scene.run.dt) {
+        (Some(fe), Mode::Explicit, None) => super::impact::find(world, scene, fe, &groups),
+        _ => None,
+    };
     let walls = Walls::new(&scene.rigid_walls);
     if let (None, None, Some(fe)) = (&contact, &walls, &mut fe) {
         // Only the contact stage and the walls' push-back read the start-of-step forces after
@@ -309,6 +316,7 @@ pub fn build(
         releases: scene
             .releases_any()
             .then(|| crate::transfer::fe_sph::Releases::new(scene)),
+        impact,
     };
     if let Some(w) = &model.walls {
         w.check_start(world, model.fe.as_ref(), model.sph.as_ref(), &file)?;
