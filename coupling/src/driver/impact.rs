@@ -90,6 +90,13 @@ pub struct Impact {
 }
 
 impl Impact {
+    /// The first step over the step at time `t` (s) the model expects: 1 before `start`,
+    /// 1 + (k - 1)(3 x^2 - 2 x^3) during the crush, k after.
+    pub fn rate(&self, t: f64) -> f64 {
+        let x = ((t - self.start) / self.duration).clamp(0.0, 1.0);
+        1.0 + (self.shrink - 1.0) * x * x * (3.0 - 2.0 * x)
+    }
+
     /// The steps from t = 0 to `end` (s) at a first step `dt0` (s): the integral of 1/dt with
     /// 1/dt = 1/dt0 before `start`, growing to k/dt0 along a smoothstep over `duration`, k/dt0
     /// after (the module's N).

@@ -49,6 +49,9 @@ pub struct StartInfo<'a> {
 /// The progress reporter of rank 0 (inactive elsewhere and with `--quiet`).
 pub struct Progress {
     active: bool,
+    /// The impact the start line's count followed: the progress lines' count follows its
+    /// shape from the current step on.
+    impact: Option<super::impact::Impact>,
     terminal: bool,
     t0: Instant,
     last: f64,
@@ -61,6 +64,7 @@ impl Progress {
     pub fn start(active: bool, warn: bool, info: &StartInfo) -> Progress {
         let p = Progress {
             active,
+            impact: info.impact.clone().filter(|_| !info.fixed_dt),
             terminal: std::io::stderr().is_terminal(),
             t0: Instant::now(),
             last: 0.0,
@@ -124,11 +128,17 @@ impl Progress {
             return;
         }
         self.last = el;
-        // The steps to come at the current step size, and the time they take at the mean
-        // wall time per step so far (the step shrinks as elements deform: a time fraction
-        // would promise too early an end).
+        // The steps to come at the current step size (where an impact shrinks the step, at
+        // the current step scaled by the impact's shape from now on: the integral of
+        // rate(t') / rate(t) over the time to come), and the time they take at the mean wall
+        // time per step so far (the step shrinks as elements deform: a time fraction would
+        // promise too early an end).
+        let to_come = match &self.impact {
+            Some(i) => (i.steps(1.0, end_time) - i.steps(1.0, time)) / (i.rate(time) * dt),
+            None => (end_time - time) / dt,
+        };
         // (a hair under the quotient: a fixed step's remaining count, 13.000000000000002, is 13)
-        let total = step as f64 + ((end_time - time) / dt * (1.0 - 1e-9)).max(0.0).ceil();
+        let total = step as f64 + (to_come * (1.0 - 1e-9)).max(0.0).ceil();
         let eta = if step > 0 {
             format!("{:.0} s", el * (total - step as f64) / step as f64)
         } else {
@@ -158,7 +168,6 @@ impl Progress {
     }
 }
 
-/// A step count for people: "1200", "3.4e7".
 /// The start line's count: the steps at the first step, or where a plastic impact will shrink
 /// the step the estimate that follows it.
 fn count_text(info: &StartInfo, steps: f64) -> String {
@@ -185,6 +194,7 @@ fn count_text(info: &StartInfo, steps: f64) -> String {
     }
 }
 
+/// A step count for people: "1200", "3.4e7".
 fn steps_text(steps: f64) -> String {
     if !steps.is_finite() {
         "infinitely many".into()
