@@ -94,6 +94,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         .as_ref()
         .map(|c| crate::input::curve::check(&cx.file, "gravity_curve", c))
         .transpose()?;
+    // A curve scales gravity: with none (or zero) it would scale nothing, without a word (as a
+    // wall's curve needs the wall's velocity).
+    if gravity_curve.is_some() && raw.gravity == [0.0; 3] {
+        return Err(cx.err(
+            "gravity_curve",
+            "a curve scales gravity, which is zero here: give gravity = [x, y, z] (m/s^2) too, a top-level key before the first [table], or remove gravity_curve".into(),
+        ));
+    }
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
     let loads = check_loads(&cx, &raw.load)?;
     // failed elements that become particles make the run one with solid particles
