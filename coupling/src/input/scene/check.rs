@@ -742,8 +742,17 @@ pub const LOW_SOLID_DENSITY: f64 = 50.0;
 /// softest rubbers are about 1e6 Pa): a warning, not an error.
 pub const LOW_YOUNGS_MODULUS: f64 = 1e6;
 
+/// A Johnson-Cook `t_room` below this, K, is almost always a temperature in degrees Celsius
+/// (room temperature 20 C is 293.15 K; liquid nitrogen, 77 K, stays above it): a warning.
+pub const LOW_ROOM_TEMPERATURE: f64 = 50.0;
+
+/// A `specific_heat` below this, J/(kg K), is almost always in kJ/(kg K) or J/(g K) (copper
+/// 0.385; the lowest of the metals, lead and gold, are about 130 J/(kg K)): a warning.
+pub const LOW_SPECIFIC_HEAT: f64 = 50.0;
+
 /// The scene's likely unit slips, one warning line each naming the key (docs/scene.md, "Units"):
-/// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`].
+/// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`],
+/// a `t_room` below [`LOW_ROOM_TEMPERATURE`], a `specific_heat` below [`LOW_SPECIFIC_HEAT`].
 pub fn unit_warnings(scene: &Scene) -> Vec<String> {
     let file = scene.file.display();
     let mut out = Vec::new();
@@ -758,6 +767,22 @@ pub fn unit_warnings(scene: &Scene) -> Vec<String> {
             if e < LOW_YOUNGS_MODULUS {
                 out.push(format!(
                     "{file}: material[{i}].youngs_modulus = {e:e} Pa ({:?}) is below {LOW_YOUNGS_MODULUS:e} Pa: check the units (SI: Pa; 2e5 is steel in MPa)",
+                    m.name
+                ));
+            }
+        }
+        if let Some(&t) = m.params.get("t_room") {
+            if t < LOW_ROOM_TEMPERATURE {
+                out.push(format!(
+                    "{file}: material[{i}].t_room = {t:e} K ({:?}) is below {LOW_ROOM_TEMPERATURE} K: check the units (K, not degrees Celsius: 20 C is 293.15 K; t_melt too)",
+                    m.name
+                ));
+            }
+        }
+        if let Some(&c) = m.params.get("specific_heat") {
+            if c < LOW_SPECIFIC_HEAT {
+                out.push(format!(
+                    "{file}: material[{i}].specific_heat = {c:e} J/(kg K) ({:?}) is below {LOW_SPECIFIC_HEAT} J/(kg K): check the units (SI: J/(kg K); 0.385 is copper in kJ/(kg K))",
                     m.name
                 ));
             }
