@@ -192,6 +192,15 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
         if let Some(q) = quoted_number(&msg) {
             msg = format!("expected a number, got a string (\"{q}\": write it without quotes)");
         }
+        // A top-level key written after a [table] header lands in that table (TOML's rule).
+        if let Some(k) = ["title", "gravity", "gravity_curve"]
+            .into_iter()
+            .find(|k| msg.starts_with(&format!("unknown field `{k}`")))
+        {
+            msg = format!(
+                "{msg}; {k} is a top-level key: write it before the first [table] (after a [table] header a key belongs to that table)"
+            );
+        }
         if let Some(r) = inner.span() {
             let (line, column) = line_column(text, r.start);
             msg = format!("{msg} (line {line}, column {column})");
