@@ -70,10 +70,13 @@ fn pick(t: &Table, file: &str, name: &str, kind: &str) -> Result<(String, Vec<f6
     }
     best.map(|(_, h, v)| (h, v)).ok_or_else(|| {
         let names: Vec<&str> = t.header.iter().skip(1).map(String::as_str).collect();
-        format!(
-            "{file}: no column {name} or {name}.{kind}_{{x,y,z}}; its columns: {}",
-            names.join(", ")
-        )
+        let there = if names.is_empty() {
+            // reactions.csv of a scene without supports or walls, probes.csv without probes
+            "it has no column but time".to_string()
+        } else {
+            format!("its columns: {}", names.join(", "))
+        };
+        format!("{file}: no column {name} or {name}.{kind}_{{x,y,z}}; {there}")
     })
 }
 
@@ -216,6 +219,9 @@ mod tests {
         assert_eq!(n, "w.force_z");
         let e = pick(&t, "r.csv", "floor", "force").unwrap_err();
         assert!(e.contains("w.force_x"), "{e}");
+        // A file with only `time` (no supports or walls, no probes) says so, not an empty list.
+        let e = pick(&table(&["time"], vec![vec![0.0]]), "r.csv", "w", "force").unwrap_err();
+        assert!(e.ends_with("; it has no column but time"), "{e}");
     }
 
     /// The sign flip makes the largest-magnitude value positive and keeps the others' ratios.

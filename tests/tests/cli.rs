@@ -344,3 +344,51 @@ fn the_start_lines_count_follows_a_plastic_impact_to_20_percent() {
         );
     }
 }
+
+/// Johnson-Cook's thermal keys in the wrong units warn by key, as the density and the modulus
+/// do (docs/scene.md, "Units"): `t_room = 20` (degrees Celsius: the law reads 20 K) and
+/// `specific_heat = 0.385` (copper in kJ/(kg K): 1,000 times the heating) ran without a word.
+/// The same material in K and J/(kg K) (293.15, 385) gives no warning; the run exits 0 either
+/// way (a warning, not a failure).
+#[test]
+fn thermal_keys_in_celsius_or_kilojoules_are_warned_of() {
+    let jc = "model = \"johnson_cook\"\na = 90.0e6\nb = 292.0e6\nn = 0.31\nc = 0.0\n\
+              eps_dot0 = 1.0\nm = 1.09\nt_room = T_ROOM\nt_melt = T_MELT\nspecific_heat = CP";
+    for (t_room, t_melt, cp, want) in [
+        ("20.0", "1083.0", "0.385", 2),
+        ("293.15", "1356.0", "385.0", 0),
+    ] {
+        let dir = workdir(&format!("cli_thermal_units_{want}"));
+        let scene = bar_scene(&dir, 2, "end_time = 1.0e-6", "");
+        let text = std::fs::read_to_string(&scene).unwrap().replace(
+            "model = \"elastic\"",
+            &jc.replace("T_ROOM", t_room)
+                .replace("T_MELT", t_melt)
+                .replace("CP", cp),
+        );
+        std::fs::write(&scene, text).unwrap();
+        let o = mpirun(1, 120)
+            .arg(tdyn())
+            .args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{o:?}");
+        let lines: Vec<String> = tdyn_lines(&o)
+            .into_iter()
+            .filter(|l| l.contains("warning"))
+            .collect();
+        assert_eq!(lines.len(), want, "{lines:#?}");
+        if want == 2 {
+            assert!(
+                lines[0].contains("material[0].t_room = 2e1 K") && lines[0].contains("Celsius"),
+                "{lines:?}"
+            );
+            assert!(
+                lines[1].contains("material[0].specific_heat = 3.85e-1 J/(kg K)")
+                    && lines[1].contains("kJ/(kg K)"),
+                "{lines:?}"
+            );
+        }
+    }
+}

@@ -339,6 +339,29 @@ fn curve_and_load_mistakes_give_clear_messages() {
         },
         "gravity_curve: expected at least one point",
     );
+    // A gravity_curve without gravity scaled nothing and ran without a word.
+    expect_error(
+        "gravity_curve_without_gravity",
+        |s| {
+            s.replace(
+                "title = \"test bar\"\n",
+                "title = \"test bar\"\ngravity_curve = [[0.0, 0.0], [1.0e-5, 1.0]]\n",
+            )
+        },
+        "gravity_curve: a curve scales gravity, which is zero here: give gravity = [x, y, z]",
+    );
+    // gravity written under [run] (after a table header a key belongs to that table): the
+    // message says it is a top-level key and where it goes.
+    expect_error(
+        "gravity_under_run",
+        |s| s.replace("[run]\n", "[run]\ngravity = [0.0, 0.0, -9.81]\n"),
+        "run.gravity: unknown field `gravity`",
+    );
+    expect_error(
+        "gravity_curve_under_run",
+        |s| s.replace("[run]\n", "[run]\ngravity_curve = [[0.0, 1.0]]\n"),
+        "gravity_curve is a top-level key: write it before the first [table]",
+    );
     expect_error(
         "curve_on_fixed",
         |s| {

@@ -1027,3 +1027,31 @@ fn a_copper_taylor_bar_on_a_rigid_wall_matches_openradioss_rigid_wall() {
         "foot radius {foot:e} m against OpenRadioss's {fp:e} m on its rigid wall (1 %)"
     );
 }
+
+/// A lattice of particles whose lowest centres lie on a wall's plane starts half a spacing
+/// into it (docs/scene.md `[[rigid_wall]]`: a particle stays its contact radius, half its
+/// spacing, from the plane). The refusal says how a particle is measured, since its centre is
+/// not behind the plane: 100 particles (a 10 x 10 layer, spacing 1 mm), 5e-4 m deep.
+#[test]
+fn particles_seeded_on_a_wall_are_refused_with_their_contact_radius() {
+    let dir = workdir("rigid_wall_particles_on_plane");
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[run]\nend_time = 1.0e-5\n\n[[material]]\nname = \"r\"\nmodel = \"elastic\"\n\
+         density = 1200.0\nyoungs_modulus = 1.0e8\npoisson_ratio = 0.4\n\n[[particles]]\n\
+         name = \"blk\"\nmaterial = \"r\"\n\
+         region = { box = { min = [0.0, 0.0, -0.0005], max = [0.01, 0.01, 0.0095] } }\n\
+         spacing = 0.001\n\n[[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0, 0.0]\n\
+         normal = [0.0, 0.0, 1.0]\n",
+    )
+    .unwrap();
+    assert_scene_refused(
+        "particles_on_plane",
+        &scene,
+        &dir.join("out"),
+        "0 mesh nodes and 100 particles start behind the wall, the deepest 5.000e-4 m behind \
+         its plane (a particle counts from its contact radius, half the spacing it was seeded \
+         at, around its centre",
+    );
+}

@@ -124,6 +124,8 @@ pub struct ParticleFrame<'a> {
     pub plastic_strain: Option<&'a [f64]>,
     /// 1 for a failed particle, else 0 (runs with solid particles).
     pub failed: Option<&'a [f64]>,
+    /// Temperature, K (runs with solid particles; NaN where the material keeps none).
+    pub temperature: Option<&'a [f64]>,
     /// Owning rank.
     pub rank: Option<&'a [i32]>,
 }
@@ -414,6 +416,9 @@ impl FieldWriter {
         }
         if let (true, Some(v)) = (self.wants("failed"), pf.failed) {
             cols.push(("failed", 1, scalar(move |i| v[i]), false));
+        }
+        if let (true, Some(v)) = (self.wants("temperature"), pf.temperature) {
+            cols.push(("temperature", 1, scalar(move |i| v[i]), false));
         }
         if let (true, Some(v)) = (self.wants("rank"), pf.rank) {
             cols.push(("rank", 1, scalar(move |i| f64::from(v[i])), true));

@@ -174,8 +174,14 @@ impl Walls {
             let deepest = collective::min(world, deepest);
             if behind[0] + behind[1] > 0.0 {
                 let n = wall.normal;
+                // a particle whose centre is on the plane or in front of it is behind it too
+                let spheres = if behind[1] > 0.0 {
+                    " (a particle counts from its contact radius, half the spacing it was seeded at, around its centre: its sphere must not cross the plane)"
+                } else {
+                    ""
+                };
                 return Err(format!(
-                    "{file}: rigid_wall[{k}] (\"{}\"): {} mesh nodes and {} particles start behind the wall, the deepest {:.3e} m behind its plane; the bodies must start on the side its normal [{:.4}, {:.4}, {:.4}] points to: move its point or turn its normal",
+                    "{file}: rigid_wall[{k}] (\"{}\"): {} mesh nodes and {} particles start behind the wall, the deepest {:.3e} m behind its plane{spheres}; the bodies must start on the side its normal [{:.4}, {:.4}, {:.4}] points to: move its point or turn its normal",
                     self.names[k], behind[0], behind[1], -deepest, n[0], n[1], n[2]
                 ));
             }

@@ -94,6 +94,14 @@ pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         .as_ref()
         .map(|c| crate::input::curve::check(&cx.file, "gravity_curve", c))
         .transpose()?;
+    // A curve scales gravity: with none (or zero) it would scale nothing, without a word (as a
+    // wall's curve needs the wall's velocity).
+    if gravity_curve.is_some() && raw.gravity == [0.0; 3] {
+        return Err(cx.err(
+            "gravity_curve",
+            "a curve scales gravity, which is zero here: give gravity = [x, y, z] (m/s^2) too, a top-level key before the first [table], or remove gravity_curve".into(),
+        ));
+    }
     let boundaries = check_boundaries(&cx, &raw.boundary)?;
     let loads = check_loads(&cx, &raw.load)?;
     // failed elements that become particles make the run one with solid particles
@@ -183,6 +191,15 @@ fn deserialize(cx: &Ctx, text: &str) -> Result<RawScene, SceneError> {
         }
         if let Some(q) = quoted_number(&msg) {
             msg = format!("expected a number, got a string (\"{q}\": write it without quotes)");
+        }
+        // A top-level key written after a [table] header lands in that table (TOML's rule).
+        if let Some(k) = ["title", "gravity", "gravity_curve"]
+            .into_iter()
+            .find(|k| msg.starts_with(&format!("unknown field `{k}`")))
+        {
+            msg = format!(
+                "{msg}; {k} is a top-level key: write it before the first [table] (after a [table] header a key belongs to that table)"
+            );
         }
         if let Some(r) = inner.span() {
             let (line, column) = line_column(text, r.start);
@@ -734,8 +751,17 @@ pub const LOW_SOLID_DENSITY: f64 = 50.0;
 /// softest rubbers are about 1e6 Pa): a warning, not an error.
 pub const LOW_YOUNGS_MODULUS: f64 = 1e6;
 
+/// A Johnson-Cook `t_room` below this, K, is almost always a temperature in degrees Celsius
+/// (room temperature 20 C is 293.15 K; liquid nitrogen, 77 K, stays above it): a warning.
+pub const LOW_ROOM_TEMPERATURE: f64 = 50.0;
+
+/// A `specific_heat` below this, J/(kg K), is almost always in kJ/(kg K) or J/(g K) (copper
+/// 0.385; the lowest of the metals, lead and gold, are about 130 J/(kg K)): a warning.
+pub const LOW_SPECIFIC_HEAT: f64 = 50.0;
+
 /// The scene's likely unit slips, one warning line each naming the key (docs/scene.md, "Units"):
-/// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`].
+/// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`],
+/// a `t_room` below [`LOW_ROOM_TEMPERATURE`], a `specific_heat` below [`LOW_SPECIFIC_HEAT`].
 pub fn unit_warnings(scene: &Scene) -> Vec<String> {
     let file = scene.file.display();
     let mut out = Vec::new();
@@ -750,6 +776,22 @@ pub fn unit_warnings(scene: &Scene) -> Vec<String> {
             if e < LOW_YOUNGS_MODULUS {
                 out.push(format!(
                     "{file}: material[{i}].youngs_modulus = {e:e} Pa ({:?}) is below {LOW_YOUNGS_MODULUS:e} Pa: check the units (SI: Pa; 2e5 is steel in MPa)",
+                    m.name
+                ));
+            }
+        }
+        if let Some(&t) = m.params.get("t_room") {
+            if t < LOW_ROOM_TEMPERATURE {
+                out.push(format!(
+                    "{file}: material[{i}].t_room = {t:e} K ({:?}) is below {LOW_ROOM_TEMPERATURE} K: check the units (K, not degrees Celsius: 20 C is 293.15 K; t_melt too)",
+                    m.name
+                ));
+            }
+        }
+        if let Some(&c) = m.params.get("specific_heat") {
+            if c < LOW_SPECIFIC_HEAT {
+                out.push(format!(
+                    "{file}: material[{i}].specific_heat = {c:e} J/(kg K) ({:?}) is below {LOW_SPECIFIC_HEAT} J/(kg K): check the units (SI: J/(kg K); 0.385 is copper in kJ/(kg K))",
                     m.name
                 ));
             }

@@ -240,6 +240,7 @@ impl Sph {
             f.stress = Some(o.stress);
             f.plastic_strain = Some(o.plastic_strain);
             f.failed = Some(o.failed);
+            f.temperature = Some(o.temperature);
         }
         f
     }
@@ -427,6 +428,7 @@ pub fn particle_frame<'a>(
         stress: None,
         plastic_strain: None,
         failed: None,
+        temperature: None,
         rank: Some(ranks),
     }
 }

@@ -255,6 +255,7 @@ fn write_fields(comm: &SimpleCommunicator, dir: &Path) -> Result<(), OutputError
             stress: None,
             plastic_strain: None,
             failed: None,
+            temperature: None,
             rank: Some(&part_rank),
         };
         writer.write_frame(time, Some(&nodes), Some(&elements), Some(&particles))?;

@@ -48,6 +48,9 @@ pub struct SolidPart {
     pub out_plastic: Vec<f64>,
     /// See `out_stress`: 1 for a failed particle, else 0.
     pub out_failed: Vec<f64>,
+    /// See `out_stress`: the temperature of a Johnson-Cook solid with thermal softening, K
+    /// (NaN for a particle whose material keeps none).
+    pub out_temperature: Vec<f64>,
 }
 
 /// The owned solid particles' output fields (`SphStage::solid_output`).
@@ -58,6 +61,8 @@ pub struct SolidOutput<'a> {
     pub plastic_strain: &'a [f64],
     /// 1 for a failed particle, else 0.
     pub failed: &'a [f64],
+    /// Temperature, K (NaN where the material keeps none).
+    pub temperature: &'a [f64],
 }
 
 /// A particle with its solid state as RCB moves it (the fluid runs' `Item` and 80 bytes).
@@ -93,6 +98,7 @@ impl SphStage {
             out_stress: Vec::new(),
             out_plastic: Vec::new(),
             out_failed: Vec::new(),
+            out_temperature: Vec::new(),
         });
     }
 
@@ -323,6 +329,9 @@ impl SphStage {
         sp.out_failed.clear();
         sp.out_failed
             .extend((0..n).map(|i| f64::from(u8::from(s.failed(p.mat[i], i)))));
+        sp.out_temperature.clear();
+        sp.out_temperature
+            .extend((0..n).map(|i| s.temperature(p.mat[i], i).unwrap_or(f64::NAN)));
     }
 
     /// The owned particles' stress, plastic strain and failed flags for a field frame (runs
@@ -332,6 +341,7 @@ impl SphStage {
             stress: &sp.out_stress,
             plastic_strain: &sp.out_plastic,
             failed: &sp.out_failed,
+            temperature: &sp.out_temperature,
         })
     }
 
