@@ -761,7 +761,7 @@ pub const LOW_SPECIFIC_HEAT: f64 = 50.0;
 
 /// The scene's likely unit slips, one warning line each naming the key (docs/scene.md, "Units"):
 /// a solid's density below [`LOW_SOLID_DENSITY`], a Young's modulus below [`LOW_YOUNGS_MODULUS`],
-/// a `t_room` below [`LOW_ROOM_TEMPERATURE`], a `specific_heat` below [`LOW_SPECIFIC_HEAT`].
+/// a `t_room` below `LOW_ROOM_TEMPERATURE` (50 K), a `specific_heat` below `LOW_SPECIFIC_HEAT` (50 J/(kg K)).
 pub fn unit_warnings(scene: &Scene) -> Vec<String> {
     let file = scene.file.display();
     let mut out = Vec::new();
