@@ -568,18 +568,23 @@ mod w4 {
         g.shift.map(|c| unsafe { _mm256_set1_pd(c) })
     }
 
-    /// [`crate::exact::Grid::add`] lane by lane, in the lanes of mask `k`.
+    /// [`crate::exact::Grid::add`] lane by lane, in the lanes of mask `k`: the term is zeroed
+    /// outside them (one `and` in place of a blend per fold), and a zero term's parts are +0,
+    /// which leaves a fold's bits as they were (a fold is never -0: it starts at +0, and a sum
+    /// that returns to zero rounds to +0), so the folds are those of the eight-node form's
+    /// masked additions.
     #[inline(always)]
     fn bin(acc: &mut [__m256d; 3], x: __m256d, c: &[__m256d; 3], k: __m256d) {
         // SAFETY: AVX (every caller is built with it).
         unsafe {
+            let x = _mm256_and_pd(x, k);
             let t1 = _mm256_sub_pd(_mm256_add_pd(x, c[0]), c[0]);
             let r1 = _mm256_sub_pd(x, t1);
             let t2 = _mm256_sub_pd(_mm256_add_pd(r1, c[1]), c[1]);
             let r2 = _mm256_sub_pd(r1, t2);
             let t3 = _mm256_sub_pd(_mm256_add_pd(r2, c[2]), c[2]);
             for (a, t) in acc.iter_mut().zip([t1, t2, t3]) {
-                *a = _mm256_blendv_pd(*a, _mm256_add_pd(*a, t), k);
+                *a = _mm256_add_pd(*a, t);
             }
         }
     }
