@@ -192,14 +192,10 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Result<Kinematics, GroupInvert
     }
     let bb = (8.0 / 4096.0) * gg * (iv * iv);
     let ivh64 = ivh * (1.0 / 64.0);
-    let mut l = [[F::ZERO; 3]; 3];
-    for (i, row) in l.iter_mut().enumerate() {
-        for (j, e) in row.iter_mut().enumerate() {
-            let mut s = u[0][i] * gh64[0][j];
-            for m in 1..6 {
-                s = u[m][i].mul_add(gh64[m][j], s);
-            }
-            *e = s * ivh64;
+    let mut l = outer_sum(&u, &gh64);
+    for row in l.iter_mut() {
+        for e in row.iter_mut() {
+            *e = *e * ivh64;
         }
     }
     let d = [
@@ -226,6 +222,29 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Result<Kinematics, GroupInvert
         d,
         r,
     })
+}
+
+/// sum_m a_m (x) b_m over the six modes: entry (i, j) is a_0i b_0j, then + a_mi b_mj for m = 1
+/// .. 5 in turn (`F::mul_add`). Written mode by mode, the nine sums held while each mode's six
+/// values are read once (fifteen registers: AVX2's sixteen hold them without spilling); each
+/// entry's operations are the same, in the same order, as entry by entry.
+#[inline(always)]
+fn outer_sum(a: &[V3; 6], b: &[V3; 6]) -> [[F; 3]; 3] {
+    let mut s = [[F::ZERO; 3]; 3];
+    for (i, row) in s.iter_mut().enumerate() {
+        for (j, e) in row.iter_mut().enumerate() {
+            *e = a[0][i] * b[0][j];
+        }
+    }
+    for m in 1..6 {
+        let (am, bm) = (a[m], b[m]);
+        for (i, row) in s.iter_mut().enumerate() {
+            for (j, e) in row.iter_mut().enumerate() {
+                *e = am[i].mul_add(bm[j], *e);
+            }
+        }
+    }
+    s
 }
 
 /// The first lane whose end-of-step volume `vol` or mid-step volume `volh` is not positive and
@@ -416,16 +435,7 @@ fn update_core(
     let x_hg = [k.xk[3], k.xk[4], k.xk[5], k.xk7];
     let u_hg = [k.u[3], k.u[4], k.u[5], k.u7];
     // 64 lg.
-    let mut lg = [[F::ZERO; 3]; 3];
-    for (i, row) in lg.iter_mut().enumerate() {
-        for (j, e) in row.iter_mut().enumerate() {
-            let mut s = k.u[0][i] * k.g64[0][j];
-            for mm in 1..6 {
-                s = k.u[mm][i].mul_add(k.g64[mm][j], s);
-            }
-            *e = s;
-        }
-    }
+    let lg = outer_sum(&k.u, &k.g64);
     let geo = hourglass_lanes::ModeGeometry::new(
         &x_hg,
         &u_hg,
