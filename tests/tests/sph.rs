@@ -446,3 +446,50 @@ fn water_at_rest_under_its_own_pressure_expands_keeping_its_energy() {
         }
     }
 }
+
+#[test]
+fn a_cold_gas_at_rest_falls_freely_to_an_end_time_far_below_its_stable_step() {
+    // docs/scene.md ("the state at end_time is always written"): particles at rest with c = 0
+    // (an ideal gas at e0 = 0) have a stable step of 0.3 h / 1e-9 = 3.6e3 s; an end time below
+    // a millionth of it (1e-3 s here) used to end the run at step 0 with no row at end_time.
+    // Reference: free fall, no pressure: KE = M (g t)^2 / 2 and momentum_z = -M g t exactly
+    // (8 particles of 1e-6 kg), to 1e-12 relative; the same bytes at np 1 and np 3.
+    let dir = workdir("sph_cold_gas");
+    let scene = dir.join("cold_gas.toml");
+    std::fs::write(
+        &scene,
+        r#"title = "A cold ideal gas (e0 = 0) at rest, falling for 1 ms"
+gravity = [0.0, 0.0, -9.81]
+[run]
+end_time = 1.0e-3
+[[material]]
+name = "gas"
+model = "fluid"
+density = 1.0
+eos = { kind = "ideal_gas", gamma = 1.4, e0 = 0.0 }
+[[particles]]
+name = "g"
+material = "gas"
+region = { box = { min = [0.0, 0.0, 0.0], max = [0.02, 0.02, 0.02] } }
+spacing = 0.01
+"#,
+    )
+    .unwrap();
+    let out = run_np1_np3_same_bytes(&scene, &dir);
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let t = column(&h, &rows, "time");
+    let ke = column(&h, &rows, "kinetic_energy");
+    let pz = column(&h, &rows, "momentum_z");
+    let (m, g, end) = (8.0e-6, 9.81, 1.0e-3);
+    assert_eq!(
+        *t.last().unwrap(),
+        end,
+        "the last row is at end_time: {t:?}"
+    );
+    let (ke_ref, pz_ref) = (0.5 * m * (g * end) * (g * end), -m * g * end);
+    assert!(
+        (ke.last().unwrap() - ke_ref).abs() <= 1e-12 * ke_ref
+            && (pz.last().unwrap() - pz_ref).abs() <= 1e-12 * pz_ref.abs(),
+        "free fall (KE = M (g t)^2 / 2 = {ke_ref:e} J, p_z = -M g t = {pz_ref:e}; tol 1e-12 relative): KE {ke:?}, p_z {pz:?}"
+    );
+}
