@@ -446,3 +446,115 @@ fn water_at_rest_under_its_own_pressure_expands_keeping_its_energy() {
         }
     }
 }
+
+#[test]
+fn a_cold_gas_at_rest_falls_freely_to_an_end_time_far_below_its_stable_step() {
+    // docs/scene.md ("the state at end_time is always written"): particles at rest with c = 0
+    // (an ideal gas at e0 = 0) have a stable step of 0.3 h / 1e-9 = 3.6e3 s; an end time below
+    // a millionth of it (1e-3 s here) used to end the run at step 0 with no row at end_time.
+    // Reference: free fall, no pressure: KE = M (g t)^2 / 2 and momentum_z = -M g t exactly
+    // (8 particles of 1e-6 kg), to 1e-12 relative; the same bytes at np 1 and np 3.
+    let dir = workdir("sph_cold_gas");
+    let scene = dir.join("cold_gas.toml");
+    std::fs::write(
+        &scene,
+        r#"title = "A cold ideal gas (e0 = 0) at rest, falling for 1 ms"
+gravity = [0.0, 0.0, -9.81]
+[run]
+end_time = 1.0e-3
+[[material]]
+name = "gas"
+model = "fluid"
+density = 1.0
+eos = { kind = "ideal_gas", gamma = 1.4, e0 = 0.0 }
+[[particles]]
+name = "g"
+material = "gas"
+region = { box = { min = [0.0, 0.0, 0.0], max = [0.02, 0.02, 0.02] } }
+spacing = 0.01
+"#,
+    )
+    .unwrap();
+    let out = run_np1_np3_same_bytes(&scene, &dir);
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let t = column(&h, &rows, "time");
+    let ke = column(&h, &rows, "kinetic_energy");
+    let pz = column(&h, &rows, "momentum_z");
+    let (m, g, end) = (8.0e-6, 9.81, 1.0e-3);
+    assert_eq!(
+        *t.last().unwrap(),
+        end,
+        "the last row is at end_time: {t:?}"
+    );
+    let (ke_ref, pz_ref) = (0.5 * m * (g * end) * (g * end), -m * g * end);
+    assert!(
+        (ke.last().unwrap() - ke_ref).abs() <= 1e-12 * ke_ref
+            && (pz.last().unwrap() - pz_ref).abs() <= 1e-12 * pz_ref.abs(),
+        "free fall (KE = M (g t)^2 / 2 = {ke_ref:e} J, p_z = -M g t = {pz_ref:e}; tol 1e-12 relative): KE {ke:?}, p_z {pz:?}"
+    );
+}
+
+#[test]
+fn the_liggghts_profile_needs_a_fixed_step_and_keeps_a_water_column_at_rest_with_one() {
+    // docs/scene.md `[sph] profile`: LIGGGHTS's integrator is unstable at the standard
+    // automatic step (0.9 x 0.3 h/c = 1.62e-4 s here): a resting column of 320 water particles
+    // on fixed floor particles reached a kinetic energy of 1.1 J in 0.1 s (and LIGGGHTS 3.8.0
+    // itself, `tdyn crosscheck` on the same particles in a tank at that step, lost particles
+    // by step 1500). Without run.dt the profile is refused naming the key. Reference with
+    // dt = 5e-5 s (the step of LIGGGHTS's dam-break deck): hydrostatics, the column stays at
+    // rest but for its start-up wave: kinetic energy at most 1 % of M g H / 2 = 0.31 J.
+    let dir = workdir("sph_liggghts_dt");
+    let scene_text = |dt: &str| {
+        format!(
+            r#"title = "A water column at rest on fixed particles, LIGGGHTS profile"
+gravity = [0.0, 0.0, -9.81]
+[run]
+end_time = 0.1
+{dt}
+[[material]]
+name = "water"
+model = "fluid"
+density = 1000.0
+eos = {{ kind = "tait", rho0 = 1000.0, sound_speed = 20.0, gamma = 7.0 }}
+[[particles]]
+name = "water"
+material = "water"
+region = {{ box = {{ min = [0.0, 0.0, 0.0], max = [0.04, 0.04, 0.2] }} }}
+spacing = 0.01
+[[particles]]
+name = "floor"
+material = "water"
+region = {{ box = {{ min = [0.0, 0.0, -0.03], max = [0.04, 0.04, 0.0] }} }}
+spacing = 0.01
+fixed = true
+[sph]
+profile = "liggghts"
+artificial_viscosity = {{ alpha = 0.1 }}
+tensile_correction = {{ epsilon = 0.2 }}
+periodic = {{ axes = [true, true, false], min = [0.0, 0.0, -1.0], max = [0.04, 0.04, 1.0] }}
+"#
+        )
+    };
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text("")).unwrap();
+    assert_scene_refused(
+        "liggghts profile without run.dt",
+        &scene,
+        &dir.join("auto"),
+        "run.dt",
+    );
+    std::fs::write(&scene, scene_text("dt = 5.0e-5")).unwrap();
+    let out = dir.join("fixed");
+    run_ok(2, &scene, &out);
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let ke = column_max(&column(&h, &rows, "kinetic_energy"));
+    let scale = 0.32 * 9.81 * 0.2 / 2.0;
+    assert!(
+        ke <= 0.01 * scale,
+        "a resting column at dt = 5e-5 s: largest kinetic energy {ke:e} J (at most 1 % of M g H / 2 = {scale:e} J)"
+    );
+}
+
+fn column_max(v: &[f64]) -> f64 {
+    v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+}

@@ -76,7 +76,10 @@ impl Clock {
     pub fn next_step(&mut self) -> Option<f64> {
         match self.fixed_dt {
             Some(d) => {
-                if (self.step as f64) * d >= self.end - TIME_EPS_STEPS * d {
+                // The tolerance is on the step that can be taken, at most the end time: a
+                // step over a million times the end time (a cold gas at rest, c = 0) must
+                // still take its one step to end_time.
+                if (self.step as f64) * d >= self.end - TIME_EPS_STEPS * d.min(self.end) {
                     return None;
                 }
                 // A fixed step that does not divide the end time: the last step is shortened
@@ -89,7 +92,9 @@ impl Clock {
             }
             None => {
                 let remaining = self.end - self.time;
-                if remaining <= TIME_EPS_STEPS * self.dt {
+                // As above: the step taken is clipped onto end_time, so the tolerance is a
+                // millionth of min(dt, end), not of a proposal far past the end time.
+                if remaining <= TIME_EPS_STEPS * self.dt.min(self.end) {
                     return None;
                 }
                 // The last steps share what remains evenly: once it is at most EVEN_STEPS
@@ -136,7 +141,7 @@ impl Clock {
 
     /// The end time is reached.
     pub fn at_end(&self) -> bool {
-        self.time >= self.end - TIME_EPS_STEPS * self.dt
+        self.time >= self.end - TIME_EPS_STEPS * self.dt.min(self.end)
     }
 
     /// The fraction of the end time reached.
@@ -206,6 +211,26 @@ mod tests {
             history_every: 0.0,
             next_frame: 1,
             next_row: 1,
+        }
+    }
+
+    #[test]
+    fn a_step_far_longer_than_the_end_time_is_taken_once_onto_it() {
+        // Reference: docs/scene.md ("the state at end_time is always written"): a stable step
+        // over 1e6 times the end time (particles at rest with c = 0 give 0.3 h / 1e-9) must
+        // take one step of exactly end_time, automatic or fixed, not end the run at t = 0.
+        for fixed in [None, Some(10.0)] {
+            let mut c = clock(3240.0, 1e-3);
+            c.fixed_dt = fixed;
+            let d = c.next_step();
+            assert_eq!(d, Some(1e-3), "fixed {fixed:?}: the one step is end_time");
+            c.advance();
+            assert_eq!(c.time, 1e-3, "fixed {fixed:?}: t = end_time after it");
+            c.propose(3600.0);
+            assert!(
+                c.at_end() && c.next_step().is_none(),
+                "fixed {fixed:?}: then the end"
+            );
         }
     }
 

@@ -152,6 +152,18 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
             ));
         }
     }
+    if !implicit
+        && scene.run.dt.is_none()
+        && scene.sph.as_ref().is_some_and(|s| s.profile == "liggghts")
+    {
+        // LIGGGHTS always runs at the deck's timestep; its integrator (nve/sph) is not stable
+        // at the standard step 0.9 x 0.3 h/(c + |v|): a resting water column of 320 particles
+        // blows up there in LIGGGHTS 3.8.0 itself (it loses particles) and in this profile
+        // alike, and is quiet at the step such decks use (5e-5 s at h = 0.012 m, c = 20 m/s).
+        return Err(format!(
+            "{file}: run.dt: sph.profile = \"liggghts\" needs a fixed step, as a LIGGGHTS deck gives one (its integrator is unstable at the standard automatic step 0.3 h/(c + |v|)); set run.dt (about 0.1 h/c), or use profile = \"standard\""
+        ));
+    }
     if scene.contact.is_some() && implicit {
         return Err(format!(
             "{file}: contact: the contact stage runs in explicit mode only; use mode = \"explicit\" or remove the [contact] table"
