@@ -664,3 +664,76 @@ fn particles_on_a_face_inside_a_meshed_body_are_refused_and_on_its_outer_face_ac
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+#[test]
+fn an_empty_physical_group_and_params_on_a_msh_are_refused_at_np_3() {
+    // gmsh writes the name of a physical group that holds no element (`Physical Surface("x") =
+    // {};`, or wrong entity numbers), so the name check alone passes: a condition, load or
+    // block on it acted on nothing without a word. And `params` on a .msh file (already
+    // meshed) were ignored without a word. Each must be one line naming the key, at np 3 too.
+    let dir = workdir("bad_empty_groups");
+    let geo = dir.join("bar_empty.geo");
+    let text = std::fs::read_to_string(root().join("meshes").join("bar.geo")).unwrap()
+        + "Physical Surface(\"nothing\") = {};\nPhysical Volume(\"no_volume\") = {};\n";
+    std::fs::write(&geo, text).unwrap();
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let base = std::fs::read_to_string(&scene).unwrap().replace(
+        &root().join("meshes/bar.geo").display().to_string(),
+        "bar_empty.geo",
+    );
+    let msh = dir.join("bar.msh");
+    let o = std::process::Command::new("gmsh")
+        .arg(root().join("meshes").join("bar.geo"))
+        .args(["-3", "-format", "msh22", "-setnumber", "N", "4", "-o"])
+        .arg(&msh)
+        .output()
+        .expect("gmsh is needed (make setup installs it)");
+    assert!(o.status.success(), "gmsh: {o:?}");
+    let cases: [(&str, String, &str); 5] = [
+        (
+            "boundary",
+            base.clone() + "[[boundary]]\ngroup = \"nothing\"\nkind = \"fixed\"\n",
+            "boundary[2].group: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "load",
+            base.clone() + "[[load]]\ngroup = \"nothing\"\npressure = 1.0e6\n",
+            "load[0].group: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "block",
+            base.clone() + "[[block]]\ngroup = \"no_volume\"\nmaterial = \"steel\"\n",
+            "block[1].group: the physical volume \"no_volume\" holds no elements",
+        ),
+        (
+            "contact",
+            base.clone() + "[contact]\nsurfaces = [\"left\", \"nothing\"]\n",
+            "contact.surfaces[1]: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "msh_params",
+            base.replace("bar_empty.geo", "bar.msh"),
+            "mesh[0].params.A: bar.msh is read as it is: params are passed to gmsh to mesh a .geo",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        std::fs::write(&scene, &text).unwrap();
+        let out = dir.join(format!("out_{name}"));
+        let o = mpirun(3, 120)
+            .arg(tdyn())
+            .args(["run"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name}: must fail at np 3:\n{err}");
+        let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+        assert!(
+            lines.len() == 1 && lines[0].contains(needle) && lines[0].contains("scene.toml"),
+            "{name}: one line at np 3 naming the file and {needle:?}:\n{err}"
+        );
+        assert!(!err.contains("panicked"), "{name}: no panic:\n{err}");
+    }
+}

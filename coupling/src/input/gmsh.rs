@@ -156,15 +156,26 @@ pub const MAX_COUNT: f64 = 1e6;
 /// The gmsh parameters of `def` are finite, and those its .geo uses as element counts
 /// ([`count_parameters`]) are whole numbers from 1 to [`MAX_COUNT`] (gmsh would round 10.5 down
 /// and turn 0, -5 or 1e12 into a mesh of one element without a word). A .msh takes no
-/// parameters. Returns the parameter and what was expected.
+/// parameters: one given to it is refused (it would change nothing, without a word). Returns
+/// the parameter and what was expected.
 pub fn check_params(def: &MeshDef) -> Result<(), (String, String)> {
     for (name, v) in &def.params {
         if !v.is_finite() {
             return Err((name.clone(), format!("expected a finite number, got {v}")));
         }
     }
-    if def.params.is_empty() || def.file.extension().is_none_or(|e| e != "geo") {
+    if def.params.is_empty() {
         return Ok(());
+    }
+    if def.file.extension().is_none_or(|e| e != "geo") {
+        let name = def.params.keys().next().cloned().unwrap_or_default();
+        return Err((
+            name,
+            format!(
+                "{} is read as it is: params are passed to gmsh to mesh a .geo file, and a .msh file is already meshed (remove params, or name the .geo file)",
+                def.file.file_name().unwrap_or_default().to_string_lossy()
+            ),
+        ));
     }
     let Ok(text) = std::fs::read_to_string(&def.file) else {
         return Ok(()); // reported where the file is read
