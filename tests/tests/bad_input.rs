@@ -163,6 +163,32 @@ fn documented_mistakes_give_clear_messages() {
         contact("passes = 1\nmaster = [\"rod\"]\n"),
         "contact.master[0]: no physical volume \"rod\"",
     );
+    // Names that head CSV columns: a comma would shift every column after it, a field listed
+    // twice would give two columns of one name (probes.csv, contact_forces.csv: docs/output.md).
+    let probe = |name: &'static str, fields: &'static str| {
+        move |s: String| {
+            s + &format!(
+                "[[probe]]\nname = \"{name}\"\npoint = [0.5, 0.025, 0.025]\nfields = [{fields}]\n"
+            )
+        }
+    };
+    expect_error(
+        "probe_name_with_comma",
+        probe("a,b", "\"velocity_x\""),
+        "probe[0].name: expected a name for probes.csv's columns (not empty, no comma",
+    );
+    expect_error(
+        "probe_field_twice",
+        probe("p", "\"velocity_x\", \"stress_xx\", \"velocity_x\""),
+        "probe[0].fields[2]: \"velocity_x\" is listed twice",
+    );
+    expect_error(
+        "particles_name_with_comma",
+        |s| {
+            s + "[[particles]]\nname = \"a,b\"\nmaterial = \"steel\"\nregion = { box = { min = [2.0, 0.0, 0.0], max = [2.01, 0.01, 0.01] } }\nspacing = 0.005\n"
+        },
+        "particles[0].name: expected a name for contact_forces.csv's columns",
+    );
 }
 
 #[test]

@@ -14,6 +14,15 @@ pub(super) fn check_particles(
 ) -> Result<(), SceneError> {
     for (i, p) in particles.iter().enumerate() {
         // (the name heads its columns in contact_forces.csv and its probes)
+        if !csv_name(&p.name) {
+            return Err(cx.err(
+                &format!("particles[{i}].name"),
+                format!(
+                    "expected a name for contact_forces.csv's columns (not empty, no comma, quote or line break), got {:?}",
+                    p.name
+                ),
+            ));
+        }
         if particles[..i].iter().any(|q| q.name == p.name) {
             return Err(cx.err(
                 &format!("particles[{i}].name"),
@@ -402,14 +411,41 @@ pub(super) fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError>
             ));
         }
         names.push(&p.name);
+        if !csv_name(&p.name) {
+            return Err(cx.err(
+                &format!("probe[{i}].name"),
+                format!(
+                    "expected a name for probes.csv's columns (not empty, no comma, quote or line break), got {:?}",
+                    p.name
+                ),
+            ));
+        }
         if p.fields.is_empty() {
             return Err(cx.err(
                 &format!("probe[{i}].fields"),
                 "expected at least one field".into(),
             ));
         }
+        for (k, f) in p.fields.iter().enumerate() {
+            if p.fields[..k].contains(f) {
+                return Err(cx.err(
+                    &format!("probe[{i}].fields[{k}]"),
+                    format!(
+                        "\"{}\" is listed twice (probes.csv would have two columns \"{}.{}\")",
+                        f.name(),
+                        p.name,
+                        f.name()
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
+}
+
+/// A name that can head CSV columns as it is: not empty, no comma, quote or line break.
+pub(super) fn csv_name(name: &str) -> bool {
+    !name.trim().is_empty() && !name.contains([',', '"', '\n', '\r'])
 }
 
 /// `[output]`: a positive checkpoint interval, known field names.
