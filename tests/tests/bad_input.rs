@@ -763,3 +763,44 @@ fn an_empty_physical_group_and_params_on_a_msh_are_refused_at_np_3() {
         assert!(!err.contains("panicked"), "{name}: no panic:\n{err}");
     }
 }
+
+#[test]
+fn a_gmsh_failure_is_one_short_line_at_np_3() {
+    // A mesh size of 0 (`bar_tets.geo`'s H) makes gmsh print one error per curve and surface,
+    // about 1,580 lines: the message quoted them all, joined into one line of about 120 kB.
+    // Now the distinct error lines (at most 3) and the count of the others.
+    let dir = workdir("bad_gmsh_failure");
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[run]\nend_time = 1.0e-5\n[[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = 0.0 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\nyoungs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+            root().join("meshes/bar_tets.geo").display()
+        ),
+    )
+    .unwrap();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "must fail:\n{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert_eq!(lines.len(), 1, "one error line:\n{err}");
+    let l = lines[0];
+    assert!(
+        l.contains("mesh[0]: gmsh failed on")
+            && l.contains("Wrong mesh element size lc = 0")
+            && l.contains("more error lines")
+            && l.len() < 500,
+        "one short line naming the key and gmsh's distinct errors ({} chars):\n{}",
+        l.len(),
+        &l[..l.len().min(2000)]
+    );
+}

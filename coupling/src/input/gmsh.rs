@@ -124,23 +124,12 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         String::from_utf8_lossy(&res.stdout),
         String::from_utf8_lossy(&res.stderr)
     );
-    let errors: Vec<&str> = log.lines().filter(|l| l.contains("Error")).collect();
-    if !res.status.success() || !errors.is_empty() || !tmp.exists() {
+    let has_error = log.lines().any(|l| l.contains("Error"));
+    if !res.status.success() || has_error || !tmp.exists() {
         let _ = std::fs::remove_file(&tmp);
-        let tail: Vec<&str> = if errors.is_empty() {
-            log.lines()
-                .rev()
-                .take(5)
-                .collect::<Vec<_>>()
-                .into_iter()
-                .rev()
-                .collect()
-        } else {
-            errors
-        };
         return Err(MeshError::Gmsh {
             path: path.clone(),
-            why: tail.join(" | "),
+            why: failure_summary(&log, &res.status),
         });
     }
     std::fs::rename(&tmp, &out).map_err(|e| MeshError::File {
@@ -148,6 +137,65 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         why: e.to_string(),
     })?;
     Ok(out)
+}
+
+/// Distinct gmsh error lines a failure message quotes at most.
+const FAILURE_LINES: usize = 3;
+
+/// What gmsh's log says about a failure, for one line: its distinct `Error` lines (the first
+/// [`FAILURE_LINES`], with the count of the others: a mesh size of 0 repeats one error for
+/// every curve, thousands of times), without gmsh's closing summary box; or, with no error
+/// line (gmsh killed, out of memory, crashed), how it ended and its last lines.
+pub fn failure_summary(log: &str, status: &std::process::ExitStatus) -> String {
+    let mut distinct: Vec<&str> = Vec::new();
+    let mut total = 0usize;
+    for l in log.lines().filter(|l| l.contains("Error")) {
+        let text = l
+            .trim_start_matches("Error")
+            .trim_start_matches([' ', ':'])
+            .trim();
+        let summary_box = text.is_empty()
+            || text.starts_with("---")
+            || text == "Mesh generation error summary"
+            || text == "Check the full log for details"
+            || text.ends_with(" warnings")
+            || text.ends_with(" errors");
+        if summary_box {
+            continue;
+        }
+        total += 1;
+        if !distinct.contains(&l.trim()) {
+            distinct.push(l.trim());
+        }
+    }
+    if total > 0 {
+        let shown: Vec<&str> = distinct.iter().take(FAILURE_LINES).copied().collect();
+        let more = total - shown.len();
+        let mut why = shown.join(" | ");
+        if more > 0 {
+            why.push_str(&format!(" (and {more} more error lines)"));
+        }
+        return why;
+    }
+    let how = match status.code() {
+        Some(0) => "gmsh wrote no mesh".to_string(),
+        Some(c) => format!("gmsh exited with status {c}"),
+        None => "gmsh was killed by a signal (out of memory? a mesh size far too small for the geometry)".to_string(),
+    };
+    let tail: Vec<&str> = log
+        .lines()
+        .rev()
+        .take(2)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .map(str::trim)
+        .collect();
+    if tail.is_empty() {
+        how
+    } else {
+        format!("{how}; its log ends: {}", tail.join(" | "))
+    }
 }
 
 /// Most elements one `Transfinite` or `Layers` count may ask for along a curve.
@@ -622,15 +670,12 @@ pub fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
         })?;
     let text =
         String::from_utf8_lossy(&res.stderr).to_string() + &String::from_utf8_lossy(&res.stdout);
-    let error = text.lines().find(|l| l.contains("Error"));
-    if !res.status.success() || error.is_some() || !tmp.exists() {
+    let error = text.lines().any(|l| l.contains("Error"));
+    if !res.status.success() || error || !tmp.exists() {
         let _ = std::fs::remove_file(&tmp);
         return Err(MeshError::Gmsh {
             path: path.to_path_buf(),
-            why: error
-                .or_else(|| text.lines().last())
-                .unwrap_or("conversion to msh 2.2 failed")
-                .to_string(),
+            why: failure_summary(&text, &res.status),
         });
     }
     std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
@@ -727,6 +772,32 @@ fn short_hash(h: Sha256) -> String {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_gmsh_failure_is_summarised_in_a_few_distinct_lines() {
+        use std::os::unix::process::ExitStatusExt;
+        // gmsh with a mesh size of 0: one error per curve, then its summary box.
+        let mut log = String::from("Info    : Meshing 1D...\n");
+        for _ in 0..1500 {
+            log.push_str("Error   : Wrong mesh element size lc = 0 (lcmin = 0, lcmax = 0)\n");
+        }
+        log.push_str("Error   : No elements in volume 1\nError   : ------------------------------\nError   : Mesh generation error summary\nError   :     0 warnings\nError   :  1583 errors\nError   : Check the full log for details\nError   : ------------------------------\n");
+        let why = failure_summary(&log, &std::process::ExitStatus::from_raw(256));
+        assert_eq!(
+            why,
+            "Error   : Wrong mesh element size lc = 0 (lcmin = 0, lcmax = 0) | Error   : No elements in volume 1 (and 1499 more error lines)"
+        );
+        // Killed (signal 9), no error line: how it ended and the log's last lines.
+        let why = failure_summary(
+            "Info    : Meshing 1D...\nInfo    : [ 10%] Meshing curve 2 (Line)\n",
+            &std::process::ExitStatus::from_raw(9),
+        );
+        assert!(why.starts_with("gmsh was killed by a signal"), "{why}");
+        assert!(
+            why.ends_with("Info    : Meshing 1D... | Info    : [ 10%] Meshing curve 2 (Line)"),
+            "{why}"
+        );
+    }
+
     use super::*;
 
     #[test]
