@@ -804,3 +804,49 @@ fn a_gmsh_failure_is_one_short_line_at_np_3() {
         &l[..l.len().min(2000)]
     );
 }
+
+#[test]
+fn a_global_mesh_size_far_below_the_model_is_refused_before_gmsh_hangs() {
+    // `bar_tets.geo` sets Mesh.MeshSizeMin/Max = H. H = 1e-9 m on a 0.2 m bar (a unit slip)
+    // kept gmsh meshing the curves (2e8 points each) for more than 10 minutes: a hang. Now
+    // refused at once, naming the size, the extent and the params; the reference is the
+    // ratio extent / size = 0.2 / 1e-9 = 2e8 > 1e6 (the most elements docs/scene.md allows
+    // along a curve). H = 0.02 (10 along the bar) still runs.
+    let dir = workdir("bad_tiny_mesh_size");
+    let scene = dir.join("scene.toml");
+    let text = |h: &str| {
+        format!(
+            "[run]\nend_time = 1.0e-6\n[[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = {h} }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\nyoungs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+            root().join("meshes/bar_tets.geo").display()
+        )
+    };
+    std::fs::write(&scene, text("1.0e-9")).unwrap();
+    let t0 = std::time::Instant::now();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "must fail:\n{err}");
+    assert!(
+        t0.elapsed().as_secs() < 60,
+        "refused at once, not after gmsh's meshing ({:?})",
+        t0.elapsed()
+    );
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("mesh[0]")
+            && lines[0].contains("Mesh.MeshSizeMax = 1e-9 m is 2.0e8 times smaller")
+            && lines[0].contains("H = 1e-9"),
+        "one line naming the size, the ratio and the params:\n{err}"
+    );
+    std::fs::write(&scene, text("0.02")).unwrap();
+    run_ok(3, &scene, &dir.join("ok"));
+}

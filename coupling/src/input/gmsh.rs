@@ -108,6 +108,7 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         path: cache_dir.to_path_buf(),
         why: e.to_string(),
     })?;
+    check_global_size(def, cache_dir)?;
     let tmp = cache_dir.join(format!("{stem}-{hash}.{}.tmp.msh", std::process::id()));
     let mut cmd = Command::new("gmsh");
     cmd.arg(path).arg("-3").arg("-format").arg("msh22");
@@ -137,6 +138,76 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         why: e.to_string(),
     })?;
     Ok(out)
+}
+
+/// Most elements a global mesh size may ask for along the model's largest extent (as
+/// [`MAX_COUNT`] along a curve for `Transfinite` counts).
+pub const MAX_ALONG_EXTENT: f64 = MAX_COUNT;
+
+/// Refuses a `.geo` whose global mesh size (`Mesh.MeshSizeMax` times `Mesh.MeshSizeFactor`,
+/// as the file and `params` set them) is more than [`MAX_ALONG_EXTENT`] times smaller than the
+/// model's largest extent: gmsh would mesh the curves alone for hours (a size of 1e-9 m on a
+/// 0.2 m bar, a unit slip, is 2e8 points on each long edge), a hang rather than an error.
+/// gmsh reads the file without meshing it (`-parse_and_exit`) and prints the bounding box and
+/// the options; a file it cannot read so is left to the meshing run, which reports it. Sizes
+/// set per point (`MeshSize{...} = h`) are not seen here.
+fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
+    let Ok(geo) = std::fs::canonicalize(&def.file) else {
+        return Ok(());
+    };
+    let probe = cache_dir.join(format!("size-probe.{}.geo", std::process::id()));
+    let text = format!(
+        "Include \"{}\";\nSyncModel;\nPrintf(\"TDYN_SIZE %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\", General.MinX, General.MinY, General.MinZ, General.MaxX, General.MaxY, General.MaxZ, Mesh.MeshSizeMax, Mesh.MeshSizeFactor);\n",
+        geo.display()
+    );
+    if std::fs::write(&probe, text).is_err() {
+        return Ok(());
+    }
+    let mut cmd = Command::new("gmsh");
+    cmd.arg(&probe).arg("-parse_and_exit");
+    for (k, v) in &def.params {
+        cmd.arg("-setnumber").arg(k).arg(format!("{v}"));
+    }
+    let out = cmd.output();
+    let _ = std::fs::remove_file(&probe);
+    let Ok(out) = out else {
+        return Ok(());
+    };
+    let log =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    let Some(v) = log.lines().find_map(|l| {
+        let rest = l.split("TDYN_SIZE ").nth(1)?;
+        let v: Vec<f64> = rest
+            .split_whitespace()
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        (v.len() == 8).then_some(v)
+    }) else {
+        return Ok(());
+    };
+    let extent = (0..3).map(|c| v[c + 3] - v[c]).fold(0.0f64, f64::max);
+    let size = v[6] * v[7];
+    if extent.is_finite() && size > 0.0 && extent / size > MAX_ALONG_EXTENT {
+        let params: Vec<String> = def
+            .params
+            .iter()
+            .map(|(k, x)| format!("{k} = {}", crate::input::scene::num_text(*x)))
+            .collect();
+        return Err(MeshError::File {
+            path: def.file.clone(),
+            why: format!(
+                "the mesh size Mesh.MeshSizeMax = {} m is {:.1e} times smaller than the model's extent {extent:.3e} m, more than {MAX_ALONG_EXTENT:e} elements along it: gmsh would not finish; check the units of the size (m){}",
+                crate::input::scene::num_text(size),
+                extent / size,
+                if params.is_empty() {
+                    String::new()
+                } else {
+                    format!(" and the params ({})", params.join(", "))
+                }
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Distinct gmsh error lines a failure message quotes at most.
