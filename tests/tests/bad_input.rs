@@ -843,10 +843,33 @@ fn a_global_mesh_size_far_below_the_model_is_refused_before_gmsh_hangs() {
     assert!(
         lines.len() == 1
             && lines[0].contains("mesh[0]")
-            && lines[0].contains("Mesh.MeshSizeMax = 1e-9 m is 2.0e8 times smaller")
+            && lines[0].contains("the mesh size Mesh.MeshSizeMax = 1e-9 m is 2.0e8 times smaller")
             && lines[0].contains("H = 1e-9"),
         "one line naming the size, the ratio and the params:\n{err}"
     );
     std::fs::write(&scene, text("0.02")).unwrap();
     run_ok(3, &scene, &dir.join("ok"));
+    // The same size set per point (`block_tet.geo`: MeshSize{ PointsOf{ Volume{1}; } } = H).
+    let block = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("bar_tets.geo", "block_tet.geo")
+        .replace("H = 0.02", "H = 1.0e-9");
+    std::fs::write(&scene, block).unwrap();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out_points"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert!(
+        !o.status.success()
+            && lines.len() == 1
+            && lines[0]
+                .contains("the point size MeshSize{...} = H = 1e-9 m is 2.0e8 times smaller"),
+        "a point size: one line naming the statement and the ratio:\n{err}"
+    );
 }

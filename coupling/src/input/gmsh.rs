@@ -150,16 +150,24 @@ pub const MAX_ALONG_EXTENT: f64 = MAX_COUNT;
 /// 0.2 m bar, a unit slip, is 2e8 points on each long edge), a hang rather than an error.
 /// gmsh reads the file without meshing it (`-parse_and_exit`) and prints the bounding box and
 /// the options; a file it cannot read so is left to the meshing run, which reports it. Sizes
-/// set per point (`MeshSize{...} = h`) are not seen here.
+/// set per point (`MeshSize{...} = h`, `Characteristic Length{...} = h`) are checked the same
+/// way: gmsh evaluates each statement's expression after reading the file (a value it cannot
+/// evaluate there, such as a loop's variable, is not checked).
 fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
     let Ok(geo) = std::fs::canonicalize(&def.file) else {
         return Ok(());
     };
     let probe = cache_dir.join(format!("size-probe.{}.geo", std::process::id()));
-    let text = format!(
-        "Include \"{}\";\nSyncModel;\nPrintf(\"TDYN_SIZE %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\", General.MinX, General.MinY, General.MinZ, General.MaxX, General.MaxY, General.MaxZ, Mesh.MeshSizeMax, Mesh.MeshSizeFactor);\n",
+    let exprs = std::fs::read_to_string(&def.file)
+        .map(|t| point_size_expressions(&t))
+        .unwrap_or_default();
+    let mut text = format!(
+        "Include \"{}\";\nSyncModel;\nPrintf(\"TDYN_SIZE %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\", General.MinX, General.MinY, General.MinZ, General.MaxX, General.MaxY, General.MaxZ, Mesh.MeshSizeMax, Mesh.MeshSizeFactor, Mesh.MeshSizeMin);\n",
         geo.display()
     );
+    for (k, e) in exprs.iter().enumerate() {
+        text.push_str(&format!("Printf(\"TDYN_PSIZE {k} %.17g\", {e});\n"));
+    }
     if std::fs::write(&probe, text).is_err() {
         return Ok(());
     }
@@ -181,13 +189,40 @@ fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
             .split_whitespace()
             .filter_map(|x| x.parse().ok())
             .collect();
-        (v.len() == 8).then_some(v)
+        (v.len() == 9).then_some(v)
     }) else {
         return Ok(());
     };
     let extent = (0..3).map(|c| v[c + 3] - v[c]).fold(0.0f64, f64::max);
-    let size = v[6] * v[7];
-    if extent.is_finite() && size > 0.0 && extent / size > MAX_ALONG_EXTENT {
+    let (factor, floor) = (v[7], v[8].max(0.0));
+    // The global size, then each point size (floored by Mesh.MeshSizeMin), with what set it.
+    let mut sizes = vec![(v[6] * factor, "the mesh size Mesh.MeshSizeMax".to_string())];
+    for l in log.lines() {
+        let Some(rest) = l.split("TDYN_PSIZE ").nth(1) else {
+            continue;
+        };
+        let mut it = rest.split_whitespace();
+        let (Some(Ok(k)), Some(Ok(h))) = (
+            it.next().map(str::parse::<usize>),
+            it.next().map(str::parse::<f64>),
+        ) else {
+            continue;
+        };
+        if let Some(e) = exprs.get(k) {
+            sizes.push((
+                h.max(floor) * factor,
+                format!("the point size MeshSize{{...}} = {e}"),
+            ));
+        }
+    }
+    let worst = sizes
+        .into_iter()
+        .filter(|(h, _)| *h > 0.0 && h.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    let Some((size, what)) = worst else {
+        return Ok(());
+    };
+    if extent.is_finite() && extent / size > MAX_ALONG_EXTENT {
         let params: Vec<String> = def
             .params
             .iter()
@@ -196,7 +231,7 @@ fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
         return Err(MeshError::File {
             path: def.file.clone(),
             why: format!(
-                "the mesh size Mesh.MeshSizeMax = {} m is {:.1e} times smaller than the model's extent {extent:.3e} m, more than {MAX_ALONG_EXTENT:e} elements along it: gmsh would not finish; check the units of the size (m){}",
+                "{what} = {} m is {:.1e} times smaller than the model's extent {extent:.3e} m, more than {MAX_ALONG_EXTENT:e} elements along it: gmsh would not finish; check the units of the size (m){}",
                 crate::input::scene::num_text(size),
                 extent / size,
                 if params.is_empty() {
@@ -208,6 +243,34 @@ fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
         });
     }
     Ok(())
+}
+
+/// The expressions of a .geo's point size statements, `MeshSize{...} = EXPR;` and
+/// `Characteristic Length{...} = EXPR;` (comments left out).
+fn point_size_expressions(geo: &str) -> Vec<String> {
+    let code = strip_comments(geo);
+    let mut out = Vec::new();
+    for key in ["MeshSize", "Characteristic Length"] {
+        let mut rest = code.as_str();
+        while let Some(at) = rest.find(key) {
+            rest = &rest[at + key.len()..];
+            let after = rest.trim_start();
+            let Some(inner) = braced(after) else {
+                continue;
+            };
+            let tail = after[inner.len() + 2..].trim_start();
+            let Some(expr) = tail.strip_prefix('=') else {
+                continue;
+            };
+            if let Some(end) = expr.find(';') {
+                let e = expr[..end].trim();
+                if !e.is_empty() && !e.contains('"') {
+                    out.push(e.to_string());
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Distinct gmsh error lines a failure message quotes at most.
@@ -843,6 +906,12 @@ fn short_hash(h: Sha256) -> String {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn point_size_statements_are_found() {
+        let geo = "MeshSize{ PointsOf{ Volume{1}; } } = HP; // the plate\nMeshSize{ Point In BoundingBox{-e, -e, -e, A + e, A + e, T + e} } = HH / 2;\nMesh.MeshSizeMax = H;\nCharacteristic Length{1, 2} = lc;\n";
+        assert_eq!(point_size_expressions(geo), ["HP", "HH / 2", "lc"]);
+    }
+
     #[test]
     fn a_gmsh_failure_is_summarised_in_a_few_distinct_lines() {
         use std::os::unix::process::ExitStatusExt;
