@@ -200,9 +200,17 @@ fn an_unreadable_mesh_and_a_blow_up_are_reported() {
     let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
     let text = std::fs::read_to_string(&scene).unwrap();
     let geo = root().join("meshes").join("bar.geo").display().to_string();
-    std::fs::write(&scene, text.replace(&geo, &msh.display().to_string())).unwrap();
+    // (a .msh takes no params)
+    let text = text
+        .replace(&geo, &msh.display().to_string())
+        .replace("params = { L = 1.0, A = 0.05, N = 4, M = 1 }\n", "");
+    std::fs::write(&scene, text).unwrap();
     let o = run(2, &scene, &dir.join("out"));
     assert!(!o.status.success(), "a broken mesh must fail");
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("params"),
+        "fails on the mesh, not on params"
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("broken.msh"), "names the mesh:\n{err}");
 
@@ -512,9 +520,11 @@ fn issue_16_cases(dir: &Path) -> Vec<Case> {
         std::fs::write(&msh, text).unwrap();
         let mut needles = needles;
         needles.push(format!("{name}.msh"));
+        // (a .msh takes no params: refused with them)
         scenes.push((
             name.into(),
-            base.replace(&geo, &msh.display().to_string()),
+            base.replace(&geo, &msh.display().to_string())
+                .replace("params = { L = 1.0, A = 0.05, N = 4, M = 1 }\n", ""),
             needles,
         ));
     }
