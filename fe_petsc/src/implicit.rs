@@ -377,6 +377,10 @@ pub struct ImplicitFe {
     owned_buf: Vec<f64>,
     local_buf: Vec<f64>,
     tangent_stale: bool,
+    /// The element matrices came back from a checkpoint (`set_restart_state`): the diagonal
+    /// and the coarse grid are summed from them before the next solve, as the tangent's
+    /// assembly would have.
+    tangent_restored: bool,
     force_scale_max: f64,
     /// The symmetry-plane normals of the nodes that have them (until the walls take them).
     plane_normals: std::collections::HashMap<usize, Vec<[f64; 3]>>,
@@ -503,6 +507,7 @@ impl ImplicitFe {
             local_buf: vec![0.0; 3 * nn],
             owned_nodes,
             tangent_stale: true,
+            tangent_restored: false,
             force_scale_max: 0.0,
             plane_normals,
             walls: None,
@@ -696,6 +701,10 @@ impl ImplicitFe {
             if self.tangent_stale || self.options.full {
                 self.assemble_tangent(exchange)?;
                 self.tangent_stale = false;
+                self.tangent_restored = false;
+            } else if self.tangent_restored {
+                self.restore_diagonal(exchange)?;
+                self.tangent_restored = false;
             }
             self.newton_update(comm, exchange)?;
             prev = Some(rnorm);

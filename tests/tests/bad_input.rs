@@ -163,6 +163,32 @@ fn documented_mistakes_give_clear_messages() {
         contact("passes = 1\nmaster = [\"rod\"]\n"),
         "contact.master[0]: no physical volume \"rod\"",
     );
+    // Names that head CSV columns: a comma would shift every column after it, a field listed
+    // twice would give two columns of one name (probes.csv, contact_forces.csv: docs/output.md).
+    let probe = |name: &'static str, fields: &'static str| {
+        move |s: String| {
+            s + &format!(
+                "[[probe]]\nname = \"{name}\"\npoint = [0.5, 0.025, 0.025]\nfields = [{fields}]\n"
+            )
+        }
+    };
+    expect_error(
+        "probe_name_with_comma",
+        probe("a,b", "\"velocity_x\""),
+        "probe[0].name: expected a name for probes.csv's columns (not empty, no comma",
+    );
+    expect_error(
+        "probe_field_twice",
+        probe("p", "\"velocity_x\", \"stress_xx\", \"velocity_x\""),
+        "probe[0].fields[2]: \"velocity_x\" is listed twice",
+    );
+    expect_error(
+        "particles_name_with_comma",
+        |s| {
+            s + "[[particles]]\nname = \"a,b\"\nmaterial = \"steel\"\nregion = { box = { min = [2.0, 0.0, 0.0], max = [2.01, 0.01, 0.01] } }\nspacing = 0.005\n"
+        },
+        "particles[0].name: expected a name for contact_forces.csv's columns",
+    );
 }
 
 #[test]
@@ -174,9 +200,17 @@ fn an_unreadable_mesh_and_a_blow_up_are_reported() {
     let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
     let text = std::fs::read_to_string(&scene).unwrap();
     let geo = root().join("meshes").join("bar.geo").display().to_string();
-    std::fs::write(&scene, text.replace(&geo, &msh.display().to_string())).unwrap();
+    // (a .msh takes no params)
+    let text = text
+        .replace(&geo, &msh.display().to_string())
+        .replace("params = { L = 1.0, A = 0.05, N = 4, M = 1 }\n", "");
+    std::fs::write(&scene, text).unwrap();
     let o = run(2, &scene, &dir.join("out"));
     assert!(!o.status.success(), "a broken mesh must fail");
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("params"),
+        "fails on the mesh, not on params"
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("broken.msh"), "names the mesh:\n{err}");
 
@@ -486,9 +520,11 @@ fn issue_16_cases(dir: &Path) -> Vec<Case> {
         std::fs::write(&msh, text).unwrap();
         let mut needles = needles;
         needles.push(format!("{name}.msh"));
+        // (a .msh takes no params: refused with them)
         scenes.push((
             name.into(),
-            base.replace(&geo, &msh.display().to_string()),
+            base.replace(&geo, &msh.display().to_string())
+                .replace("params = { L = 1.0, A = 0.05, N = 4, M = 1 }\n", ""),
             needles,
         ));
     }
@@ -662,5 +698,188 @@ fn particles_on_a_face_inside_a_meshed_body_are_refused_and_on_its_outer_face_ac
         o.status.success(),
         "a lattice resting on the plate's top face is outside it:\n{}",
         String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn an_empty_physical_group_and_params_on_a_msh_are_refused_at_np_3() {
+    // gmsh writes the name of a physical group that holds no element (`Physical Surface("x") =
+    // {};`, or wrong entity numbers), so the name check alone passes: a condition, load or
+    // block on it acted on nothing without a word. And `params` on a .msh file (already
+    // meshed) were ignored without a word. Each must be one line naming the key, at np 3 too.
+    let dir = workdir("bad_empty_groups");
+    let geo = dir.join("bar_empty.geo");
+    let text = std::fs::read_to_string(root().join("meshes").join("bar.geo")).unwrap()
+        + "Physical Surface(\"nothing\") = {};\nPhysical Volume(\"no_volume\") = {};\n";
+    std::fs::write(&geo, text).unwrap();
+    let scene = bar_scene(&dir, 4, "end_time = 1.0e-5", "");
+    let base = std::fs::read_to_string(&scene).unwrap().replace(
+        &root().join("meshes/bar.geo").display().to_string(),
+        "bar_empty.geo",
+    );
+    let msh = dir.join("bar.msh");
+    let o = std::process::Command::new("gmsh")
+        .arg(root().join("meshes").join("bar.geo"))
+        .args(["-3", "-format", "msh22", "-setnumber", "N", "4", "-o"])
+        .arg(&msh)
+        .output()
+        .expect("gmsh is needed (make setup installs it)");
+    assert!(o.status.success(), "gmsh: {o:?}");
+    let cases: [(&str, String, &str); 5] = [
+        (
+            "boundary",
+            base.clone() + "[[boundary]]\ngroup = \"nothing\"\nkind = \"fixed\"\n",
+            "boundary[2].group: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "load",
+            base.clone() + "[[load]]\ngroup = \"nothing\"\npressure = 1.0e6\n",
+            "load[0].group: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "block",
+            base.clone() + "[[block]]\ngroup = \"no_volume\"\nmaterial = \"steel\"\n",
+            "block[1].group: the physical volume \"no_volume\" holds no elements",
+        ),
+        (
+            "contact",
+            base.clone() + "[contact]\nsurfaces = [\"left\", \"nothing\"]\n",
+            "contact.surfaces[1]: the physical surface \"nothing\" holds no elements",
+        ),
+        (
+            "msh_params",
+            base.replace("bar_empty.geo", "bar.msh"),
+            "mesh[0].params.A: bar.msh is read as it is: params are passed to gmsh to mesh a .geo",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        std::fs::write(&scene, &text).unwrap();
+        let out = dir.join(format!("out_{name}"));
+        let o = mpirun(3, 120)
+            .arg(tdyn())
+            .args(["run"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name}: must fail at np 3:\n{err}");
+        let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+        assert!(
+            lines.len() == 1 && lines[0].contains(needle) && lines[0].contains("scene.toml"),
+            "{name}: one line at np 3 naming the file and {needle:?}:\n{err}"
+        );
+        assert!(!err.contains("panicked"), "{name}: no panic:\n{err}");
+    }
+}
+
+#[test]
+fn a_gmsh_failure_is_one_short_line_at_np_3() {
+    // A mesh size of 0 (`bar_tets.geo`'s H) makes gmsh print one error per curve and surface,
+    // about 1,580 lines: the message quoted them all, joined into one line of about 120 kB.
+    // Now the distinct error lines (at most 3) and the count of the others.
+    let dir = workdir("bad_gmsh_failure");
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[run]\nend_time = 1.0e-5\n[[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = 0.0 }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\nyoungs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+            root().join("meshes/bar_tets.geo").display()
+        ),
+    )
+    .unwrap();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "must fail:\n{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert_eq!(lines.len(), 1, "one error line:\n{err}");
+    let l = lines[0];
+    assert!(
+        l.contains("mesh[0]: gmsh failed on")
+            && l.contains("Wrong mesh element size lc = 0")
+            && l.contains("more error lines")
+            && l.len() < 500,
+        "one short line naming the key and gmsh's distinct errors ({} chars):\n{}",
+        l.len(),
+        &l[..l.len().min(2000)]
+    );
+}
+
+#[test]
+fn a_global_mesh_size_far_below_the_model_is_refused_before_gmsh_hangs() {
+    // `bar_tets.geo` sets Mesh.MeshSizeMin/Max = H. H = 1e-9 m on a 0.2 m bar (a unit slip)
+    // kept gmsh meshing the curves (2e8 points each) for more than 10 minutes: a hang. Now
+    // refused at once, naming the size, the extent and the params; the reference is the
+    // ratio extent / size = 0.2 / 1e-9 = 2e8 > 1e6 (the most elements docs/scene.md allows
+    // along a curve). H = 0.02 (10 along the bar) still runs.
+    let dir = workdir("bad_tiny_mesh_size");
+    let scene = dir.join("scene.toml");
+    let text = |h: &str| {
+        format!(
+            "[run]\nend_time = 1.0e-6\n[[mesh]]\nfile = \"{}\"\nparams = {{ L = 0.2, A = 0.05, H = {h} }}\n\
+             [[material]]\nname = \"steel\"\nmodel = \"elastic\"\ndensity = 7850.0\nyoungs_modulus = 200.0e9\npoisson_ratio = 0.3\n\
+             [[block]]\ngroup = \"bar\"\nmaterial = \"steel\"\n",
+            root().join("meshes/bar_tets.geo").display()
+        )
+    };
+    std::fs::write(&scene, text("1.0e-9")).unwrap();
+    let t0 = std::time::Instant::now();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "must fail:\n{err}");
+    assert!(
+        t0.elapsed().as_secs() < 60,
+        "refused at once, not after gmsh's meshing ({:?})",
+        t0.elapsed()
+    );
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("mesh[0]")
+            && lines[0].contains("the mesh size Mesh.MeshSizeMax = 1e-9 m is 2.0e8 times smaller")
+            && lines[0].contains("H = 1e-9"),
+        "one line naming the size, the ratio and the params:\n{err}"
+    );
+    std::fs::write(&scene, text("0.02")).unwrap();
+    run_ok(3, &scene, &dir.join("ok"));
+    // The same size set per point (`block_tet.geo`: MeshSize{ PointsOf{ Volume{1}; } } = H).
+    let block = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("bar_tets.geo", "block_tet.geo")
+        .replace("H = 0.02", "H = 1.0e-9");
+    std::fs::write(&scene, block).unwrap();
+    let o = mpirun(3, 120)
+        .arg(tdyn())
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out_points"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("tdyn: error")).collect();
+    assert!(
+        !o.status.success()
+            && lines.len() == 1
+            && lines[0]
+                .contains("the point size MeshSize{...} = H = 1e-9 m is 2.0e8 times smaller"),
+        "a point size: one line naming the statement and the ratio:\n{err}"
     );
 }

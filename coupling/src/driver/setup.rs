@@ -352,6 +352,7 @@ fn load_mesh(
     let file = scene.file.display().to_string();
     let mut mesh_path = PathBuf::new();
     let mut surfaces = fe_petsc::mesh::FileSurfaces::default();
+    let mut volume_counts: Vec<(i32, usize)> = Vec::new();
     let mut err = None;
     let mut split_counts = [0u64; 4];
     if world.rank() == 0 {
@@ -362,6 +363,7 @@ fn load_mesh(
                         [s.tetrahedra, s.prisms, s.hexahedra, s.hexahedra_run].map(|n| n as u64);
                 }
                 mesh_path = p;
+                volume_counts = summary.volumes;
                 surfaces = fe_petsc::mesh::FileSurfaces {
                     nodes: summary.nodes,
                     surfaces: summary.surfaces,
@@ -409,6 +411,28 @@ fn load_mesh(
     let vols: Vec<String> = groups.volumes.keys().cloned().collect();
     let surfs: Vec<String> = groups.surfaces.keys().cloned().collect();
     scene::validate_groups(scene, &vols, &surfs).map_err(|e| e.to_string())?;
+    // A group the scene names must hold elements: gmsh writes the name of a physical group
+    // whose entities have none (`Physical Surface("top") = {};`, or a wrong entity number),
+    // and a condition or a block on it would act on nothing without a word. Rank 0 read the
+    // file's elements; the others learn its verdict.
+    let mut err = None;
+    if world.rank() == 0 {
+        let has_volume = |tag: i32| volume_counts.iter().any(|&(t, n)| t == tag && n > 0);
+        let has_surface = |tag: i32| {
+            surfaces
+                .surfaces
+                .iter()
+                .any(|(t, f)| *t == tag && !f.is_empty())
+        };
+        err = scene::validate_groups_hold_elements(
+            scene,
+            |name| groups.volumes.get(name).is_some_and(|&t| has_volume(t)),
+            |name| groups.surfaces.get(name).is_some_and(|&t| has_surface(t)),
+        )
+        .err()
+        .map(|e| e.to_string());
+    }
+    first_error(world, err)?;
     let mut dm = DistributedMesh::load(world, &mesh_path, &surfaces)
         .map_err(|e| format!("{file}: mesh: {e}"))?;
     // One mesh is moved here; several were moved when merged.

@@ -108,6 +108,7 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         path: cache_dir.to_path_buf(),
         why: e.to_string(),
     })?;
+    check_global_size(def, cache_dir)?;
     let tmp = cache_dir.join(format!("{stem}-{hash}.{}.tmp.msh", std::process::id()));
     let mut cmd = Command::new("gmsh");
     cmd.arg(path).arg("-3").arg("-format").arg("msh22");
@@ -124,23 +125,12 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
         String::from_utf8_lossy(&res.stdout),
         String::from_utf8_lossy(&res.stderr)
     );
-    let errors: Vec<&str> = log.lines().filter(|l| l.contains("Error")).collect();
-    if !res.status.success() || !errors.is_empty() || !tmp.exists() {
+    let has_error = log.lines().any(|l| l.contains("Error"));
+    if !res.status.success() || has_error || !tmp.exists() {
         let _ = std::fs::remove_file(&tmp);
-        let tail: Vec<&str> = if errors.is_empty() {
-            log.lines()
-                .rev()
-                .take(5)
-                .collect::<Vec<_>>()
-                .into_iter()
-                .rev()
-                .collect()
-        } else {
-            errors
-        };
         return Err(MeshError::Gmsh {
             path: path.clone(),
-            why: tail.join(" | "),
+            why: failure_summary(&log, &res.status),
         });
     }
     std::fs::rename(&tmp, &out).map_err(|e| MeshError::File {
@@ -150,21 +140,224 @@ pub fn mesh_file(def: &MeshDef, cache_dir: &Path) -> Result<PathBuf, MeshError> 
     Ok(out)
 }
 
+/// Most elements a global mesh size may ask for along the model's largest extent (as
+/// [`MAX_COUNT`] along a curve for `Transfinite` counts).
+pub const MAX_ALONG_EXTENT: f64 = MAX_COUNT;
+
+/// Refuses a `.geo` whose global mesh size (`Mesh.MeshSizeMax` times `Mesh.MeshSizeFactor`,
+/// as the file and `params` set them) is more than [`MAX_ALONG_EXTENT`] times smaller than the
+/// model's largest extent: gmsh would mesh the curves alone for hours (a size of 1e-9 m on a
+/// 0.2 m bar, a unit slip, is 2e8 points on each long edge), a hang rather than an error.
+/// gmsh reads the file without meshing it (`-parse_and_exit`) and prints the bounding box and
+/// the options; a file it cannot read so is left to the meshing run, which reports it. Sizes
+/// set per point (`MeshSize{...} = h`, `Characteristic Length{...} = h`) are checked the same
+/// way: gmsh evaluates each statement's expression after reading the file (a value it cannot
+/// evaluate there, such as a loop's variable, is not checked).
+fn check_global_size(def: &MeshDef, cache_dir: &Path) -> Result<(), MeshError> {
+    let Ok(geo) = std::fs::canonicalize(&def.file) else {
+        return Ok(());
+    };
+    let probe = cache_dir.join(format!("size-probe.{}.geo", std::process::id()));
+    let exprs = std::fs::read_to_string(&def.file)
+        .map(|t| point_size_expressions(&t))
+        .unwrap_or_default();
+    let mut text = format!(
+        "Include \"{}\";\nSyncModel;\nPrintf(\"TDYN_SIZE %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\", General.MinX, General.MinY, General.MinZ, General.MaxX, General.MaxY, General.MaxZ, Mesh.MeshSizeMax, Mesh.MeshSizeFactor, Mesh.MeshSizeMin);\n",
+        geo.display()
+    );
+    for (k, e) in exprs.iter().enumerate() {
+        text.push_str(&format!("Printf(\"TDYN_PSIZE {k} %.17g\", {e});\n"));
+    }
+    if std::fs::write(&probe, text).is_err() {
+        return Ok(());
+    }
+    let mut cmd = Command::new("gmsh");
+    cmd.arg(&probe).arg("-parse_and_exit");
+    for (k, v) in &def.params {
+        cmd.arg("-setnumber").arg(k).arg(format!("{v}"));
+    }
+    let out = cmd.output();
+    let _ = std::fs::remove_file(&probe);
+    let Ok(out) = out else {
+        return Ok(());
+    };
+    let log =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    let Some(v) = log.lines().find_map(|l| {
+        let rest = l.split("TDYN_SIZE ").nth(1)?;
+        let v: Vec<f64> = rest
+            .split_whitespace()
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        (v.len() == 9).then_some(v)
+    }) else {
+        return Ok(());
+    };
+    let extent = (0..3).map(|c| v[c + 3] - v[c]).fold(0.0f64, f64::max);
+    let (factor, floor) = (v[7], v[8].max(0.0));
+    // The global size, then each point size (floored by Mesh.MeshSizeMin), with what set it.
+    let mut sizes = vec![(v[6] * factor, "the mesh size Mesh.MeshSizeMax".to_string())];
+    for l in log.lines() {
+        let Some(rest) = l.split("TDYN_PSIZE ").nth(1) else {
+            continue;
+        };
+        let mut it = rest.split_whitespace();
+        let (Some(Ok(k)), Some(Ok(h))) = (
+            it.next().map(str::parse::<usize>),
+            it.next().map(str::parse::<f64>),
+        ) else {
+            continue;
+        };
+        if let Some(e) = exprs.get(k) {
+            sizes.push((
+                h.max(floor) * factor,
+                format!("the point size MeshSize{{...}} = {e}"),
+            ));
+        }
+    }
+    let worst = sizes
+        .into_iter()
+        .filter(|(h, _)| *h > 0.0 && h.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    let Some((size, what)) = worst else {
+        return Ok(());
+    };
+    if extent.is_finite() && extent / size > MAX_ALONG_EXTENT {
+        let params: Vec<String> = def
+            .params
+            .iter()
+            .map(|(k, x)| format!("{k} = {}", crate::input::scene::num_text(*x)))
+            .collect();
+        return Err(MeshError::File {
+            path: def.file.clone(),
+            why: format!(
+                "{what} = {} m is {:.1e} times smaller than the model's extent {extent:.3e} m, more than {MAX_ALONG_EXTENT:e} elements along it: gmsh would not finish; check the units of the size (m){}",
+                crate::input::scene::num_text(size),
+                extent / size,
+                if params.is_empty() {
+                    String::new()
+                } else {
+                    format!(" and the params ({})", params.join(", "))
+                }
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The expressions of a .geo's point size statements, `MeshSize{...} = EXPR;` and
+/// `Characteristic Length{...} = EXPR;` (comments left out).
+fn point_size_expressions(geo: &str) -> Vec<String> {
+    let code = strip_comments(geo);
+    let mut out = Vec::new();
+    for key in ["MeshSize", "Characteristic Length"] {
+        let mut rest = code.as_str();
+        while let Some(at) = rest.find(key) {
+            rest = &rest[at + key.len()..];
+            let after = rest.trim_start();
+            let Some(inner) = braced(after) else {
+                continue;
+            };
+            let tail = after[inner.len() + 2..].trim_start();
+            let Some(expr) = tail.strip_prefix('=') else {
+                continue;
+            };
+            if let Some(end) = expr.find(';') {
+                let e = expr[..end].trim();
+                if !e.is_empty() && !e.contains('"') {
+                    out.push(e.to_string());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Distinct gmsh error lines a failure message quotes at most.
+const FAILURE_LINES: usize = 3;
+
+/// What gmsh's log says about a failure, for one line: its distinct `Error` lines (the first
+/// [`FAILURE_LINES`], with the count of the others: a mesh size of 0 repeats one error for
+/// every curve, thousands of times), without gmsh's closing summary box; or, with no error
+/// line (gmsh killed, out of memory, crashed), how it ended and its last lines.
+pub fn failure_summary(log: &str, status: &std::process::ExitStatus) -> String {
+    let mut distinct: Vec<&str> = Vec::new();
+    let mut total = 0usize;
+    for l in log.lines().filter(|l| l.contains("Error")) {
+        let text = l
+            .trim_start_matches("Error")
+            .trim_start_matches([' ', ':'])
+            .trim();
+        let summary_box = text.is_empty()
+            || text.starts_with("---")
+            || text == "Mesh generation error summary"
+            || text == "Check the full log for details"
+            || text.ends_with(" warnings")
+            || text.ends_with(" errors");
+        if summary_box {
+            continue;
+        }
+        total += 1;
+        if !distinct.contains(&l.trim()) {
+            distinct.push(l.trim());
+        }
+    }
+    if total > 0 {
+        let shown: Vec<&str> = distinct.iter().take(FAILURE_LINES).copied().collect();
+        let more = total - shown.len();
+        let mut why = shown.join(" | ");
+        if more > 0 {
+            why.push_str(&format!(" (and {more} more error lines)"));
+        }
+        return why;
+    }
+    let how = match status.code() {
+        Some(0) => "gmsh wrote no mesh".to_string(),
+        Some(c) => format!("gmsh exited with status {c}"),
+        None => "gmsh was killed by a signal (out of memory? a mesh size far too small for the geometry)".to_string(),
+    };
+    let tail: Vec<&str> = log
+        .lines()
+        .rev()
+        .take(2)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .map(str::trim)
+        .collect();
+    if tail.is_empty() {
+        how
+    } else {
+        format!("{how}; its log ends: {}", tail.join(" | "))
+    }
+}
+
 /// Most elements one `Transfinite` or `Layers` count may ask for along a curve.
 pub const MAX_COUNT: f64 = 1e6;
 
 /// The gmsh parameters of `def` are finite, and those its .geo uses as element counts
 /// ([`count_parameters`]) are whole numbers from 1 to [`MAX_COUNT`] (gmsh would round 10.5 down
 /// and turn 0, -5 or 1e12 into a mesh of one element without a word). A .msh takes no
-/// parameters. Returns the parameter and what was expected.
+/// parameters: one given to it is refused (it would change nothing, without a word). Returns
+/// the parameter and what was expected.
 pub fn check_params(def: &MeshDef) -> Result<(), (String, String)> {
     for (name, v) in &def.params {
         if !v.is_finite() {
             return Err((name.clone(), format!("expected a finite number, got {v}")));
         }
     }
-    if def.params.is_empty() || def.file.extension().is_none_or(|e| e != "geo") {
+    if def.params.is_empty() {
         return Ok(());
+    }
+    if def.file.extension().is_none_or(|e| e != "geo") {
+        let name = def.params.keys().next().cloned().unwrap_or_default();
+        return Err((
+            name,
+            format!(
+                "{} is read as it is: params are passed to gmsh to mesh a .geo file, and a .msh file is already meshed (remove params, or name the .geo file)",
+                def.file.file_name().unwrap_or_default().to_string_lossy()
+            ),
+        ));
     }
     let Ok(text) = std::fs::read_to_string(&def.file) else {
         return Ok(()); // reported where the file is read
@@ -611,15 +804,12 @@ pub fn as_msh22(path: &Path, cache_dir: &Path) -> Result<PathBuf, MeshError> {
         })?;
     let text =
         String::from_utf8_lossy(&res.stderr).to_string() + &String::from_utf8_lossy(&res.stdout);
-    let error = text.lines().find(|l| l.contains("Error"));
-    if !res.status.success() || error.is_some() || !tmp.exists() {
+    let error = text.lines().any(|l| l.contains("Error"));
+    if !res.status.success() || error || !tmp.exists() {
         let _ = std::fs::remove_file(&tmp);
         return Err(MeshError::Gmsh {
             path: path.to_path_buf(),
-            why: error
-                .or_else(|| text.lines().last())
-                .unwrap_or("conversion to msh 2.2 failed")
-                .to_string(),
+            why: failure_summary(&text, &res.status),
         });
     }
     std::fs::rename(&tmp, &out).map_err(|e| bad(&out, &e.to_string()))?;
@@ -716,6 +906,38 @@ fn short_hash(h: Sha256) -> String {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn point_size_statements_are_found() {
+        let geo = "MeshSize{ PointsOf{ Volume{1}; } } = HP; // the plate\nMeshSize{ Point In BoundingBox{-e, -e, -e, A + e, A + e, T + e} } = HH / 2;\nMesh.MeshSizeMax = H;\nCharacteristic Length{1, 2} = lc;\n";
+        assert_eq!(point_size_expressions(geo), ["HP", "HH / 2", "lc"]);
+    }
+
+    #[test]
+    fn a_gmsh_failure_is_summarised_in_a_few_distinct_lines() {
+        use std::os::unix::process::ExitStatusExt;
+        // gmsh with a mesh size of 0: one error per curve, then its summary box.
+        let mut log = String::from("Info    : Meshing 1D...\n");
+        for _ in 0..1500 {
+            log.push_str("Error   : Wrong mesh element size lc = 0 (lcmin = 0, lcmax = 0)\n");
+        }
+        log.push_str("Error   : No elements in volume 1\nError   : ------------------------------\nError   : Mesh generation error summary\nError   :     0 warnings\nError   :  1583 errors\nError   : Check the full log for details\nError   : ------------------------------\n");
+        let why = failure_summary(&log, &std::process::ExitStatus::from_raw(256));
+        assert_eq!(
+            why,
+            "Error   : Wrong mesh element size lc = 0 (lcmin = 0, lcmax = 0) | Error   : No elements in volume 1 (and 1499 more error lines)"
+        );
+        // Killed (signal 9), no error line: how it ended and the log's last lines.
+        let why = failure_summary(
+            "Info    : Meshing 1D...\nInfo    : [ 10%] Meshing curve 2 (Line)\n",
+            &std::process::ExitStatus::from_raw(9),
+        );
+        assert!(why.starts_with("gmsh was killed by a signal"), "{why}");
+        assert!(
+            why.ends_with("Info    : Meshing 1D... | Info    : [ 10%] Meshing curve 2 (Line)"),
+            "{why}"
+        );
+    }
+
     use super::*;
 
     #[test]

@@ -83,6 +83,9 @@ pub struct MshSummary {
     /// tag: each face's corners as indices of the nodes in the file's order (PETSc numbers
     /// its vertices in that order), so the FE stage marks its surfaces from them.
     pub surfaces: Vec<(i32, Vec<Vec<usize>>)>,
+    /// The volume elements of each physical volume (msh 2.2's first tag of a volume element),
+    /// by tag: a physical volume the file names but no element carries is not listed.
+    pub volumes: Vec<(i32, usize)>,
     /// Elements other than linear hexahedra, quadrangles, lines and points (tetrahedra, prisms,
     /// pyramids, triangles, second-order elements): the mesh goes through `split`.
     pub not_hexahedral: usize,
@@ -188,6 +191,13 @@ pub fn check(text: &str) -> Result<MshSummary, String> {
     let elements = elements.ok_or("no $Elements section")?;
     let mut summary = check_elements(&nodes, &elements)?;
     summary.surfaces = physical_surfaces(&nodes, &elements);
+    let mut volumes: std::collections::BTreeMap<i32, usize> = Default::default();
+    for e in elements.iter().filter(|e| e.dim() == 3) {
+        if let Some(&tag) = e.tags.first().filter(|&&t| t > 0) {
+            *volumes.entry(tag as i32).or_default() += 1;
+        }
+    }
+    summary.volumes = volumes.into_iter().collect();
     Ok(summary)
 }
 

@@ -853,7 +853,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 mod check;
 pub use check::{
     check_work, interaction_warnings, mode_warnings, num_text, parse, sph_warnings, unit_warnings,
-    validate_groups, LOW_SOLID_DENSITY, LOW_YOUNGS_MODULUS,
+    validate_groups, validate_groups_hold_elements, LOW_SOLID_DENSITY, LOW_YOUNGS_MODULUS,
 };
 
 #[cfg(test)]

@@ -39,12 +39,18 @@ pub fn restart_layout(name: &str) -> Option<RestartLayout> {
         | "implicit.wall_active"
         | "implicit.wall_slip"
         | "implicit.wall_force_n" => Node,
-        "fe.hex_state" | "fe.mat_state" | "fe.block_forces" | "fe.erosion"
-        | "fe.erosion_volume" => Element,
+        "fe.hex_state"
+        | "fe.mat_state"
+        | "fe.block_forces"
+        | "fe.erosion"
+        | "fe.erosion_volume"
+        | "implicit.tangent_ke" => Element,
         "fe.tet_state" | "fe.tet_mat_state" | "fe.tet_block_forces" => Tet,
-        "fe.scalars" | "fe.block_energies" | "implicit.force_scale_max" | "implicit.stats" => {
-            Global
-        }
+        "fe.scalars"
+        | "fe.block_energies"
+        | "implicit.force_scale_max"
+        | "implicit.stats"
+        | "implicit.tangent_kept" => Global,
         _ => return None,
     })
 }

@@ -81,6 +81,17 @@ impl ExactCg {
         self.ke[576 * e..576 * (e + 1)].copy_from_slice(ke);
     }
 
+    /// The stored element matrices, 576 values per local element (a checkpoint keeps them).
+    pub(super) fn matrices(&self) -> &[f64] {
+        &self.ke
+    }
+
+    /// Sets the element matrices a checkpoint kept ([`ExactCg::matrices`]); the diagonal
+    /// follows with [`ExactCg::set_diagonal`].
+    pub(super) fn set_matrices(&mut self, ke: &[f64]) {
+        self.ke.copy_from_slice(ke);
+    }
+
     /// Sums the diagonal of `A` from the stored element matrices (collective).
     pub(super) fn set_diagonal(
         &mut self,

@@ -3,9 +3,13 @@ use super::*;
 
 impl ImplicitFe {
     /// The restart state beyond the explicit arrays (`ExplicitFe::restart_state`): the
-    /// accepted state's forces and reactions (the energy sums use them) and the force scale of
-    /// the convergence test. The tangent is not kept: a restarted run assembles a fresh one,
-    /// so it agrees with the run without a stop to the Newton tolerance, not bit for bit.
+    /// accepted state's forces and reactions (the energy sums use them), the force scale of
+    /// the convergence test, and the tangent in use: with the default solver (`Linear::Exact`)
+    /// its element matrices by element (`implicit.tangent_ke`, 576 values each) and whether
+    /// they are current (`implicit.tangent_kept`), so the continued run's modified Newton
+    /// iterates with the same matrix as the run without a stop, on the same ranks or others
+    /// (the solver is rank-independent): bit for bit. With a PETSc solver the tangent is
+    /// assembled afresh after a restart (its answers agree to its tolerance only anyway).
     pub fn restart_state(&self) -> Vec<(&'static str, Vec<f64>)> {
         let mut v = self.fe.restart_state();
         v.push(("implicit.force_n", self.force_n.as_flattened().to_vec()));
@@ -16,7 +20,31 @@ impl ImplicitFe {
         v.push(("implicit.force_scale_max", vec![self.force_scale_max]));
         v.push(("implicit.stats", self.stats_state()));
         v.extend(self.wall_restart_state());
+        let (ke, kept) = match &self.linear {
+            Linear::Exact { cg, .. } => (cg.matrices().to_vec(), !self.tangent_stale),
+            Linear::Petsc { .. } => (Vec::new(), false),
+        };
+        v.push(("implicit.tangent_ke", ke));
+        v.push(("implicit.tangent_kept", vec![f64::from(u8::from(kept))]));
         v
+    }
+
+    /// Sums the diagonal and the coarse grid of the element matrices a checkpoint gave back,
+    /// as the tangent's assembly does after storing them (collective).
+    pub(super) fn restore_diagonal(
+        &mut self,
+        exchange: &mut NodeExchange,
+    ) -> Result<(), PetscError> {
+        if let Linear::Exact { cg, .. } = &mut self.linear {
+            let sys = CgSystem {
+                elems: &self.fe.elems,
+                owned: &self.fe.owned,
+                mass_term: &self.mass_term,
+                dofs: &self.dofs,
+            };
+            cg.set_diagonal(&sys, &mut self.fe.assembly, exchange)?;
+        }
+        Ok(())
     }
 
     /// The run's counters (the same on every rank: the solves are collective), so that
@@ -65,6 +93,19 @@ impl ImplicitFe {
         }
         self.set_wall_restart_state(get)?;
         self.tangent_stale = true;
+        self.tangent_restored = false;
+        // The tangent in use at the checkpoint (absent from a checkpoint of an earlier tdyn,
+        // or written with a PETSc solver: assembled afresh).
+        let kept = get("implicit.tangent_kept").is_some_and(|k| k.first() == Some(&1.0));
+        if let (true, Some(ke), Linear::Exact { cg, .. }) =
+            (kept, get("implicit.tangent_ke"), &mut self.linear)
+        {
+            if ke.len() == cg.matrices().len() {
+                cg.set_matrices(&ke);
+                self.tangent_stale = false;
+                self.tangent_restored = true;
+            }
+        }
         Ok(())
     }
 }

@@ -3,8 +3,8 @@
 use super::*;
 
 mod stages;
-pub use stages::validate_groups;
 use stages::*;
+pub use stages::{validate_groups, validate_groups_hold_elements};
 
 /// Model keys by model (besides `name`, `model`, `density`, `eos`).
 const MODEL_KEYS: &[(&str, &[&str])] = &[

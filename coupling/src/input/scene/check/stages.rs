@@ -14,6 +14,15 @@ pub(super) fn check_particles(
 ) -> Result<(), SceneError> {
     for (i, p) in particles.iter().enumerate() {
         // (the name heads its columns in contact_forces.csv and its probes)
+        if !csv_name(&p.name) {
+            return Err(cx.err(
+                &format!("particles[{i}].name"),
+                format!(
+                    "expected a name for contact_forces.csv's columns (not empty, no comma, quote or line break), got {:?}",
+                    p.name
+                ),
+            ));
+        }
         if particles[..i].iter().any(|q| q.name == p.name) {
             return Err(cx.err(
                 &format!("particles[{i}].name"),
@@ -402,14 +411,41 @@ pub(super) fn check_probes(cx: &Ctx, probes: &[Probe]) -> Result<(), SceneError>
             ));
         }
         names.push(&p.name);
+        if !csv_name(&p.name) {
+            return Err(cx.err(
+                &format!("probe[{i}].name"),
+                format!(
+                    "expected a name for probes.csv's columns (not empty, no comma, quote or line break), got {:?}",
+                    p.name
+                ),
+            ));
+        }
         if p.fields.is_empty() {
             return Err(cx.err(
                 &format!("probe[{i}].fields"),
                 "expected at least one field".into(),
             ));
         }
+        for (k, f) in p.fields.iter().enumerate() {
+            if p.fields[..k].contains(f) {
+                return Err(cx.err(
+                    &format!("probe[{i}].fields[{k}]"),
+                    format!(
+                        "\"{}\" is listed twice (probes.csv would have two columns \"{}.{}\")",
+                        f.name(),
+                        p.name,
+                        f.name()
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
+}
+
+/// A name that can head CSV columns as it is: not empty, no comma, quote or line break.
+pub(super) fn csv_name(name: &str) -> bool {
+    !name.trim().is_empty() && !name.contains([',', '"', '\n', '\r'])
 }
 
 /// `[output]`: a positive checkpoint interval, known field names.
@@ -479,6 +515,54 @@ pub(super) fn number(v: &toml::Value) -> Result<f64, String> {
         )),
         other => Err(format!("expected a number, got {}", other.type_str())),
     }
+}
+
+/// Checks that every group the scene names holds elements of its dimension (after
+/// [`validate_groups`]: the names exist): `has_volume(name)` says whether the physical volume
+/// holds volume elements, `has_surface(name)` whether the physical surface holds faces.
+pub fn validate_groups_hold_elements(
+    scene: &Scene,
+    has_volume: impl Fn(&str) -> bool,
+    has_surface: impl Fn(&str) -> bool,
+) -> Result<(), SceneError> {
+    let file = scene.file.display().to_string();
+    let empty = |key: String, what: &str, name: &str| {
+        SceneError {
+        file: file.clone(),
+        key,
+        message: format!(
+            "the physical {what} \"{name}\" holds no elements in the mesh (a physical group of no meshed entity, or of the wrong entity numbers in the .geo): it would act on nothing"
+        ),
+    }
+    };
+    for (i, b) in scene.blocks.iter().enumerate() {
+        if !has_volume(&b.group) {
+            return Err(empty(format!("block[{i}].group"), "volume", &b.group));
+        }
+    }
+    for (i, b) in scene.boundaries.iter().enumerate() {
+        if !has_surface(&b.group) {
+            return Err(empty(format!("boundary[{i}].group"), "surface", &b.group));
+        }
+    }
+    for (i, l) in scene.loads.iter().enumerate() {
+        if !has_surface(&l.group) {
+            return Err(empty(format!("load[{i}].group"), "surface", &l.group));
+        }
+    }
+    if let Some(c) = &scene.contact {
+        for (i, s) in c.surfaces.iter().enumerate() {
+            if s != "exterior" && !has_surface(s) {
+                return Err(empty(format!("contact.surfaces[{i}]"), "surface", s));
+            }
+        }
+        for (i, m) in c.master.iter().enumerate() {
+            if !has_volume(m) {
+                return Err(empty(format!("contact.master[{i}]"), "volume", m));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Checks that every group the scene names exists in the mesh.
