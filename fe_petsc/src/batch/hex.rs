@@ -195,7 +195,7 @@ fn kinematics(xm: &Modes, um: &Modes, dt: f64) -> Result<Kinematics, GroupInvert
     let mut l = outer_sum(&u, &gh64);
     for row in l.iter_mut() {
         for e in row.iter_mut() {
-            *e = *e * ivh64;
+            *e *= ivh64;
         }
     }
     let d = [
