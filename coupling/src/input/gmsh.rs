@@ -277,7 +277,7 @@ fn point_size_expressions(geo: &str) -> Vec<String> {
 const FAILURE_LINES: usize = 3;
 
 /// What gmsh's log says about a failure, for one line: its distinct `Error` lines (the first
-/// [`FAILURE_LINES`], with the count of the others: a mesh size of 0 repeats one error for
+/// `FAILURE_LINES`, with the count of the others: a mesh size of 0 repeats one error for
 /// every curve, thousands of times), without gmsh's closing summary box; or, with no error
 /// line (gmsh killed, out of memory, crashed), how it ended and its last lines.
 pub fn failure_summary(log: &str, status: &std::process::ExitStatus) -> String {
