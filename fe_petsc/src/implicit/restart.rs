@@ -29,8 +29,9 @@ impl ImplicitFe {
         v
     }
 
-    /// Sums the diagonal and the coarse grid of the element matrices a checkpoint gave back,
-    /// as the tangent's assembly does after storing them (collective).
+    /// Sums the diagonal and the coarse grid of the stored element matrices (the exact
+    /// solver's): the tangent's assembly after storing them, and a restart after a checkpoint
+    /// gave them back (collective).
     pub(super) fn restore_diagonal(
         &mut self,
         exchange: &mut NodeExchange,

@@ -99,15 +99,7 @@ impl ImplicitFe {
             }
         }
         match &mut self.linear {
-            Linear::Exact { cg, .. } => {
-                let sys = CgSystem {
-                    elems: &self.fe.elems,
-                    owned: &self.fe.owned,
-                    mass_term: &self.mass_term,
-                    dofs: &self.dofs,
-                };
-                cg.set_diagonal(&sys, &mut self.fe.assembly, exchange)?;
-            }
+            Linear::Exact { .. } => self.restore_diagonal(exchange)?,
             Linear::Petsc { matrix, .. } => {
                 let c_mass = 4.0 / (dt * dt);
                 for &n in &self.owned_nodes {
