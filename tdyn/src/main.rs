@@ -515,6 +515,13 @@ fn main() -> ExitCode {
             }
             std::process::exit(e.exit_code())
         }
+        // A mistake on the command line reads as every other error, `tdyn: error: ...`
+        // (clap's text, its usage and tip lines after it); --help and --version as clap
+        // prints them.
+        Err(e) if e.use_stderr() => {
+            eprint!("tdyn: {e}");
+            std::process::exit(e.exit_code())
+        }
         Err(e) => e.exit(),
     };
     match cli.cmd {

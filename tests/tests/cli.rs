@@ -129,6 +129,10 @@ fn a_command_line_mistake_is_printed_once_at_any_rank_count() {
         1,
         "clap's report once:\n{err}"
     );
+    assert!(
+        err.starts_with("tdyn: error: invalid value 'lanes16'"),
+        "a command-line mistake reads as every other error (docs/cli.md):\n{err}"
+    );
     let o = tdyn_np(2, &["run", &s, "--out", &out, "-p", "N"]);
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(tdyn_lines(&o).len(), 1, "{:?}", tdyn_lines(&o));
